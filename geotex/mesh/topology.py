@@ -1,0 +1,260 @@
+"""Combinatorial structure of triangle meshes, computed with vectorized numpy.
+
+Edge order convention
+---------------------
+Unique (undirected) edges are rows ``(i, j)`` with ``i < j``, sorted
+lexicographically; per-edge data anywhere in geotex is indexed in this order.
+Half-edge ``3 * f + k`` runs from ``F[f, k]`` to ``F[f, (k + 1) % 3]``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
+
+__all__ = [
+    "EdgeTopology",
+    "edge_topology",
+    "half_edges",
+    "vertex_components",
+    "face_components",
+    "non_manifold_vertices",
+    "duplicate_face_groups",
+    "referenced_vertices",
+]
+
+
+def half_edges(F: np.ndarray) -> np.ndarray:
+    """Return the directed edges of every face.
+
+    Parameters
+    ----------
+    F : numpy.ndarray, (m, 3) int64
+
+    Returns
+    -------
+    numpy.ndarray, (3m, 2) int64
+        Row ``3 * f + k`` is ``(F[f, k], F[f, (k + 1) % 3])``.
+    """
+    return np.stack([F, np.roll(F, -1, axis=1)], axis=2).reshape(-1, 2)
+
+
+@dataclass(frozen=True)
+class EdgeTopology:
+    """Unique edges of a triangle mesh and their incidence.
+
+    Attributes
+    ----------
+    edges : numpy.ndarray, (e, 2) int64
+        Unique undirected edges, ``edges[:, 0] < edges[:, 1]``, sorted.
+    half_to_edge : numpy.ndarray, (3m,) int64
+        Unique edge of every half-edge (see module docstring for the order).
+    face_count : numpy.ndarray, (e,) int64
+        Number of faces that use each edge (1 boundary, 2 manifold, >2 not).
+    forward_count : numpy.ndarray, (e,) int64
+        Number of half-edges running from ``edges[:, 0]`` to ``edges[:, 1]``.
+    """
+
+    edges: np.ndarray
+    half_to_edge: np.ndarray
+    face_count: np.ndarray
+    forward_count: np.ndarray
+
+    @property
+    def boundary(self) -> np.ndarray:
+        """Indices of boundary edges (used by exactly one face)."""
+        return np.flatnonzero(self.face_count == 1)
+
+    @property
+    def non_manifold(self) -> np.ndarray:
+        """Indices of edges used by more than two faces."""
+        return np.flatnonzero(self.face_count > 2)
+
+    @property
+    def inconsistent(self) -> np.ndarray:
+        """Indices of two-face edges traversed twice in the same direction."""
+        return np.flatnonzero((self.face_count == 2) & (self.forward_count != 1))
+
+    def edge_faces(self) -> np.ndarray:
+        """Return the two faces of every edge, ``-1`` where there is none.
+
+        Returns
+        -------
+        numpy.ndarray, (e, 2) int64
+            For edges with more than two faces, the first two (in face order).
+        """
+        order = np.argsort(self.half_to_edge, kind="stable")
+        he_sorted = self.half_to_edge[order]
+        start = np.searchsorted(he_sorted, np.arange(self.edges.shape[0]))
+        out = np.full((self.edges.shape[0], 2), -1, dtype=np.int64)
+        out[:, 0] = order[start] // 3
+        two = self.face_count >= 2
+        out[two, 1] = order[start[two] + 1] // 3
+        return out
+
+
+def edge_topology(F: np.ndarray, n_vertices: int | None = None) -> EdgeTopology:
+    """Compute unique edges and how faces use them.
+
+    Parameters
+    ----------
+    F : numpy.ndarray, (m, 3) int64
+    n_vertices : int, optional
+        Number of vertices (defaults to ``F.max() + 1``).
+
+    Returns
+    -------
+    EdgeTopology
+    """
+    F = np.asarray(F, dtype=np.int64)
+    n = int(n_vertices if n_vertices is not None else (F.max() + 1 if F.size else 0))
+    he = half_edges(F)
+    lo = np.minimum(he[:, 0], he[:, 1])
+    hi = np.maximum(he[:, 0], he[:, 1])
+    key = lo * max(n, 1) + hi
+    uniq, inv, counts = np.unique(key, return_inverse=True, return_counts=True)
+    edges = np.stack([uniq // max(n, 1), uniq % max(n, 1)], axis=1)
+    forward = np.bincount(inv, weights=(he[:, 0] < he[:, 1]), minlength=uniq.size)
+    return EdgeTopology(edges=edges, half_to_edge=inv.astype(np.int64),
+                        face_count=counts.astype(np.int64),
+                        forward_count=forward.astype(np.int64))
+
+
+def referenced_vertices(F: np.ndarray, n_vertices: int) -> np.ndarray:
+    """Return a boolean mask, ``(n_vertices,)``, of vertices used by some face."""
+    mask = np.zeros(n_vertices, dtype=bool)
+    mask[np.asarray(F).ravel()] = True
+    return mask
+
+
+def vertex_components(F: np.ndarray, n_vertices: int) -> tuple[int, np.ndarray]:
+    """Label vertices by the connected component of the face graph.
+
+    Parameters
+    ----------
+    F : numpy.ndarray, (m, 3) int64
+    n_vertices : int
+
+    Returns
+    -------
+    count : int
+        Number of components that contain at least one face.
+    labels : numpy.ndarray, (n_vertices,) int64
+        Component of every vertex, ``-1`` for unreferenced vertices; labels
+        are ``0 .. count - 1`` in order of first appearance in ``F``.
+    """
+    F = np.asarray(F, dtype=np.int64)
+    labels = np.full(n_vertices, -1, dtype=np.int64)
+    if F.shape[0] == 0:
+        return 0, labels
+    rows = np.concatenate([F[:, 0], F[:, 1]])
+    cols = np.concatenate([F[:, 1], F[:, 2]])
+    adj = sp.coo_matrix((np.ones(rows.size, dtype=np.int8), (rows, cols)),
+                        shape=(n_vertices, n_vertices)).tocsr()
+    _, raw = connected_components(adj, directed=False)
+    used = referenced_vertices(F, n_vertices)
+    # relabel in order of first appearance in F for determinism and compactness
+    first = raw[F.ravel()]
+    _, idx = np.unique(first, return_index=True)
+    ordered = first[np.sort(idx)]
+    remap = np.full(raw.max() + 1, -1, dtype=np.int64)
+    remap[ordered] = np.arange(ordered.size)
+    labels[used] = remap[raw[used]]
+    return int(ordered.size), labels
+
+
+def face_components(F: np.ndarray, n_vertices: int) -> tuple[int, np.ndarray]:
+    """Label faces by connected component (faces sharing a vertex are connected).
+
+    Returns
+    -------
+    count : int
+    labels : numpy.ndarray, (m,) int64
+    """
+    count, vlab = vertex_components(F, n_vertices)
+    return count, vlab[np.asarray(F)[:, 0]] if len(F) else np.zeros(0, np.int64)
+
+
+def non_manifold_vertices(F: np.ndarray, n_vertices: int,
+                          topo: EdgeTopology | None = None) -> np.ndarray:
+    """Return vertices whose incident faces do not form one edge-connected fan.
+
+    Two corners at the same vertex are connected when their faces share an
+    edge through that vertex that has exactly two faces.  A vertex is
+    non-manifold when its corners fall into more than one group (a "bow tie").
+    Vertices on non-manifold edges are reported by the edge test instead.
+
+    Parameters
+    ----------
+    F : numpy.ndarray, (m, 3) int64
+    n_vertices : int
+    topo : EdgeTopology, optional
+        Reuse an already computed edge topology.
+
+    Returns
+    -------
+    numpy.ndarray, (k,) int64
+        Sorted vertex indices.
+    """
+    F = np.asarray(F, dtype=np.int64)
+    m = F.shape[0]
+    if m == 0:
+        return np.zeros(0, dtype=np.int64)
+    topo = topo if topo is not None else edge_topology(F, n_vertices)
+    he = half_edges(F)
+    manifold_he = topo.face_count[topo.half_to_edge] == 2
+    # pair the two half-edges of every manifold edge
+    hid = np.flatnonzero(manifold_he)
+    order = hid[np.argsort(topo.half_to_edge[hid], kind="stable")]
+    a, b = order[0::2], order[1::2]
+    # corner index of (face, vertex): 3 * f + k. Half-edge h = 3f + k starts at
+    # corner 3f + k and ends at corner 3f + (k + 1) % 3.
+    def start_corner(h):
+        return h
+
+    def end_corner(h):
+        return (h // 3) * 3 + (h % 3 + 1) % 3
+
+    # match corners at equal vertices across the two faces of the edge
+    same_dir = he[a, 0] == he[b, 0]
+    a_s, a_e = start_corner(a), end_corner(a)
+    b_s, b_e = start_corner(b), end_corner(b)
+    r1 = a_s
+    c1 = np.where(same_dir, b_s, b_e)
+    r2 = a_e
+    c2 = np.where(same_dir, b_e, b_s)
+    rows = np.concatenate([r1, r2])
+    cols = np.concatenate([c1, c2])
+    g = sp.coo_matrix((np.ones(rows.size, dtype=np.int8), (rows, cols)),
+                      shape=(3 * m, 3 * m)).tocsr()
+    _, lab = connected_components(g, directed=False)
+    corner_vertex = F.ravel()
+    pairs = np.unique(corner_vertex * (3 * m) + lab)
+    fans = np.bincount(pairs // (3 * m), minlength=n_vertices)
+    bad = np.flatnonzero(fans > 1)
+    if bad.size and topo.non_manifold.size:
+        on_nm_edge = np.zeros(n_vertices, dtype=bool)
+        on_nm_edge[topo.edges[topo.non_manifold].ravel()] = True
+        bad = bad[~on_nm_edge[bad]]
+    return bad
+
+
+def duplicate_face_groups(F: np.ndarray) -> np.ndarray:
+    """Return faces that repeat an earlier face's vertex set (any orientation).
+
+    Returns
+    -------
+    numpy.ndarray, (k,) int64
+        Indices of every face whose sorted vertex triple already occurred at a
+        lower face index.
+    """
+    F = np.asarray(F, dtype=np.int64)
+    if F.shape[0] == 0:
+        return np.zeros(0, dtype=np.int64)
+    s = np.sort(F, axis=1)
+    _, first, inv = np.unique(s, axis=0, return_index=True, return_inverse=True)
+    inv = inv.ravel()
+    return np.flatnonzero(first[inv] != np.arange(F.shape[0]))
