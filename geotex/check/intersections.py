@@ -1,0 +1,723 @@
+"""Self-intersection detection for triangle meshes.
+
+:func:`self_intersecting_pairs` reports every pair of faces whose triangles
+intersect, in vectorized numpy: a broad phase on a hierarchical uniform grid,
+then a tolerance-aware narrow phase, both on chunks of a bounded size.
+
+Pipeline
+--------
+1. Coordinates are normalised in a copy: scaled by a power of two (exact) so
+   that the bounding box of the referenced vertices has its largest extent in
+   ``[1, 2)``, and centred on the origin.  Results therefore do not depend on
+   the unit or the position, and meshes with coordinates near the float
+   limits (``±3.4e38`` and beyond) cannot overflow.
+2. Per face (in blocks): corners, unit normal and plane offset, unit in-plane
+   inward edge normals, tolerance, and a float32 bounding box inflated by
+   twice the tolerance.  Degenerate faces (repeated index, or
+   ``|e0 x e1| <= 1e-12 * longest_edge**2``, the criterion of
+   :func:`geotex.mesh.geometry.degenerate_faces`) take no part.
+3. Broad phase: the base cell is 1.5 times the 95th percentile of the box
+   sizes; a face whose box is larger than ``base * 2**L`` goes to level
+   ``L + 1``, whose cells are twice as large.  For each level, the level's
+   faces and the smaller faces in the same cells are sorted by one packed
+   int64 key (cell, level, face, corner flags); within every cell each
+   current-level face is paired with the entries after it.  A pair met in
+   several cells is kept only in the cell that holds the lower corner of the
+   two boxes' intersection (no pair is generated twice, no ``unique`` over
+   pairs), and the boxes must overlap.
+4. Narrow phase on each chunk: shared vertex indices decide the case, plane
+   side tests reject most pairs cheaply, and the few survivors get the exact
+   case analysis described in :func:`self_intersecting_pairs`.
+
+Chunks of candidate pairs (generation, filtering and narrow phase) run on a
+small thread pool (numpy releases the GIL); results are gathered in a fixed
+order, so the output does not depend on the scheduling.
+"""
+
+from __future__ import annotations
+
+import collections
+import numbers
+import os
+from concurrent.futures import ThreadPoolExecutor
+from functools import partial
+
+import numpy as np
+
+from geotex.errors import InputError
+from geotex.mesh.arrays import as_mesh_arrays
+
+__all__ = ["self_intersecting_pairs", "REL_TOL", "ABS_TOL"]
+
+#: Tolerance of the geometric predicates relative to the local triangle size
+#: (the longest edge of the two triangles of a pair).
+REL_TOL = 1e-10
+#: Absolute floor of the tolerance, in normalised coordinates (the bounding
+#: box's largest extent is between 1 and 2), covering float64 rounding.
+ABS_TOL = 1e-14
+
+# Same criterion and default as geotex.mesh.geometry.degenerate_faces.
+_DEGENERATE_REL_TOL = 1e-12
+# Widening of the float32 boxes: more than two float32 ulps at magnitude 1.
+_BOX32_PAD = 2.0 ** -21
+# Finest grid cell: this ratio times the given quantile of the box sizes.
+_BASE_QUANTILE = 0.95
+_CELL_RATIO = 1.5
+# Candidate pairs enumerated per task, and faces per preparation block: both
+# keep every temporary array to a few tens of MB.
+_PAIR_CHUNK = 500_000
+_FACE_BLOCK = 65_536
+_MAX_WORKERS = 4
+
+
+def self_intersecting_pairs(V, F, *, max_pairs=None) -> np.ndarray:
+    """Return every pair of faces of a triangle mesh whose triangles intersect.
+
+    Parameters
+    ----------
+    V : array_like, (n, 3) float64
+        Vertex positions (finite).
+    F : array_like, (m, 3) int64
+        Triangles as vertex indices.
+    max_pairs : int, optional
+        Stop as soon as at least this many intersecting pairs are known.  The
+        result then holds at most ``max_pairs`` pairs, still sorted, and is a
+        subset of the full answer (not necessarily its first rows); the same
+        inputs always give the same subset.  ``None`` (default) finds all.
+
+    Returns
+    -------
+    numpy.ndarray, (k, 2) int64
+        Face index pairs ``(i, j)`` with ``i < j``, sorted lexicographically,
+        without repetition.
+
+    Raises
+    ------
+    InputError
+        If ``V`` or ``F`` is malformed (shape, non-finite values, indices out
+        of range) or ``max_pairs`` is not a non-negative integer.
+
+    Notes
+    -----
+    Which pairs count depends on how many vertex *indices* the two faces share
+    (positions are not compared, so an unwelded "triangle soup" reports all
+    its touching neighbours: weld vertices first):
+
+    * **No shared vertex**: the closed triangles intersect when they have any
+      common point, touching and coplanar overlap included.
+    * **One shared vertex** ``p``: they intersect when they have a common
+      point other than ``p`` (farther than the tolerance from it): a fold or
+      piercing near ``p``, an edge of one lying on the other, or, for
+      coplanar faces, overlapping wedges at ``p``.
+    * **Two shared vertices** (a shared edge): they intersect only when they
+      fold onto each other, i.e. one face lies in the other's plane (within
+      the tolerance) and the two opposite vertices are on the same side of
+      the shared edge.  Any dihedral angle other than (close to) zero is not
+      an intersection.
+    * **Three shared vertices** (duplicate faces) and **degenerate faces**
+      (a repeated index or zero area, see
+      :func:`geotex.mesh.geometry.degenerate_faces`) are excluded: they are
+      reported by their own checks.
+
+    Predicates are evaluated in float64 on normalised coordinates (see the
+    module docstring) with the tolerance ``REL_TOL * L + ABS_TOL``, where
+    ``L`` is the longest edge of the two triangles.  A point within the
+    tolerance of a triangle counts as on it, so exact contacts built in the
+    input coordinates are found whatever their scale, and the answer does not
+    change when the mesh is uniformly scaled or translated.
+
+    The non-coplanar test uses the fact that each triangle meets the other's
+    plane in a segment on the planes' common line, and two such segments
+    overlap exactly when an endpoint of one lies in the other: every endpoint
+    (a vertex in the plane, or an edge crossing it) is tested against the
+    other triangle with edge functions.  Coplanar triangles use the separating
+    axis test on the six in-plane edge normals; coplanar faces sharing a
+    vertex compare the wedges at that vertex.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> V = np.array([[0, 0, 0], [2, 0, 0], [0, 2, 0],
+    ...               [0.5, 0.5, -1], [0.5, 0.5, 1], [3, 3, 1]], float)
+    >>> F = np.array([[0, 1, 2], [3, 4, 5]])
+    >>> self_intersecting_pairs(V, F)
+    array([[0, 1]])
+    """
+    V, F = as_mesh_arrays(V, F)
+    if max_pairs is not None:
+        if (isinstance(max_pairs, bool) or not isinstance(max_pairs, numbers.Integral)
+                or max_pairs < 0):
+            raise InputError(
+                f"max_pairs must be a non-negative integer or None, got {max_pairs!r}")
+        max_pairs = int(max_pairs)
+    m = F.shape[0]
+    empty = np.zeros((0, 2), dtype=np.int64)
+    if m < 2 or max_pairs == 0:
+        return empty
+    workers = _workers()
+    pool = ThreadPoolExecutor(max_workers=workers)
+    try:
+        faces = _FaceData(_normalized(V, F), F, mapper=pool.map)
+        if faces.active.size < 2:
+            return empty
+        found = []
+        count = 0
+        for hits in _in_order(pool, _pair_tasks(faces), window=2 * workers):
+            if hits.size:
+                found.append(hits)
+                count += hits.size
+                if max_pairs is not None and count >= max_pairs:
+                    break
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+    if not found:
+        return empty
+    keys = np.sort(np.concatenate(found))
+    if max_pairs is not None:
+        keys = keys[:max_pairs]
+    return np.stack([keys // m, keys % m], axis=1)
+
+
+def _workers() -> int:
+    try:
+        n = len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        n = os.cpu_count() or 1
+    return max(1, min(n, _MAX_WORKERS))
+
+
+def _in_order(pool, tasks, *, window: int):
+    """Run callables on ``pool``, at most ``window`` at a time; yield results in order."""
+    pending = collections.deque()
+    try:
+        for task in tasks:
+            pending.append(pool.submit(task))
+            if len(pending) >= window:
+                yield pending.popleft().result()
+        while pending:
+            yield pending.popleft().result()
+    finally:
+        for future in pending:
+            future.cancel()
+
+
+# ---------------------------------------------------------------------------
+# preparation
+
+
+def _normalized(V: np.ndarray, F: np.ndarray) -> np.ndarray:
+    """Return ``V`` centred on the box of the referenced vertices, extent in [1, 2)."""
+    used = np.zeros(V.shape[0], dtype=bool)
+    used[F.ravel()] = True
+    U = V[used]
+    half = float(np.max(0.5 * U.max(axis=0) - 0.5 * U.min(axis=0)))
+    exponent = int(np.frexp(half)[1]) if half > 0 else 0
+    W = np.ldexp(V, -exponent)              # exact scaling, half-extent in [0.5, 1)
+    Wu = W[used]
+    W -= 0.5 * Wu.min(axis=0) + 0.5 * Wu.max(axis=0)
+    return W
+
+
+class _FaceData:
+    """Per-face arrays used by both phases (normalised coordinates).
+
+    Attributes
+    ----------
+    V : (n, 3) float64
+        Normalised vertex positions.
+    F : (m, 3) int64
+    plane : (m, 4) float64
+        Unit normal and plane offset ``n . v0``.
+    tol : (m,) float64
+        ``REL_TOL * longest edge + ABS_TOL``.
+    box32 : (m, 6) float32
+        Bounding box (low corner, high corner) inflated by twice the
+        tolerance, and widened to cover the float32 rounding.
+    active : (a,) int64
+        Non-degenerate faces.
+    """
+
+    def __init__(self, Vn: np.ndarray, F: np.ndarray, *, mapper=map):
+        m = F.shape[0]
+        self.V = Vn
+        self.F = F
+        self.plane = np.empty((m, 4))
+        self.tol = np.empty(m)
+        self.box32 = np.empty((m, 6), dtype=np.float32)
+        bad = np.empty(m, dtype=bool)
+        blocks = range(0, m, _FACE_BLOCK)
+        for _ in mapper(lambda s: self._fill(bad, s, min(s + _FACE_BLOCK, m)), blocks):
+            pass
+        self.active = np.flatnonzero(~bad)
+
+    def _fill(self, bad, s, e):
+        F = self.F[s:e]
+        P = np.take(self.V, F.ravel(), axis=0).reshape(-1, 9)
+        x0, y0, z0, x1, y1, z1, x2, y2, z2 = (P[:, k] for k in range(9))
+        edges = ((x1 - x0, y1 - y0, z1 - z0), (x2 - x1, y2 - y1, z2 - z1),
+                 (x0 - x2, y0 - y2, z0 - z2))
+        (ax, ay, az), _, (cx, cy, cz) = edges
+        nx = az * cy - ay * cz                  # e0 x (v2 - v0) = e0 x (-e2)
+        ny = ax * cz - az * cx
+        nz = ay * cx - ax * cy
+        double_area = np.sqrt(nx * nx + ny * ny + nz * nz)
+        length2 = [ex * ex + ey * ey + ez * ez for ex, ey, ez in edges]
+        longest2 = np.maximum(np.maximum(length2[0], length2[1]), length2[2])
+        degenerate = ~(double_area > _DEGENERATE_REL_TOL * longest2)
+        degenerate |= (F[:, 0] == F[:, 1]) | (F[:, 1] == F[:, 2]) | (F[:, 2] == F[:, 0])
+        bad[s:e] = degenerate
+        inv = np.divide(1.0, double_area, out=np.zeros_like(double_area), where=~degenerate)
+        plane = self.plane[s:e]
+        plane[:, 0] = nx * inv
+        plane[:, 1] = ny * inv
+        plane[:, 2] = nz * inv
+        plane[:, 3] = plane[:, 0] * x0 + plane[:, 1] * y0 + plane[:, 2] * z0
+        tol = REL_TOL * np.sqrt(longest2) + ABS_TOL
+        self.tol[s:e] = tol
+        pad = 2.0 * tol + _BOX32_PAD
+        box = self.box32[s:e]
+        for axis, (u0, u1, u2) in enumerate(((x0, x1, x2), (y0, y1, y2), (z0, z1, z2))):
+            box[:, axis] = np.minimum(np.minimum(u0, u1), u2) - pad
+            box[:, 3 + axis] = np.maximum(np.maximum(u0, u1), u2) + pad
+
+
+def _edge_planes(P: np.ndarray, normal: np.ndarray) -> np.ndarray:
+    """Return the in-plane edge normals of triangles, ``(k, 3, 4)``.
+
+    Row ``[:, e]`` holds the unit vector ``w_e = n x (v_e+1 - v_e) / |...|``,
+    which lies in the triangle's plane and points into the triangle, and
+    ``w_e . v_e``: ``w_e . x - (w_e . v_e)`` is the signed distance of ``x``'s
+    projection to the edge line, positive inside.
+    """
+    edges = np.roll(P, -1, axis=1) - P
+    w = np.cross(normal[:, None, :], edges)
+    w /= np.sqrt(_dot(edges, edges))[:, :, None]
+    out = np.empty(P.shape[:2] + (4,))
+    out[:, :, :3] = w
+    out[:, :, 3] = _dot(w, P)
+    return out
+
+
+# ---------------------------------------------------------------------------
+# broad phase
+
+
+def _pair_tasks(faces: _FaceData):
+    """Yield callables; each returns the intersecting pairs of one chunk as keys.
+
+    Over all tasks, every pair of active faces whose boxes overlap is
+    examined exactly once.  A key is ``i * m + j`` with ``i < j``.
+    """
+    box = faces.box32[faces.active]
+    extent = (box[:, 3:] - box[:, :3]).max(axis=1).astype(np.float64)
+    cell0 = _CELL_RATIO * float(np.quantile(extent, _BASE_QUANTILE))
+    # level L: cells of cell0 * 4**L, faces up to twice that size (<= 3 cells
+    # per axis); an even mesh has all its faces on level 0
+    with np.errstate(divide="ignore"):
+        level = np.ceil(np.log(extent / (2.0 * cell0)) / np.log(4.0))
+    level = np.maximum(level, 0).astype(np.int64)
+    while True:                                  # fix rounding of the logarithm
+        short = extent > 2.0 * cell0 * 4.0 ** level
+        if not short.any():
+            break
+        level[short] += 1
+    del extent
+    for lev in np.unique(level):
+        cell = cell0 * 4.0 ** lev
+        cur = np.flatnonzero(level == lev)
+        low = np.flatnonzero(level < lev)
+        if low.size:
+            # only smaller faces near the current level's faces can pair up
+            lo = box[cur, :3].min(axis=0)
+            hi = box[cur, 3:].max(axis=0)
+            bl = box[low]
+            near = ((bl[:, 0] <= hi[0]) & (bl[:, 3] >= lo[0]) & (bl[:, 1] <= hi[1])
+                    & (bl[:, 4] >= lo[1]) & (bl[:, 2] <= hi[2]) & (bl[:, 5] >= lo[2]))
+            low = low[near]
+            del bl, near
+        yield from _level_tasks(faces, box, cell, cur, low)
+
+
+def _cell_bounds(box, rows, cell):
+    """First and last grid cell covered by boxes ``rows``: two lists of 3 int64 arrays.
+
+    The same monotone float32 computation is used for every box, so boxes
+    that overlap always have ``lo_j <= hi_i`` in cell coordinates too.
+    """
+    b = box[rows]
+    inv = np.float32(1.0 / cell) if 1.0 / cell < 3e38 else None
+    lo, hi = [], []
+    for axis in range(3):
+        for out, col in ((lo, b[:, axis]), (hi, b[:, 3 + axis])):
+            q = col * inv if inv is not None else col.astype(np.float64) / cell
+            out.append(np.floor(q).astype(np.int64))
+    return lo, hi
+
+
+def _offsets(lo, hi):
+    """Yield ``(dx, dy, dz, idx)``: boxes ``idx`` cover the cell ``lo + (dx, dy, dz)``."""
+    span = [h - l for l, h in zip(lo, hi)]
+    n = lo[0].size
+    for dx in range(int(span[0].max()) + 1):
+        mx = span[0] >= dx
+        for dy in range(int(span[1].max()) + 1):
+            mxy = mx & (span[1] >= dy)
+            for dz in range(int(span[2].max()) + 1):
+                if dx == dy == dz == 0:
+                    yield 0, 0, 0, np.arange(n)
+                else:
+                    idx = np.flatnonzero(mxy & (span[2] >= dz))
+                    if idx.size:
+                        yield dx, dy, dz, idx
+
+
+def _corner_mask(dx, dy, dz):
+    return np.uint8((dx == 0) | (dy == 0) << 1 | (dz == 0) << 2)
+
+
+def _packed_entries(lo, hi, lowbits, rows, flag, cmin, size, row_bits):
+    """Grid entries as packed keys ``(cell, flag, row, corner bits)``.
+
+    The corner bits of an entry tell on which axes its cell is the box's
+    lowest cell (``lowbits`` clears the axes where the true lowest cell was
+    clipped away).
+    """
+    shift = row_bits + 3
+    key = ((lo[0] - cmin[0]) * size[1] + (lo[1] - cmin[1])) * size[2] + (lo[2] - cmin[2])
+    base = ((key * 2 + flag) << shift) | (rows.astype(np.int64) << 3)
+    del key
+    out = []
+    for dx, dy, dz, idx in _offsets(lo, hi):
+        step = ((dx * size[1] + dy) * size[2] + dz) << (shift + 1)
+        out.append((base[idx] + step) | (lowbits[idx] & _corner_mask(dx, dy, dz)))
+    return np.concatenate(out)
+
+
+def _coordinate_entries(lo, hi, lowbits, rows):
+    """Grid entries as ``(rows, corner bits, (E, 3) cell coordinates)``."""
+    r, f, c = [], [], []
+    for dx, dy, dz, idx in _offsets(lo, hi):
+        r.append(rows[idx])
+        f.append(lowbits[idx] & _corner_mask(dx, dy, dz))
+        c.append(np.stack([lo[0][idx] + dx, lo[1][idx] + dy, lo[2][idx] + dz], axis=1))
+    return np.concatenate(r), np.concatenate(f), np.concatenate(c)
+
+
+def _level_tasks(faces, box, cell, cur, low):
+    """Sort one level's grid entries by cell and yield its pair tasks.
+
+    ``cur`` and ``low`` are rows of ``faces.active``: the faces of this level
+    and the smaller faces that may meet them.
+    """
+    act = faces.active
+    row_bits = max(1, int(act.size - 1).bit_length())
+    lo, hi = _cell_bounds(box, cur, cell)
+    cmin = [int(x.min()) for x in lo]
+    cmax = [int(x.max()) for x in hi]
+    size = [b - a + 1 for a, b in zip(cmin, cmax)]
+    all7 = np.full(cur.size, 7, dtype=np.uint8)
+    if low.size:
+        llo, lhi = _cell_bounds(box, low, cell)
+        keep = np.ones(low.size, dtype=bool)
+        lowbits = np.zeros(low.size, dtype=np.uint8)
+        for axis in range(3):
+            exact = llo[axis] >= cmin[axis]         # true lowest cell is in range
+            lowbits |= exact.astype(np.uint8) << axis
+            np.maximum(llo[axis], cmin[axis], out=llo[axis])
+            np.minimum(lhi[axis], cmax[axis], out=lhi[axis])
+            keep &= llo[axis] <= lhi[axis]
+        sel = np.flatnonzero(keep)
+        low = low[sel]
+        llo = [x[sel] for x in llo]
+        lhi = [x[sel] for x in lhi]
+        lowbits = lowbits[sel]
+    index = np.int32 if act.size < 2 ** 31 else np.int64
+    shift = row_bits + 3
+    if float(size[0]) * size[1] * size[2] * 2 < 2.0 ** (62 - shift):
+        packed = _packed_entries(lo, hi, all7, cur, 0, cmin, size, row_bits)
+        if low.size:
+            lpacked = _packed_entries(llo, lhi, lowbits, low, 1, cmin, size, row_bits)
+            # keep only entries in cells that hold a current-level face
+            cells = np.unique(packed >> (shift + 1))
+            key = lpacked >> (shift + 1)
+            pos = np.minimum(np.searchsorted(cells, key), cells.size - 1)
+            packed = np.concatenate([packed, lpacked[cells[pos] == key]])
+            del lpacked, key, pos, cells
+        packed.sort()                               # cell, then current level first
+        first = (packed & 7).astype(np.uint8)
+        rows = ((packed >> 3) & ((1 << row_bits) - 1)).astype(index)
+        is_low = ((packed >> shift) & 1).astype(bool)
+        packed >>= shift + 1
+        cellkey = packed
+    else:                                           # huge grid: dense cell ids
+        r1, f1, c1 = _coordinate_entries(lo, hi, all7, cur)
+        if low.size:
+            r2, f2, c2 = _coordinate_entries(llo, lhi, lowbits, low)
+        else:
+            r2, f2, c2 = r1[:0], f1[:0], c1[:0]
+        _, cellkey = np.unique(np.concatenate([c1, c2]), axis=0, return_inverse=True)
+        cellkey = cellkey.ravel()
+        is_low = np.concatenate([np.zeros(r1.size, bool), np.ones(r2.size, bool)])
+        order = np.lexsort((is_low, cellkey))
+        cellkey, is_low = cellkey[order], is_low[order]
+        rows = np.concatenate([r1, r2])[order].astype(index)
+        first = np.concatenate([f1, f2])[order]
+        del r1, r2, f1, f2, c1, c2, order
+    new_cell = np.empty(cellkey.size, dtype=bool)
+    new_cell[0] = True
+    np.not_equal(cellkey[1:], cellkey[:-1], out=new_cell[1:])
+    del cellkey
+    starts = np.flatnonzero(new_cell).astype(index)
+    del new_cell
+    ends = np.append(starts[1:], index(rows.size))
+    counts = np.repeat(ends, ends - starts)
+    del starts, ends
+    counts -= np.arange(1, rows.size + 1, dtype=index)
+    counts[is_low] = 0                              # lower-level entries start no pair
+    face = act.astype(index)[rows]
+    del rows, is_low
+    cum = np.cumsum(counts, dtype=np.int64)
+    total = int(cum[-1])
+    for s in range(0, total, _PAIR_CHUNK):
+        yield partial(_pair_task, faces, (cum, counts, first, face),
+                      s, min(s + _PAIR_CHUNK, total))
+
+
+def _pair_task(faces, level, s, e):
+    """Generate candidate pairs ``s .. e - 1`` of a level, filter, test them."""
+    cum, counts, first, face = level
+    p0 = int(np.searchsorted(cum, s, side="right"))
+    p1 = int(np.searchsorted(cum, e - 1, side="right")) + 1
+    b = cum[p0:p1] - counts[p0:p1]                  # first pair index of each entry
+    a = np.maximum(b, s)
+    n = np.minimum(cum[p0:p1], e) - a
+    e1 = np.repeat(np.arange(p0, p1), n)
+    e2 = np.repeat(a - b - (np.cumsum(n) - n) + 1 + np.arange(p0, p1), n)
+    e2 += np.arange(e2.size)
+    # keep a pair only in the cell holding the low corner of the boxes'
+    # intersection: there, on every axis, one of the two entries is its box's
+    # lowest cell
+    own = (np.take(first, e1) | np.take(first, e2)) == 7
+    fa = np.take(face, e1[own])
+    fb = np.take(face, e2[own])
+    b1 = np.take(faces.box32, fa, axis=0)
+    b2 = np.take(faces.box32, fb, axis=0)
+    overlap = b1[:, 0] <= b2[:, 3]
+    overlap &= b2[:, 0] <= b1[:, 3]
+    overlap &= b1[:, 1] <= b2[:, 4]
+    overlap &= b2[:, 1] <= b1[:, 4]
+    overlap &= b1[:, 2] <= b2[:, 5]
+    overlap &= b2[:, 2] <= b1[:, 5]
+    fa = fa[overlap].astype(np.int64)
+    fb = fb[overlap].astype(np.int64)
+    i = np.minimum(fa, fb)
+    j = np.maximum(fa, fb)
+    hit = _intersecting(faces, i, j)
+    return i[hit] * faces.F.shape[0] + j[hit]
+
+
+# ---------------------------------------------------------------------------
+# narrow phase
+
+
+def _intersecting(faces: _FaceData, i: np.ndarray, j: np.ndarray) -> np.ndarray:
+    """Return a boolean mask: which face pairs ``(i[k], j[k])`` intersect."""
+    out = np.zeros(i.size, dtype=bool)
+    if i.size == 0:
+        return out
+    FA = np.take(faces.F, i, axis=0)
+    FB = np.take(faces.F, j, axis=0)
+    eq = FA[:, :, None] == FB[:, None, :]
+    shA = eq[:, :, 0] | eq[:, :, 1] | eq[:, :, 2]   # corner of A shared with B
+    shB = eq[:, 0, :] | eq[:, 1, :] | eq[:, 2, :]
+    del eq
+    nshared = shA[:, 0].astype(np.int8) + shA[:, 1] + shA[:, 2]
+    PA = np.take(faces.V, FA.ravel(), axis=0).reshape(-1, 3, 3)
+    PB = np.take(faces.V, FB.ravel(), axis=0).reshape(-1, 3, 3)
+    plA = np.take(faces.plane, i, axis=0)
+    plB = np.take(faces.plane, j, axis=0)
+    tol = np.maximum(np.take(faces.tol, i), np.take(faces.tol, j))
+    t = tol[:, None]
+    # signed distances of the corners of each triangle to the other's plane
+    dA = np.einsum("nkc,nc->nk", PA, plB[:, :3]) - plB[:, 3:4]
+    dB = np.einsum("nkc,nc->nk", PB, plA[:, :3]) - plA[:, 3:4]
+
+    def strictly_one_side(d, sh):
+        # every corner not shared with the other face is strictly on one side
+        above = (d > t) | sh
+        below = (d < -t) | sh
+        return ((above[:, 0] & above[:, 1] & above[:, 2])
+                | (below[:, 0] & below[:, 1] & below[:, 2]))
+
+    rejA = strictly_one_side(dA, shA)
+    rejB = strictly_one_side(dB, shB)
+    # a shared edge needs one face in the other's plane; otherwise one plane
+    # separating the other face's free corners is enough
+    alive = np.where(nshared == 2, ~(rejA & rejB), ~(rejA | rejB)) & (nshared < 3)
+    if not alive.any():
+        return out
+    near = np.abs(dA) <= t
+    coplanar = near[:, 0] & near[:, 1] & near[:, 2]      # A lies in the plane of B
+    near = np.abs(dB) <= t
+    in_planeB = near[:, 0] & near[:, 1] & near[:, 2]
+    coplanar |= in_planeB
+    cases = (
+        (nshared == 2, _folded),
+        ((nshared == 1) & coplanar, _wedges_overlap),
+        ((nshared == 0) & coplanar, _coplanar_overlap),
+        ((nshared < 2) & ~coplanar, _crossing),
+    )
+    for mask, test in cases:
+        k = np.flatnonzero(alive & mask)
+        if k.size:
+            normal = np.where(in_planeB[k, None], plA[k, :3], plB[k, :3])
+            out[k] = test(_Pairs(PA[k], PB[k], plA[k, :3], plB[k, :3], dA[k], dB[k],
+                                 shA[k], shB[k], tol[k], normal))
+    return out
+
+
+class _Pairs:
+    """Data of the pairs that need the exact test (all arrays have ``n`` rows).
+
+    ``PA, PB`` (n, 3, 3) corners; ``nA, nB`` (n, 3) unit normals; ``dA`` (n, 3)
+    signed distances of A's corners to B's plane and ``dB`` the converse;
+    ``shA, shB`` (n, 3) corners shared with the other face; ``tol`` (n,);
+    ``normal`` (n, 3) the plane used when the faces are coplanar.
+    """
+
+    __slots__ = ("PA", "PB", "nA", "nB", "dA", "dB", "shA", "shB", "tol", "normal")
+
+    def __init__(self, *arrays):
+        for name, value in zip(self.__slots__, arrays):
+            setattr(self, name, value)
+
+
+def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Dot product over the last axis of length 3, written out."""
+    return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + a[..., 2] * b[..., 2]
+
+
+def _triple(a: np.ndarray, b: np.ndarray, n: np.ndarray) -> np.ndarray:
+    """``n . (a x b)`` for rows of (k, 3) arrays, written out."""
+    return (n[:, 0] * (a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1])
+            + n[:, 1] * (a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2])
+            + n[:, 2] * (a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]))
+
+
+def _corners(P: np.ndarray, k: np.ndarray):
+    """Return corners ``k``, ``k + 1``, ``k + 2`` (cyclic) of each triangle."""
+    flat = P.reshape(-1, 3)
+    base = np.arange(0, flat.shape[0], 3)
+    return (np.take(flat, base + k, axis=0), np.take(flat, base + (k + 1) % 3, axis=0),
+            np.take(flat, base + (k + 2) % 3, axis=0))
+
+
+def _folded(q: _Pairs) -> np.ndarray:
+    """Faces sharing an edge: one lies in the other's plane, folded onto it.
+
+    With ``a`` and ``b`` the corners off the shared edge ``p-r``: folded when
+    ``b`` is in A's plane and strictly on ``a``'s side of the edge, or ``a``
+    in B's plane and strictly on ``b``'s side.
+    """
+    r = np.arange(q.tol.size)
+    ka = np.argmin(q.shA, axis=1)                # the corner off the shared edge
+    kb = np.argmin(q.shB, axis=1)
+    a, p, e = _corners(q.PA, ka)
+    e = e - p                                    # the shared edge
+    b = np.take(q.PB.reshape(-1, 3), 3 * r + kb, axis=0)
+    margin = q.tol * np.sqrt(_dot(e, e))
+    # n . (e x (x - p)) is |e| times the signed distance of x's projection to
+    # the edge line, positive on a's side for A's own normal
+    side_b = _triple(e, b - p, q.nA)
+    on_a_side = side_b > margin
+    sa = _triple(e, a - p, q.nB)
+    sb = _triple(e, b - p, q.nB)
+    on_b_side = np.where(sb > 0, sa, -sa) > margin
+    return (((np.abs(q.dB[r, kb]) <= q.tol) & on_a_side)
+            | ((np.abs(q.dA[r, ka]) <= q.tol) & on_b_side))
+
+
+def _wedges_overlap(q: _Pairs) -> np.ndarray:
+    """Coplanar faces sharing one corner: do their wedges there overlap?
+
+    Two convex wedges with a common apex share more than the apex exactly
+    when one of the four boundary rays lies in the other (closed) wedge.
+    """
+    p, a1, a2 = _corners(q.PA, np.argmax(q.shA, axis=1))
+    _, b1, b2 = _corners(q.PB, np.argmax(q.shB, axis=1))
+    u1, u2, v1, v2 = a1 - p, a2 - p, b1 - p, b2 - p
+    n = q.normal
+    tol = q.tol
+
+    def inside(v, w1, w2):
+        # ray v in the wedge (w1, w2); a wedge whose projection is flat
+        # (orientation 0) contains no ray
+        sign = np.sign(_triple(w1, w2, n))
+        return ((sign != 0)
+                & (_triple(w1, v, n) * sign >= -tol * np.sqrt(_dot(w1, w1)))
+                & (_triple(v, w2, n) * sign >= -tol * np.sqrt(_dot(w2, w2))))
+
+    return inside(v1, u1, u2) | inside(v2, u1, u2) | inside(u1, v1, v2) | inside(u2, v1, v2)
+
+
+def _coplanar_overlap(q: _Pairs) -> np.ndarray:
+    """Coplanar faces without shared corner: separating axis test in the plane.
+
+    Two convex polygons in a plane are disjoint exactly when the line of one
+    of their edges has the other polygon strictly outside.
+    """
+    n = q.normal
+    separated = np.zeros(q.tol.size, dtype=bool)
+    for X, Y in ((q.PA, q.PB), (q.PB, q.PA)):
+        x0, x1, x2 = X[:, 0], X[:, 1], X[:, 2]
+        sign = np.sign(_triple(x1 - x0, x2 - x0, n))   # orientation seen from n
+        for s, e in ((x0, x1), (x1, x2), (x2, x0)):
+            edge = e - s
+            limit = -q.tol * np.sqrt(_dot(edge, edge))
+            # signed distance (times |edge|) of Y's corners, positive inside
+            out0 = _triple(edge, Y[:, 0] - s, n) * sign < limit
+            out1 = _triple(edge, Y[:, 1] - s, n) * sign < limit
+            out2 = _triple(edge, Y[:, 2] - s, n) * sign < limit
+            separated |= out0 & out1 & out2
+    return ~separated
+
+
+def _crossing(q: _Pairs) -> np.ndarray:
+    """Faces that are not coplanar and share at most one corner."""
+    EA = _edge_planes(q.PA, q.nA)
+    EB = _edge_planes(q.PB, q.nB)
+    return (_endpoints_inside(q.PA, q.dA, q.shA, EB, q.tol)
+            | _endpoints_inside(q.PB, q.dB, q.shB, EA, q.tol))
+
+
+def _endpoints_inside(PX, dX, shX, EY, tol):
+    """Is an endpoint of ``X`` ∩ plane(Y) inside triangle ``Y``?
+
+    ``X`` and ``Y`` are not coplanar.  The candidate endpoints are the corners
+    of ``X`` in the plane of ``Y`` and the crossings of ``X``'s edges with it;
+    a corner shared with ``Y`` (and any point within the tolerance of it) is
+    not a candidate, so faces sharing a corner must meet elsewhere.
+    """
+    t = tol[:, None]
+    d1 = np.roll(dX, -1, axis=1)
+    on_plane = (np.abs(dX) <= t) & ~shX
+    crossing = ((dX > t) & (d1 < -t)) | ((dX < -t) & (d1 > t))
+    rv, kv = np.nonzero(on_plane)
+    rc, kc = np.nonzero(crossing)
+    s = dX[rc, kc] / (dX[rc, kc] - d1[rc, kc])
+    start = PX[rc, kc]
+    pts = np.concatenate([PX[rv, kv], start + (PX[rc, (kc + 1) % 3] - start) * s[:, None]])
+    rows = np.concatenate([rv, rc])
+    tr = tol[rows]
+    keep = np.ones(rows.size, dtype=bool)
+    shared = shX.any(axis=1)[rows]
+    if shared.any():
+        p = PX[rows[shared], np.argmax(shX[rows[shared]], axis=1)]
+        diff = pts[shared] - p
+        keep[shared] = _dot(diff, diff) > tr[shared] ** 2
+    E = EY[rows]
+    for k in range(3):
+        keep &= _dot(E[:, k, :3], pts) - E[:, k, 3] >= -tr
+    out = np.zeros(PX.shape[0], dtype=bool)
+    out[rows[keep]] = True
+    return out

@@ -1,0 +1,54 @@
+"""The ``geotex`` command: one subcommand per job, one-line errors, exit codes.
+
+Exit status: 0 success (printable), 1 a readable mesh that is not printable,
+2 bad usage or unreadable input, 3 an internal error (a bug: please report it;
+set ``GEOTEX_DEBUG=1`` for the traceback).
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+
+from geotex import __version__
+from geotex.cli import check, convert, demo, render, repair
+from geotex.cli._common import EXIT_INTERNAL, EXIT_USAGE, Parser, fail
+from geotex.errors import GeotexError
+
+COMMANDS = (demo, check, repair, render, convert)
+
+
+def build_parser() -> Parser:
+    """Return the argument parser of the ``geotex`` command."""
+    parser = Parser(prog="geotex", description="Geometric texture on triangle meshes, "
+                    "made printable.")
+    parser.add_argument("--version", action="version", version=f"geotex {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
+    for module in COMMANDS:
+        module.register(sub)
+    return parser
+
+
+def main(argv=None) -> int:
+    """Run the command line; returns the exit status (also used by the script)."""
+    try:
+        args = build_parser().parse_args(argv)
+        if not getattr(args, "run", None):
+            return fail("no command given (see 'geotex --help')")
+        return args.run(args)
+    except GeotexError as exc:
+        return fail(str(exc), EXIT_USAGE)
+    except KeyboardInterrupt:
+        print("geotex: interrupted", file=sys.stderr)
+        return 130
+    except MemoryError:
+        return fail("out of memory; try a smaller mesh", EXIT_INTERNAL)
+    except Exception as exc:  # an unexpected failure is a bug: one line unless debugging
+        if os.environ.get("GEOTEX_DEBUG"):
+            raise
+        return fail(f"internal error: {type(exc).__name__}: {exc} "
+                    "(set GEOTEX_DEBUG=1 for the traceback)", EXIT_INTERNAL)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

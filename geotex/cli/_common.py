@@ -1,0 +1,63 @@
+"""Shared pieces of the command line: parser, error handling, output guards."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from pathlib import Path
+
+from geotex.errors import InputError
+
+EXIT_OK = 0
+EXIT_NOT_PRINTABLE = 1
+EXIT_USAGE = 2
+EXIT_INTERNAL = 3
+
+
+class UsageError(InputError):
+    """Bad command-line usage (reported like any other input error)."""
+
+
+class Parser(argparse.ArgumentParser):
+    """An ``ArgumentParser`` whose errors are one line and raise ``UsageError``."""
+
+    def error(self, message):  # noqa: D401 - argparse hook
+        raise UsageError(f"{message} (see '{self.prog} --help')")
+
+
+def fail(message: str, code: int = EXIT_USAGE) -> int:
+    """Print ``geotex: error: message`` to stderr and return ``code``."""
+    print(f"geotex: error: {message}", file=sys.stderr)
+    return code
+
+
+def guard_output(output, *inputs) -> Path:
+    """Refuse an output path that is one of the inputs or an existing directory.
+
+    Returns
+    -------
+    pathlib.Path
+        The output path.
+
+    Raises
+    ------
+    UsageError
+        If writing ``output`` would overwrite an input, or its folder is missing.
+    """
+    out = Path(output)
+    for src in inputs:
+        if src is None:
+            continue
+        src = Path(src)
+        if out.exists() and src.exists() and os.path.samefile(out, src):
+            raise UsageError(f"{out}: refusing to overwrite the input file; "
+                             "choose another output name")
+        if out.resolve() == src.resolve():
+            raise UsageError(f"{out}: refusing to overwrite the input file; "
+                             "choose another output name")
+    if out.is_dir():
+        raise UsageError(f"{out}: is a directory; give an output file name")
+    if not out.parent.exists():
+        raise UsageError(f"{out}: folder {out.parent} does not exist")
+    return out

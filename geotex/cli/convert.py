@@ -1,0 +1,24 @@
+"""``geotex convert IN OUT``: convert between mesh file formats."""
+
+from __future__ import annotations
+
+from geotex.cli._common import EXIT_OK, guard_output
+from geotex.io import read_mesh, write_mesh
+
+HELP = "convert a mesh between STL, OBJ, PLY, OFF, 3MF and GLB"
+
+
+def register(sub):
+    p = sub.add_parser("convert", help=HELP, description=HELP + " (format from the extension).")
+    p.add_argument("input", help="mesh file to read")
+    p.add_argument("output", help="mesh file to write")
+    p.add_argument("--ascii", action="store_true", help="write ASCII STL/PLY instead of binary")
+    p.set_defaults(run=run)
+
+
+def run(args) -> int:
+    out = guard_output(args.output, args.input)
+    mesh = read_mesh(args.input)
+    write_mesh(out, mesh, binary=not args.ascii)
+    print(f"wrote {out}: {mesh.n_vertices} vertices, {mesh.n_faces} faces")
+    return EXIT_OK

@@ -1,0 +1,466 @@
+"""3MF (3D Manufacturing Format, core specification) reading and writing.
+
+Reading
+    The model part is the target of the ``3dmodel`` relationship in
+    ``_rels/.rels`` when present, else ``3D/3dmodel.model``.  Every build
+    ``<item>`` is placed: its object's mesh (``<vertices>``, ``<triangles>``)
+    or ``<components>`` (recursively, each with its own ``transform``; a
+    component may name another model part of the package through the
+    production extension's ``p:path``), transformed and merged into one mesh
+    (items are concatenated, not welded).  A 3MF transform has 12 numbers
+    ``m00 m01 m02 m10 m11 m12 m20 m21 m22 m30 m31 m32``: the rows of a 4x3
+    matrix applied to row vectors, ``p' = p @ [[m00, m01, m02], [m10, m11,
+    m12], [m20, m21, m22]] + [m30, m31, m32]``; a component transform applies
+    before the transform of the object containing it.  Triangles of an item
+    whose transform mirrors (negative determinant) are flipped so they keep
+    facing outward.  The model's ``unit`` (micron, millimeter, centimeter,
+    inch, foot, meter) is converted to millimetres; ``metadata["unit"]`` is
+    ``"millimeter"`` and ``metadata["source_unit"]`` the file's unit.  A
+    package without build items gives an empty mesh.  Materials, colours and
+    textures of extensions are ignored.
+
+    Speed: ``<vertex>`` and ``<triangle>`` tags are extracted with regular
+    expressions over the raw XML (any namespace prefix, single or double
+    quotes); the rest of the document, with the mesh data cut out, is parsed
+    with :mod:`xml.etree.ElementTree`, which also checks it is well formed.
+    Mesh blocks the fast path does not understand fully (attributes in
+    another order, comments...) are left in and parsed with ElementTree.
+
+Writing
+    ``[Content_Types].xml``, ``_rels/.rels`` and ``3D/3dmodel.model`` with
+    ``unit="millimeter"``, the core 2015/02 namespace, one object of type
+    ``model`` and one build item.  Coordinates are written with ``repr``
+    (the shortest decimal that reads back to the same float64; 17 significant
+    digits at most), so a round trip is exact.  Zip entries carry a fixed
+    timestamp: the same mesh always gives the same bytes.
+"""
+
+from __future__ import annotations
+
+import io
+import re
+import xml.etree.ElementTree as ET
+import zipfile
+import zlib
+from xml.sax.saxutils import quoteattr
+
+import numpy as np
+
+from geotex.errors import MeshFileError
+from geotex.io._common import build_mesh, first_bad_number, format_rows
+
+__all__ = ["read_3mf", "write_3mf", "UNITS_TO_MM", "CORE_NAMESPACE"]
+
+CORE_NAMESPACE = "http://schemas.microsoft.com/3dmanufacturing/core/2015/02"
+_MODEL_REL = "http://schemas.microsoft.com/3dmanufacturing/2013/01/3dmodel"
+_PRODUCTION_NS = "http://schemas.microsoft.com/3dmanufacturing/production/2015/06"
+_DEFAULT_PART = "3D/3dmodel.model"
+
+UNITS_TO_MM = {"micron": 0.001, "millimeter": 1.0, "centimeter": 10.0, "inch": 25.4,
+               "foot": 304.8, "meter": 1000.0}
+
+_P = rb"(?:[A-Za-z_][\w.\-]*:)?"        # optional namespace prefix
+_Q = rb"[\"']([^\"'<>]*)[\"']"           # a quoted attribute value
+_OPEN = re.compile(rb"<(" + _P + rb")(vertices|triangles)\b[^>]*?(/?)>")
+_CLOSE = re.compile(rb"</" + _P + rb"(vertices|triangles)\s*>")
+_VERTEX = re.compile(
+    rb"<" + _P + rb"vertex\s+x\s*=\s*" + _Q + rb"\s+y\s*=\s*" + _Q + rb"\s+z\s*=\s*" + _Q
+    + rb"\s*(?:/>|>\s*</" + _P + rb"vertex\s*>)")
+_TRIANGLE = re.compile(
+    rb"<" + _P + rb"triangle\s+v1\s*=\s*[\"'](\d+)[\"']\s+v2\s*=\s*[\"'](\d+)[\"']"
+    rb"\s+v3\s*=\s*[\"'](\d+)[\"'](?:\s+[\w:.\-]+\s*=\s*[\"'][^\"'<>]*[\"'])*"
+    rb"\s*(?:/>|>\s*</" + _P + rb"triangle\s*>)")
+_MARK = "geotexblock"
+
+
+def _quoted_patterns(tag: bytes, names: tuple[bytes, ...]):
+    end = rb"\s*(?:/>|>\s*</" + _P + tag + rb"\s*>)"
+    head = rb"\s*<" + _P + tag + rb"\s+" + names[0] + rb"\s*=\s*"
+    return (re.compile(head),
+            [re.compile(rb"\s+" + n + rb"\s*=\s*") for n in names[1:]],
+            re.compile(end + head),
+            re.compile(end + rb"\s*"))
+
+
+_QUOTED = {b"vertices": _quoted_patterns(b"vertex", (b"x", b"y", b"z")),
+           b"triangles": _quoted_patterns(b"triangle", (b"v1", b"v2", b"v3"))}
+
+
+def _split_on_quotes(body: bytes, kind: bytes):
+    """Values of tags written uniformly as ``<tag a="1" b="2" c="3"/>``, else None.
+
+    The body is split on its quote character; the text between values must
+    then be, exactly, the tag syntax (checked once per distinct separator).
+    """
+    quote_at = min((i for i in (body.find(b'"'), body.find(b"'")) if i >= 0), default=-1)
+    if quote_at < 0:
+        return None
+    pieces = body.split(body[quote_at:quote_at + 1])
+    if (len(pieces) - 1) % 6:
+        return None
+    head, mids, join, tail = _QUOTED[kind]
+    if not head.fullmatch(pieces[0]) or not tail.fullmatch(pieces[-1]):
+        return None
+    for j, mid in enumerate(mids, 1):
+        if not all(mid.fullmatch(p) for p in set(pieces[2 * j::6])):
+            return None
+    if not all(join.fullmatch(p) for p in set(pieces[6:-1:6])):
+        return None
+    return pieces[1::2]
+
+
+def _local(tag: str) -> str:
+    return tag.rsplit("}", 1)[-1]
+
+
+def _attr(element, name: str):
+    """Attribute by local name (namespaced or not)."""
+    value = element.get(name)
+    if value is not None:
+        return value
+    for key, val in element.attrib.items():
+        if _local(key) == name:
+            return val
+    return None
+
+
+class _Part:
+    """One parsed model part: its objects and build items."""
+
+    def __init__(self, name, unit, objects, items):
+        self.name = name
+        self.unit = unit
+        self.objects = objects      # id -> Element
+        self.items = items          # list of Element
+
+
+class _Reader:
+    def __init__(self, path, archive: zipfile.ZipFile):
+        self.path = path
+        self.archive = archive
+        self.parts: dict[str, _Part] = {}
+        self.blocks: list[np.ndarray] = []
+        self.cache: dict[tuple[str, str], tuple[np.ndarray, np.ndarray]] = {}
+
+    def fail(self, message: str):
+        raise MeshFileError(self.path, message)
+
+    # ---------------------------------------------------------------- package
+    def start_part(self) -> str:
+        if "_rels/.rels" not in self.archive.namelist():
+            return _DEFAULT_PART
+        rels = self.read_part_bytes("_rels/.rels")
+        try:
+            root = ET.fromstring(rels)
+        except ET.ParseError as exc:
+            self.fail(f"malformed XML in _rels/.rels: {exc}")
+        for rel in root.iter():
+            if _local(rel.tag) == "Relationship" and rel.get("Type") == _MODEL_REL:
+                target = (rel.get("Target") or "").lstrip("/")
+                if target:
+                    return target
+        return _DEFAULT_PART
+
+    def read_part_bytes(self, name: str) -> bytes:
+        try:
+            return self.archive.read(name)
+        except KeyError:
+            if name == _DEFAULT_PART:
+                self.fail(f"3MF archive has no model part ({name}); it is not a 3MF "
+                          "file or is damaged")
+            self.fail(f"3MF archive has no model part {name!r}")
+        except (zipfile.BadZipFile, zlib.error, EOFError, NotImplementedError,
+                RuntimeError, OSError, ValueError) as exc:
+            self.fail(f"damaged 3MF archive: cannot read {name!r} ({exc})")
+
+    def part(self, name: str) -> _Part:
+        name = name.lstrip("/")
+        if name not in self.parts:
+            self.parts[name] = self.parse_part(name)
+        return self.parts[name]
+
+    # ---------------------------------------------------------------- parsing
+    def parse_part(self, name: str) -> _Part:
+        raw = self.read_part_bytes(name)
+        skeleton = self.cut_mesh_blocks(raw, name)
+        try:
+            root = ET.fromstring(skeleton)
+        except ET.ParseError as exc:
+            self.fail(f"malformed XML in {name}: {exc}")
+        if _local(root.tag) != "model":
+            self.fail(f"{name} is not a 3MF model (root element is "
+                      f"{_local(root.tag)!r}, expected 'model')")
+        unit = root.get("unit", "millimeter")
+        objects = {}
+        items = []
+        for child in root:
+            tag = _local(child.tag)
+            if tag == "resources":
+                for obj in child:
+                    if _local(obj.tag) == "object":
+                        oid = obj.get("id")
+                        if oid is None:
+                            self.fail(f"{name}: <object> without an id")
+                        objects[oid] = obj
+            elif tag == "build":
+                items.extend(it for it in child if _local(it.tag) == "item")
+        return _Part(name, unit, objects, items)
+
+    def cut_mesh_blocks(self, raw: bytes, name: str) -> bytes:
+        """Extract vertex / triangle blocks without a DOM; return the remaining XML.
+
+        Blocks the fast paths cannot fully account for stay in place for
+        ElementTree.  Removed bodies are replaced by as many newlines, so
+        ElementTree's line numbers still match the file.
+        """
+        out = []
+        last = 0
+        pos = 0
+        while True:
+            match = _OPEN.search(raw, pos)
+            if match is None:
+                break
+            pos = match.end()
+            if match.group(3):              # <vertices/>: nothing inside
+                continue
+            kind = match.group(2)
+            close_at = raw.find(b"</" + match.group(1) + kind, pos)
+            close = _CLOSE.match(raw, close_at) if close_at >= 0 else None
+            if close is None or close.group(1) != kind:
+                continue
+            body = raw[pos:close_at]
+            array = self.fast_block(body, kind, name)
+            if array is None:
+                continue
+            k = len(self.blocks)
+            self.blocks.append(array)
+            out.append(raw[last:match.end() - 1])
+            out.append(f' {_MARK}="{k}">'.encode())
+            out.append(b"\n" * body.count(b"\n"))
+            last = close_at
+            pos = close.end()
+        if not out:
+            return raw
+        out.append(raw[last:])
+        return b"".join(out)
+
+    def fast_block(self, body: bytes, kind: bytes, name: str):
+        """``(n, 3)`` values of a block, or None to leave it to ElementTree."""
+        empty = np.zeros((0, 3), dtype=np.float64 if kind == b"vertices" else np.int64)
+        if not body.strip():
+            return empty
+        values = _split_on_quotes(body, kind)
+        if values is None:
+            regex = _VERTEX if kind == b"vertices" else _TRIANGLE
+            pieces = regex.split(body)
+            if b"".join(pieces[0::4]).strip():
+                return None
+            del pieces[0::4]                 # keep the three values of each tag
+            values = pieces
+        try:
+            if kind == b"vertices":
+                return np.array(values, dtype=np.float64).reshape(-1, 3)
+            return np.array(values, dtype=np.int64).reshape(-1, 3)
+        except (ValueError, OverflowError):
+            if kind == b"vertices":
+                self.fail(f"{name}: bad vertex coordinate {first_bad_number(values)!r}")
+            self.fail(f"{name}: bad triangle index {first_bad_number(values, int)!r}")
+
+    def slow_block(self, element, kind: str, name: str, oid: str) -> np.ndarray:
+        tag = "vertex" if kind == "vertices" else "triangle"
+        keys = ("x", "y", "z") if kind == "vertices" else ("v1", "v2", "v3")
+        rows = []
+        for child in element:
+            if _local(child.tag) != tag:
+                continue
+            values = [_attr(child, k) for k in keys]
+            if any(v is None for v in values):
+                self.fail(f"{name}: object {oid}: <{tag}> lacks one of the attributes "
+                          f"{', '.join(keys)}")
+            rows.append(values)
+        if not rows:
+            return np.zeros((0, 3), dtype=np.float64 if tag == "vertex" else np.int64)
+        try:
+            if tag == "vertex":
+                return np.array(rows, dtype=np.float64)
+            return np.array(rows, dtype=np.int64)
+        except (ValueError, OverflowError):
+            bad = first_bad_number((v for r in rows for v in r),
+                                   float if tag == "vertex" else int)
+            self.fail(f"{name}: object {oid}: bad <{tag}> value {bad!r}")
+
+    def block(self, element, kind: str, name: str, oid: str) -> np.ndarray:
+        mark = element.get(_MARK)
+        if mark is not None:
+            return self.blocks[int(mark)]
+        return self.slow_block(element, kind, name, oid)
+
+    # ---------------------------------------------------------------- objects
+    def object_mesh(self, part_name: str, oid: str, stack: tuple):
+        key = (part_name, oid)
+        if key in self.cache:
+            return self.cache[key]
+        if key in stack:
+            self.fail(f"{part_name}: object {oid} contains itself through its components")
+        if len(stack) > 64:
+            self.fail(f"{part_name}: components nested more than 64 levels deep")
+        part = self.part(part_name)
+        obj = part.objects.get(oid)
+        if obj is None:
+            self.fail(f"{part_name}: no object with id {oid!r}")
+        mesh_el = next((c for c in obj if _local(c.tag) == "mesh"), None)
+        comps_el = next((c for c in obj if _local(c.tag) == "components"), None)
+        pieces = []
+        if mesh_el is not None:
+            verts = next((c for c in mesh_el if _local(c.tag) == "vertices"), None)
+            tris = next((c for c in mesh_el if _local(c.tag) == "triangles"), None)
+            V = (self.block(verts, "vertices", part_name, oid) if verts is not None
+                 else np.zeros((0, 3)))
+            F = (self.block(tris, "triangles", part_name, oid) if tris is not None
+                 else np.zeros((0, 3), dtype=np.int64))
+            if F.size and (F.min() < 0 or F.max() >= V.shape[0]):
+                bad = int(np.flatnonzero(((F < 0) | (F >= V.shape[0])).any(axis=1))[0])
+                self.fail(f"{part_name}: object {oid}: triangle {bad} references vertex "
+                          f"{F[bad].tolist()} but the object has {V.shape[0]} vertices")
+            pieces.append((V, F))
+        if comps_el is not None:
+            for comp in comps_el:
+                if _local(comp.tag) != "component":
+                    continue
+                cid = comp.get("objectid")
+                if cid is None:
+                    self.fail(f"{part_name}: object {oid}: <component> without objectid")
+                target = _attr(comp, "path") or part_name
+                V, F = self.object_mesh(target.lstrip("/"), cid, stack + (key,))
+                pieces.append(self.transformed(V, F, comp.get("transform"), part_name))
+        result = _concatenate(pieces)
+        self.cache[key] = result
+        return result
+
+    def transformed(self, V, F, transform, where):
+        if transform is None:
+            return V, F
+        M = parse_transform(transform)
+        if M is None:
+            self.fail(f"{where}: bad transform {transform[:80]!r} (expected 12 numbers)")
+        V = V @ M[:3] + M[3]
+        if np.linalg.det(M[:3]) < 0:
+            F = F[:, ::-1]
+        return V, F
+
+
+def parse_transform(text: str) -> np.ndarray | None:
+    """Parse a 3MF transform into a ``(4, 3)`` array (rows m0*, m1*, m2*, m3*).
+
+    Returns None when ``text`` is not 12 finite numbers.
+    """
+    try:
+        values = [float(t) for t in text.split()]
+    except ValueError:
+        return None
+    if len(values) != 12 or not np.isfinite(values).all():
+        return None
+    return np.array(values).reshape(4, 3)
+
+
+def _concatenate(pieces):
+    if not pieces:
+        return np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64)
+    if len(pieces) == 1:
+        return pieces[0]
+    Vs, Fs, offset = [], [], 0
+    for V, F in pieces:
+        Vs.append(V)
+        Fs.append(F + offset)
+        offset += V.shape[0]
+    return np.concatenate(Vs), np.concatenate(Fs)
+
+
+def read_3mf(path, data: bytes):
+    """Parse 3MF bytes into a :class:`~geotex.mesh.Mesh` in millimetres.
+
+    Raises
+    ------
+    MeshFileError
+        If the file is not a zip archive, lacks the model part, has malformed
+        XML, an unknown unit, bad transforms or out-of-range triangles.
+    """
+    try:
+        archive = zipfile.ZipFile(io.BytesIO(data))
+    except (zipfile.BadZipFile, zlib.error, EOFError, ValueError, OSError):
+        raise MeshFileError(path, "not a 3MF file: it is not a zip archive") from None
+    with archive:
+        reader = _Reader(path, archive)
+        root_name = reader.start_part()
+        root = reader.part(root_name)
+        unit = root.unit
+        if unit not in UNITS_TO_MM:
+            reader.fail(f"unknown 3MF unit {unit!r} (expected one of "
+                        f"{', '.join(UNITS_TO_MM)})")
+        pieces = []
+        for item in root.items:
+            oid = item.get("objectid")
+            if oid is None:
+                reader.fail(f"{root_name}: build <item> without objectid")
+            target = (_attr(item, "path") or root_name).lstrip("/")
+            V, F = reader.object_mesh(target, oid, ())
+            pieces.append(reader.transformed(V, F, item.get("transform"), root_name))
+        V, F = _concatenate(pieces)
+    V = V * UNITS_TO_MM[unit] if unit != "millimeter" else V
+    return build_mesh(path, V, F, fmt="3mf",
+                      metadata={"unit": "millimeter", "source_unit": unit})
+
+
+_CONTENT_TYPES = (
+    '<?xml version="1.0" encoding="UTF-8"?>\n'
+    '<Types xmlns="http://schemas.openxmlformats.org/package/2006/content-types">\n'
+    ' <Default Extension="rels" '
+    'ContentType="application/vnd.openxmlformats-package.relationships+xml"/>\n'
+    ' <Default Extension="model" '
+    'ContentType="application/vnd.ms-package.3dmanufacturing-3dmodel+xml"/>\n'
+    '</Types>\n')
+_RELS = (
+    '<?xml version="1.0" encoding="UTF-8"?>\n'
+    '<Relationships xmlns="http://schemas.openxmlformats.org/package/2006/relationships">\n'
+    f' <Relationship Target="/{_DEFAULT_PART}" Id="rel0" Type="{_MODEL_REL}"/>\n'
+    '</Relationships>\n')
+
+
+def model_xml(mesh) -> bytes:
+    """The ``3D/3dmodel.model`` document for ``mesh`` (millimetres)."""
+    name = " ".join((mesh.name or "geotex").split()) or "geotex"
+    head = (
+        '<?xml version="1.0" encoding="UTF-8"?>\n'
+        f'<model unit="millimeter" xml:lang="en-US" xmlns="{CORE_NAMESPACE}">\n'
+        ' <metadata name="Application">geotex</metadata>\n'
+        ' <resources>\n'
+        f'  <object id="1" type="model" name={quoteattr(name)}>\n'
+        '   <mesh>\n'
+        '    <vertices>\n')
+    middle = '    </vertices>\n    <triangles>\n'
+    tail = ('    </triangles>\n'
+            '   </mesh>\n'
+            '  </object>\n'
+            ' </resources>\n'
+            ' <build>\n'
+            '  <item objectid="1"/>\n'
+            ' </build>\n'
+            '</model>\n')
+    vertices = format_rows('     <vertex x="%r" y="%r" z="%r"/>\n', mesh.vertices)
+    triangles = format_rows('     <triangle v1="%d" v2="%d" v3="%d"/>\n', mesh.faces)
+    return (head + vertices + middle + triangles + tail).encode("utf-8")
+
+
+def _entry(name: str) -> zipfile.ZipInfo:
+    info = zipfile.ZipInfo(name, date_time=(1980, 1, 1, 0, 0, 0))
+    info.compress_type = zipfile.ZIP_DEFLATED
+    info.external_attr = 0o644 << 16
+    return info
+
+
+def write_3mf(fh, mesh, *, path=None, binary: bool = True) -> None:
+    """Write ``mesh`` (millimetres) as a 3MF package to the open binary file ``fh``."""
+    with zipfile.ZipFile(fh, "w", compression=zipfile.ZIP_DEFLATED) as archive:
+        archive.writestr(_entry("[Content_Types].xml"), _CONTENT_TYPES)
+        archive.writestr(_entry("_rels/.rels"), _RELS)
+        archive.writestr(_entry(_DEFAULT_PART), model_xml(mesh))

@@ -1,0 +1,104 @@
+import json
+
+import numpy as np
+import pytest
+
+from geotex.check import check_mesh
+from geotex.errors import InputError
+from geotex.mesh.primitives import box, icosphere
+
+
+def test_tetrahedron_is_printable(tet):
+    V, F = tet
+    r = check_mesh(V, F)
+    assert r.printable and r.reasons == []
+    assert r.genus == 0 and r.euler_characteristic == 2 and r.components == 1
+    assert r.volume == pytest.approx(1 / 6)
+    assert r.outward is True and r.manifold3d_status == "NoError"
+    assert r.bbox_size == [1.0, 1.0, 1.0]
+
+
+def test_torus_genus(ring):
+    V, F = ring
+    r = check_mesh(V, F)
+    assert r.printable and r.genus == 1 and r.euler_characteristic == 0
+
+
+def test_inside_out_is_not_printable(sphere):
+    V, F = sphere
+    r = check_mesh(V, F[:, ::-1])
+    assert not r.printable and r.outward is False
+    assert any("inward" in x for x in r.reasons)
+
+
+def test_hollow_sphere_with_inward_cavity_is_printable():
+    Vo, Fo = icosphere(2, radius=2.0)
+    Vi, Fi = icosphere(2, radius=1.0)
+    V = np.vstack([Vo, Vi])
+    F = np.vstack([Fo, Fi[:, ::-1] + len(Vo)])
+    r = check_mesh(V, F)
+    assert r.printable, r.reasons
+    # the same cavity facing outward is a wrongly oriented shell
+    r2 = check_mesh(V, np.vstack([Fo, Fi + len(Vo)]))
+    assert not r2.printable and r2.examples["inward_components"] == [1]
+
+
+def test_open_mesh_reports_boundary_with_examples(sphere):
+    V, F = sphere
+    r = check_mesh(V, F[1:])
+    assert not r.printable and r.boundary_edges == 3 and r.genus is None
+    assert len(r.examples["boundary_edges"]) == 3
+    assert "not watertight: 3 boundary edges" in r.reasons
+
+
+def test_two_overlapping_spheres_self_intersect():
+    Va, Fa = icosphere(2)
+    Vb, Fb = icosphere(2, center=(0.5, 0.1, 0.0))
+    r = check_mesh(np.vstack([Va, Vb]), np.vstack([Fa, Fb + len(Va)]))
+    assert not r.printable and r.self_intersecting_pairs > 0
+    assert any("self-intersecting" in x for x in r.reasons)
+
+
+def test_skipping_self_intersections_is_never_printable(tet):
+    V, F = tet
+    r = check_mesh(V, F, self_intersections=False)
+    assert not r.printable and r.self_intersecting_pairs is None
+    assert r.reasons == ["self-intersections were not checked"]
+
+
+def test_json_has_required_keys_and_is_valid(cube):
+    V, F = cube
+    d = json.loads(check_mesh(V, F).to_json())
+    assert d["printable"] is True and d["reasons"] == []
+    for key in ("vertices", "faces", "components", "boundary_edges", "non_manifold_edges",
+                "non_manifold_vertices", "orientation_consistent", "outward", "volume",
+                "degenerate_faces", "duplicate_faces", "self_intersecting_pairs",
+                "euler_characteristic", "genus", "bbox_min", "bbox_max", "bbox_size"):
+        assert key in d
+
+
+def test_empty_and_point_cloud():
+    r = check_mesh(np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64))
+    assert not r.printable and r.reasons == ["the mesh has no faces"]
+    r = check_mesh(np.random.default_rng(0).random((5, 3)), np.zeros((0, 3), np.int64))
+    assert r.reasons == ["the mesh has no faces (a point cloud)"]
+
+
+def test_report_is_scale_invariant():
+    V, F = box(divisions=3)
+    base = check_mesh(V, F)
+    for s in (1e-6, 1e6):
+        r = check_mesh(V * s, F)
+        assert r.printable == base.printable and r.genus == base.genus
+        assert r.volume == pytest.approx(s ** 3, rel=1e-9)
+
+
+def test_summary_ends_with_verdict(sphere):
+    V, F = sphere
+    text = check_mesh(V, F[2:]).summary()
+    assert "printable: no" in text and text.splitlines()[-1].startswith("  - ")
+
+
+def test_malformed_arrays_raise():
+    with pytest.raises(InputError):
+        check_mesh(np.zeros((3, 3)), [[0, 1, 3]])

@@ -1,0 +1,535 @@
+"""Tests of geotex.check.intersections.self_intersecting_pairs."""
+
+from __future__ import annotations
+
+import itertools
+
+import igl
+import numpy as np
+import pytest
+
+import geotex.check.intersections as gi
+from geotex.check.intersections import self_intersecting_pairs
+from geotex.errors import InputError
+from geotex.mesh.geometry import degenerate_faces
+
+# ---------------------------------------------------------------------------
+# mesh generators
+
+
+def icosphere(level: int, *, radius: float = 1.0, center=(0.0, 0.0, 0.0)):
+    """Subdivided icosahedron projected on a sphere, outward-facing."""
+    t = (1.0 + 5.0 ** 0.5) / 2.0
+    V = np.array([[-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0], [0, -1, t], [0, 1, t],
+                  [0, -1, -t], [0, 1, -t], [t, 0, -1], [t, 0, 1], [-t, 0, -1], [-t, 0, 1]],
+                 dtype=float)
+    F = np.array([[0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9],
+                  [5, 11, 4], [11, 10, 2], [10, 7, 6], [7, 1, 8], [3, 9, 4], [3, 4, 2],
+                  [3, 2, 6], [3, 6, 8], [3, 8, 9], [4, 9, 5], [2, 4, 11], [6, 2, 10],
+                  [8, 6, 7], [9, 8, 1]], dtype=np.int64)
+    V /= np.linalg.norm(V, axis=1, keepdims=True)
+    for _ in range(level):
+        E = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
+        edges, inv = np.unique(E, axis=0, return_inverse=True)
+        inv = inv.ravel()
+        mid = V[edges[:, 0]] + V[edges[:, 1]]
+        mid /= np.linalg.norm(mid, axis=1, keepdims=True)
+        n, m = len(V), len(F)
+        V = np.concatenate([V, mid])
+        a, b, c = inv[:m] + n, inv[m:2 * m] + n, inv[2 * m:] + n
+        F = np.concatenate([np.stack([F[:, 0], a, c], 1), np.stack([F[:, 1], b, a], 1),
+                            np.stack([F[:, 2], c, b], 1), np.stack([a, b, c], 1)])
+    return V * radius + np.asarray(center, dtype=float), F
+
+
+def torus(nu: int, nv: int, *, R: float = 1.0, r: float = 0.35):
+    """Closed torus grid, two triangles per quad."""
+    u = np.arange(nu) * 2 * np.pi / nu
+    v = np.arange(nv) * 2 * np.pi / nv
+    U, W = np.meshgrid(u, v, indexing="ij")
+    V = np.stack([(R + r * np.cos(W)) * np.cos(U), (R + r * np.cos(W)) * np.sin(U),
+                  r * np.sin(W)], axis=-1).reshape(-1, 3)
+    i, j = np.meshgrid(np.arange(nu), np.arange(nv), indexing="ij")
+    a = i * nv + j
+    b = ((i + 1) % nu) * nv + j
+    c = ((i + 1) % nu) * nv + (j + 1) % nv
+    d = i * nv + (j + 1) % nv
+    F = np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3),
+                        np.stack([a, c, d], -1).reshape(-1, 3)])
+    return V, F
+
+
+def two_spheres(level=2, offset=(0.9, 0.13, 0.07)):
+    V1, F1 = icosphere(level)
+    V2, F2 = icosphere(level, radius=0.8, center=offset)
+    return np.concatenate([V1, V2]), np.concatenate([F1, F2 + len(V1)]), len(F1)
+
+
+def random_soup(seed, m=200, *, pool=None, sizes=(0.05, 0.4)):
+    """Random triangles in the unit cube; ``pool`` vertices shared if given."""
+    rng = np.random.default_rng(seed)
+    if pool is None:
+        centers = rng.random((m, 1, 3))
+        scale = np.exp(rng.uniform(np.log(sizes[0]), np.log(sizes[1]), (m, 1, 1)))
+        V = (centers + scale * rng.normal(size=(m, 3, 3))).reshape(-1, 3)
+        F = np.arange(3 * m).reshape(m, 3)
+    else:
+        V = rng.random((pool, 3))
+        F = np.array([rng.choice(pool, 3, replace=False) for _ in range(m)])
+    return V, F
+
+
+# ---------------------------------------------------------------------------
+# references
+
+
+def as_set(pairs):
+    return {tuple(p) for p in np.asarray(pairs).tolist()}
+
+
+def brute_force(V, F):
+    """All pairs through the narrow phase, no broad phase (O(m^2))."""
+    faces = gi._FaceData(gi._normalized(V, F), F)
+    act = faces.active
+    i, j = np.triu_indices(act.size, k=1)
+    i, j = act[i], act[j]
+    hit = gi._intersecting(faces, i, j)
+    return np.stack([i[hit], j[hit]], axis=1)
+
+
+def igl_hit(V, fa, fb):
+    """igl's verdict for one pair, plus the length of its intersection segment."""
+    tri = [V[k][None, :].astype(float) for k in (*fa, *fb)]
+    hit, coplanar, source, target = igl.tri_tri_intersection_test_3d(*tri)
+    length = float(np.linalg.norm(np.asarray(source) - np.asarray(target))) if hit else 0.0
+    return bool(hit), bool(coplanar), length
+
+
+def independent_reference(V, F):
+    """Slow per-pair reference built on igl, for meshes in general position.
+
+    No shared vertex: igl's test.  One shared vertex ``p``: igl's intersection
+    segment must be longer than a point.  Two or three shared vertices: never
+    (a fold needs exact coplanarity, which random data does not produce).
+    """
+    out = []
+    scale = np.ptp(V, axis=0).max()
+    for a, b in itertools.combinations(range(len(F)), 2):
+        shared = len(set(F[a].tolist()) & set(F[b].tolist()))
+        if shared >= 2:
+            continue
+        hit, coplanar, length = igl_hit(V, F[a], F[b])
+        assert not coplanar
+        if hit and (shared == 0 or length > 1e-9 * scale):
+            out.append((a, b))
+    return np.array(out, dtype=np.int64).reshape(-1, 2)
+
+
+def check_output(pairs, m):
+    assert pairs.dtype == np.int64
+    assert pairs.ndim == 2 and pairs.shape[1] == 2
+    assert np.all(pairs[:, 0] < pairs[:, 1])
+    assert np.all((pairs >= 0) & (pairs < m))
+    keys = pairs[:, 0] * m + pairs[:, 1]
+    assert np.all(np.diff(keys) > 0), "rows must be sorted and unique"
+
+
+# ---------------------------------------------------------------------------
+# input handling
+
+
+def test_empty_input():
+    out = self_intersecting_pairs(np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64))
+    assert out.shape == (0, 2) and out.dtype == np.int64
+    V, F = icosphere(0)
+    assert self_intersecting_pairs(V, F[:1]).shape == (0, 2)
+    assert self_intersecting_pairs(V, F[:0]).shape == (0, 2)
+
+
+def test_bad_input_raises():
+    V, F = icosphere(1)
+    with pytest.raises(InputError):
+        self_intersecting_pairs(V[:, :2], F)
+    with pytest.raises(InputError):
+        self_intersecting_pairs(V, F + len(V))
+    bad = V.copy()
+    bad[0, 0] = np.nan
+    with pytest.raises(InputError):
+        self_intersecting_pairs(bad, F)
+    for value in (-1, 1.5, "3", True):
+        with pytest.raises(InputError):
+            self_intersecting_pairs(V, F, max_pairs=value)
+
+
+def test_inputs_not_modified_and_lists_accepted():
+    V, F, _ = two_spheres()
+    V0, F0 = V.copy(), F.copy()
+    out = self_intersecting_pairs(V, F)
+    assert np.array_equal(V, V0) and np.array_equal(F, F0)
+    assert np.array_equal(self_intersecting_pairs(V.tolist(), F.tolist()), out)
+    assert np.array_equal(self_intersecting_pairs(V.astype(np.float32), F.astype(np.int32)),
+                          self_intersecting_pairs(V.astype(np.float32).astype(float), F))
+
+
+# ---------------------------------------------------------------------------
+# clean meshes
+
+
+@pytest.mark.parametrize("level", [0, 1, 2, 3, 4, 5])
+def test_icosphere_is_clean(level):
+    V, F = icosphere(level)
+    assert self_intersecting_pairs(V, F).shape == (0, 2)
+
+
+@pytest.mark.parametrize("nu,nv", [(12, 6), (60, 20), (40, 120), (200, 70)])
+def test_torus_is_clean(nu, nv):
+    V, F = torus(nu, nv)
+    assert self_intersecting_pairs(V, F).shape == (0, 2)
+
+
+def test_flat_grid_is_clean():
+    # coplanar neighbours everywhere: exercises the coplanar tests
+    V, F = igl.triangulated_grid(40, 30)
+    V = np.column_stack([V, np.zeros(len(V))])
+    assert self_intersecting_pairs(V, F.astype(np.int64)).shape == (0, 2)
+    # and a cube made of flat grids (coplanar fans, right-angle edges)
+    cube_V, cube_F = [], []
+    g, gf = igl.triangulated_grid(8, 8)
+    g = g * 2 - 1
+    for axis in range(3):
+        for sign in (-1.0, 1.0):
+            P = np.insert(g, axis, sign, axis=1)
+            f = gf if sign > 0 else gf[:, ::-1]
+            cube_F.append(f + sum(len(v) for v in cube_V))
+            cube_V.append(P)
+    V = np.concatenate(cube_V)
+    F = np.concatenate(cube_F).astype(np.int64)
+    # weld the duplicated boundary vertices of the six grids
+    key = np.round(V * 1e6).astype(np.int64)
+    _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    V, F = V[first], inv.ravel()[F]
+    assert len(degenerate_faces(V, F)) == 0
+    assert self_intersecting_pairs(V, F).shape == (0, 2)
+
+
+# ---------------------------------------------------------------------------
+# the cases of the semantics
+
+
+def tri_pair(A, B, shared=0):
+    """Two faces with corners ``A`` and ``B``; the first ``shared`` corners shared."""
+    A = np.asarray(A, dtype=float)
+    B = np.asarray(B, dtype=float)
+    V = np.concatenate([A, B[shared:]])
+    F = np.array([[0, 1, 2], [*range(shared), *range(3, 6 - shared)]], dtype=np.int64)
+    return V, F
+
+
+def hits(V, F):
+    return self_intersecting_pairs(V, F).shape[0] == 1
+
+
+A0 = [[0, 0, 0], [2, 0, 0], [0, 2, 0]]
+
+
+def test_no_shared_vertex_piercing_and_separate():
+    assert hits(*tri_pair(A0, [[0.5, 0.5, -1], [0.6, 0.4, 1], [3, 3, 1]]))
+    assert not hits(*tri_pair(A0, [[0.5, 0.5, 0.1], [0.6, 0.4, 1], [3, 3, 1]]))
+    # an edge of each crosses the other (neither contains a whole edge)
+    assert hits(*tri_pair(A0, [[1.5, 1.5, -1], [1.5, 1.5, 1], [-1, -1, 0.2]]))
+    # crossing planes but disjoint triangles
+    assert not hits(*tri_pair(A0, [[3, 3, -1], [3, 3, 1], [2.5, 0.6, 0]]))
+
+
+def test_touching_at_a_point():
+    # a corner of B exactly on A's interior, B above
+    assert hits(*tri_pair(A0, [[0.5, 0.5, 0], [1, 1, 1], [0, 1, 1]]))
+    # corner on A's edge, corner on A's corner
+    assert hits(*tri_pair(A0, [[1, 0, 0], [1, -1, 1], [0, -1, 1]]))
+    assert hits(*tri_pair(A0, [[2, 0, 0], [3, 0, 1], [3, 1, 1]]))
+    # edge touching edge at one point (crossing edges, one above the other... at z=0)
+    assert hits(*tri_pair(A0, [[1.5, 1.5, 0], [0.5, -0.5, 0.0], [1, 1, 2]]))
+    # just apart
+    assert not hits(*tri_pair(A0, [[0.5, 0.5, 1e-6], [1, 1, 1], [0, 1, 1]]))
+    assert not hits(*tri_pair(A0, [[2 + 1e-6, 0, 0], [3, 0, 1], [3, 1, 1]]))
+
+
+def test_coplanar_no_shared_vertex():
+    # overlapping
+    assert hits(*tri_pair(A0, [[0.5, 0.5, 0], [3, 0.5, 0], [0.5, 3, 0]]))
+    # one inside the other (no edge crossings at all)
+    assert hits(*tri_pair(A0, [[0.2, 0.2, 0], [0.6, 0.2, 0], [0.2, 0.6, 0]]))
+    assert hits(*tri_pair([[0.2, 0.2, 0], [0.6, 0.2, 0], [0.2, 0.6, 0]], A0))
+    # touching along an edge, at a corner, corner on edge
+    assert hits(*tri_pair(A0, [[2, 0, 0], [0, 2, 0], [2, 2, 0]]))
+    assert hits(*tri_pair(A0, [[2, 0, 0], [3, 0, 0], [3, 1, 0]]))
+    assert hits(*tri_pair(A0, [[1, 1, 0], [3, 1, 0], [1, 3, 0]]))
+    # separate, and separated by a hair
+    assert not hits(*tri_pair(A0, [[1.1, 1.1, 0], [3, 1, 0], [1, 3, 0]]))
+    assert not hits(*tri_pair(A0, [[2 + 1e-7, 0, 0], [0, 2 + 1e-7, 0], [2, 2, 0]]))
+
+
+def test_shared_vertex_piercing():
+    # B's opposite edge crosses A's interior
+    assert hits(*tri_pair(A0, [[0, 0, 0], [0.5, 0.4, 1], [0.5, 0.4, -1]], shared=1))
+    # B's opposite edge misses A, but A's opposite edge crosses B: the
+    # intersection segment runs from p to A's far edge
+    assert hits(*tri_pair(A0, [[0, 0, 0], [3, 1, 1], [3, 1, -1]], shared=1))
+    # B lies in a plane through p and slices A from p onwards
+    assert hits(*tri_pair(A0, [[0, 0, 0], [0.3, 0.3, 1], [0.4, 0.2, -1]], shared=1))
+
+
+def test_shared_vertex_edge_on_the_other_face():
+    # B's edge at p runs along A's edge p-a1, B standing up: touching beyond p
+    assert hits(*tri_pair(A0, [[0, 0, 0], [1, 0, 0], [0, 0, 1]], shared=1))
+    # B's edge at p lies inside A, B standing up
+    assert hits(*tri_pair(A0, [[0, 0, 0], [1, 1, 0], [0, -1, 1]], shared=1))
+
+
+def test_shared_vertex_not_intersecting():
+    # B above A, its projection overlapping A: meets A's plane only at p
+    assert not hits(*tri_pair(A0, [[0, 0, 0], [1, 1, 1], [1, 0.2, 1]], shared=1))
+    # B through A's plane but outside A
+    assert not hits(*tri_pair(A0, [[0, 0, 0], [-1, -1, 1], [-1, -0.5, -1]], shared=1))
+    # B's opposite edge crosses A's plane outside A, and the plane of B cuts A
+    # only at p
+    assert not hits(*tri_pair(A0, [[0, 0, 0], [-1, 1, 1], [-1, 1, -1]], shared=1))
+    # a sphere's fan: neighbours meeting at one vertex only
+    V, F = icosphere(0)
+    assert self_intersecting_pairs(V, F).shape == (0, 2)
+
+
+def test_shared_vertex_coplanar_wedges():
+    # wedges overlap
+    assert hits(*tri_pair(A0, [[0, 0, 0], [1, 0.5, 0], [3, -1, 0]], shared=1))
+    # one wedge inside the other
+    assert hits(*tri_pair(A0, [[0, 0, 0], [1, 0.2, 0], [0.2, 1, 0]], shared=1))
+    # wedges sharing a boundary ray (collinear edges from p): touch beyond p
+    assert hits(*tri_pair(A0, [[0, 0, 0], [0, -1, 0], [1, 0, 0]], shared=1))
+    # wedges meeting only at p
+    assert not hits(*tri_pair(A0, [[0, 0, 0], [-1, 0.5, 0], [-1, -1, 0]], shared=1))
+    assert not hits(*tri_pair(A0, [[0, 0, 0], [1, -1e-6, 0], [1, -1, 0]], shared=1))
+
+
+def test_shared_edge_fold():
+    # B = (a1, p, b): shares edge p-a1 with A
+    # A = (p, a1, a2), B = (a1, p, b) shares the edge p-a1; only b moves
+    for b, expected in [([1, -1, 0], False),      # flat, on the other side
+                        ([1, 1, 0], True),        # folded onto A
+                        ([5, 3, 0], True),        # folded, reaching beyond A
+                        ([1, 1, 0.05], False),    # bent, not folded
+                        ([1, 1, 1e-7], False),    # nearly folded
+                        ([3, 0, 0], False)]:      # collinear: degenerate B
+        V = np.concatenate([np.asarray(A0, float), [b]])
+        assert hits(V, np.array([[0, 1, 2], [1, 0, 3]])) == expected, b
+    # folded with inconsistent orientation
+    V = np.concatenate([np.asarray(A0, float), [[1, 1, 0]]])
+    assert hits(V, np.array([[0, 1, 2], [0, 1, 3]]))
+    # a sharp but open dihedral angle is not an intersection
+    V = np.concatenate([np.asarray(A0, float), [[1, 1, 0.001]]])
+    assert not hits(V, np.array([[0, 1, 2], [1, 0, 3]]))
+
+
+def test_duplicates_and_degenerates_excluded():
+    V, F = icosphere(2)
+    n = len(F)
+    extra = np.array([F[5][::-1], F[7][[1, 2, 0]]])              # duplicates
+    # degenerate faces crossing the sphere: a repeated index, collinear corners
+    V2 = np.concatenate([V, [[-2, 0.01, 0.02], [2, 0.01, 0.02], [0, 0.01, 0.02]]])
+    k = len(V)
+    degen = np.array([[k, k + 1, k + 1], [k, k + 1, k + 2]])
+    F2 = np.concatenate([F, extra, degen])
+    assert set(degenerate_faces(V2, F2).tolist()) == {n + 2, n + 3}
+    assert self_intersecting_pairs(V2, F2).shape == (0, 2)
+    # a duplicate face is still tested against the other faces
+    V3 = np.concatenate([V2, [[0, 0, -2], [0.01, 0.02, 2], [0.03, -0.02, 2]]])
+    F3 = np.concatenate([F2, [[k + 3, k + 4, k + 5]]])
+    out = self_intersecting_pairs(V3, F3)
+    assert out.shape[0] > 0 and np.all(out[:, 1] == len(F3) - 1)
+
+
+# ---------------------------------------------------------------------------
+# meshes with intersections, against references
+
+
+def test_two_spheres_against_igl():
+    V, F, m1 = two_spheres(level=2)
+    out = self_intersecting_pairs(V, F)
+    check_output(out, len(F))
+    assert out.shape[0] > 0
+    # every pair crosses between the two spheres
+    assert np.all((out[:, 0] < m1) & (out[:, 1] >= m1))
+    expected = []
+    for a in range(m1):
+        for b in range(m1, len(F)):
+            if igl_hit(V, F[a], F[b])[0]:
+                expected.append((a, b))
+    assert as_set(out) == set(expected)
+
+
+def test_reported_pairs_really_intersect_large():
+    V, F, m1 = two_spheres(level=5, offset=(0.7, 0.31, -0.2))
+    out = self_intersecting_pairs(V, F)
+    check_output(out, len(F))
+    assert out.shape[0] > 100
+    rng = np.random.default_rng(0)
+    for a, b in out[rng.choice(len(out), 300, replace=False)]:
+        assert igl_hit(V, F[a], F[b])[0]
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_random_soup_matches_igl(seed):
+    V, F = random_soup(seed)
+    out = self_intersecting_pairs(V, F)
+    check_output(out, len(F))
+    assert out.shape[0] > 0
+    assert np.array_equal(out, independent_reference(V, F))
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_random_shared_vertex_soup_matches_igl(seed):
+    V, F = random_soup(seed, m=120, pool=40)
+    out = self_intersecting_pairs(V, F)
+    check_output(out, len(F))
+    assert np.array_equal(out, independent_reference(V, F))
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_broad_phase_matches_brute_force(seed, monkeypatch):
+    levels = []
+    level_tasks = gi._level_tasks
+
+    def spy(faces, box, cell, cur, low):
+        levels.append(cell)
+        return level_tasks(faces, box, cell, cur, low)
+
+    monkeypatch.setattr(gi, "_level_tasks", spy)
+    # mostly small triangles and a few up to 500 times larger: several levels
+    Vs, Fs = random_soup(seed, m=400, sizes=(0.002, 0.01))
+    Vb, Fb = random_soup(seed + 100, m=30, sizes=(0.01, 1.0))
+    V = np.concatenate([Vs, Vb])
+    F = np.concatenate([Fs, Fb + len(Vs)])
+    out = self_intersecting_pairs(V, F)
+    assert len(levels) >= 3
+    assert out.shape[0] > 0
+    assert np.array_equal(out, brute_force(V, F))
+    V, F = random_soup(seed, m=300, sizes=(0.002, 0.8))
+    assert np.array_equal(self_intersecting_pairs(V, F), brute_force(V, F))
+    V, F = random_soup(seed, m=300, pool=80)
+    assert np.array_equal(self_intersecting_pairs(V, F), brute_force(V, F))
+
+
+def test_broad_phase_huge_grid_fallback():
+    # tiny triangles spread over a large box: too many cells for one int64 key
+    rng = np.random.default_rng(3)
+    centers = rng.random((400, 1, 3)) * 1e7
+    centers[200:] = centers[:200] + rng.normal(size=(200, 1, 3)) * 0.5
+    V = (centers + rng.normal(size=(400, 3, 3))).reshape(-1, 3)
+    F = np.arange(1200).reshape(400, 3)
+    out = self_intersecting_pairs(V, F)
+    assert out.shape[0] > 0
+    assert np.array_equal(out, brute_force(V, F))
+
+
+def test_mixed_sizes_levels():
+    # a fine sphere pierced by a few huge triangles
+    V, F = icosphere(4)
+    big = np.array([[-3, -3, 0.1], [3, -3, 0.2], [0, 4, -0.1],
+                    [0.3, -3, -3], [0.2, 3, -3], [-0.1, 0, 4]])
+    V2 = np.concatenate([V, big])
+    F2 = np.concatenate([F, [[len(V), len(V) + 1, len(V) + 2], [len(V) + 3, len(V) + 4, len(V) + 5]]])
+    out = self_intersecting_pairs(V2, F2)
+    assert np.array_equal(out, brute_force(V2, F2))
+    assert set(np.unique(out[:, 1]).tolist()) == {len(F), len(F) + 1}
+    assert np.any(out[:, 0] == len(F))  # the two big triangles cross each other
+
+
+# ---------------------------------------------------------------------------
+# scale, position, determinism, early stop
+
+
+def test_scale_and_translation_invariance():
+    V, F, _ = two_spheres(level=3, offset=(0.83, 0.11, 0.05))
+    ref = self_intersecting_pairs(V, F)
+    assert ref.shape[0] > 0
+    for scale in (1e-6, 1e6):
+        assert np.array_equal(self_intersecting_pairs(V * scale, F), ref)
+    assert np.array_equal(self_intersecting_pairs(V + [1e4, -2e4, 3e3], F), ref)
+    Vs, Fs = random_soup(11, m=250, pool=90)
+    ref = self_intersecting_pairs(Vs, Fs)
+    for scale in (1e-6, 1e6):
+        assert np.array_equal(self_intersecting_pairs(Vs * scale, Fs), ref)
+
+
+def test_exact_contacts_at_any_scale():
+    V, F = tri_pair(A0, [[0.5, 0.5, 0], [1, 1, 1], [0, 1, 1]])
+    Vc, Fc = tri_pair(A0, [[0, 0, 0], [1, 0, 0], [0, 0, 1]], shared=1)
+    for scale in (1e-6, 1.0, 1e6, 1e30, 1e-30):
+        assert hits(V * scale, F)
+        assert hits(Vc * scale, Fc)
+
+
+def test_huge_coordinates():
+    V, F, _ = two_spheres(level=2)
+    ref = self_intersecting_pairs(V, F)
+    huge = V / np.abs(V).max() * 3.4e38
+    with np.errstate(all="raise"):
+        out = self_intersecting_pairs(huge, F)
+    assert np.array_equal(out, ref)
+    Vc, Fc = icosphere(3)
+    assert self_intersecting_pairs(Vc * 3.4e38, Fc).shape == (0, 2)
+    assert self_intersecting_pairs(Vc * 1e300, Fc).shape == (0, 2)
+
+
+def test_unreferenced_far_vertex_does_not_matter():
+    V, F, _ = two_spheres(level=2)
+    ref = self_intersecting_pairs(V, F)
+    V2 = np.concatenate([V, [[1e30, 1e30, 1e30]]])
+    assert np.array_equal(self_intersecting_pairs(V2, F), ref)
+
+
+def test_deterministic_and_chunk_independent(monkeypatch):
+    V, F, _ = two_spheres(level=4, offset=(0.5, 0.4, 0.3))
+    ref = self_intersecting_pairs(V, F)
+    assert np.array_equal(self_intersecting_pairs(V, F), ref)
+    monkeypatch.setattr(gi, "_PAIR_CHUNK", 997)
+    monkeypatch.setattr(gi, "_FACE_BLOCK", 333)
+    assert np.array_equal(self_intersecting_pairs(V, F), ref)
+    monkeypatch.setattr(gi, "_MAX_WORKERS", 1)
+    assert np.array_equal(self_intersecting_pairs(V, F), ref)
+
+
+def test_max_pairs(monkeypatch):
+    monkeypatch.setattr(gi, "_PAIR_CHUNK", 1000)      # many chunks: a real early stop
+    V, F, _ = two_spheres(level=4, offset=(0.5, 0.4, 0.3))
+    full = self_intersecting_pairs(V, F)
+    assert full.shape[0] > 300
+    full_set = as_set(full)
+    for k in (1, 7, 100, 300):
+        part = self_intersecting_pairs(V, F, max_pairs=k)
+        check_output(part, len(F))
+        assert 1 <= part.shape[0] <= k
+        assert as_set(part) <= full_set
+        assert np.array_equal(self_intersecting_pairs(V, F, max_pairs=k), part)
+    assert self_intersecting_pairs(V, F, max_pairs=0).shape == (0, 2)
+    assert np.array_equal(self_intersecting_pairs(V, F, max_pairs=len(full)), full)
+    assert np.array_equal(self_intersecting_pairs(V, F, max_pairs=10 ** 9), full)
+    assert np.array_equal(self_intersecting_pairs(V, F, max_pairs=np.int64(10 ** 9)), full)
+
+
+def test_max_pairs_stops_early(monkeypatch):
+    monkeypatch.setattr(gi, "_PAIR_CHUNK", 1000)
+    calls = []
+    narrow = gi._intersecting
+
+    def counting(faces, i, j):
+        calls.append(i.size)
+        return narrow(faces, i, j)
+
+    monkeypatch.setattr(gi, "_intersecting", counting)
+    V, F, _ = two_spheres(level=4, offset=(0.5, 0.4, 0.3))
+    self_intersecting_pairs(V, F)
+    everything = len(calls)
+    calls.clear()
+    self_intersecting_pairs(V, F, max_pairs=1)
+    assert len(calls) < everything / 2

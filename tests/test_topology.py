@@ -1,0 +1,112 @@
+import numpy as np
+import pytest
+
+from geotex.errors import InputError
+from geotex.mesh import (Mesh, as_faces, as_vertices, degenerate_faces, duplicate_face_groups,
+                         edge_topology, face_components, non_manifold_vertices, signed_volume)
+from geotex.mesh.primitives import box, grid_plane, icosphere, torus
+
+
+def test_closed_sphere_topology(sphere):
+    V, F = sphere
+    t = edge_topology(F, len(V))
+    assert t.boundary.size == 0 and t.non_manifold.size == 0 and t.inconsistent.size == 0
+    assert len(V) - len(t.edges) + len(F) == 2
+    assert np.all(t.edges[:, 0] < t.edges[:, 1])
+    # lexicographic order of unique edges
+    assert np.all(np.diff(t.edges[:, 0] * len(V) + t.edges[:, 1]) > 0)
+
+
+def test_half_edge_to_edge_map_is_consistent(ring):
+    V, F = ring
+    t = edge_topology(F, len(V))
+    he = np.stack([F, np.roll(F, -1, axis=1)], axis=2).reshape(-1, 2)
+    assert np.array_equal(np.sort(he, axis=1), t.edges[t.half_to_edge])
+    ef = t.edge_faces()
+    assert np.all(ef >= 0)
+    for e in range(0, len(t.edges), 97):
+        for f in ef[e]:
+            assert set(t.edges[e]) <= set(F[f])
+
+
+def test_euler_characteristic_of_torus(ring):
+    V, F = ring
+    t = edge_topology(F, len(V))
+    assert len(V) - len(t.edges) + len(F) == 0
+
+
+def test_open_plane_has_boundary():
+    V, F = grid_plane(3, 2)
+    t = edge_topology(F, len(V))
+    assert t.boundary.size == 2 * (3 + 2)
+
+
+def test_flipped_face_is_inconsistent(tet):
+    V, F = tet
+    F = F.copy()
+    F[0] = F[0, ::-1]
+    assert edge_topology(F, 4).inconsistent.size == 3
+
+
+def test_bowtie_vertex_is_non_manifold(tet):
+    V, F = tet
+    V2 = np.vstack([V, V[1:] + [0, 0, -2]])
+    F2 = np.vstack([F, np.where(F == 0, 0, F + 3)])
+    assert non_manifold_vertices(F2, len(V2)).tolist() == [0]
+    assert non_manifold_vertices(F, 4).size == 0
+
+
+def test_components_and_volume(tet):
+    V, F = tet
+    V2 = np.vstack([V, V + 5.0])
+    F2 = np.vstack([F, F + 4])
+    count, labels = face_components(F2, 8)
+    assert count == 2 and labels.tolist() == [0] * 4 + [1] * 4
+    assert signed_volume(V2, F2) == pytest.approx(2 / 6)
+
+
+def test_volume_far_from_origin_is_accurate():
+    V, F = box(divisions=3)
+    assert signed_volume(V + 1e7, F) == pytest.approx(1.0, rel=1e-9)
+
+
+def test_degenerate_and_duplicate_faces(tet):
+    V, F = tet
+    V2 = np.vstack([V, [[0.5, 0, 0]]])
+    F2 = np.vstack([F, [[0, 1, 4]], [[0, 0, 2]], F[:1][:, ::-1]])
+    assert degenerate_faces(V2, F2).tolist() == [4, 5]
+    assert duplicate_face_groups(F2).tolist() == [6]
+
+
+def test_degenerate_test_is_scale_invariant(sphere):
+    V, F = sphere
+    for s in (1e-6, 1.0, 1e6):
+        assert degenerate_faces(V * s, F).size == 0
+
+
+def test_array_validation_errors():
+    with pytest.raises(InputError, match=r"shape \(n, 3\)"):
+        as_vertices(np.zeros((3, 2)))
+    with pytest.raises(InputError, match="non-finite"):
+        as_vertices([[0, 0, np.nan]])
+    with pytest.raises(InputError, match="outside"):
+        as_faces([[0, 1, 5]], 3)
+    with pytest.raises(InputError, match="integer"):
+        as_faces([[0, 1, 1.5]], 3)
+    with pytest.raises(InputError, match="uv and uv_faces"):
+        Mesh(np.zeros((3, 3)), [[0, 1, 2]], uv=np.zeros((3, 2)))
+
+
+def test_mesh_record_does_not_alias_or_mutate(tet):
+    V, F = tet
+    V0, F0 = V.copy(), F.copy()
+    m = Mesh(V.astype(np.float32), F.astype(np.int32))
+    assert m.vertices.dtype == np.float64 and m.faces.dtype == np.int64
+    assert np.array_equal(V, V0) and np.array_equal(F, F0)
+
+
+def test_primitives_are_closed_and_outward():
+    for V, F in (icosphere(2), torus(), box(divisions=3)):
+        t = edge_topology(F, len(V))
+        assert t.boundary.size == 0 and t.inconsistent.size == 0
+        assert signed_volume(V, F) > 0
