@@ -24,7 +24,7 @@ from geotex.check.intersections import self_intersecting_pairs
 from geotex.check.report import CheckReport, check_mesh
 from geotex.mesh.arrays import as_mesh_arrays
 from geotex.mesh.record import Mesh
-from geotex.mesh.topology import edge_topology, non_manifold_vertices
+from geotex.mesh.topology import edge_topology, non_manifold_vertices, position_welded_faces
 
 __all__ = [
     "assert_printable", "assert_watertight", "assert_manifold",
@@ -101,7 +101,7 @@ def assert_manifold(mesh, F=None, *, msg: str = "") -> None:
 def assert_no_self_intersections(mesh, F=None, *, msg: str = "") -> None:
     """Assert no two faces of the mesh intersect (see ``self_intersecting_pairs``)."""
     V, F, label = _arrays(mesh, F)
-    pairs = self_intersecting_pairs(V, F)
+    pairs = self_intersecting_pairs(V, position_welded_faces(V, F))
     if pairs.shape[0]:
         first = pairs[0]
         where = V[F[first[0]]].mean(axis=0)

@@ -14,7 +14,8 @@ from geotex.mesh.arrays import as_mesh_arrays
 from geotex.mesh.solid import manifold_status
 from geotex.mesh.geometry import bounding_box, component_volumes, degenerate_faces
 from geotex.mesh.topology import (duplicate_face_groups, edge_topology, face_components,
-                                  non_manifold_vertices, referenced_vertices)
+                                  non_manifold_vertices, position_welded_faces,
+                                  referenced_vertices)
 
 __all__ = ["CheckReport", "check_mesh", "LARGE_COORDINATE"]
 
@@ -238,7 +239,7 @@ def check_mesh(V, F, *, self_intersections: bool = True, max_examples: int = 5,
 
     pairs = None
     if self_intersections and m:
-        pairs = self_intersecting_pairs(V, F)
+        pairs = self_intersecting_pairs(V, position_welded_faces(V, F) if dup_positions else F)
     elif self_intersections:
         pairs = np.zeros((0, 2), dtype=np.int64)
 
@@ -290,7 +291,7 @@ def check_mesh(V, F, *, self_intersections: bool = True, max_examples: int = 5,
         warnings.append(f"{unreferenced} unreferenced vertices")
     if dup_positions:
         warnings.append(f"{dup_positions} vertices repeat another vertex's position "
-                        "(unwelded seams; `geotex repair` welds them)")
+                        "(unwelded seams, or shells that touch)")
     big = float(np.max(np.abs(V))) if n else 0.0
     if big > LARGE_COORDINATE:
         warnings.append(f"very large coordinates (max |c| = {big:.3g}); check the unit")

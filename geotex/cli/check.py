@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-from geotex.check import check_mesh
 from geotex.cli._common import EXIT_NOT_PRINTABLE, EXIT_OK
-from geotex.io import read_mesh
 
 HELP = "report whether a mesh file is a printable solid, and why not"
 
@@ -20,6 +18,9 @@ def register(sub):
 
 
 def run(args) -> int:
+    from geotex.check import check_mesh
+    from geotex.io import read_mesh
+
     mesh = read_mesh(args.file)
     report = check_mesh(mesh.vertices, mesh.faces,
                         self_intersections=not args.no_self_intersections,

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from geotex.cli._common import EXIT_OK, guard_output
-from geotex.io import read_mesh, write_mesh
 
 HELP = "convert a mesh between STL, OBJ, PLY, OFF, 3MF and GLB"
 
@@ -17,6 +16,8 @@ def register(sub):
 
 
 def run(args) -> int:
+    from geotex.io import read_mesh, write_mesh
+
     out = guard_output(args.output, args.input)
     mesh = read_mesh(args.input)
     write_mesh(out, mesh, binary=not args.ascii)

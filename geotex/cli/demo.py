@@ -12,17 +12,8 @@ import json
 from pathlib import Path
 
 import numpy as np
-from tqdm import tqdm
 
-from geotex.check import check_mesh
 from geotex.cli._common import EXIT_NOT_PRINTABLE, EXIT_OK, UsageError
-from geotex.data import sample_path
-from geotex.io import read_mesh
-from geotex.io.atomic import atomic_output
-from geotex.mesh.topology import edge_topology
-from geotex.printing import export_printable
-from geotex.render import Panel, render_panels
-from geotex.repair import repair_mesh
 
 HELP = "run the main job on bundled meshes and write the results"
 
@@ -49,6 +40,17 @@ def print_ready(V: np.ndarray, *, size_mm: float, y_up: bool) -> np.ndarray:
 
 
 def run(args) -> int:
+    from tqdm import tqdm
+
+    from geotex.check import check_mesh
+    from geotex.data import sample_path
+    from geotex.io import read_mesh
+    from geotex.io.atomic import atomic_output
+    from geotex.mesh.topology import edge_topology
+    from geotex.printing import export_printable
+    from geotex.render import Panel, render_panels
+    from geotex.repair import repair_mesh
+
     out = Path(args.output_dir)
     if out.exists() and not out.is_dir():
         raise UsageError(f"{out}: exists and is not a folder")

@@ -5,9 +5,6 @@ from __future__ import annotations
 from pathlib import Path
 
 from geotex.cli._common import EXIT_OK, UsageError, guard_output
-from geotex.io import read_mesh
-from geotex.mesh.topology import edge_topology
-from geotex.render import render_mesh
 
 HELP = "render a picture (PNG) of a mesh file, off-screen"
 
@@ -32,6 +29,10 @@ def register(sub):
 
 
 def run(args) -> int:
+    from geotex.io import read_mesh
+    from geotex.mesh.topology import edge_topology
+    from geotex.render import render_mesh
+
     out = guard_output(args.output, args.file)
     if out.suffix.lower() != ".png":
         raise UsageError(f"{out}: pictures are written as PNG; use a .png file name")

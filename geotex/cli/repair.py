@@ -5,10 +5,7 @@ from __future__ import annotations
 import json
 import sys
 
-from geotex.check import check_mesh
 from geotex.cli._common import EXIT_NOT_PRINTABLE, EXIT_OK, guard_output
-from geotex.io import read_mesh, write_mesh
-from geotex.repair import repair_mesh
 
 HELP = "weld, clean, orient, fill holes and resolve self-intersections"
 
@@ -33,6 +30,10 @@ def register(sub):
 
 
 def run(args) -> int:
+    from geotex.check import check_mesh
+    from geotex.io import read_mesh, write_mesh
+    from geotex.repair import repair_mesh
+
     out = guard_output(args.output, args.input)
     mesh = read_mesh(args.input)
     before = check_mesh(mesh.vertices, mesh.faces)

@@ -24,6 +24,7 @@ __all__ = [
     "non_manifold_vertices",
     "duplicate_face_groups",
     "referenced_vertices",
+    "position_welded_faces",
 ]
 
 
@@ -258,3 +259,20 @@ def duplicate_face_groups(F: np.ndarray) -> np.ndarray:
     _, first, inv = np.unique(s, axis=0, return_index=True, return_inverse=True)
     inv = inv.ravel()
     return np.flatnonzero(first[inv] != np.arange(F.shape[0]))
+
+
+def position_welded_faces(V: np.ndarray, F: np.ndarray) -> np.ndarray:
+    """Return ``F`` re-indexed so vertices at exactly equal positions share an index.
+
+    Used where geometry, not bookkeeping, matters: an unwelded seam is not a
+    self-intersection.  The index of each position is the lowest original
+    vertex index at that position, so ``V`` can still be used with the result.
+
+    Returns
+    -------
+    numpy.ndarray, (m, 3) int64
+    """
+    if V.shape[0] == 0:
+        return np.asarray(F, dtype=np.int64).copy()
+    _, first, inv = np.unique(V, axis=0, return_index=True, return_inverse=True)
+    return first[inv.ravel()][F]
