@@ -35,6 +35,11 @@ from geotex.mesh.primitives import torus
 RESULTS = Path(__file__).parent / "results" / "io_check.md"
 
 
+def _version(dist: str) -> str:
+    from importlib.metadata import version
+    return version(dist)
+
+
 def timed(fn, repeat=3):
     best, out = float("inf"), None
     for _ in range(repeat):
@@ -79,7 +84,7 @@ def main():
         t_c, ans = timed(lambda: tm_check(), 1)
         t_c -= t_r  # exclude the reload inside tm_check
         assert ans[0] and ans[1] and tl.faces.shape[0] == F.shape[0]
-        rows["trimesh " + trimesh.__version__] = (t_w, t_r, t_c, "no self-intersection test")
+        rows["trimesh " + _version("trimesh")] = (t_w, t_r, t_c, "no self-intersection test")
 
         # --- pymeshlab
         import pymeshlab
@@ -101,7 +106,7 @@ def main():
             return s.current_mesh().selected_face_number()
         t_c, nsel = timed(ml_check, 1)
         assert nsel == 0
-        rows["pymeshlab " + pymeshlab.__version__] = (t_w, t_r, t_c, "incl. self-intersections")
+        rows["pymeshlab " + _version("pymeshlab")] = (t_w, t_r, t_c, "incl. self-intersections")
 
     size_mb = (84 + 50 * F.shape[0]) / 1e6
     lines = [
