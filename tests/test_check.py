@@ -102,3 +102,15 @@ def test_summary_ends_with_verdict(sphere):
 def test_malformed_arrays_raise():
     with pytest.raises(InputError):
         check_mesh(np.zeros((3, 3)), [[0, 1, 3]])
+
+
+def test_progress_callback_sees_every_stage(sphere):
+    from geotex.check.report import CHECK_STAGES
+    from geotex.repair import REPAIR_STAGES, repair_mesh
+    V, F = sphere
+    seen = []
+    check_mesh(V, F, progress=seen.append)
+    assert tuple(seen) == CHECK_STAGES
+    seen.clear()
+    repair_mesh(V, F, progress=seen.append)
+    assert tuple(seen) == REPAIR_STAGES

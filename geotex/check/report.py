@@ -11,13 +11,17 @@ import numpy as np
 from geotex.check.intersections import self_intersecting_pairs
 from geotex.check.nesting import component_nesting_depth
 from geotex.mesh.arrays import as_mesh_arrays
+from geotex.progress import report
 from geotex.mesh.solid import manifold_status
 from geotex.mesh.geometry import bounding_box, component_volumes, degenerate_faces
 from geotex.mesh.topology import (duplicate_face_groups, edge_topology, face_components,
                                   non_manifold_vertices, position_welded_faces,
                                   referenced_vertices)
 
-__all__ = ["CheckReport", "check_mesh", "LARGE_COORDINATE"]
+__all__ = ["CheckReport", "check_mesh", "LARGE_COORDINATE", "CHECK_STAGES"]
+
+#: Stage names passed to the ``progress`` callback of :func:`check_mesh`.
+CHECK_STAGES = ("topology", "self-intersections", "manifold3d")
 
 #: Coordinates beyond this magnitude get a warning (unit mix-ups, float32 limits).
 LARGE_COORDINATE = 1e9
@@ -149,7 +153,7 @@ def _first(arr, k):
 
 
 def check_mesh(V, F, *, self_intersections: bool = True, max_examples: int = 5,
-               source: str | None = None) -> CheckReport:
+               source: str | None = None, progress=None) -> CheckReport:
     """Compute the validity report of a triangle mesh as a printable solid.
 
     Parameters
@@ -166,6 +170,9 @@ def check_mesh(V, F, *, self_intersections: bool = True, max_examples: int = 5,
         How many offending elements of each kind to keep in ``examples``.
     source : str, optional
         File name recorded in the report.
+    progress : callable, optional
+        Called with a stage name as each of the stages ``CHECK_STAGES``
+        starts (see :mod:`geotex.progress`).
 
     Returns
     -------
@@ -191,6 +198,7 @@ def check_mesh(V, F, *, self_intersections: bool = True, max_examples: int = 5,
     warnings: list[str] = []
     examples: dict[str, list] = {}
 
+    report(progress, "topology")
     used = referenced_vertices(F, n)
     unreferenced = int(n - used.sum())
     lo, hi = bounding_box(V[used] if m else V)
@@ -238,6 +246,7 @@ def check_mesh(V, F, *, self_intersections: bool = True, max_examples: int = 5,
             examples["inward_components"] = _first(wrong, k)
 
     pairs = None
+    report(progress, "self-intersections")
     if self_intersections and m:
         pairs = self_intersecting_pairs(V, position_welded_faces(V, F) if dup_positions else F)
     elif self_intersections:
@@ -283,6 +292,7 @@ def check_mesh(V, F, *, self_intersections: bool = True, max_examples: int = 5,
         examples["self_intersecting_pairs"] = pairs[:k].tolist()
     if pairs is None and m:
         reasons.append("self-intersections were not checked")
+    report(progress, "manifold3d")
     status = manifold_status(V, F) if m else "Empty"
     if m and status != "NoError" and not reasons:
         reasons.append(f"manifold3d rejects the mesh ({status})")

@@ -19,12 +19,16 @@ def register(sub):
 
 def run(args) -> int:
     from geotex.check import check_mesh
+    from geotex.check.report import CHECK_STAGES
     from geotex.io import read_mesh
+    from geotex.progress import stage_bar
 
     mesh = read_mesh(args.file)
-    report = check_mesh(mesh.vertices, mesh.faces,
-                        self_intersections=not args.no_self_intersections,
-                        source=str(args.file))
+    with stage_bar(len(CHECK_STAGES), "geotex check",
+                   enabled=None if mesh.n_faces > 100_000 else False) as progress:
+        report = check_mesh(mesh.vertices, mesh.faces,
+                            self_intersections=not args.no_self_intersections,
+                            source=str(args.file), progress=progress)
     if args.json:
         print(report.to_json())
     else:

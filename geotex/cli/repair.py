@@ -32,15 +32,19 @@ def register(sub):
 def run(args) -> int:
     from geotex.check import check_mesh
     from geotex.io import read_mesh, write_mesh
-    from geotex.repair import repair_mesh
+    from geotex.progress import stage_bar
+    from geotex.repair import REPAIR_STAGES, repair_mesh
 
     out = guard_output(args.output, args.input)
     mesh = read_mesh(args.input)
     before = check_mesh(mesh.vertices, mesh.faces)
-    result = repair_mesh(mesh.vertices, mesh.faces, weld_tolerance=args.weld_tolerance,
-                         fill_holes=not args.no_fill_holes,
-                         max_hole_edges=args.max_hole_edges,
-                         resolve_intersections=not args.keep_intersections)
+    with stage_bar(len(REPAIR_STAGES), "geotex repair",
+                   enabled=None if mesh.n_faces > 100_000 else False) as progress:
+        result = repair_mesh(mesh.vertices, mesh.faces, weld_tolerance=args.weld_tolerance,
+                             fill_holes=not args.no_fill_holes,
+                             max_hole_edges=args.max_hole_edges,
+                             resolve_intersections=not args.keep_intersections,
+                             progress=progress)
     report = result.report
     written = False
     if report.printable or args.force:

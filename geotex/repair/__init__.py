@@ -14,6 +14,7 @@ from geotex.check.intersections import self_intersecting_pairs
 from geotex.check.report import CheckReport, check_mesh
 from geotex.mesh.arrays import as_mesh_arrays
 from geotex.mesh.topology import face_components
+from geotex.progress import report
 from geotex.repair.faces import without_degenerate_faces, without_duplicate_faces
 from geotex.repair.holes import filled_holes, split_non_manifold
 from geotex.repair.intersections import union_of_shells, without_intersecting_faces
@@ -24,8 +25,12 @@ __all__ = [
     "RepairResult", "repair_mesh", "welded", "without_unreferenced_vertices",
     "without_degenerate_faces", "without_duplicate_faces", "split_non_manifold",
     "filled_holes", "consistently_oriented", "outward_oriented", "union_of_shells",
-    "without_intersecting_faces", "default_weld_tolerance",
+    "without_intersecting_faces", "default_weld_tolerance", "REPAIR_STAGES",
 ]
+
+#: Stage names passed to the ``progress`` callback of :func:`repair_mesh`.
+REPAIR_STAGES = ("weld", "faces", "orientation", "holes", "self-intersections",
+                 "final check")
 
 
 @dataclass
@@ -54,8 +59,8 @@ class RepairResult:
 
 
 def repair_mesh(V, F, *, weld_tolerance: float | None = None, fill_holes: bool = True,
-                max_hole_edges: int | None = None, resolve_intersections: bool = True
-                ) -> RepairResult:
+                max_hole_edges: int | None = None, resolve_intersections: bool = True,
+                progress=None) -> RepairResult:
     """Repair a triangle mesh towards a printable solid.
 
     Steps, in order: weld vertices closer than ``weld_tolerance``; drop
@@ -78,6 +83,8 @@ def repair_mesh(V, F, *, weld_tolerance: float | None = None, fill_holes: bool =
         Largest hole to close, in boundary edges (all by default).
     resolve_intersections : bool, optional
         Try to remove self-intersections.
+    progress : callable, optional
+        Called with a stage name as each of ``REPAIR_STAGES`` starts.
 
     Returns
     -------
@@ -97,22 +104,27 @@ def repair_mesh(V, F, *, weld_tolerance: float | None = None, fill_holes: bool =
         if count:
             changes.append(text.format(count))
 
+    report(progress, "weld")
     tol = default_weld_tolerance(V) if weld_tolerance is None else float(weld_tolerance)
     V, F, k = welded(V, F, tolerance=tol)
     note(k, "welded {} vertices" + (f" (tolerance {tol:.3g})" if tol else ""))
+    report(progress, "faces")
     F, k = without_degenerate_faces(V, F)
     note(k, "removed {} degenerate faces")
     F, k = without_duplicate_faces(F)
     note(k, "removed {} duplicate faces")
+    report(progress, "orientation")
     V, F, k = split_non_manifold(V, F)
     note(k, "split non-manifold edges and vertices ({} vertices added)")
     F, k = consistently_oriented(F)
     note(k, "flipped {} faces for consistent orientation")
+    report(progress, "holes")
     if fill_holes:
         V, F, k = filled_holes(V, F, max_hole_edges=max_hole_edges)
         note(k, "filled holes with {} faces")
     F, k = outward_oriented(V, F)
     note(k, "reoriented {} shells outward")
+    report(progress, "self-intersections")
     if resolve_intersections and F.shape[0]:
         pairs = self_intersecting_pairs(V, F)
         if pairs.shape[0]:
@@ -133,4 +145,5 @@ def repair_mesh(V, F, *, weld_tolerance: float | None = None, fill_holes: bool =
                     F, _ = outward_oriented(V, F)
     V, F, k = without_unreferenced_vertices(V, F)
     note(k, "removed {} unreferenced vertices")
+    report(progress, "final check")
     return RepairResult(vertices=V, faces=F, changes=changes, report=check_mesh(V, F))
