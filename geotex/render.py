@@ -60,11 +60,22 @@ class Panel:
         a legend; used to show boundary or non-manifold edges.
     show_edges : bool, optional
         Draw the triangle wireframe.
+    arrows : tuple of array_like ((k, 3), (k, 3)), optional
+        Arrow origins and vectors (drawn at the given length), e.g. a
+        tangent field at face centroids.
+    markers : dict of str -> (array_like (k, 3), str), optional
+        Named point sets drawn as spheres with a colour, with a legend; e.g.
+        field singularities.
+    uv : array_like, (n, 2), optional
+        Per-vertex texture coordinates; with ``texture`` the surface shows
+        the image (e.g. a checkerboard over a parameterization).
+    texture : numpy.ndarray, (h, w, 3) uint8, optional
     """
 
     def __init__(self, V, F, *, title: str = "", color: str = DEFAULT_COLOR,
                  scalars=None, cmap: str = "viridis", highlight: dict | None = None,
-                 show_edges: bool = False):
+                 show_edges: bool = False, arrows=None, markers: dict | None = None,
+                 uv=None, texture=None):
         self.V, self.F = as_mesh_arrays(V, F)
         self.title = title
         self.color = color
@@ -72,6 +83,21 @@ class Panel:
         self.cmap = cmap
         self.highlight = highlight or {}
         self.show_edges = show_edges
+        self.arrows = None
+        if arrows is not None:
+            P = np.asarray(arrows[0], dtype=np.float64).reshape(-1, 3)
+            D = np.asarray(arrows[1], dtype=np.float64).reshape(-1, 3)
+            if P.shape != D.shape:
+                raise InputError("arrows need as many origins as vectors")
+            self.arrows = (P, D)
+        self.markers = {k: (np.asarray(p, dtype=np.float64).reshape(-1, 3), c)
+                        for k, (p, c) in (markers or {}).items()}
+        self.uv = None if uv is None else np.asarray(uv, dtype=np.float64)
+        if self.uv is not None and self.uv.shape != (self.V.shape[0], 2):
+            raise InputError(f"uv must have shape ({self.V.shape[0]}, 2), got {self.uv.shape}")
+        if (self.uv is None) != (texture is None):
+            raise InputError("uv and texture must be given together")
+        self.texture = None if texture is None else np.ascontiguousarray(texture, dtype=np.uint8)
 
 
 def _up_vector(up) -> np.ndarray:
@@ -106,7 +132,10 @@ def _draw(pv, plotter, panel: Panel, up: np.ndarray):
         poly = _polydata(pv, V, F)
         kwargs = dict(smooth_shading=False, specular=0.25, specular_power=20,
                       show_edges=panel.show_edges, edge_color="#555555", line_width=0.5)
-        if panel.scalars is not None:
+        if panel.texture is not None:
+            poly.active_texture_coordinates = panel.uv
+            plotter.add_mesh(poly, texture=pv.Texture(panel.texture), **kwargs)
+        elif panel.scalars is not None:
             plotter.add_mesh(poly, scalars=panel.scalars, cmap=panel.cmap,
                              show_scalar_bar=False, **kwargs)
         else:
@@ -114,6 +143,23 @@ def _draw(pv, plotter, panel: Panel, up: np.ndarray):
     elif V.shape[0]:
         plotter.add_points(V, color=panel.color, point_size=4)
     legend = []
+    diag = float(np.linalg.norm(np.ptp(V, axis=0))) if V.shape[0] else 1.0
+    if panel.arrows is not None and panel.arrows[0].shape[0]:
+        P, D = panel.arrows
+        glyphs = pv.PolyData(P)
+        glyphs["vectors"] = D
+        length = np.linalg.norm(D, axis=1)
+        glyphs["length"] = length
+        arrow = pv.Arrow(tip_length=0.35, tip_radius=0.12, shaft_radius=0.035)
+        plotter.add_mesh(glyphs.glyph(orient="vectors", scale="length", factor=1.0, geom=arrow),
+                         color="#1d3f8f")
+    for label, (P, color) in panel.markers.items():
+        if P.shape[0] == 0:
+            continue
+        balls = pv.PolyData(P).glyph(geom=pv.Sphere(radius=diag * 0.012), scale=False,
+                                     orient=False)
+        plotter.add_mesh(balls, color=color, smooth_shading=True)
+        legend.append([f"{label} ({P.shape[0]})", color])
     for (label, edges), color in zip(panel.highlight.items(), HIGHLIGHT_COLORS):
         E = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
         if E.shape[0] == 0:

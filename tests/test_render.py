@@ -34,3 +34,21 @@ def test_render_errors(tmp_path, ring):
     with pytest.raises(InputError, match="nothing to render"):
         render_panels([], tmp_path / "x.png")
     assert not list(tmp_path.iterdir())
+
+
+def test_arrows_markers_and_texture(tmp_path, sphere):
+    V, F = sphere
+    C = V[F].mean(axis=1)
+    tex = (np.indices((64, 64)).sum(0) // 8 % 2 * 200 + 30).astype(np.uint8)
+    tex = np.repeat(tex[:, :, None], 3, axis=2)
+    out = render_panels([
+        Panel(V, F, arrows=(C[:50], np.tile([0.0, 0.0, 0.2], (50, 1))),
+              markers={"poles": ([[0, 0, 1], [0, 0, -1]], "#e4202a")}),
+        Panel(V, F, uv=V[:, :2], texture=tex)], tmp_path / "a.png", size=(200, 150))
+    img = np.asarray(Image.open(out).convert("RGB")).astype(int)
+    red = (img[..., 0] > 180) & (img[..., 1] < 90) & (img[..., 2] < 90)
+    assert red[:, :200].any()            # the marker (and its legend) is drawn
+    right = img[:, 200:]
+    assert right.std() > 30               # the checkerboard shows contrast
+    with pytest.raises(InputError, match="uv and texture"):
+        Panel(V, F, uv=V[:, :2])
