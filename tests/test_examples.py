@@ -1,0 +1,23 @@
+"""Every example script runs and writes its picture."""
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from PIL import Image
+
+EXAMPLES = sorted((Path(__file__).parents[1] / "examples").glob("*.py"))
+
+
+@pytest.mark.parametrize("script", EXAMPLES, ids=[p.stem for p in EXAMPLES])
+def test_example_writes_pictures(script, tmp_path):
+    p = subprocess.run([sys.executable, str(script), str(tmp_path)], capture_output=True,
+                       text=True, timeout=600)
+    assert p.returncode == 0, p.stderr[-2000:]
+    pictures = [f for f in tmp_path.rglob("*.png") if f.stem == script.stem or
+                f.name.startswith(script.stem)]
+    assert pictures, f"{script.name} wrote no picture named after it"
+    for f in pictures:
+        with Image.open(f) as im:
+            assert im.size[0] >= 200 and im.size[1] >= 150
