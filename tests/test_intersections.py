@@ -419,16 +419,40 @@ def test_broad_phase_matches_brute_force(seed, monkeypatch):
     assert np.array_equal(self_intersecting_pairs(V, F), brute_force(V, F))
 
 
-def test_broad_phase_huge_grid_fallback():
-    # tiny triangles spread over a large box: too many cells for one int64 key
-    rng = np.random.default_rng(3)
+def spread_clusters(seed=3):
+    """Tiny triangles in far-apart clusters: too many cells for a dense key."""
+    rng = np.random.default_rng(seed)
     centers = rng.random((400, 1, 3)) * 1e7
     centers[200:] = centers[:200] + rng.normal(size=(200, 1, 3)) * 0.5
-    V = (centers + rng.normal(size=(400, 3, 3))).reshape(-1, 3)
-    F = np.arange(1200).reshape(400, 3)
+    centers[:20] *= 1e-3                             # a few faces of a lower level
+    V = (centers + rng.normal(size=(400, 3, 3)) * np.where(
+        np.arange(400) % 50 == 0, 30.0, 1.0)[:, None, None]).reshape(-1, 3)
+    return V, np.arange(1200).reshape(400, 3)
+
+
+def test_broad_phase_far_apart_clusters(monkeypatch):
+    fits = []
+    original = gi._fits
+
+    def spy(size, shift):
+        fits.append(original(size, shift))
+        return fits[-1]
+
+    monkeypatch.setattr(gi, "_fits", spy)
+    V, F = spread_clusters()
     out = self_intersecting_pairs(V, F)
     assert out.shape[0] > 0
+    assert False in fits and True in fits            # numbered used cells, packed
     assert np.array_equal(out, brute_force(V, F))
+
+
+@pytest.mark.parametrize("key_bits", [40, 20])
+def test_broad_phase_unpacked_fallbacks(monkeypatch, key_bits):
+    # fewer key bits: 40 numbers the used cells, 20 sorts coordinates
+    monkeypatch.setattr(gi, "_KEY_BITS", key_bits)
+    for V, F in (spread_clusters(), random_soup(1, m=300, pool=80),
+                 icosphere(3), two_spheres(level=3)[:2]):
+        assert np.array_equal(self_intersecting_pairs(V, F), brute_force(V, F))
 
 
 def test_mixed_sizes_levels():
@@ -442,6 +466,55 @@ def test_mixed_sizes_levels():
     assert np.array_equal(out, brute_force(V2, F2))
     assert set(np.unique(out[:, 1]).tolist()) == {len(F), len(F) + 1}
     assert np.any(out[:, 0] == len(F))  # the two big triangles cross each other
+
+
+def _overlap_area(P, Q):
+    """Area of the intersection of two 2D triangles (Sutherland-Hodgman)."""
+    def ccw(T):
+        T = [tuple(p) for p in T]
+        cross = ((T[1][0] - T[0][0]) * (T[2][1] - T[0][1])
+                 - (T[1][1] - T[0][1]) * (T[2][0] - T[0][0]))
+        return T if cross > 0 else T[::-1]
+
+    def left(a, b, p):
+        return (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0])
+
+    poly, clipper = ccw(P), ccw(Q)
+    for k in range(3):
+        a, b = clipper[k], clipper[(k + 1) % 3]
+        src, poly = poly, []
+        for u, v in zip(src, src[1:] + src[:1]):
+            du, dv = left(a, b, u), left(a, b, v)
+            if du >= 0:
+                poly.append(u)
+            if (du >= 0) != (dv >= 0):
+                t = du / (du - dv)
+                poly.append((u[0] + (v[0] - u[0]) * t, u[1] + (v[1] - u[1]) * t))
+        if not poly:
+            return 0.0
+    return 0.5 * abs(sum(u[0] * v[1] - v[0] * u[1]
+                         for u, v in zip(poly, poly[1:] + poly[:1])))
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_flat_jittered_grid_matches_polygon_clipping(seed):
+    # in-plane jitter flips triangles: coplanar overlaps with 0, 1 and 2
+    # shared vertices, checked against the overlap area of each pair
+    rng = np.random.default_rng(seed)
+    g, F = igl.triangulated_grid(18, 18)
+    g = g + rng.normal(scale=0.02, size=g.shape)
+    V = np.column_stack([g, np.zeros(len(g))])
+    F = F.astype(np.int64)
+    out = self_intersecting_pairs(V, F)
+    shared = [len(set(F[a].tolist()) & set(F[b].tolist())) for a, b in out]
+    assert set(shared) == {0, 1, 2}
+    T = g[F]
+    lo, hi = T.min(axis=1), T.max(axis=1)
+    a, b = np.triu_indices(len(F), k=1)
+    near = np.all((lo[a] <= hi[b]) & (lo[b] <= hi[a]), axis=1)
+    expected = {(x, y) for x, y in zip(a[near].tolist(), b[near].tolist())
+                if _overlap_area(T[x], T[y]) > 1e-12}
+    assert as_set(out) == expected
 
 
 # ---------------------------------------------------------------------------
