@@ -11,6 +11,7 @@ import pytest
 import geotex.check.intersections as gi
 from geotex.check.intersections import self_intersecting_pairs
 from geotex.errors import InputError
+from geotex.mesh import primitives
 from geotex.mesh.geometry import degenerate_faces
 
 # ---------------------------------------------------------------------------
@@ -19,44 +20,12 @@ from geotex.mesh.geometry import degenerate_faces
 
 def icosphere(level: int, *, radius: float = 1.0, center=(0.0, 0.0, 0.0)):
     """Subdivided icosahedron projected on a sphere, outward-facing."""
-    t = (1.0 + 5.0 ** 0.5) / 2.0
-    V = np.array([[-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0], [0, -1, t], [0, 1, t],
-                  [0, -1, -t], [0, 1, -t], [t, 0, -1], [t, 0, 1], [-t, 0, -1], [-t, 0, 1]],
-                 dtype=float)
-    F = np.array([[0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9],
-                  [5, 11, 4], [11, 10, 2], [10, 7, 6], [7, 1, 8], [3, 9, 4], [3, 4, 2],
-                  [3, 2, 6], [3, 6, 8], [3, 8, 9], [4, 9, 5], [2, 4, 11], [6, 2, 10],
-                  [8, 6, 7], [9, 8, 1]], dtype=np.int64)
-    V /= np.linalg.norm(V, axis=1, keepdims=True)
-    for _ in range(level):
-        E = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
-        edges, inv = np.unique(E, axis=0, return_inverse=True)
-        inv = inv.ravel()
-        mid = V[edges[:, 0]] + V[edges[:, 1]]
-        mid /= np.linalg.norm(mid, axis=1, keepdims=True)
-        n, m = len(V), len(F)
-        V = np.concatenate([V, mid])
-        a, b, c = inv[:m] + n, inv[m:2 * m] + n, inv[2 * m:] + n
-        F = np.concatenate([np.stack([F[:, 0], a, c], 1), np.stack([F[:, 1], b, a], 1),
-                            np.stack([F[:, 2], c, b], 1), np.stack([a, b, c], 1)])
-    return V * radius + np.asarray(center, dtype=float), F
+    return primitives.icosphere(level, radius=radius, center=center)
 
 
 def torus(nu: int, nv: int, *, R: float = 1.0, r: float = 0.35):
     """Closed torus grid, two triangles per quad."""
-    u = np.arange(nu) * 2 * np.pi / nu
-    v = np.arange(nv) * 2 * np.pi / nv
-    U, W = np.meshgrid(u, v, indexing="ij")
-    V = np.stack([(R + r * np.cos(W)) * np.cos(U), (R + r * np.cos(W)) * np.sin(U),
-                  r * np.sin(W)], axis=-1).reshape(-1, 3)
-    i, j = np.meshgrid(np.arange(nu), np.arange(nv), indexing="ij")
-    a = i * nv + j
-    b = ((i + 1) % nu) * nv + j
-    c = ((i + 1) % nu) * nv + (j + 1) % nv
-    d = i * nv + (j + 1) % nv
-    F = np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3),
-                        np.stack([a, c, d], -1).reshape(-1, 3)])
-    return V, F
+    return primitives.torus(R, r, n_major=nu, n_minor=nv)
 
 
 def two_spheres(level=2, offset=(0.9, 0.13, 0.07)):
