@@ -1,0 +1,1 @@
+"""Fields over surfaces: tangent directions, scalar fields, discrete 1-forms."""
