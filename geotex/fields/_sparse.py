@@ -4,77 +4,26 @@ SuperLU calls BLAS on small supernode blocks.  With a multi-threaded OpenBLAS
 those calls gain nothing and, on a busy machine, spin-waiting BLAS threads made
 one factorization of a 100k-face field 10-60 times slower (0.4 s became up to
 40 s on a loaded 2-core machine).  Factorizations and solves therefore run with
-BLAS limited to one thread: through ``threadpoolctl`` when it is installed,
-otherwise by calling OpenBLAS's own ``*set_num_threads`` in the OpenBLAS
-libraries bundled with scipy (a no-op when none is found).  The previous thread
-count is restored afterwards.
+BLAS limited to one thread (``threadpoolctl``); the previous limit is restored
+afterwards.
 """
 
 from __future__ import annotations
 
-import ctypes
-import glob
-import os
 from contextlib import contextmanager
-from functools import lru_cache
 
-import scipy
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
+from threadpoolctl import threadpool_limits
 
 __all__ = ["factor_hpd", "HPDFactor", "single_threaded_blas"]
-
-
-@lru_cache(maxsize=1)
-def _openblas_controls() -> tuple:
-    """(set, get) function pairs of the OpenBLAS libraries shipped with scipy."""
-    root = os.path.dirname(os.path.dirname(scipy.__file__))
-    paths = set()
-    for pattern in ("scipy.libs/*openblas*", "scipy/.dylibs/*openblas*"):
-        paths.update(glob.glob(os.path.join(root, pattern)))
-    controls = []
-    for path in sorted(paths):
-        try:
-            lib = ctypes.CDLL(path)
-        except OSError:
-            continue
-        for prefix in ("scipy_openblas", "openblas"):
-            for suffix in ("", "64_"):
-                try:
-                    set_ = getattr(lib, f"{prefix}_set_num_threads{suffix}")
-                    get = getattr(lib, f"{prefix}_get_num_threads{suffix}")
-                except AttributeError:
-                    continue
-                set_.argtypes, set_.restype = [ctypes.c_int], None
-                get.argtypes, get.restype = [], ctypes.c_int
-                controls.append((set_, get))
-                break
-            else:
-                continue
-            break
-    return tuple(controls)
 
 
 @contextmanager
 def single_threaded_blas():
     """Limit BLAS to one thread inside the ``with`` block (see module docstring)."""
-    try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:
-        threadpool_limits = None
-    if threadpool_limits is not None:
-        with threadpool_limits(limits=1, user_api="blas"):
-            yield
-        return
-    controls = _openblas_controls()
-    previous = [get() for _, get in controls]
-    for set_, _ in controls:
-        set_(1)
-    try:
+    with threadpool_limits(limits=1, user_api="blas"):
         yield
-    finally:
-        for (set_, _), n in zip(controls, previous):
-            set_(max(int(n), 1))
 
 
 class HPDFactor:

@@ -26,7 +26,7 @@ All weights are dimensionless, so scaling the mesh leaves the field unchanged.
   unknowns are eliminated and ``A_uu z_u = -A_uc z_c`` is one sparse complex
   solve) or pulled towards them by strong penalties (``mode="soft"``).
 * Without constraints, ``z`` is the eigenvector of the smallest eigenvalue of
-  ``A z = lambda M z`` (inverse power iteration with one factorization of
+  ``A z = lambda M z`` (ARPACK shift-invert with one factorization of
   ``A + eps M``): the globally smoothest unit-norm field.
 * Each connected component of the face graph is handled on its own:
   components without a constraint get the smoothest field.
@@ -42,11 +42,13 @@ from numbers import Integral, Real
 
 import igl
 import numpy as np
+import scipy.linalg
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
+from scipy.sparse.linalg import ArpackNoConvergence, LinearOperator, eigsh
 
 from geotex.errors import InputError
-from geotex.fields._sparse import factor_hpd
+from geotex.fields._sparse import factor_hpd, single_threaded_blas
 from geotex.fields.frames import (FaceConnection, _checked_arrays, _connection, _frames,
                                   tangent_angles, vectors_from_angles)
 from geotex.fields.singularities import _index_numerators, _singularity_list
@@ -243,7 +245,7 @@ class DirectionField:
     @property
     def index_sum(self) -> float:
         """Sum of the singularity indices (the Euler characteristic on closed meshes)."""
-        return float(sum(k * self.symmetry for _, k in self.singularities)) / self.symmetry
+        return sum(round(i * self.symmetry) for _, i in self.singularities) / self.symmetry
 
     def representatives(self) -> np.ndarray:
         """Return all ``N`` unit vectors per face, ``(m, N, 3)``, counter-clockwise."""
@@ -279,33 +281,44 @@ def _face_components(conn: FaceConnection) -> tuple[int, np.ndarray]:
     return connected_components(adj, directed=False)
 
 
-def _smoothest(A: sp.csc_matrix, mass: np.ndarray, rng: np.random.Generator,
-               max_iter: int = 100, rtol: float = 1e-10) -> np.ndarray:
+def _smoothest(A: sp.csc_matrix, mass: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     """Smallest generalized eigenvector of ``A z = lambda M z`` (M = diag(mass)).
 
-    Inverse power iteration with one factorization of ``A + eps M``; the phase
-    is fixed so that the first face with at least half the largest modulus is
-    real positive, and the field has unit area-weighted RMS modulus.
+    Small problems use a dense solver; large ones ARPACK in shift-invert mode
+    around ``-eps`` (``A + eps M`` is positive definite even when ``A`` is
+    singular, as on flat tori), with one SuperLU factorization and a start
+    vector drawn from ``rng``.  The phase is fixed so that the first face with
+    at least half the largest modulus is real positive, and the field has unit
+    area-weighted RMS modulus.
     """
     k = A.shape[0]
     diag_mean = float(np.real(A.diagonal()).mean()) if k else 0.0
     if k == 1 or diag_mean <= 0.0:
         return np.ones(k, dtype=np.complex128)
-    eps = 1e-10 * diag_mean / float(mass.mean())
-    lu = factor_hpd(A + sp.diags((eps * mass).astype(np.complex128)))
-    x = rng.standard_normal(k) + 1j * rng.standard_normal(k)
-    x /= np.sqrt(np.real(np.vdot(x, mass * x)))
-    lam_prev = np.inf
-    for _ in range(max_iter):
-        x = lu.solve(mass * x)
-        x /= np.sqrt(np.real(np.vdot(x, mass * x)))
-        lam = float(np.real(np.vdot(x, A @ x)))
-        if abs(lam_prev - lam) <= rtol * max(lam, eps):
-            break
-        lam_prev = lam
+    if k <= 64:
+        _, vecs = scipy.linalg.eigh(A.toarray(), np.diag(mass).astype(np.complex128),
+                                    subset_by_index=[0, 0])
+        x = vecs[:, 0]
+    else:
+        eps = 1e-10 * diag_mean / float(mass.mean())
+        lu = factor_hpd(A + sp.diags((eps * mass).astype(np.complex128)))
+        op = LinearOperator((k, k), dtype=np.complex128,
+                            matvec=lambda b: lu.solve(np.asarray(b, np.complex128).ravel()))
+        v0 = rng.standard_normal(k) + 1j * rng.standard_normal(k)
+        M = sp.diags(mass.astype(np.complex128)).tocsc()
+        try:
+            _, vecs = eigsh(A, k=1, M=M, sigma=-eps, OPinv=op, v0=v0, which="LM",
+                            ncv=min(6, k - 1), tol=1e-8)
+            x = vecs[:, 0]
+        except ArpackNoConvergence:
+            # fall back to plain inverse iteration: converges, just more slowly
+            x = v0
+            for _ in range(200):
+                x = lu.solve(mass * x)
+                x /= np.sqrt(np.real(np.vdot(x, mass * x)))
     mod = np.abs(x)
     ref = int(np.flatnonzero(mod >= 0.5 * mod.max())[0])
-    x *= np.conj(x[ref]) / mod[ref]
+    x = x * (np.conj(x[ref]) / mod[ref])
     return x / np.sqrt(float(np.sum(mass * mod ** 2)) / float(mass.sum()))
 
 
@@ -313,7 +326,6 @@ def _solve_values(conn: FaceConnection, N: int, rng: np.random.Generator, *,
                   hard_faces=None, hard_values=None,
                   soft_faces=None, soft_values=None, soft_weights=None) -> np.ndarray:
     """Minimise the connection Dirichlet energy; see the module docstring."""
-    m = conn.n_faces
     empty_i = np.zeros(0, dtype=np.int64)
     empty_z = np.zeros(0, dtype=np.complex128)
     hard_faces = empty_i if hard_faces is None else hard_faces
@@ -321,6 +333,14 @@ def _solve_values(conn: FaceConnection, N: int, rng: np.random.Generator, *,
     soft_faces = empty_i if soft_faces is None else soft_faces
     soft_values = empty_z if soft_values is None else soft_values
     soft_weights = np.zeros(0) if soft_weights is None else soft_weights
+    with single_threaded_blas():
+        return _solve_components(conn, N, rng, hard_faces, hard_values, soft_faces,
+                                 soft_values, soft_weights)
+
+
+def _solve_components(conn, N, rng, hard_faces, hard_values, soft_faces, soft_values,
+                      soft_weights) -> np.ndarray:
+    m = conn.n_faces
     A = _energy_matrix(conn, N)
     mass = conn.areas / conn.areas.mean()
     ncomp, label = _face_components(conn)
@@ -431,8 +451,7 @@ def smooth_direction_field(V, F, *, symmetry: int = 1, constraints=None, mode: s
     if mode == "hard":
         faces, first = np.unique(res.faces, return_index=True)
         # constraints on one face must agree as N-directions
-        rep = np.empty(res.faces.size, dtype=np.int64)
-        rep[:] = first[np.searchsorted(faces, res.faces)]
+        rep = first[np.searchsorted(faces, res.faces)]
         clash = np.flatnonzero(np.abs(q - q[rep]) > 1e-9)
         if clash.size:
             i = int(clash[0])

@@ -27,7 +27,7 @@ import numpy as np
 from geotex.errors import InputError
 from geotex.mesh.arrays import as_mesh_arrays
 from geotex.mesh.geometry import degenerate_faces
-from geotex.mesh.topology import edge_topology
+from geotex.mesh.topology import edge_topology, non_manifold_vertices
 
 __all__ = [
     "face_frames",
@@ -142,8 +142,9 @@ class FaceConnection:
     areas : numpy.ndarray, (m,) float64
         Face areas.
     interior_vertex : numpy.ndarray, (n,) bool
-        Vertices all of whose edges are interior (every other vertex is on a
-        boundary or a non-manifold edge, or unreferenced).
+        Vertices all of whose edges are interior and whose faces form one fan
+        (every other vertex is on a boundary or a non-manifold edge, is a
+        non-manifold "bow tie" vertex, or is unreferenced).
     """
 
     T1: np.ndarray
@@ -187,7 +188,9 @@ def face_connection(V, F) -> FaceConnection:
     --------
     >>> from geotex.mesh.primitives import grid_plane
     >>> conn = face_connection(*grid_plane(2, 2))
-    >>> bool(np.allclose(wrap_angle(conn.angle), 0.0))   # flat: no rotation
+    >>> f, g = conn.faces.T                 # flat: T1 of f is carried onto itself
+    >>> moved = vectors_from_angles(conn.T1[g], conn.T2[g], conn.angle)
+    >>> bool(np.allclose(moved, conn.T1[f]))
     True
     """
     V, F = _checked_arrays(V, F)
@@ -238,6 +241,7 @@ def _connection(V: np.ndarray, F: np.ndarray) -> FaceConnection:
     interior_vertex = np.zeros(n, dtype=bool)
     interior_vertex[F.ravel()] = True
     interior_vertex[topo.edges[~interior].ravel()] = False
+    interior_vertex[non_manifold_vertices(F, n, topo)] = False         # bow ties
     return FaceConnection(T1=T1, T2=T2, N=N, edges=edges, faces=faces, vertices=verts,
                           angle=angle, weight=weight, dual_length=dual, areas=areas,
                           interior_vertex=interior_vertex)

@@ -31,7 +31,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
 from geotex.errors import InputError
-from geotex.fields.directions import (DirectionField, _fill, _positive, _resolve_constraints)
+from geotex.fields.directions import DirectionField, _fill, _positive, _resolve_constraints
 from geotex.fields.frames import _checked_arrays, _connection, tangent_angles
 from geotex.fields.singularities import _index_numerators, _singularity_list
 
@@ -111,7 +111,8 @@ def rbf_direction_field(V, F, constraints, *, kernel: str = "gaussian", radius=N
     kernel : {"gaussian", "inverse_multiquadric", "thin_plate"}, optional
         ``exp(-s^2)``, ``1 / sqrt(1 + s^2)`` or ``s^2 log s`` of
         ``s = distance / radius``; the thin-plate system is augmented with a
-        constant vector term.
+        constant vector term, and its constraints cannot carry their own
+        radius (mixing radii would add an unbalanced ``d^2`` term).
     radius : float, optional
         Basis radius (surface distance).  Default: the largest distance from
         any face to its nearest constraint, so every face is within one radius
@@ -136,7 +137,8 @@ def rbf_direction_field(V, F, constraints, *, kernel: str = "gaussian", radius=N
     InputError
         On malformed meshes, no constraints, invalid constraints (see
         :func:`geotex.fields.directions.smooth_direction_field`), conflicting
-        constraints on one face, an unknown kernel, or a non-positive radius,
+        constraints on one face, an unknown kernel, a per-constraint radius
+        with ``kernel="thin_plate"``, or a non-positive radius,
         negative smoothing or non-positive tolerance.
 
     Examples
@@ -179,6 +181,10 @@ def rbf_direction_field(V, F, constraints, *, kernel: str = "gaussian", radius=N
             r_default = float(conn.dual_length.mean()) if conn.dual_length.size else 1.0
     else:
         r_default = _positive(radius, "radius")
+    if kernel == "thin_plate" and not np.isnan(res.radii).all():
+        i = int(np.flatnonzero(~np.isnan(res.radii))[0])
+        raise InputError(f"constraints[{i}] radius cannot be used with kernel='thin_plate' "
+                         "(its basis has no extent); drop the radius or use 'gaussian'")
     r = np.where(np.isnan(r_own), r_default, r_own)
     k = faces.size
     B = _kernel(kernel, D[:, faces].T / r[None, :])    # B[j, i] = phi_i(d(c_i, c_j))

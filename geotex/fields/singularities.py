@@ -27,7 +27,8 @@ from fractions import Fraction
 import numpy as np
 
 from geotex.errors import InputError
-from geotex.fields.frames import FaceConnection, _checked_arrays, _connection, tangent_angles, wrap_angle
+from geotex.fields.frames import (FaceConnection, _checked_arrays, _connection, tangent_angles,
+                                  wrap_angle)
 
 __all__ = ["singularities", "index_sum", "vertex_indices", "angle_defects"]
 
