@@ -35,8 +35,6 @@ Conventions
 
 from __future__ import annotations
 
-from typing import Callable
-
 import numpy as np
 import scipy.sparse as sp
 
@@ -251,6 +249,7 @@ def decode_one_form(V, F, c, *, topology: EdgeTopology | None = None) -> np.ndar
 
     Examples
     --------
+    >>> import numpy as np
     >>> from geotex.mesh.primitives import grid_plane
     >>> V, F = grid_plane(4, 4)
     >>> c = encode_one_form(V, F, np.tile([0.3, -0.2, 0.0], (len(F), 1)))
@@ -443,6 +442,8 @@ def encode_one_form(V, F, vectors, *, at: str = "faces", bound=True,
 
     Examples
     --------
+    >>> import numpy as np
+    >>> from geotex.mesh import edge_topology
     >>> from geotex.mesh.primitives import icosphere
     >>> V, F = icosphere(2)
     >>> a = np.array([0.2, -0.1, 0.4])
@@ -514,17 +515,31 @@ def _dot(x: np.ndarray, y: np.ndarray) -> float:
     return float(np.einsum("i,i->", x, y))
 
 
-def _cg(K, b, x0, diag, rtol=_CG_RTOL):
+def _cg(K, b, x0, diag, rtol=_CG_RTOL, free=None):
     """Jacobi-preconditioned conjugate gradients for SPD ``K``; returns ``x``.
 
-    Stops when ``|b - K x| <= rtol |b|`` or after ``_CG_MAXITER`` iterations.
+    With ``free`` (a boolean mask) only the free unknowns are solved for:
+    ``K_ff x_f = b_f - K_fa x_a`` with ``x_a = x0[~free]`` kept, done on full
+    length vectors (masking instead of slicing ``K``).  Stops when
+    ``|r| <= rtol |b_f - K_fa x_a|`` or after ``_CG_MAXITER`` iterations.
     """
-    if not np.any(b):
-        return np.zeros_like(b)
-    inv = 1.0 / diag
     x = np.zeros_like(b) if x0 is None else x0.astype(np.float64, copy=True)
-    r = b - K @ x if x0 is not None else b.copy()
-    stop = (rtol * np.sqrt(_dot(b, b))) ** 2
+    mask = None if free is None else free.astype(np.float64)
+    if mask is None:
+        rhs = b
+        r = b - K @ x if x0 is not None else b.copy()
+    else:
+        xa = x * (1.0 - mask)
+        rhs = (b - K @ xa) * mask
+        r = rhs - (K @ (x * mask)) * mask
+    bn2 = _dot(rhs, rhs)
+    if bn2 == 0.0:
+        if mask is not None:
+            x *= 1.0 - mask
+            return x
+        return np.zeros_like(b)
+    stop = rtol * rtol * bn2
+    inv = 1.0 / diag if mask is None else mask / diag
     z = inv * r
     p = z.copy()
     rz = _dot(r, z)
@@ -532,6 +547,8 @@ def _cg(K, b, x0, diag, rtol=_CG_RTOL):
         if _dot(r, r) <= stop:
             break
         Kp = K @ p
+        if mask is not None:
+            Kp *= mask
         alpha = rz / _dot(p, Kp)
         x += alpha * p
         r -= alpha * Kp
@@ -556,7 +573,8 @@ def _encode_vertices(V, F, X, topo, evec, limit, weighting, damping):
     K = (A + sp.diags(reg)).tocsr()
     Kd = K.diagonal()
     b = B.T @ (Xt.ravel() - B @ c0)
-    d = _cg(K, b, None, Kd)                       # unconstrained correction c - c0
+    # unconstrained correction c - c0 (loose when the active-set solve refines it)
+    d = _cg(K, b, None, Kd, _CG_RTOL if limit is None else _CG_RTOL_LOOSE)
     if limit is None:
         return c0 + d
     return np.clip(c0 + _box_qp(K, Kd, b, d, -limit - c0, limit - c0), -limit, limit)
@@ -573,8 +591,8 @@ def _box_qp(K, Kd, b, d, lo, hi):
     solves are loose; afterwards they are tight and Judice-Pires' safeguard
     applies: when the number of infeasible edges has not improved for three
     rounds, only one edge (the highest-index one, Murty's rule) is exchanged,
-    which guarantees termination for SPD matrices.  ``d`` on entry is the
-    unconstrained minimiser.
+    which guarantees termination for SPD matrices.  ``d`` on entry is an
+    (approximate) unconstrained minimiser.
     """
     d = d.copy()
     tol = 1e-9 * np.maximum(hi - lo, np.finfo(float).tiny)
@@ -606,20 +624,15 @@ def _box_qp(K, Kd, b, d, lo, hi):
             elif patience > 0:
                 patience -= 1
             else:
-                keep = bad[-1]
-                to_up, to_down, release = (x & (np.arange(d.size) == keep)
-                                           for x in (to_up, to_down, release))
+                only = np.zeros(d.shape, dtype=bool)
+                only[bad[-1]] = True
+                to_up, to_down, release = to_up & only, to_down & only, release & only
         up = (up & ~release) | to_up
         down = (down & ~release) | to_down
         act = up | down
         d[up] = hi[up]
         d[down] = lo[down]
-        free_idx = np.flatnonzero(~act)
-        if free_idx.size:
-            Kf = K[free_idx]
-            rhs = b[free_idx] - Kf[:, act] @ d[act]
-            d[free_idx] = _cg(Kf[:, free_idx].tocsr(), rhs, d[free_idx], Kd[free_idx],
-                              _CG_RTOL_LOOSE if loose else _CG_RTOL)
+        d = _cg(K, b, d, Kd, _CG_RTOL_LOOSE if loose else _CG_RTOL, free=~act)
         lam = b - K @ d
         lam[~act] = 0.0
     return d
@@ -801,6 +814,7 @@ def line_integrals(field, P0, P1, *, samples: int = 5, rule: str = "gauss") -> n
 
     Examples
     --------
+    >>> import numpy as np
     >>> P0 = np.zeros((1, 3)); P1 = np.array([[1.0, 2.0, 0.0]])
     >>> float(line_integrals(lambda p: p, P0, P1)[0])    # grad of |p|^2 / 2
     2.5

@@ -21,9 +21,9 @@ from __future__ import annotations
 import igl
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.linalg import spsolve
 
 from geotex.errors import InputError
+from geotex.fields._sparse import factor_hpd
 from geotex.mesh.arrays import as_faces, as_mesh_arrays
 from geotex.mesh.topology import edge_topology, vertex_components
 
@@ -88,10 +88,7 @@ def _laplacian(V: np.ndarray, F: np.ndarray, kind: str) -> sp.csr_matrix:
     """Return ``-L`` (positive semi-definite, rows summing to zero), ``(n, n)``."""
     n = V.shape[0]
     if kind == "cotan":
-        L = sp.csr_matrix(igl.cotmatrix(V, F), dtype=np.float64)
-        if L.shape != (n, n):        # libigl sizes by the largest index used
-            L = sp.csr_matrix((L.data, L.indices, L.indptr), shape=(L.shape[0], n))
-            L.resize((n, n))
+        L = sp.csr_matrix(igl.cotmatrix(V, F), dtype=np.float64)      # (n, n)
         if not np.isfinite(L.data).all():
             raise InputError("V, F: the cotangent Laplacian is not finite (degenerate "
                              "faces); repair the mesh or use laplacian='uniform'")
@@ -157,7 +154,8 @@ def interpolate_scalar(V, F, locked_vertices, locked_values, *, laplacian: str =
     numpy.ndarray, (n,) float64
         Locked vertices carry exactly their locked values; the others solve
         ``(L u)_i = 0``.  Solved as one sparse system in the unlocked
-        unknowns (locked columns moved to the right-hand side), by SuperLU.
+        unknowns (locked columns moved to the right-hand side), by a sparse
+        Cholesky-like SuperLU factorization (symmetric mode).
 
     Raises
     ------
@@ -199,8 +197,10 @@ def interpolate_scalar(V, F, locked_vertices, locked_values, *, laplacian: str =
         Qf = Q[free]
         A = Qf[:, free].tocsc()
         rhs = -(Qf[:, locked] @ values)
-        x = spsolve(A, rhs) if free.size > 1 else np.array([rhs[0] / A[0, 0]])
-        x = np.atleast_1d(np.asarray(x, dtype=np.float64))
+        try:
+            x = np.asarray(factor_hpd(A).solve(rhs), dtype=np.float64)
+        except RuntimeError:                              # exactly singular factor
+            x = np.full(free.size, np.nan)
         if not np.isfinite(x).all():
             raise InputError("V, F: the Laplacian system is singular (degenerate faces?); "
                              "repair the mesh or use laplacian='uniform'")
@@ -254,6 +254,12 @@ def scale_field(V, F, locked_vertices, locked_values, *, epsilon: float | None =
             raise InputError(f"epsilon must be a positive number, got {epsilon!r}") from None
         if not (np.isfinite(eps) and eps > 0):
             raise InputError(f"epsilon must be a positive number, got {epsilon!r}")
+    if eps is not None and vals is not None and vals.shape == np.shape(locked_vertices) \
+            and vals.size and vals.min() < eps:
+        k = int(np.argmin(vals))
+        raise InputError(f"locked_values: scale {vals[k]} at vertex "
+                         f"{int(np.asarray(locked_vertices)[k])} is below epsilon {eps}; "
+                         "scales must be positive and at least epsilon")
     clamp = None if eps is None else (eps, None)
     return interpolate_scalar(V, F, locked_vertices, locked_values, laplacian=laplacian,
                               clamp=clamp)
