@@ -40,9 +40,21 @@ def test_smooth_field_json_index_sum(capsys, tmp_path, sphere_file, symmetry):
     assert d["index_sum"] == pytest.approx(2.0) and d["euler_characteristic"] == 2
     assert all({"vertex", "index"} <= set(s) for s in d["singularities"])
     assert sum(s["index"] for s in d["singularities"]) == pytest.approx(2.0)
-    field, meta = load_direction_field(out)
-    assert field.symmetry == symmetry and meta["method"] == "smooth"
-    assert field.vectors.shape == (len(icosphere(3)[1]), 3)
+    ff = load_direction_field(out)
+    assert ff.field.symmetry == symmetry and ff.metadata["method"] == "smooth"
+    assert ff.field.vectors.shape == (len(icosphere(3)[1]), 3) and ff.scale is None
+
+
+def test_constraint_scales_become_a_scale_field(capsys, tmp_path, sphere_file):
+    cons = tmp_path / "c.json"
+    cons.write_text(json.dumps([{"face": 3, "direction": [0, 0, 1], "scale": 2.0},
+                                {"point": [0, 0, -1], "direction": [1, 0, 0], "scale": 0.5}]))
+    out = tmp_path / "f.npz"
+    code, text, _ = run(capsys, "field", sphere_file, "--constraints", cons, "-o", out, "--json")
+    assert code == 0 and json.loads(text)["scale_range"] == [0.5, 2.0]
+    ff = load_direction_field(out)
+    assert ff.scale.shape == (len(icosphere(3)[0]),)
+    assert ff.scale.min() == pytest.approx(0.5) and ff.scale.max() == pytest.approx(2.0)
 
 
 def test_up_and_curvature_fields_on_torus(capsys, tmp_path, torus_file):
@@ -69,6 +81,8 @@ def test_field_usage_errors(capsys, tmp_path, sphere_file, argv, message):
     ("{not json", "not valid JSON"),
     ('[{"face": 99999, "direction": [1, 0, 0]}]', "face"),
     ('[{"face": 0, "direction": [0, 0, 0]}]', "direction"),
+    ('[{"face": 0, "direction": [1, 0, 0], "scale": -1}]', "scale"),
+    ('[{"face": 0, "direction": [1, 0, 0], "colour": 1}]', "unknown key"),
 ])
 def test_bad_constraint_files(capsys, tmp_path, sphere_file, payload, message):
     cons = tmp_path / "c.json"

@@ -22,8 +22,9 @@ def register(sub):
                      help="principal curvature directions (maximal curvature)")
     src.add_argument("--constraints", metavar="FILE.json",
                      help="smooth field through constraints: a JSON list of "
-                          '{"face": i | "point": [x,y,z], "direction": [x,y,z], "weight": w}; '
-                          "an empty list gives the globally smoothest field")
+                          '{"face": i | "point": [x,y,z], "direction": [x,y,z], "weight": w, '
+                          '"scale": s}; an empty list gives the globally smoothest field; '
+                          "scales are interpolated into a per-vertex scale field")
     p.add_argument("--symmetry", type=int, default=None, choices=(1, 2, 4),
                    help="N-direction symmetry (default 1; 2 for --curvature)")
     p.add_argument("-o", "--output", required=True, help="field file to write (.npz)")
@@ -60,8 +61,9 @@ def _constraints(path: str) -> list:
 def run(args) -> int:
     import numpy as np
 
-    from geotex.fields.directions import (DirectionField, principal_direction_field,
-                                          projected_direction_field, smooth_direction_field)
+    from geotex.fields.directions import (DirectionField, constraint_scale_field,
+                                          principal_direction_field, projected_direction_field,
+                                          smooth_direction_field)
     from geotex.fields.frames import face_frames, tangent_angles
     from geotex.fields.singularities import singularities
     from geotex.fields.store import save_direction_field
@@ -79,10 +81,12 @@ def run(args) -> int:
     if args.curvature and N == 1:
         raise UsageError("--curvature gives lines, not arrows: use --symmetry 2 or 4")
 
+    scale = None
     if args.constraints is not None:
         method = "smooth"
-        field = smooth_direction_field(V, F, symmetry=N, constraints=_constraints(args.constraints),
-                                       seed=args.seed)
+        constraints = _constraints(args.constraints)
+        field = smooth_direction_field(V, F, symmetry=N, constraints=constraints, seed=args.seed)
+        scale = constraint_scale_field(V, F, constraints)
     else:
         if args.up is not None:
             method = "up"
@@ -100,14 +104,16 @@ def run(args) -> int:
     topo = edge_topology(F, mesh.n_vertices)
     chi = int(np.unique(F).size - topo.edges.shape[0] + F.shape[0])
     total = float(sum(k for _, k in field.singularities))
-    save_direction_field(out, field, metadata={"mesh": str(args.mesh), "method": method,
-                                               "euler_characteristic": chi})
+    save_direction_field(out, field, scale=scale,
+                         metadata={"mesh": str(args.mesh), "method": method,
+                                   "euler_characteristic": chi})
     summary = {"mesh": str(args.mesh), "output": str(out), "method": method, "symmetry": N,
                "faces": int(F.shape[0]),
                "singularities": [{"vertex": int(v), "index": float(k)}
                                  for v, k in field.singularities],
                "index_sum": total, "euler_characteristic": chi,
-               "closed": bool(topo.boundary.size == 0)}
+               "closed": bool(topo.boundary.size == 0),
+               "scale_range": None if scale is None else [float(scale.min()), float(scale.max())]}
     if args.json:
         print(json.dumps(summary))
     else:

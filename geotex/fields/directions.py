@@ -60,6 +60,7 @@ __all__ = [
     "projected_direction_field",
     "principal_direction_field",
     "smooth_direction_field",
+    "constraint_scale_field",
 ]
 
 #: a direction is parallel to the normal when its tangential part is below this
@@ -96,6 +97,9 @@ class Constraint:
     radius : float, optional
         Positive extent of this constraint's basis function in RBF fields
         (surface distance); ignored by smooth fields.
+    scale : float, optional
+        Positive texture scale at this constraint, interpolated over the
+        surface by :func:`constraint_scale_field`; direction solvers ignore it.
     """
 
     direction: tuple
@@ -103,9 +107,10 @@ class Constraint:
     point: tuple | None = None
     weight: float = 1.0
     radius: float | None = None
+    scale: float | None = None
 
 
-_KEYS = ("face", "point", "direction", "weight", "radius")
+_KEYS = ("face", "point", "direction", "weight", "radius", "scale")
 
 
 @dataclass(frozen=True)
@@ -114,6 +119,7 @@ class _Resolved:
     tangents: np.ndarray     # (k, 3) unit, in the face plane
     weights: np.ndarray      # (k,)
     radii: np.ndarray        # (k,) NaN where not given
+    scales: np.ndarray       # (k,) NaN where not given
 
 
 def _vector3(value, what: str) -> np.ndarray:
@@ -148,6 +154,7 @@ def _resolve_constraints(V: np.ndarray, F: np.ndarray, conn: FaceConnection, con
     dirs = np.empty((len(items), 3))
     weights = np.empty(len(items))
     radii = np.full(len(items), np.nan)
+    scales = np.full(len(items), np.nan)
     points, point_rows = [], []
     for i, c in enumerate(items):
         where = f"{name}[{i}]"
@@ -171,6 +178,8 @@ def _resolve_constraints(V: np.ndarray, F: np.ndarray, conn: FaceConnection, con
         weights[i] = _positive(c.get("weight", 1.0), f"{where} weight")
         if c.get("radius") is not None:
             radii[i] = _positive(c["radius"], f"{where} radius")
+        if c.get("scale") is not None:
+            scales[i] = _positive(c["scale"], f"{where} scale")
         if face is not None:
             if isinstance(face, bool) or not isinstance(face, Integral):
                 raise InputError(f"{where} face must be an integer index, got {face!r}")
@@ -208,7 +217,8 @@ def _resolve_constraints(V: np.ndarray, F: np.ndarray, conn: FaceConnection, con
         raise InputError(
             f"{name}[{i}] direction {dirs[i].tolist()} is parallel to the normal of face "
             f"{int(faces[i])}; give a direction along the surface")
-    return _Resolved(faces=faces, tangents=tang / tlen[:, None], weights=weights, radii=radii)
+    return _Resolved(faces=faces, tangents=tang / tlen[:, None], weights=weights, radii=radii,
+                     scales=scales)
 
 
 @dataclass(frozen=True, eq=False)
@@ -631,3 +641,48 @@ def principal_direction_field(V, F, *, which: str = "max", radius: int = 5
     return PrincipalDirections(directions=vectors_from_angles(T1, T2, angle),
                                k_max=PV1[F].mean(axis=1), k_min=PV2[F].mean(axis=1),
                                coherence=np.clip(coherence, 0.0, 1.0))
+
+
+def constraint_scale_field(V, F, constraints, *, epsilon: float | None = None,
+                           max_snap_distance=None) -> np.ndarray | None:
+    """Interpolate the ``scale`` of constraints into a per-vertex scale field.
+
+    The vertices of every constrained face that carries a ``scale`` are locked
+    to it (the mean where faces share a vertex) and the rest is filled by
+    cotan-Laplacian interpolation, clamped above ``epsilon``
+    (:func:`geotex.fields.scalar.scale_field`).
+
+    Parameters
+    ----------
+    V : array_like, (n, 3) float64
+    F : array_like, (m, 3) int64
+    constraints : sequence of Constraint or dict
+        As for :func:`smooth_direction_field`.
+    epsilon : float, optional
+        Smallest scale (default ``1e-3`` times the largest given scale).
+    max_snap_distance : float, optional
+        See :class:`Constraint`.
+
+    Returns
+    -------
+    numpy.ndarray, (n,) float64, or None
+        ``None`` when no constraint gives a scale.
+
+    Raises
+    ------
+    InputError
+        On invalid constraints, or a connected component without any scale.
+    """
+    from geotex.fields.scalar import scale_field
+
+    V, F = _checked_arrays(V, F)
+    res = _resolve_constraints(V, F, _connection(V, F), constraints,
+                               max_snap_distance=max_snap_distance)
+    given = np.flatnonzero(np.isfinite(res.scales))
+    if given.size == 0:
+        return None
+    verts = F[res.faces[given]].ravel()
+    vals = np.repeat(res.scales[given], 3)
+    uniq, inv = np.unique(verts, return_inverse=True)
+    mean = np.bincount(inv, weights=vals) / np.bincount(inv)
+    return scale_field(V, F, uniq, mean, epsilon=epsilon)

@@ -5,25 +5,44 @@ from __future__ import annotations
 import io
 import json
 import zipfile
+from dataclasses import dataclass, field as dc_field
 from pathlib import Path
 
 import numpy as np
 
 from geotex.errors import InputError, MeshFileError, MissingFileError
 
-__all__ = ["save_direction_field", "load_direction_field", "FIELD_FORMAT"]
+__all__ = ["save_direction_field", "load_direction_field", "FieldFile", "FIELD_FORMAT"]
 
 #: Format tag stored in every field file.
 FIELD_FORMAT = "geotex-direction-field/1"
 
 
-def save_direction_field(path, field, *, metadata: dict | None = None) -> Path:
+@dataclass
+class FieldFile:
+    """Contents of a field file.
+
+    Attributes
+    ----------
+    field : DirectionField
+    scale : numpy.ndarray, (n,) float64, or None
+        Per-vertex texture scale, when one was saved.
+    metadata : dict
+    """
+
+    field: object
+    scale: np.ndarray | None = None
+    metadata: dict = dc_field(default_factory=dict)
+
+
+def save_direction_field(path, field, *, scale=None, metadata: dict | None = None) -> Path:
     """Write a :class:`~geotex.fields.directions.DirectionField` to ``path`` (.npz).
 
     The file holds ``vectors`` (m, 3), ``values`` (m,) complex, ``normals``
     (m, 3), ``constrained`` (k,), ``singular_vertices`` (s,) int64,
-    ``singular_indices`` (s,) float64, and ``metadata`` (a JSON string with
-    ``format``, ``symmetry`` and the caller's entries).  Written atomically.
+    ``singular_indices`` (s,) float64, optionally ``scale`` (n,) float64, and
+    ``metadata`` (a JSON string with ``format``, ``symmetry`` and the caller's
+    entries).  Written atomically.
 
     Returns
     -------
@@ -36,23 +55,24 @@ def save_direction_field(path, field, *, metadata: dict | None = None) -> Path:
         raise InputError(f"{path}: field files are .npz; use a .npz file name")
     sing = np.asarray(field.singularities, dtype=np.float64).reshape(-1, 2)
     meta = {"format": FIELD_FORMAT, "symmetry": int(field.symmetry), **(metadata or {})}
+    arrays = dict(vectors=field.vectors, values=field.values, normals=field.normals,
+                  constrained=field.constrained, singular_vertices=sing[:, 0].astype(np.int64),
+                  singular_indices=sing[:, 1], metadata=np.array(json.dumps(meta)))
+    if scale is not None:
+        arrays["scale"] = np.asarray(scale, dtype=np.float64)
     buf = io.BytesIO()
-    np.savez_compressed(buf, vectors=field.vectors, values=field.values,
-                        normals=field.normals, constrained=field.constrained,
-                        singular_vertices=sing[:, 0].astype(np.int64),
-                        singular_indices=sing[:, 1], metadata=np.array(json.dumps(meta)))
+    np.savez_compressed(buf, **arrays)
     with atomic_output(path, "wb") as fh:
         fh.write(buf.getvalue())
     return path
 
 
-def load_direction_field(path):
+def load_direction_field(path) -> FieldFile:
     """Read a field file written by :func:`save_direction_field`.
 
     Returns
     -------
-    field : DirectionField
-    metadata : dict
+    FieldFile
 
     Raises
     ------
@@ -77,8 +97,9 @@ def load_direction_field(path):
             field = DirectionField(vectors=data["vectors"], symmetry=int(meta["symmetry"]),
                                    values=data["values"], singularities=sing,
                                    normals=data["normals"], constrained=data["constrained"])
+            scale = data["scale"] if "scale" in data.files else None
     except MeshFileError:
         raise
     except (OSError, ValueError, KeyError, zipfile.BadZipFile, json.JSONDecodeError) as exc:
         raise MeshFileError(path, f"damaged or not a field file ({type(exc).__name__})") from None
-    return field, meta
+    return FieldFile(field=field, scale=scale, metadata=meta)
