@@ -40,14 +40,13 @@ def print_ready(V: np.ndarray, *, size_mm: float, y_up: bool) -> np.ndarray:
 
 
 def run(args) -> int:
-    from tqdm import tqdm
-
     from geotex.check import check_mesh
     from geotex.data import sample_path
     from geotex.io import read_mesh
     from geotex.io.atomic import atomic_output
     from geotex.mesh.topology import edge_topology
     from geotex.printing import export_printable
+    from geotex.progress import stage_bar
     from geotex.render import Panel, render_panels
     from geotex.repair import repair_mesh
 
@@ -57,39 +56,36 @@ def run(args) -> int:
     if not (1.0 <= args.size_mm <= 1000.0):
         raise UsageError(f"--size-mm {args.size_mm}: choose a size between 1 and 1000 mm")
     out.mkdir(parents=True, exist_ok=True)
-    stages = tqdm(total=6, desc="geotex demo", unit="step", leave=False)
-
-    spot = read_mesh(sample_path("spot"))
-    V = print_ready(spot.vertices, size_mm=args.size_mm, y_up=True)
-    stages.update()
-    spot_report = check_mesh(V, spot.faces, source="spot")
-    export_printable(out / "spot.stl", V, spot.faces, name="spot", report=spot_report)
-    export_printable(out / "spot.3mf", V, spot.faces, name="spot", report=spot_report)
-    stages.update()
-
-    teapot = read_mesh(sample_path("teapot-open"))
-    before = check_mesh(teapot.vertices, teapot.faces, source="teapot_open.stl")
-    stages.update()
-    fixed = repair_mesh(teapot.vertices, teapot.faces)
-    stages.update()
-    if fixed.printable:
-        export_printable(out / "teapot_repaired.stl", fixed.vertices, fixed.faces,
-                         name="teapot", report=fixed.report)
-    topo = edge_topology(teapot.faces, teapot.n_vertices)
-    render_panels([Panel(V, spot.faces, title=f"spot, {args.size_mm:g} mm, printable: "
-                         f"{'yes' if spot_report.printable else 'no'}")],
-                  out / "spot.png", size=(1000, 900))
-    stages.update()
-    render_panels([
-        Panel(teapot.vertices, teapot.faces, title="teapot as read: not printable",
-              highlight={"boundary edges": topo.edges[topo.boundary],
-                         "non-manifold edges": topo.edges[topo.non_manifold]}),
-        Panel(fixed.vertices, fixed.faces, color="#9cc3a5",
-              title=f"after geotex repair: printable {'yes' if fixed.printable else 'no'}"),
-    ], out / "teapot_repair.png", size=(900, 800))
-    stages.update()
-    stages.close()
-
+    with stage_bar(6, "geotex demo") as stage:
+        stage("read spot")
+        spot = read_mesh(sample_path("spot"))
+        V = print_ready(spot.vertices, size_mm=args.size_mm, y_up=True)
+        stage("check and export spot")
+        spot_report = check_mesh(V, spot.faces, source="spot")
+        export_printable(out / "spot.stl", V, spot.faces, name="spot", report=spot_report)
+        export_printable(out / "spot.3mf", V, spot.faces, name="spot", report=spot_report)
+        stage("check teapot")
+        teapot = read_mesh(sample_path("teapot-open"))
+        before = check_mesh(teapot.vertices, teapot.faces, source="teapot_open.stl")
+        stage("repair teapot")
+        fixed = repair_mesh(teapot.vertices, teapot.faces)
+        if fixed.printable:
+            export_printable(out / "teapot_repaired.stl", fixed.vertices, fixed.faces,
+                             name="teapot", report=fixed.report)
+        stage("render spot")
+        topo = edge_topology(teapot.faces, teapot.n_vertices)
+        render_panels([Panel(V, spot.faces, title=f"spot, {args.size_mm:g} mm, printable: "
+                             f"{'yes' if spot_report.printable else 'no'}")],
+                      out / "spot.png", size=(1000, 900))
+        stage("render teapot")
+        render_panels([
+            Panel(teapot.vertices, teapot.faces, title="teapot as read: not printable",
+                  highlight={"boundary edges": topo.edges[topo.boundary],
+                             "non-manifold edges": topo.edges[topo.non_manifold]}),
+            Panel(fixed.vertices, fixed.faces, color="#9cc3a5",
+                  title=f"after geotex repair: printable {'yes' if fixed.printable else 'no'}"),
+        ], out / "teapot_repair.png", size=(900, 800))
+        stage("done")
     summary = {"spot": {"files": ["spot.stl", "spot.3mf", "spot.png"],
                         "report": spot_report.to_dict()},
                "teapot": {"changes": fixed.changes, "before": before.to_dict(),
