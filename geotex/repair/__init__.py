@@ -139,9 +139,13 @@ def repair_mesh(V, F, *, weld_tolerance: float | None = None, fill_holes: bool =
                 before = pairs.shape[0]
                 V2, F2, left = without_intersecting_faces(V, F)
                 if left < before:
+                    shells_before, _ = face_components(F, V.shape[0])
                     V, F = V2, F2
+                    shells, _ = face_components(F, V.shape[0])
+                    split = (f"; the solid now has {shells} shells (was {shells_before})"
+                             if shells != shells_before else "")
                     changes.append(f"cut away {before - left} of {before} self-intersecting "
-                                   "face pairs and closed the holes")
+                                   f"face pairs and closed the holes{split}")
                     F, _ = outward_oriented(V, F)
     V, F, k = without_unreferenced_vertices(V, F)
     note(k, "removed {} unreferenced vertices")

@@ -37,7 +37,7 @@ def union_of_shells(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarra
     return arrays_of_manifold(out)
 
 
-def without_intersecting_faces(V: np.ndarray, F: np.ndarray, *, rounds: int = 3,
+def without_intersecting_faces(V: np.ndarray, F: np.ndarray, *, rounds: int = 6,
                                max_fraction: float = 0.1
                                ) -> tuple[np.ndarray, np.ndarray, int]:
     """Delete intersecting faces (and a ring around them) and close the holes.
