@@ -1,0 +1,175 @@
+"""The height-and-tilt texture record and its ``.npz`` file format."""
+
+from __future__ import annotations
+
+import io
+import json
+import zipfile
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from geotex.errors import InputError, MeshFileError
+from geotex.io.atomic import atomic_output
+from geotex.mesh.arrays import as_faces
+from geotex.mesh.topology import edge_topology
+
+__all__ = ["HeightTiltTexture", "save_texture", "load_texture", "FORMAT_TAG"]
+
+FORMAT_TAG = "geotex.heighttilt/1"
+
+
+@dataclass(frozen=True, eq=False)
+class HeightTiltTexture:
+    """A height-and-tilt geometric texture over a fixed connectivity.
+
+    Attributes
+    ----------
+    height : numpy.ndarray, (n,) float64
+        Pseudo-height per vertex, ``sign(d . n) |d|`` with sign(0) = +1.
+    tilt : numpy.ndarray, (e,) float64
+        Tilt 1-form coefficients in geotex's unique edge order of ``faces``
+        (``edge_topology(faces, n).edges``).
+    faces : numpy.ndarray, (m, 3) int64
+        Connectivity the texture belongs to.
+    residual : numpy.ndarray, (n, 2) float64
+        The part of the vertex tilt the 1-form does not reproduce, as
+        components in the intrinsic vertex frames of
+        :func:`geotex.heighttilt.base.tilt_frames` (zero for a purely
+        intrinsic texture; see :func:`geotex.heighttilt.base.encode_tilt`).
+    metadata : dict
+        JSON-serialisable extra information.
+
+    Raises
+    ------
+    InputError
+        On construction with arrays of inconsistent shapes or non-finite values.
+    """
+
+    height: np.ndarray
+    tilt: np.ndarray
+    faces: np.ndarray
+    residual: np.ndarray | None = None
+    metadata: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        h = np.array(self.height, dtype=np.float64)
+        if h.ndim != 1 or h.shape[0] == 0:
+            raise InputError(f"height must be a non-empty (n,) array, got shape {h.shape}")
+        n = h.shape[0]
+        Fa = np.array(as_faces(self.faces, n, name="faces"), dtype=np.int64)
+        if Fa.shape[0] == 0:
+            raise InputError("faces is empty: a texture needs a connectivity")
+        e = edge_topology(Fa, n).edges.shape[0]
+        t = np.array(self.tilt, dtype=np.float64)
+        if t.shape != (e,):
+            raise InputError(f"tilt must have shape ({e},), one coefficient per unique edge "
+                             f"of faces, got {t.shape}")
+        r = (np.zeros((n, 2)) if self.residual is None
+             else np.array(self.residual, dtype=np.float64))
+        if r.shape != (n, 2):
+            raise InputError(f"residual must have shape ({n}, 2), got {r.shape}")
+        for name, a in (("height", h), ("tilt", t), ("residual", r)):
+            if not np.isfinite(a).all():
+                raise InputError(f"{name} has non-finite values")
+            a.setflags(write=False)
+        Fa.setflags(write=False)
+        if not isinstance(self.metadata, dict):
+            raise InputError(f"metadata must be a dict, got {type(self.metadata).__name__}")
+        object.__setattr__(self, "height", h)
+        object.__setattr__(self, "tilt", t)
+        object.__setattr__(self, "faces", Fa)
+        object.__setattr__(self, "residual", r)
+        object.__setattr__(self, "metadata", dict(self.metadata))
+
+    @property
+    def n_vertices(self) -> int:
+        """Number of vertices ``n``."""
+        return int(self.height.shape[0])
+
+    def replace(self, **changes) -> "HeightTiltTexture":
+        """Return a copy with some fields replaced (validated again)."""
+        kw = dict(height=self.height, tilt=self.tilt, faces=self.faces,
+                  residual=self.residual, metadata=self.metadata)
+        kw.update(changes)
+        return HeightTiltTexture(**kw)
+
+
+def save_texture(path, tex: HeightTiltTexture) -> None:
+    """Write a texture to an ``.npz`` file atomically.
+
+    The archive holds ``height``, ``tilt``, ``faces``, ``residual`` and
+    ``header``: a JSON string with the format tag, the counts
+    (vertices, faces, edges) and the metadata.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    tex : HeightTiltTexture
+
+    Raises
+    ------
+    InputError
+        If ``tex`` is not a texture or its metadata is not JSON serialisable.
+    MeshFileError
+        If the file cannot be written.
+    """
+    if not isinstance(tex, HeightTiltTexture):
+        raise InputError(f"tex must be a HeightTiltTexture, got {type(tex).__name__}")
+    try:
+        header = json.dumps({"format": FORMAT_TAG, "vertices": tex.n_vertices,
+                             "faces": int(tex.faces.shape[0]), "edges": int(tex.tilt.shape[0]),
+                             "metadata": tex.metadata}, sort_keys=True)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"tex.metadata is not JSON serialisable: {exc}") from None
+    buf = io.BytesIO()
+    np.savez(buf, height=tex.height, tilt=tex.tilt, faces=tex.faces, residual=tex.residual,
+             header=np.array(header))
+    with atomic_output(path, "wb") as fh:
+        fh.write(buf.getvalue())
+
+
+def load_texture(path) -> HeightTiltTexture:
+    """Read a texture written by :func:`save_texture`.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+
+    Returns
+    -------
+    HeightTiltTexture
+
+    Raises
+    ------
+    MeshFileError
+        If the file is missing, not an ``.npz`` archive, lacks an array, has a
+        wrong format tag, or its arrays disagree with the header counts or
+        with each other.
+    """
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            arrays = {k: z[k] for k in ("height", "tilt", "faces", "residual", "header")}
+    except FileNotFoundError:
+        raise MeshFileError(path, "no such texture file") from None
+    except KeyError as exc:
+        raise MeshFileError(path, f"not a height-and-tilt texture: missing array {exc}") from None
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
+        raise MeshFileError(path, f"not a readable .npz texture file: {exc}") from None
+    try:
+        header = json.loads(str(arrays["header"]))
+    except ValueError as exc:
+        raise MeshFileError(path, f"corrupted texture header: {exc}") from None
+    if not isinstance(header, dict) or header.get("format") != FORMAT_TAG:
+        raise MeshFileError(path, f"not a height-and-tilt texture (format tag is not {FORMAT_TAG})")
+    counts = (arrays["height"].shape, arrays["faces"].shape[:1], arrays["tilt"].shape)
+    if counts != ((header.get("vertices"),), (header.get("faces"),), (header.get("edges"),)):
+        raise MeshFileError(path, "array sizes do not match the header counts "
+                            f"(vertices, faces, edges = {header.get('vertices')}, "
+                            f"{header.get('faces')}, {header.get('edges')})")
+    try:
+        return HeightTiltTexture(height=arrays["height"], tilt=arrays["tilt"],
+                                 faces=arrays["faces"], residual=arrays["residual"],
+                                 metadata=header.get("metadata") or {})
+    except InputError as exc:
+        raise MeshFileError(path, f"inconsistent texture: {exc}") from None
