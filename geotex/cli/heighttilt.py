@@ -1,0 +1,132 @@
+"""``geotex heighttilt extract | apply | edit``: height-and-tilt textures from the command line."""
+
+from __future__ import annotations
+
+from geotex.cli._common import EXIT_OK, UsageError, guard_output
+
+HELP = "extract, apply and edit height-and-tilt geometric textures"
+
+
+def register(sub):
+    p = sub.add_parser("heighttilt", help=HELP, description=HELP + ".")
+    hs = p.add_subparsers(dest="heighttilt_command", metavar="ACTION", required=True,
+                          parser_class=type(p))
+
+    e = hs.add_parser("extract", help="texture of a detailed mesh over a smooth base",
+                      description="Extract the height-and-tilt texture of TEXTURED over a "
+                      "base: --base (same connectivity) or implicit mean-curvature-flow steps.")
+    e.add_argument("textured", help="detailed mesh file")
+    src = e.add_mutually_exclusive_group()
+    src.add_argument("--base", help="base mesh file with the same connectivity")
+    src.add_argument("--smooth-steps", type=int, default=3,
+                     help="mean-curvature-flow steps for the base (default 3)")
+    e.add_argument("-o", "--output", required=True, help="texture file to write (.npz)")
+    e.add_argument("--base-out", help="also write the base mesh to this file")
+    e.set_defaults(run=run_extract)
+
+    a = hs.add_parser("apply", help="put a texture on a base mesh",
+                      description="Reconstruct the detailed mesh from BASE and the texture.")
+    a.add_argument("texture", help="texture file (.npz)")
+    a.add_argument("--base", required=True, help="base mesh file (the texture's connectivity)")
+    a.add_argument("-o", "--output", required=True, help="mesh file to write")
+    a.set_defaults(run=run_apply)
+
+    d = hs.add_parser("edit", help="set tilt, wrap, wiggle or scale the height",
+                      description="Edit a texture; tilt edits need the base mesh.")
+    d.add_argument("texture", help="texture file (.npz)")
+    how = d.add_mutually_exclusive_group(required=True)
+    how.add_argument("--set-tilt", type=float, metavar="DEG", help="lean every element by DEG")
+    how.add_argument("--wrap", type=float, metavar="K", help="bend elements: lean = K x height")
+    how.add_argument("--wiggle", type=float, metavar="AMP",
+                     help="travelling wave of lean, AMP degrees at most; see --phase")
+    how.add_argument("--scale-height", type=float, metavar="S", help="multiply heights by S")
+    d.add_argument("--direction", metavar="X,Y,Z", help="lean direction (default: as extracted)")
+    d.add_argument("--phase", type=float, default=0.0, help="wave phase for --wiggle (radians)")
+    d.add_argument("--base", help="base mesh file (needed by --set-tilt, --wrap, --wiggle)")
+    d.add_argument("-o", "--output", required=True, help="texture file to write (.npz)")
+    d.set_defaults(run=run_edit)
+
+
+def _vector(text, option):
+    try:
+        v = [float(x) for x in text.split(",")]
+    except ValueError:
+        v = []
+    if len(v) != 3:
+        raise UsageError(f"{option} {text!r}: give three comma-separated numbers, e.g. 1,0,0")
+    return v
+
+
+def _npz(path, option="-o"):
+    if not str(path).lower().endswith(".npz"):
+        raise UsageError(f"{path}: texture files are .npz; use a .npz name for {option}")
+
+
+def run_extract(args) -> int:
+    from geotex.heighttilt import extract_texture, save_texture
+    from geotex.io import read_mesh, write_mesh
+
+    out = guard_output(args.output, args.textured, args.base)
+    _npz(out)
+    base_out = guard_output(args.base_out, args.textured, args.base) if args.base_out else None
+    mesh = read_mesh(args.textured)
+    base = None
+    if args.base:
+        b = read_mesh(args.base)
+        if b.n_faces != mesh.n_faces or not (b.faces == mesh.faces).all():
+            raise UsageError(f"{args.base}: the base must have the same faces as "
+                             f"{args.textured} ({b.n_faces} vs {mesh.n_faces} faces)")
+        base = b.vertices
+    if args.smooth_steps < 1:
+        raise UsageError(f"--smooth-steps {args.smooth_steps}: give at least 1")
+    tex, Vs = extract_texture(mesh.vertices, mesh.faces, base=base, steps=args.smooth_steps)
+    save_texture(out, tex)
+    if base_out is not None:
+        write_mesh(base_out, mesh.with_geometry(Vs, mesh.faces))
+    h = tex.height
+    print(f"{args.textured}: {mesh.n_vertices} vertices, heights {h.min():.4g} .. {h.max():.4g}")
+    print(f"wrote {out}" + (f" and {base_out}" if base_out else ""))
+    return EXIT_OK
+
+
+def run_apply(args) -> int:
+    from geotex.heighttilt import apply_texture, load_texture
+    from geotex.io import read_mesh, write_mesh
+
+    out = guard_output(args.output, args.texture, args.base)
+    tex = load_texture(args.texture)
+    base = read_mesh(args.base)
+    V = apply_texture(base.vertices, base.faces, tex)
+    write_mesh(out, base.with_geometry(V, base.faces))
+    print(f"wrote {out}: {base.n_vertices} vertices, {base.n_faces} faces")
+    return EXIT_OK
+
+
+def run_edit(args) -> int:
+    from geotex.heighttilt import load_texture, save_texture, scale_height, set_tilt, wiggle, wrap
+    from geotex.io import read_mesh
+
+    out = guard_output(args.output, args.texture, args.base)
+    _npz(out)
+    tex = load_texture(args.texture)
+    direction = _vector(args.direction, "--direction") if args.direction else None
+    if args.scale_height is not None:
+        new = scale_height(tex, args.scale_height)
+    else:
+        if not args.base:
+            raise UsageError("--set-tilt, --wrap and --wiggle need --base BASE "
+                             "(the base mesh the texture lives on)")
+        base = read_mesh(args.base)
+        Vs, F = base.vertices, base.faces
+        if args.set_tilt is not None:
+            new = set_tilt(Vs, F, tex, angle_degrees=args.set_tilt, direction=direction)
+        elif args.wrap is not None:
+            new = wrap(Vs, F, tex, k=args.wrap, direction=direction)
+        else:
+            if direction is None:
+                raise UsageError("--wiggle needs --direction X,Y,Z (the wave's direction)")
+            new = wiggle(Vs, F, tex, amplitude=args.wiggle, phase=args.phase,
+                         direction=direction)
+    save_texture(out, new)
+    print(f"wrote {out}")
+    return EXIT_OK

@@ -1,0 +1,81 @@
+import numpy as np
+import pytest
+
+from geotex.cli import main
+from geotex.heighttilt import base_normals, load_texture, spiky_sphere
+from geotex.io import read_mesh, write_mesh
+from geotex.mesh import Mesh
+
+
+@pytest.fixture
+def files(tmp_path):
+    V0, F, Vs = spiky_sphere(subdivisions=3, spikes=10, seed=2)
+    return (write_mesh(tmp_path / "spiky.ply", Mesh(V0, F)),
+            write_mesh(tmp_path / "base.ply", Mesh(Vs, F)), V0, F, Vs)
+
+
+def run(capsys, *argv):
+    code = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_extract_apply_round_trip(capsys, tmp_path, files):
+    textured, base, V0, F, Vs = files
+    tex = tmp_path / "t.npz"
+    assert run(capsys, "heighttilt", "extract", textured, "--base", base, "-o", tex)[0] == 0
+    out = tmp_path / "back.ply"
+    assert run(capsys, "heighttilt", "apply", tex, "--base", base, "-o", out)[0] == 0
+    V = read_mesh(out).vertices
+    assert np.abs(V - V0).max() <= 1e-9 * np.linalg.norm(np.ptp(V0, axis=0))
+
+
+def test_set_tilt_from_the_command_line(capsys, tmp_path, files):
+    textured, base, V0, F, Vs = files
+    tex, tilted, out = tmp_path / "t.npz", tmp_path / "t30.npz", tmp_path / "o.ply"
+    run(capsys, "heighttilt", "extract", textured, "--base", base, "-o", tex)
+    assert run(capsys, "heighttilt", "edit", tex, "--set-tilt", "30", "--base", base,
+               "-o", tilted)[0] == 0
+    run(capsys, "heighttilt", "apply", tilted, "--base", base, "-o", out)
+    d = read_mesh(out).vertices - Vs
+    h = load_texture(tilted).height
+    big = np.abs(h) > 0.2 * np.abs(h).max()
+    n = base_normals(Vs, F)
+    cos = np.einsum("ij,ij->i", d[big], n[big]) / np.linalg.norm(d[big], axis=1)
+    angles = np.degrees(np.arccos(np.clip(np.abs(cos), -1, 1)))
+    assert np.allclose(angles, 30.0, atol=1.0)
+
+
+def test_smoothed_base_and_scale_height(capsys, tmp_path, files):
+    textured, base, *_ = files
+    tex, base_out, half = tmp_path / "t.npz", tmp_path / "b.stl", tmp_path / "h.npz"
+    code, text, _ = run(capsys, "heighttilt", "extract", textured, "--smooth-steps", "2",
+                        "-o", tex, "--base-out", base_out)
+    assert code == 0 and base_out.exists()
+    assert run(capsys, "heighttilt", "edit", tex, "--scale-height", "0.5", "-o", half)[0] == 0
+    assert np.allclose(load_texture(half).height, 0.5 * load_texture(tex).height)
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["edit", "{tex}", "--wrap", "2", "-o", "{out}"], "need --base"),
+    (["edit", "{tex}", "--wiggle", "10", "--base", "{base}", "-o", "{out}"], "--direction"),
+    (["edit", "{tex}", "--scale-height", "2", "-o", "{tmp}/x.ply"], ".npz"),
+    (["apply", "{tex}", "--base", "{tmp}/missing.ply", "-o", "{tmp}/o.ply"], "no such file"),
+    (["extract", "{textured}", "--smooth-steps", "0", "-o", "{out}"], "at least 1"),
+])
+def test_usage_errors(capsys, tmp_path, files, argv, message):
+    textured, base, *_ = files
+    tex = tmp_path / "t.npz"
+    run(capsys, "heighttilt", "extract", textured, "--base", base, "-o", tex)
+    subs = dict(tex=tex, out=tmp_path / "o.npz", base=base, tmp=tmp_path, textured=textured)
+    code, out, err = run(capsys, "heighttilt", *[a.format(**subs) for a in argv])
+    assert code == 2 and message in err and err.count("\n") == 1
+    assert not (tmp_path / "o.npz").exists() and not (tmp_path / "o.ply").exists()
+
+
+def test_connectivity_mismatch(capsys, tmp_path, files):
+    textured, base, V0, F, Vs = files
+    other = write_mesh(tmp_path / "other.ply", Mesh(Vs, F[:, [0, 2, 1]]))
+    code, _, err = run(capsys, "heighttilt", "extract", textured, "--base", other,
+                       "-o", tmp_path / "t.npz")
+    assert code == 2 and "same faces" in err
