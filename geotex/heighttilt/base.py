@@ -23,6 +23,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from geotex.errors import InputError
+from geotex.fields._sparse import single_threaded_blas
 from geotex.fields.oneforms import (_projected_decoder, decode_one_form_at_vertices,
                                     encode_one_form)
 from geotex.mesh.arrays import as_mesh_arrays
@@ -214,6 +215,10 @@ def tilt_frames(Vs, F) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return nrm, T1, T2
 
 
+#: Conjugate-gradient iterations of the minimum-norm correction in :func:`encode_tilt`.
+CORRECTION_ITERATIONS = 400
+
+
 def encode_tilt(Vs, F, tilt, *, exact: bool = True,
                 topology: EdgeTopology | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Encode per-vertex tilt vectors as a 1-form plus a per-vertex residual.
@@ -283,11 +288,15 @@ def encode_tilt(Vs, F, tilt, *, exact: bool = True,
     B = (S @ B3).tocsr()
     t2 = np.stack([np.einsum("nd,nd->n", t, T1), np.einsum("nd,nd->n", t, T2)], axis=1).ravel()
     if exact:
-        K = (B @ B.T).tocsc()
+        K = (B @ B.T).tocsr()
         eps = 1e-12 * float(K.diagonal().mean())
-        lu = spla.splu(sp.csc_matrix(K + eps * sp.identity(2 * n, format="csc")))
-        for _ in range(3):          # solve, then refine against round-off
-            c = c + B.T @ lu.solve(t2 - B @ c)
+        K = K + eps * sp.identity(2 * n, format="csr")
+        diag = K.diagonal()
+        pre = spla.LinearOperator(K.shape, matvec=lambda x: x / diag, dtype=np.float64)
+        with single_threaded_blas():
+            y, _ = spla.cg(K, t2 - B @ c, rtol=1e-13, atol=0.0, maxiter=CORRECTION_ITERATIONS,
+                           M=pre)
+        c = c + B.T @ y
     residual = (t2 - B @ c).reshape(n, 2)
     return c, residual
 
