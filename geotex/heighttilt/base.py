@@ -230,10 +230,12 @@ def encode_tilt(Vs, F, tilt, *, exact: bool = True,
        interpolation: ``c = c0 + B^T y``, ``(B B^T + eps I) y = t2 - B c0``,
        with ``B`` (2n, e) the map from coefficients to the two tangent-frame
        components of ``decode_one_form_at_vertices(..., weighting="uniform")``
-       and ``eps = 1e-12 * mean(diag(B B^T))`` (``B`` has full row rank on the
-       closed meshes tried, e.g. icospheres, but loses rank on discs: a grid
-       plane has rank ``2n - 1``).  The correction may push a few
-       coefficients past ``|e|``.
+       and ``eps = 1e-12 * mean(diag(B B^T))``, solved by Jacobi-preconditioned
+       conjugate gradients (at most ``CORRECTION_ITERATIONS``; ``B`` has full
+       row rank on the closed meshes tried, e.g. icospheres, but loses rank on
+       discs: a grid plane has rank ``2n - 1``).  The correction may push a
+       few coefficients past ``|e|``.  Whatever it leaves is kept in the
+       residual, so exactness never depends on its convergence.
     3. The residual ``r = t - P D(c)`` that the 1-form cannot represent, stored
        as its two components in :func:`tilt_frames` (intrinsic: rigid-motion
        and scale invariant).  On closed meshes it is at round-off level after
