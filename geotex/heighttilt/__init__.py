@@ -13,11 +13,14 @@ True
 
 from geotex.heighttilt.base import (base_normals, decode_tilt, encode_tilt, smoothed_base,
                                     tilt_frames)
+from geotex.heighttilt.deform import (bend, deformed_texture, naive_space_deformation,
+                                      reapplied, scale_base, twist)
 from geotex.heighttilt.edit import scale_height, set_tilt, wiggle, wrap
 from geotex.heighttilt.extract import displacement_to_height_tilt, extract_texture
 from geotex.heighttilt.procedural import bumpy_plane, spiky_sphere, tentacle_stick
 from geotex.heighttilt.reconstruct import apply_texture, displacements
 from geotex.heighttilt.texture import HeightTiltTexture, load_texture, save_texture
+from geotex.heighttilt.transfer import closest_point_correspondence, transfer_texture
 
 __all__ = [
     "HeightTiltTexture", "save_texture", "load_texture",
@@ -26,4 +29,6 @@ __all__ = [
     "apply_texture", "displacements",
     "set_tilt", "scale_height", "wrap", "wiggle",
     "spiky_sphere", "bumpy_plane", "tentacle_stick",
+    "reapplied", "deformed_texture", "bend", "twist", "scale_base", "naive_space_deformation",
+    "transfer_texture", "closest_point_correspondence",
 ]
