@@ -175,6 +175,7 @@ def _draw(pv, plotter, panel: Panel, up: np.ndarray):
         plotter.add_text(panel.title, position="upper_edge", font_size=12, color="#222222")
     if V.shape[0]:
         plotter.camera_position = _camera(V, up)
+        plotter.reset_camera()            # keep the view direction, fit the whole mesh
         plotter.reset_camera_clipping_range()
 
 
