@@ -98,6 +98,11 @@ def base_normals(Vs, F) -> np.ndarray:
         See :func:`check_base_mesh`.
     """
     Vs, F = check_base_mesh(Vs, F, name="Vs")
+    return _normals(Vs, F)
+
+
+def _normals(Vs: np.ndarray, F: np.ndarray) -> np.ndarray:
+    """:func:`base_normals` on already validated arrays."""
     N = np.cross(Vs[F[:, 1]] - Vs[F[:, 0]], Vs[F[:, 2]] - Vs[F[:, 0]])
     N /= np.linalg.norm(N, axis=1, keepdims=True)
     acc = np.zeros_like(Vs)
@@ -197,8 +202,13 @@ def tilt_frames(Vs, F) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     n, T1, T2 : numpy.ndarray, (n, 3) float64 each
     """
     Vs, F = check_base_mesh(Vs, F, name="Vs")
-    nrm = base_normals(Vs, F)
-    E = edge_topology(F, Vs.shape[0]).edges
+    return _frames(Vs, F, _normals(Vs, F), edge_topology(F, Vs.shape[0]))
+
+
+def _frames(Vs: np.ndarray, F: np.ndarray, nrm: np.ndarray, topo: EdgeTopology
+            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`tilt_frames` on validated arrays with normals and topology given."""
+    E = topo.edges
     both = np.concatenate([E, E[:, ::-1]])
     order = np.lexsort((both[:, 1], both[:, 0]))
     both = both[order]
@@ -322,8 +332,15 @@ def decode_tilt(Vs, F, c, residual=None, *, topology: EdgeTopology | None = None
         Tangent to :func:`base_normals` (not clamped).
     """
     Vs, F = check_base_mesh(Vs, F, name="Vs")
-    nrm, T1, T2 = tilt_frames(Vs, F)
-    t = decode_one_form_at_vertices(Vs, F, c, weighting="uniform", topology=topology)
+    topo = edge_topology(F, Vs.shape[0]) if topology is None else topology
+    nrm = _normals(Vs, F)
+    return _decode(Vs, F, c, residual, nrm, _frames(Vs, F, nrm, topo), topo)
+
+
+def _decode(Vs, F, c, residual, nrm, frames, topo) -> np.ndarray:
+    """:func:`decode_tilt` on validated arrays with normals, frames and topology given."""
+    _, T1, T2 = frames
+    t = decode_one_form_at_vertices(Vs, F, c, weighting="uniform", topology=topo)
     t = t - np.einsum("nd,nd->n", t, nrm)[:, None] * nrm
     if residual is not None:
         r = np.asarray(residual, dtype=np.float64)

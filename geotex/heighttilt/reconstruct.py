@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from geotex.errors import InputError
-from geotex.heighttilt.base import base_normals, check_base_mesh, decode_tilt
+from geotex.heighttilt.base import _decode, _frames, _normals, check_base_mesh
+from geotex.mesh.topology import edge_topology
 from geotex.heighttilt.texture import HeightTiltTexture
 
 __all__ = ["apply_texture", "displacements", "check_texture"]
@@ -56,8 +57,9 @@ def displacements(Vs, F, tex: HeightTiltTexture) -> np.ndarray:
         See :func:`apply_texture`.
     """
     Vs, F = check_texture(Vs, F, tex)
-    n = base_normals(Vs, F)
-    t = decode_tilt(Vs, F, tex.tilt, tex.residual)
+    topo = edge_topology(F, Vs.shape[0])
+    n = _normals(Vs, F)
+    t = _decode(Vs, F, tex.tilt, tex.residual, n, _frames(Vs, F, n, topo), topo)
     mag = np.linalg.norm(t, axis=1)
     t = np.where(mag[:, None] > 1.0, t / np.maximum(mag, 1.0)[:, None], t)
     s2 = np.clip(1.0 - np.einsum("nd,nd->n", t, t), 0.0, 1.0)
