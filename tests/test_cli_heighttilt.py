@@ -79,3 +79,23 @@ def test_connectivity_mismatch(capsys, tmp_path, files):
     code, _, err = run(capsys, "heighttilt", "extract", textured, "--base", other,
                        "-o", tmp_path / "t.npz")
     assert code == 2 and "same faces" in err
+
+
+def test_transfer_onto_a_finer_sphere(capsys, tmp_path):
+    from geotex.mesh.primitives import icosphere
+    from geotex.testing import hausdorff_distance
+    V0, F, Vs = spiky_sphere(subdivisions=3, spikes=6, height=0.2, width=0.4, lean_degrees=30,
+                             seed=1)
+    src = write_mesh(tmp_path / "src.ply", Mesh(V0, F))
+    base = write_mesh(tmp_path / "base.ply", Mesh(Vs, F))
+    Vd, Fd = icosphere(4)
+    dst = write_mesh(tmp_path / "dst.ply", Mesh(Vd, Fd))
+    tex, out, mesh = tmp_path / "t.npz", tmp_path / "t2.npz", tmp_path / "moved.ply"
+    run(capsys, "heighttilt", "extract", src, "--base", base, "-o", tex)
+    code, text, err = run(capsys, "heighttilt", "transfer", tex, "--source-base", base,
+                          "--target", dst, "-o", out, "--apply", mesh)
+    assert code == 0, err
+    assert load_texture(out).height.shape == (len(Vd),)
+    moved = read_mesh(mesh)
+    d, _ = hausdorff_distance(moved.vertices, moved.faces, V0, F)
+    assert d < 0.25 * 0.2          # within a quarter of the bump height

@@ -1,10 +1,10 @@
-"""``geotex heighttilt extract | apply | edit``: height-and-tilt textures from the command line."""
+"""``geotex heighttilt extract | apply | edit | transfer``: height-and-tilt textures."""
 
 from __future__ import annotations
 
 from geotex.cli._common import EXIT_OK, UsageError, guard_output
 
-HELP = "extract, apply and edit height-and-tilt geometric textures"
+HELP = "extract, apply, edit and transfer height-and-tilt geometric textures"
 
 
 def register(sub):
@@ -30,6 +30,19 @@ def register(sub):
     a.add_argument("--base", required=True, help="base mesh file (the texture's connectivity)")
     a.add_argument("-o", "--output", required=True, help="mesh file to write")
     a.set_defaults(run=run_apply)
+
+    t = hs.add_parser("transfer", help="carry a texture onto another base mesh",
+                      description="Transfer a texture from its base (--source-base) onto "
+                      "TARGET, matching every target vertex to the closest point of the source "
+                      "base; the tilt is integrated along target edges.")
+    t.add_argument("texture", help="texture file (.npz)")
+    t.add_argument("--source-base", required=True, help="the base mesh the texture lives on")
+    t.add_argument("--target", required=True, help="base mesh to receive the texture")
+    t.add_argument("--samples", type=int, default=5,
+                   help="samples per edge for the tilt integrals (default 5)")
+    t.add_argument("-o", "--output", required=True, help="texture file to write (.npz)")
+    t.add_argument("--apply", metavar="MESH", help="also write the textured target mesh")
+    t.set_defaults(run=run_transfer)
 
     d = hs.add_parser("edit", help="set tilt, wrap, wiggle or scale the height",
                       description="Edit a texture; tilt edits need the base mesh.")
@@ -129,4 +142,28 @@ def run_edit(args) -> int:
                          direction=direction)
     save_texture(out, new)
     print(f"wrote {out}")
+    return EXIT_OK
+
+
+def run_transfer(args) -> int:
+    from geotex.heighttilt import (apply_texture, closest_point_correspondence, load_texture,
+                                   save_texture, transfer_texture)
+    from geotex.io import read_mesh, write_mesh
+
+    out = guard_output(args.output, args.texture, args.source_base, args.target)
+    _npz(out)
+    applied = (guard_output(args.apply, args.texture, args.source_base, args.target)
+               if args.apply else None)
+    tex = load_texture(args.texture)
+    src = read_mesh(args.source_base)
+    dst = read_mesh(args.target)
+    corr = closest_point_correspondence(dst.vertices, src.vertices, src.faces)
+    new = transfer_texture(src.vertices, src.faces, tex, dst.vertices, dst.faces,
+                           correspondence=corr, samples=args.samples)
+    save_texture(out, new)
+    if applied is not None:
+        V = apply_texture(dst.vertices, dst.faces, new)
+        write_mesh(applied, dst.with_geometry(V, dst.faces))
+    print(f"transferred onto {args.target} ({dst.n_vertices} vertices); wrote {out}"
+          + (f" and {applied}" if applied else ""))
     return EXIT_OK
