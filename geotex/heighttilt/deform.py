@@ -37,6 +37,7 @@ import numpy as np
 
 from geotex.errors import InputError
 from geotex.heighttilt.base import decode_tilt, tilt_frames
+from geotex.heighttilt.edit import _number
 from geotex.heighttilt.reconstruct import apply_texture, check_texture
 from geotex.heighttilt.texture import HeightTiltTexture
 from geotex.mesh.arrays import as_mesh_arrays, as_vertices
@@ -46,14 +47,13 @@ __all__ = ["deformed_texture", "reapplied", "bend", "twist", "scale_base",
            "naive_space_deformation"]
 
 
-def _number(name, value) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{name} must be a finite number, got {value!r}") from None
-    if not np.isfinite(v):
-        raise InputError(f"{name} must be a finite number, got {value!r}")
-    return v
+def _span(u: np.ndarray, origin, length) -> tuple[float, float]:
+    """Start and length of a deformation along ``u`` (default: the range of ``u``)."""
+    u0 = float(u.min()) if origin is None else _number("origin", origin)
+    L = float(u.max() - u.min()) if length is None else _number("length", length)
+    if not L > 0:
+        raise InputError(f"length must be positive, got {L!r}")
+    return u0, L
 
 
 def _axis(name, value) -> int:
@@ -211,10 +211,7 @@ def bend(V, *, angle, axis: int = 2, toward: int | None = None, origin: float | 
     if V.shape[0] == 0 or ang == 0.0:
         return out
     u = V[:, axis]
-    u0 = float(u.min()) if origin is None else _number("origin", origin)
-    L = float(u.max() - u.min()) if length is None else _number("length", length)
-    if not L > 0:
-        raise InputError(f"length must be positive, got {L!r}")
+    u0, L = _span(u, origin, length)
     R = L / ang
     w = V[:, toward]
     phi = (u - u0) / R
@@ -256,10 +253,7 @@ def twist(V, *, turns, axis: int = 2, origin: float | None = None,
     if V.shape[0] == 0 or tr == 0.0:
         return out
     u = V[:, axis]
-    u0 = float(u.min()) if origin is None else _number("origin", origin)
-    L = float(u.max() - u.min()) if length is None else _number("length", length)
-    if not L > 0:
-        raise InputError(f"length must be positive, got {L!r}")
+    u0, L = _span(u, origin, length)
     a, b = (axis + 1) % 3, (axis + 2) % 3
     th = 2.0 * np.pi * tr * (u - u0) / L
     c, s = np.cos(th), np.sin(th)
