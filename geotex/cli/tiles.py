@@ -1,0 +1,157 @@
+"""``geotex tiles build | check | tile | list | preview``: geometric Wang tile sets."""
+
+from __future__ import annotations
+
+import sys
+
+from geotex.cli._common import EXIT_NOT_PRINTABLE, EXIT_OK, UsageError, guard_output
+
+HELP = "build, check, preview and lay out geometric Wang tile sets"
+
+
+def register(sub):
+    p = sub.add_parser("tiles", help=HELP, description=HELP + ".")
+    ts = p.add_subparsers(dest="tiles_command", metavar="ACTION", required=True,
+                          parser_class=type(p))
+
+    b = ts.add_parser("build", help="build a tile set from an exemplar",
+                      description="Build a tile set from EXEMPLAR: an exemplar name "
+                      "(see 'geotex exemplar --list') or an exemplar file (.npz or mesh).")
+    b.add_argument("exemplar", help="exemplar name or file")
+    b.add_argument("-o", "--output", required=True, help="tile set file to write (.npz)")
+    b.add_argument("--colors", default="2", help="colours per axis class: N or NX,NY,NZ "
+                   "(default 2)")
+    b.add_argument("--planar", action="store_true", help="only the planar tiles")
+    b.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    b.add_argument("--name", help="set name (default: the exemplar's)")
+    b.set_defaults(run=run_build)
+
+    c = ts.add_parser("check", help="verify that every legal neighbour pair is seamless",
+                      description="Compare the open boundaries of every pair of tile sides "
+                      "that may meet; exit 1 naming the first offending pair.")
+    c.add_argument("tileset", help="tile set file or catalog name")
+    c.set_defaults(run=run_check)
+
+    t = ts.add_parser("tile", help="random legal tiling of the plane, as a printable solid",
+                      description="Lay out a random legal W x H arrangement, weld it, union "
+                      "it with a slab and write a printable solid.")
+    t.add_argument("tileset", help="tile set file or catalog name")
+    t.add_argument("--grid", nargs=2, type=int, metavar=("W", "H"), required=True)
+    t.add_argument("-o", "--output", required=True, help="mesh file (.stl, .3mf, ...)")
+    t.add_argument("--seed", type=int, default=0)
+    t.add_argument("--slab", type=float, default=0.2, help="slab thickness in tile units")
+    t.add_argument("--tile-size", type=float, default=10.0,
+                   help="tile edge length in output units (default 10, i.e. mm)")
+    t.set_defaults(run=run_tile)
+
+    ls = ts.add_parser("list", help="list the tile set catalog")
+    ls.set_defaults(run=run_list)
+
+    v = ts.add_parser("preview", help="picture of a tile set and a random tiling")
+    v.add_argument("tileset", help="tile set file or catalog name")
+    v.add_argument("-o", "--output", required=True, help="PNG file to write")
+    v.add_argument("--grid", type=int, default=6, help="tiling size (default 6)")
+    v.add_argument("--seed", type=int, default=0)
+    v.set_defaults(run=run_preview)
+
+
+def _exemplar(spec: str, seed: int):
+    from pathlib import Path
+
+    from geotex import exemplars
+
+    if Path(spec).exists():
+        return exemplars.load_exemplar(spec)
+    if spec in exemplars.EXEMPLAR_KINDS:
+        return exemplars.exemplar(spec, seed=seed)
+    raise UsageError(f"{spec}: no such file or exemplar name "
+                     f"({', '.join(exemplars.EXEMPLAR_KINDS)})")
+
+
+def run_build(args) -> int:
+    import time
+
+    from geotex.progress import stage_bar
+    from geotex.tiles.build import BUILD_STAGES, build_tileset
+    from geotex.tiles.colors import parse_colors, tile_count
+    from geotex.tiles.tileset import save_tileset
+
+    out = guard_output(args.output, args.exemplar)
+    if out.suffix.lower() != ".npz":
+        raise UsageError(f"{out}: tile sets are written as .npz files")
+    ex = _exemplar(args.exemplar, args.seed)
+    n = tile_count(parse_colors(args.colors, planar=args.planar), planar=args.planar)
+    start = time.perf_counter()
+    with stage_bar(len(BUILD_STAGES), f"tiles ({n})") as bar:
+        tiles = build_tileset(ex, colors=args.colors, planar=args.planar, seed=args.seed,
+                              name=args.name, progress=bar)
+    elapsed = time.perf_counter() - start
+    save_tileset(out, tiles)
+    print(f"{out}: {len(tiles)} tiles, colours X/Y/Z {tiles.n_colors}, height "
+          f"{tiles.height:.3g}, {elapsed:.2f} s ({1000 * elapsed / len(tiles):.0f} ms per tile)")
+    return EXIT_OK
+
+
+def run_check(args) -> int:
+    from geotex.tiles.catalog import load_named
+    from geotex.tiles.verify import check_seams
+
+    tiles = load_named(args.tileset)
+    rep = check_seams(tiles)
+    if rep.ok:
+        print(f"{args.tileset}: seamless: {len(tiles)} tiles, {rep.pairs_checked} side "
+              "pairs checked")
+        return EXIT_OK
+    print(f"geotex: error: {args.tileset}: {rep.problems[0]} "
+          f"({len(rep.problems)} problems)", file=sys.stderr)
+    return EXIT_NOT_PRINTABLE
+
+
+def run_tile(args) -> int:
+    from geotex.errors import NotPrintableError
+    from geotex.printing import export_printable
+    from geotex.tiles.catalog import load_named, tileset_path
+    from geotex.tiles.tiling import on_slab, planar_tiling, random_arrangement
+
+    out = guard_output(args.output, tileset_path(args.tileset))
+    if args.slab <= 0 or args.tile_size <= 0:
+        raise UsageError("--slab and --tile-size must be positive")
+    tiles = load_named(args.tileset)
+    w, h = args.grid
+    arrangement = random_arrangement(tiles, w, h, seed=args.seed)
+    V, F = on_slab(*planar_tiling(tiles, arrangement), (w, h), thickness=args.slab)
+    V = V * args.tile_size
+    try:
+        export_printable(out, V, F, name=f"{tiles.name} {w}x{h}")
+    except NotPrintableError as exc:
+        print(f"geotex: error: {exc}", file=sys.stderr)
+        return EXIT_NOT_PRINTABLE
+    print(f"{out}: {len(F)} faces, {w} x {h} tiles of {args.tile_size:g}, printable")
+    return EXIT_OK
+
+
+def run_list(args) -> int:
+    from geotex.tiles.catalog import list_tilesets
+
+    rows = list_tilesets()
+    if not rows:
+        print("the tile catalog is empty")
+        return EXIT_OK
+    print(f"{'name':<14}{'tiles':>6}  {'colours':<10}{'size':>9}  exemplar")
+    for r in rows:
+        cols = ",".join(str(c) for c in r["colors"])
+        print(f"{r['name']:<14}{r['tiles']:>6}  {cols:<10}{r['bytes'] / 1e6:>7.2f}MB  "
+              f"{r['exemplar']}  {r['description']}")
+    return EXIT_OK
+
+
+def run_preview(args) -> int:
+    from geotex.tiles.catalog import load_named, tileset_path
+    from geotex.tiles.preview import render_tileset
+
+    out = guard_output(args.output, tileset_path(args.tileset))
+    if out.suffix.lower() != ".png":
+        raise UsageError(f"{out}: previews are PNG pictures")
+    render_tileset(load_named(args.tileset), out, grid=args.grid, seed=args.seed)
+    print(f"{out}: preview written")
+    return EXIT_OK

@@ -1,0 +1,102 @@
+"""Split a triangle mesh by an axis-aligned plane into two open halves.
+
+The halves share their cut exactly: every mesh edge that crosses the plane gets
+one new vertex, used by both halves, whose coordinate along the plane's axis is
+set to the plane value exactly. Welding the two halves back (by position) gives
+the original surface refined along the cut, which is what makes Wang tiles
+seamless: two neighbouring tiles receive the two halves of one edge strip.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from geotex.mesh.topology import edge_topology
+
+__all__ = ["split_by_plane", "compact"]
+
+
+def compact(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Drop unreferenced vertices.
+
+    Parameters
+    ----------
+    V : numpy.ndarray, (n, 3) float64
+    F : numpy.ndarray, (m, 3) int64
+
+    Returns
+    -------
+    V2 : numpy.ndarray, (k, 3) float64
+        The referenced vertices in their original order.
+    F2 : numpy.ndarray, (m, 3) int64
+    """
+    used = np.zeros(len(V), dtype=bool)
+    used[F.ravel()] = True
+    new_index = np.cumsum(used) - 1
+    return V[used], new_index[F].astype(np.int64)
+
+
+def split_by_plane(V: np.ndarray, F: np.ndarray, *, axis: int, value: float,
+                   snap: float = 1e-7) -> tuple[tuple[np.ndarray, np.ndarray],
+                                                  tuple[np.ndarray, np.ndarray]]:
+    """Cut a mesh with the plane ``x[axis] = value`` into its two sides.
+
+    Parameters
+    ----------
+    V : numpy.ndarray, (n, 3) float64
+    F : numpy.ndarray, (m, 3) int64
+    axis : int
+        0, 1 or 2.
+    value : float
+        Plane position along ``axis``.
+    snap : float
+        Vertices closer than this to the plane are first pushed to
+        ``value + snap`` so that no cut triangle degenerates.
+
+    Returns
+    -------
+    below, above : tuple of (V, F)
+        The parts with ``x[axis] <= value`` and ``x[axis] >= value``; both are
+        compacted, keep the input orientation, and their vertices on the plane
+        are bit-identical.
+    """
+    V = np.array(V, dtype=np.float64)
+    F = np.asarray(F, dtype=np.int64)
+    d = V[:, axis] - value
+    near = np.abs(d) < snap
+    V[near, axis] = value + snap
+    d[near] = V[near, axis] - value
+    positive = d > 0
+
+    topo = edge_topology(F, len(V))
+    e0, e1 = topo.edges[:, 0], topo.edges[:, 1]
+    crossing = positive[e0] != positive[e1]
+    cut_edges = np.flatnonzero(crossing)
+    t = d[e0[cut_edges]] / (d[e0[cut_edges]] - d[e1[cut_edges]])
+    P = V[e0[cut_edges]] + t[:, None] * (V[e1[cut_edges]] - V[e0[cut_edges]])
+    P[:, axis] = value
+    cut_vertex = np.full(len(topo.edges), -1, dtype=np.int64)
+    cut_vertex[cut_edges] = len(V) + np.arange(len(cut_edges))
+    W = np.vstack([V, P])
+
+    side = positive[F]
+    n_pos = side.sum(axis=1)
+    whole_pos = F[n_pos == 3]
+    whole_neg = F[n_pos == 0]
+    mixed = np.flatnonzero((n_pos == 1) | (n_pos == 2))
+    # rotate each mixed face so that its lone vertex (the odd one out) comes first
+    s = side[mixed]
+    lone_is_pos = n_pos[mixed] == 1
+    lone = np.where(lone_is_pos[:, None], s, ~s).argmax(axis=1)
+    k = (lone[:, None] + np.arange(3)) % 3
+    corners = np.take_along_axis(F[mixed], k, axis=1)
+    he = np.take_along_axis(topo.half_to_edge.reshape(-1, 3)[mixed], k, axis=1)
+    L, A, B = corners.T
+    p = cut_vertex[he[:, 0]]            # on edge L-A
+    q = cut_vertex[he[:, 2]]            # on edge B-L
+    lone_tri = np.stack([L, p, q], axis=1)
+    pair = np.vstack([np.stack([p, A, B], axis=1), np.stack([p, B, q], axis=1)])
+    pair_pos = np.concatenate([~lone_is_pos, ~lone_is_pos])
+    above = np.vstack([whole_pos, lone_tri[lone_is_pos], pair[pair_pos]])
+    below = np.vstack([whole_neg, lone_tri[~lone_is_pos], pair[~pair_pos]])
+    return compact(W, below), compact(W, above)

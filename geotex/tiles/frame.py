@@ -1,0 +1,80 @@
+"""Tile frames: the four edge-strip halves placed on the sides of a tile."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from geotex.tiles.colors import EAST, NORTH, SOUTH, WEST
+from geotex.tiles.strips import Strip
+
+__all__ = ["placed_half", "frame_of", "concatenated"]
+
+
+def placed_half(strip: Strip, side: int) -> tuple[tuple[np.ndarray, np.ndarray], np.ndarray]:
+    """The half of ``strip`` that lies inside a tile, placed on ``side``.
+
+    Placement is a rotation plus a translation (never a mirror), with the strip's
+    ``t`` along +u (south, north) or +v (west, east) and its ``s`` axis a quarter
+    turn counter-clockwise from ``t``; cut vertices land exactly on the side.
+
+    Returns
+    -------
+    mesh : tuple of (V (n, 3) float64, F (m, 3) int64)
+    boxes : numpy.ndarray, (k, 4) float64
+        Footprints ``(u0, v0, u1, v1)`` of the placed elements.
+    """
+    (V, F) = strip.above if side in (SOUTH, EAST) else strip.below
+    t, s = V[:, 0], V[:, 1]
+    b = strip.boxes
+    out = V.copy()
+    if side == SOUTH:
+        out[:, 0], out[:, 1] = t, s
+        boxes = np.stack([b[:, 0], np.zeros(len(b)), b[:, 2], b[:, 3]], 1)
+    elif side == NORTH:
+        out[:, 0], out[:, 1] = t, 1.0 + s
+        boxes = np.stack([b[:, 0], 1.0 + b[:, 1], b[:, 2], np.ones(len(b))], 1)
+    elif side == WEST:
+        out[:, 0], out[:, 1] = 0.0 - s, t
+        boxes = np.stack([np.zeros(len(b)), b[:, 0], -b[:, 1], b[:, 2]], 1)
+    elif side == EAST:
+        out[:, 0], out[:, 1] = 1.0 - s, t
+        boxes = np.stack([1.0 - b[:, 3], b[:, 0], np.ones(len(b)), b[:, 2]], 1)
+    else:
+        raise ValueError(f"side must be 0..3, got {side}")
+    return (out, F), boxes
+
+
+def concatenated(parts) -> tuple[np.ndarray, np.ndarray]:
+    """Stack meshes ``[(V, F), ...]`` into one ``(V, F)``."""
+    parts = [(V, F) for V, F in parts if len(F)]
+    if not parts:
+        return np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64)
+    offsets = np.cumsum([0] + [len(V) for V, _ in parts[:-1]])
+    return (np.vstack([V for V, _ in parts]),
+            np.vstack([F + o for (_, F), o in zip(parts, offsets)]).astype(np.int64))
+
+
+def frame_of(strips_ab, colors) -> tuple[tuple[np.ndarray, np.ndarray], np.ndarray]:
+    """The frame of one tile.
+
+    Parameters
+    ----------
+    strips_ab : tuple of (list of Strip, list of Strip)
+        Strips of the south/north class and of the west/east class.
+    colors : sequence of 4 int
+        Colours of sides south, east, north, west.
+
+    Returns
+    -------
+    mesh : tuple of (V, F)
+    boxes : numpy.ndarray, (k, 4) float64
+        Element footprints of the frame.
+    """
+    sn, we = strips_ab
+    parts, boxes = [], []
+    for side, strip in ((SOUTH, sn[colors[0]]), (EAST, we[colors[1]]),
+                        (NORTH, sn[colors[2]]), (WEST, we[colors[3]])):
+        mesh, b = placed_half(strip, side)
+        parts.append(mesh)
+        boxes.append(b)
+    return concatenated(parts), np.vstack(boxes)

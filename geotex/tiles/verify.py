@@ -1,0 +1,110 @@
+"""Seamlessness check of a tile set: every legal neighbour pair welds shut.
+
+Two tile sides may meet whenever they carry the same axis class and colour
+(on the plane and across polycube edges alike). Each side's open boundary is
+summarised in edge coordinates ``(t, w)`` (``t`` along the side, ``w`` the
+height); the set is seamless when every tile's open boundary lies on its sides
+and all sides of one class and colour carry bit-identical boundaries, which
+makes the check exhaustive over all pairs of such sides.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from geotex.mesh.topology import edge_topology
+from geotex.tiles.colors import side_classes
+from geotex.tiles.tileset import TileSet
+
+__all__ = ["SeamReport", "check_seams", "side_boundaries"]
+
+_SIDE_NAMES = ("south", "east", "north", "west")
+
+
+@dataclass(frozen=True)
+class SeamReport:
+    """Outcome of :func:`check_seams`.
+
+    Attributes
+    ----------
+    ok : bool
+    pairs_checked : int
+        Ordered pairs of tile sides that may meet (all compared).
+    problems : list of str
+        One line per problem, naming the tiles and sides.
+    """
+
+    ok: bool
+    pairs_checked: int
+    problems: list = field(default_factory=list)
+
+
+def side_boundaries(V: np.ndarray, F: np.ndarray) -> tuple[list, int]:
+    """Open boundary segments of a tile per side, in edge coordinates.
+
+    Returns
+    -------
+    sides : list of 4 numpy.ndarray, (k, 4) float64
+        Rows ``(t_a, w_a, t_b, w_b)`` with endpoints ordered, rows sorted.
+    stray : int
+        Boundary edges that lie on no side (must be 0).
+    """
+    topo = edge_topology(F, len(V))
+    e = topo.edges[topo.boundary]
+    a, b = V[e[:, 0]], V[e[:, 1]]
+    tests = ((1, 0.0, 0), (0, 1.0, 1), (1, 1.0, 0), (0, 0.0, 1))  # (coord, value, t-axis)
+    sides, on_any = [], np.zeros(len(e), dtype=bool)
+    for coord, value, t_axis in tests:
+        on = (a[:, coord] == value) & (b[:, coord] == value)
+        on_any |= on
+        pa = np.stack([a[on, t_axis], a[on, 2]], 1)
+        pb = np.stack([b[on, t_axis], b[on, 2]], 1)
+        swap = (pa[:, 0] > pb[:, 0]) | ((pa[:, 0] == pb[:, 0]) & (pa[:, 1] > pb[:, 1]))
+        lo = np.where(swap[:, None], pb, pa)
+        hi = np.where(swap[:, None], pa, pb)
+        rows = np.hstack([lo, hi]) + 0.0
+        rows = rows[np.lexsort(rows.T[::-1])] if len(rows) else rows.reshape(0, 4)
+        sides.append(rows)
+    return sides, int((~on_any).sum())
+
+
+def check_seams(tiles: TileSet) -> SeamReport:
+    """Check every pair of tile sides that may meet, exhaustively.
+
+    Parameters
+    ----------
+    tiles : TileSet
+
+    Returns
+    -------
+    SeamReport
+    """
+    problems = []
+    first = {}                      # (class, colour) -> (digest, tile, side)
+    keys = []
+    for i in range(len(tiles)):
+        V, F = tiles.tile(i)
+        sides, stray = side_boundaries(V, F)
+        topo = edge_topology(F, len(V))
+        if stray:
+            problems.append(f"tile {i}: {stray} open boundary edges away from its sides")
+        if topo.non_manifold.any():
+            problems.append(f"tile {i}: {int(topo.non_manifold.sum())} non-manifold edges")
+        classes = side_classes(tiles.groups[i])
+        for s in range(4):
+            key = (int(classes[s]), int(tiles.colors[i, s]))
+            digest = hashlib.sha1(np.ascontiguousarray(sides[s]).tobytes()).hexdigest()
+            keys.append(key)
+            if key not in first:
+                first[key] = (digest, i, s)
+            elif first[key][0] != digest:
+                d0, i0, s0 = first[key]
+                problems.append(f"tiles {i0} ({_SIDE_NAMES[s0]}) and {i} ({_SIDE_NAMES[s]}) "
+                                f"share axis class {'XYZ'[key[0]]} colour {key[1]} but "
+                                "their boundaries differ")
+    _, counts = np.unique(np.array(keys).reshape(-1, 2), axis=0, return_counts=True)
+    pairs = int((counts * (counts - 1)).sum())
+    return SeamReport(not problems, pairs, problems)
