@@ -99,3 +99,60 @@ def test_transfer_onto_a_finer_sphere(capsys, tmp_path):
     moved = read_mesh(mesh)
     d, _ = hausdorff_distance(moved.vertices, moved.faces, V0, F)
     assert d < 0.25 * 0.2          # within a quarter of the bump height
+
+
+@pytest.fixture
+def planar_files(tmp_path, capsys):
+    from geotex.heighttilt import bumpy_plane
+    from geotex.mesh.primitives import icosphere
+    V0, F, Vs = bumpy_plane(12, 12, seed=1, periodic=True, radius=0.15, bumps=5, height=0.1)
+    src = write_mesh(tmp_path / "plane.ply", Mesh(V0, F))
+    base = write_mesh(tmp_path / "flat.ply", Mesh(Vs, F))
+    Vd, Fd = icosphere(1)
+    dst = write_mesh(tmp_path / "ball.ply", Mesh(Vd, Fd))
+    tex = tmp_path / "t.npz"
+    assert run(capsys, "heighttilt", "extract", src, "--base", base, "-o", tex)[0] == 0
+    return tex, base, dst
+
+
+def test_planar_transfer_onto_a_sphere(capsys, tmp_path, planar_files):
+    from geotex.heighttilt import apply_texture
+    tex, base, dst = planar_files
+    out, refined, mesh = tmp_path / "s.npz", tmp_path / "refined.ply", tmp_path / "bumpy.ply"
+    code, text, err = run(capsys, "heighttilt", "transfer", tex, "--source-base", base,
+                          "--target", dst, "--planar", "--scale", "1.2", "--field", "smooth",
+                          "-o", out, "--base-out", refined, "--apply", mesh)
+    assert code == 0, err
+    assert "refined to" in text and "patches" in text
+    b, m = read_mesh(refined), read_mesh(mesh)
+    t = load_texture(out)
+    assert t.height.shape == (b.n_vertices,) and np.array_equal(m.faces, b.faces)
+    assert np.allclose(apply_texture(b.vertices, b.faces, t), m.vertices, atol=1e-9)
+    assert np.abs(t.height).max() > 0.5 * 1.2 * 0.1      # bumps arrived, scaled
+
+
+@pytest.mark.parametrize("extra, message", [
+    (["--planar", "-o", "{tmp}/o.npz", "--base-out", "{tmp}/b.ply"], "--scale"),
+    (["--planar", "--scale", "1", "-o", "{tmp}/o.npz"], "--base-out"),
+    (["--scale", "1", "-o", "{tmp}/o.npz"], "--planar"),
+    (["--planar", "--scale", "1", "--field", "x.txt", "-o", "{tmp}/o.npz",
+      "--base-out", "{tmp}/b.ply"], "field file"),
+    (["--planar", "--scale", "-1", "-o", "{tmp}/o.npz", "--base-out", "{tmp}/b.ply"], "scale"),
+])
+def test_planar_usage_errors(capsys, tmp_path, planar_files, extra, message):
+    tex, base, dst = planar_files
+    code, _, err = run(capsys, "heighttilt", "transfer", tex, "--source-base", base,
+                       "--target", dst, *[a.format(tmp=tmp_path) for a in extra])
+    assert code == 2 and message in err and err.count("\n") == 1
+    assert not (tmp_path / "o.npz").exists() and not (tmp_path / "b.ply").exists()
+
+
+def test_planar_transfer_with_a_field_file(capsys, tmp_path, planar_files):
+    tex, base, dst = planar_files
+    field, out, refined = tmp_path / "f.npz", tmp_path / "s.npz", tmp_path / "r.ply"
+    assert run(capsys, "field", dst, "--up", "1,0,0", "-o", field)[0] == 0
+    code, _, err = run(capsys, "heighttilt", "transfer", tex, "--source-base", base,
+                       "--target", dst, "--planar", "--scale", "1.2", "--field", field,
+                       "--refine", "subdivide", "-o", out, "--base-out", refined)
+    assert code == 0, err
+    assert load_texture(out).height.shape == (read_mesh(refined).n_vertices,)

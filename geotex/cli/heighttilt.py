@@ -34,7 +34,9 @@ def register(sub):
     t = hs.add_parser("transfer", help="carry a texture onto another base mesh",
                       description="Transfer a texture from its base (--source-base) onto "
                       "TARGET, matching every target vertex to the closest point of the source "
-                      "base; the tilt is integrated along target edges.")
+                      "base; the tilt is integrated along target edges.  With --planar the "
+                      "source is a flat texture in the XY plane, tiled over the (refined) "
+                      "target through field-aligned patch parameterizations.")
     t.add_argument("texture", help="texture file (.npz)")
     t.add_argument("--source-base", required=True, help="the base mesh the texture lives on")
     t.add_argument("--target", required=True, help="base mesh to receive the texture")
@@ -42,6 +44,21 @@ def register(sub):
                    help="samples per edge for the tilt integrals (default 5)")
     t.add_argument("-o", "--output", required=True, help="texture file to write (.npz)")
     t.add_argument("--apply", metavar="MESH", help="also write the textured target mesh")
+    pl = t.add_argument_group("planar mode")
+    pl.add_argument("--planar", action="store_true",
+                    help="the source is a flat texture in the XY plane; tile it over TARGET")
+    pl.add_argument("--scale", type=float, metavar="S",
+                    help="surface length of one source unit on the target (required)")
+    pl.add_argument("--field", default="up", metavar="up|smooth|FILE.npz",
+                    help="direction the texture's x axis follows (default up; a field file "
+                    "from 'geotex field' for TARGET's faces)")
+    pl.add_argument("--up", default="0,0,1", metavar="X,Y,Z",
+                    help="the up direction for --field up (default 0,0,1)")
+    pl.add_argument("--refine", choices=("remesh", "subdivide", "none"), default="remesh",
+                    help="how TARGET is refined to the texture's resolution (default remesh)")
+    pl.add_argument("--seed", type=int, default=0, help="patch seed order (default 0)")
+    pl.add_argument("--base-out", metavar="MESH",
+                    help="write the refined target the texture lives on (required)")
     t.set_defaults(run=run_transfer)
 
     d = hs.add_parser("edit", help="set tilt, wrap, wiggle or scale the height",
@@ -146,6 +163,10 @@ def run_edit(args) -> int:
 
 
 def run_transfer(args) -> int:
+    if args.planar:
+        return _run_planar(args)
+    if args.scale is not None or args.base_out:
+        raise UsageError("--scale and --base-out belong to the planar mode; add --planar")
     from geotex.heighttilt import (apply_texture, closest_point_correspondence, load_texture,
                                    save_texture, transfer_texture)
     from geotex.io import read_mesh, write_mesh
@@ -166,4 +187,50 @@ def run_transfer(args) -> int:
         write_mesh(applied, dst.with_geometry(V, dst.faces))
     print(f"transferred onto {args.target} ({dst.n_vertices} vertices); wrote {out}"
           + (f" and {applied}" if applied else ""))
+    return EXIT_OK
+
+
+def _run_planar(args) -> int:
+    from geotex.heighttilt import apply_texture, load_texture, save_texture
+    from geotex.heighttilt.planar import transfer_planar
+    from geotex.io import read_mesh, write_mesh
+    from geotex.progress import stage_bar
+
+    if args.scale is None:
+        raise UsageError("--planar needs --scale S (surface length of one source unit)")
+    if not args.base_out:
+        raise UsageError("--planar needs --base-out MESH: the texture lives on the refined "
+                         "target, which is written there")
+    inputs = (args.texture, args.source_base, args.target)
+    field = args.field
+    if field not in ("up", "smooth"):
+        if not str(field).lower().endswith(".npz"):
+            raise UsageError(f"--field {field!r}: give up, smooth or a field file (.npz)")
+        inputs += (field,)
+    out = guard_output(args.output, *inputs)
+    _npz(out)
+    base_out = guard_output(args.base_out, *inputs)
+    applied = guard_output(args.apply, *inputs) if args.apply else None
+    outs = [str(p) for p in (out, base_out, applied) if p is not None]
+    if len(set(outs)) != len(outs):
+        raise UsageError("-o, --base-out and --apply must be different files")
+    up = _vector(args.up, "--up")
+    tex = load_texture(args.texture)
+    src = read_mesh(args.source_base)
+    dst = read_mesh(args.target)
+    if field not in ("up", "smooth"):
+        from geotex.fields import load_direction_field
+        field = load_direction_field(field).field
+    with stage_bar(6, "planar transfer") as bar:
+        res = transfer_planar(src.vertices, src.faces, tex, dst.vertices, dst.faces,
+                              scale=args.scale, field=field, up=up, refine=args.refine,
+                              samples=args.samples, seed=args.seed, progress=bar)
+    save_texture(out, res.texture)
+    write_mesh(base_out, dst.with_geometry(res.vertices, res.faces))
+    if applied is not None:
+        V = apply_texture(res.vertices, res.faces, res.texture)
+        write_mesh(applied, dst.with_geometry(V, res.faces))
+    print(f"{args.target}: refined to {res.vertices.shape[0]} vertices, {res.faces.shape[0]} "
+          f"faces; {res.n_patches} patches")
+    print(f"wrote {out} and {base_out}" + (f" and {applied}" if applied else ""))
     return EXIT_OK

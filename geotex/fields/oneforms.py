@@ -53,6 +53,7 @@ __all__ = [
     "segment_samples",
     "line_integrals",
     "integrate_edges",
+    "projected_decoder",
 ]
 
 _DEGENERATE_REL = 1e-12
@@ -375,7 +376,7 @@ def evaluate_one_form(V, F, c, faces, bary, *, topology: EdgeTopology | None = N
 
 def encode_one_form(V, F, vectors, *, at: str = "faces", bound=True,
                     weighting: str = "uniform", damping: float = 1e-2,
-                    topology: EdgeTopology | None = None) -> np.ndarray:
+                    topology: EdgeTopology | None = None, decoder=None) -> np.ndarray:
     """Encode a tangent vector field as a 1-form, one coefficient per unique edge.
 
     Parameters
@@ -426,6 +427,10 @@ def encode_one_form(V, F, vectors, *, at: str = "faces", bound=True,
         ``20 / sqrt(damping)`` conjugate-gradient iterations for rough data).
     topology : EdgeTopology, optional
         ``edge_topology(F, len(V))``, to reuse across calls.
+    decoder : tuple, optional
+        ``projected_decoder(V, F, weighting=weighting, topology=topology)``,
+        to reuse when the caller needs the matrix too (``at="vertices"``
+        only; it is assembled here otherwise).
 
     Returns
     -------
@@ -480,11 +485,69 @@ def encode_one_form(V, F, vectors, *, at: str = "faces", bound=True,
                         minlength=E.shape[0]) / topo.face_count
         return c if limit is None else np.clip(c, -limit, limit)
 
-    return _encode_vertices(V, F, X, topo, evec, limit, weighting, damping)
+    if decoder is not None:
+        ok = (isinstance(decoder, tuple) and len(decoder) == 2
+              and getattr(decoder[0], "shape", None) == (3 * n, E.shape[0])
+              and np.shape(decoder[1]) == (n, 3))
+        if not ok:
+            raise InputError("decoder must be the pair returned by projected_decoder(V, F, "
+                             "weighting=..., topology=...) for this mesh")
+    return _encode_vertices(V, F, X, topo, evec, limit, weighting, damping, decoder)
+
+
+def projected_decoder(V, F, *, weighting: str = "uniform",
+                      topology: EdgeTopology | None = None) -> tuple[sp.csr_matrix, np.ndarray]:
+    """Sparse matrix of the vertex decoder followed by the tangent projection.
+
+    ``B @ c`` is ``P_v decode_one_form_at_vertices(V, F, c, weighting=...)``
+    flattened vertex-major (``x0, y0, z0, x1, ...``), with ``P_v = I - n_v n_v^T``
+    the projector onto the plane orthogonal to the unit vertex normal ``n_v``
+    (mean of unit face normals for ``"uniform"``, area weighted for
+    ``"area"``).  It is the data term of the ``at="vertices"`` least-squares
+    encoding; assemble it once and pass it to :func:`encode_one_form`
+    (``decoder=``) when it is needed elsewhere too (as the exact tilt
+    correction of :func:`geotex.heighttilt.base.encode_tilt` does).
+
+    Parameters
+    ----------
+    V : array_like, (n, 3) float64
+    F : array_like, (m, 3) int64
+    weighting : {"uniform", "area"}, optional
+    topology : EdgeTopology, optional
+        ``edge_topology(F, len(V))``, to reuse across calls.
+
+    Returns
+    -------
+    B : scipy.sparse.csr_matrix, (3n, e)
+        At most 6 non-zeros per face corner and coordinate; degenerate faces
+        contribute nothing.
+    normals : numpy.ndarray, (n, 3) float64
+        The unit vertex normals used (zero where undefined).
+
+    Raises
+    ------
+    InputError
+        On malformed arrays, a topology of another mesh or an unknown weighting.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from geotex.mesh.primitives import icosphere
+    >>> V, F = icosphere(1)
+    >>> B, nrm = projected_decoder(V, F)
+    >>> c = np.random.default_rng(0).normal(size=B.shape[1])
+    >>> X = decode_one_form_at_vertices(V, F, c)
+    >>> PX = X - np.einsum("nd,nd->n", X, nrm)[:, None] * nrm
+    >>> bool(np.allclose(B @ c, PX.ravel()))
+    True
+    """
+    V, F = as_mesh_arrays(V, F)
+    weighting = _weighting(weighting)
+    return _projected_decoder(V, F, _topology(F, V.shape[0], topology), weighting)
 
 
 def _projected_decoder(V, F, topo, weighting):
-    """Sparse ``(3n, e)`` matrix of ``P_v D`` and the unit vertex normals."""
+    """:func:`projected_decoder` on validated arrays."""
     n, m = V.shape[0], F.shape[0]
     G, N, ok = _face_frames(V[F])
     normals = _vertex_normals(F, n, N, ok, weighting)
@@ -560,9 +623,10 @@ def _cg(K, b, x0, diag, rtol=_CG_RTOL, free=None):
     return x
 
 
-def _encode_vertices(V, F, X, topo, evec, limit, weighting, damping):
+def _encode_vertices(V, F, X, topo, evec, limit, weighting, damping, decoder=None):
     E = topo.edges
-    B, normals = _projected_decoder(V, F, topo, weighting)
+    B, normals = (_projected_decoder(V, F, topo, weighting) if decoder is None
+                  else decoder)
     Xt = X - np.einsum("nd,nd->n", X, normals)[:, None] * normals
     c0 = 0.5 * np.einsum("ed,ed->e", Xt[E[:, 0]] + Xt[E[:, 1]], evec)
     A = (B.T @ B).tocsr()

@@ -17,7 +17,9 @@ from geotex.heighttilt.deform import (bend, deformed_texture, naive_space_deform
                                       reapplied, scale_base, twist)
 from geotex.heighttilt.edit import scale_height, set_tilt, wiggle, wrap
 from geotex.heighttilt.extract import displacement_to_height_tilt, extract_texture
+from geotex.heighttilt.planar import PlanarTransfer, transfer_planar
 from geotex.heighttilt.procedural import bumpy_plane, spiky_sphere, tentacle_stick
+from geotex.heighttilt.refine import refine_base
 from geotex.heighttilt.reconstruct import apply_texture, displacements
 from geotex.heighttilt.texture import HeightTiltTexture, load_texture, save_texture
 from geotex.heighttilt.transfer import closest_point_correspondence, transfer_texture
@@ -31,4 +33,5 @@ __all__ = [
     "spiky_sphere", "bumpy_plane", "tentacle_stick",
     "reapplied", "deformed_texture", "bend", "twist", "scale_base", "naive_space_deformation",
     "transfer_texture", "closest_point_correspondence",
+    "transfer_planar", "PlanarTransfer", "refine_base",
 ]

@@ -1,9 +1,13 @@
-"""Base shape, base normals and exact tilt encoding for height-and-tilt textures.
+"""Base validation and geometry, base normals, tilt frames and the tilt codec.
 
 The base shape is a smoothed copy of the textured mesh with the same
 connectivity (vertex ``i`` of the base corresponds to vertex ``i`` of the
-detailed mesh).  Base normals and the tilt encoding used by extraction and by
-the edits live here so that every module agrees on them.
+detailed mesh; :func:`smoothed_base`, from :mod:`geotex.heighttilt.smoothing`,
+is re-exported here).  Base normals, frames and the tilt encoding used by
+extraction, reconstruction and the edits live here so that every module
+agrees on them.  :func:`base_geometry` validates a base once and keeps its
+face geometry, edge topology, valences, normals and frames for reuse
+(:class:`geotex.heighttilt._kernels.BaseGeometry`).
 
 Base normals
 ------------
@@ -17,21 +21,20 @@ the normal refer to the same plane.
 
 from __future__ import annotations
 
-import igl
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from geotex.errors import InputError
 from geotex.fields._sparse import single_threaded_blas
-from geotex.fields.oneforms import (_projected_decoder, decode_one_form_at_vertices,
-                                    encode_one_form)
+from geotex.fields.oneforms import encode_one_form, projected_decoder
+from geotex.heighttilt._kernels import BaseGeometry, dot, edge_encode, lowest_neighbours
+from geotex.heighttilt.smoothing import smoothed_base
 from geotex.mesh.arrays import as_mesh_arrays
-from geotex.mesh.geometry import degenerate_faces
-from geotex.mesh.topology import EdgeTopology, edge_topology
+from geotex.mesh.topology import EdgeTopology
 
 __all__ = ["smoothed_base", "base_normals", "tilt_frames", "encode_tilt", "decode_tilt",
-           "check_base_mesh"]
+           "check_base_mesh", "base_geometry", "ENCODINGS"]
 
 
 def check_base_mesh(V, F, *, name: str = "V") -> tuple[np.ndarray, np.ndarray]:
@@ -57,25 +60,66 @@ def check_base_mesh(V, F, *, name: str = "V") -> tuple[np.ndarray, np.ndarray]:
         vertices referenced by no face (no normal).  Open (boundary) meshes
         are accepted.
     """
+    g = base_geometry(V, F, name=name)
+    return g.V, g.F
+
+
+def base_geometry(V, F, *, name: str = "V", topology: EdgeTopology | None = None
+                  ) -> BaseGeometry:
+    """Validate a base (see :func:`check_base_mesh`) and return its shared geometry.
+
+    The face geometry, edge topology, valences and base normals are computed
+    once here and reused by extraction, reconstruction and the tilt codec.
+
+    Parameters
+    ----------
+    V : array_like, (n, 3) float64
+    F : array_like, (m, 3) int64
+    name : str, optional
+        Name of the vertex argument, used in messages.
+    topology : EdgeTopology, optional
+        ``edge_topology(F, len(V))``, to reuse.
+
+    Returns
+    -------
+    geotex.heighttilt._kernels.BaseGeometry
+
+    Raises
+    ------
+    InputError
+        As :func:`check_base_mesh`; also when the incident face normals of a
+        vertex cancel (no base normal there).
+    """
     V, F = as_mesh_arrays(V, F)
     if V.shape[0] == 0:
         raise InputError(f"{name} is empty: a height-and-tilt base needs vertices")
     if F.shape[0] == 0:
         raise InputError("F is empty: a height-and-tilt base needs faces")
-    bad = degenerate_faces(V, F)
-    if bad.size:
+    if topology is not None and (not isinstance(topology, EdgeTopology)
+                                 or topology.half_to_edge.shape != (3 * F.shape[0],)):
+        raise InputError("topology does not belong to F: pass edge_topology(F, len(V)) "
+                         "computed for this mesh, or leave it out")
+    g = BaseGeometry(V, F, topology)
+    if g.flat.any():
+        bad = np.flatnonzero(g.flat)
         raise InputError(f"F has {bad.size} zero-area faces in {name} (first: face {int(bad[0])}); "
                          "remove them (geotex.repair) before extracting a texture")
-    topo = edge_topology(F, V.shape[0])
-    if topo.non_manifold.size:
-        raise InputError(f"F has {topo.non_manifold.size} non-manifold edges (shared by more "
+    nm = g.topo.non_manifold
+    if nm.size:
+        raise InputError(f"F has {nm.size} non-manifold edges (shared by more "
                          "than two faces); repair the mesh first")
-    used = np.zeros(V.shape[0], dtype=bool)
-    used[F.ravel()] = True
-    if not used.all():
-        raise InputError(f"{name} has {int((~used).sum())} vertices used by no face "
-                         f"(first: {int(np.flatnonzero(~used)[0])}); remove them first")
-    return V, F
+    unused = g.valence == 0
+    if unused.any():
+        raise InputError(f"{name} has {int(unused.sum())} vertices used by no face "
+                         f"(first: {int(np.flatnonzero(unused)[0])}); remove them first")
+    acc = g.unit_sum_normals()
+    ln = np.linalg.norm(acc, axis=1, keepdims=True)
+    if np.any(ln[:, 0] <= 1e-12):
+        v = int(np.flatnonzero(ln[:, 0] <= 1e-12)[0])
+        raise InputError(f"{name} has a vertex whose incident face normals cancel (vertex {v}); "
+                         "the base normal is undefined there")
+    g.set_normals(acc / ln)
+    return g
 
 
 def base_normals(Vs, F) -> np.ndarray:
@@ -97,95 +141,7 @@ def base_normals(Vs, F) -> np.ndarray:
     InputError
         See :func:`check_base_mesh`.
     """
-    Vs, F = check_base_mesh(Vs, F, name="Vs")
-    return _normals(Vs, F)
-
-
-def _normals(Vs: np.ndarray, F: np.ndarray) -> np.ndarray:
-    """:func:`base_normals` on already validated arrays."""
-    N = np.cross(Vs[F[:, 1]] - Vs[F[:, 0]], Vs[F[:, 2]] - Vs[F[:, 0]])
-    N /= np.linalg.norm(N, axis=1, keepdims=True)
-    acc = np.zeros_like(Vs)
-    for d in range(3):
-        acc[:, d] = np.bincount(F.ravel(), weights=np.repeat(N[:, d], 3), minlength=Vs.shape[0])
-    ln = np.linalg.norm(acc, axis=1, keepdims=True)
-    if np.any(ln[:, 0] <= 1e-12):
-        v = int(np.flatnonzero(ln[:, 0] <= 1e-12)[0])
-        raise InputError(f"Vs has a vertex whose incident face normals cancel (vertex {v}); "
-                         "the base normal is undefined there")
-    return acc / ln
-
-
-def smoothed_base(V, F, *, steps: int = 3, time_step: float | None = None) -> np.ndarray:
-    """Smooth a textured mesh by implicit mean-curvature flow, keeping correspondence.
-
-    Each step solves ``(M_k - dt L) V_{k+1} = M_k V_k`` (Desbrun et al. 1999)
-    with the cotangent Laplacian ``L`` of the *input* mesh (``igl.cotmatrix``,
-    negative semi-definite, scale free) and the Voronoi mass matrix ``M_k``
-    (``igl.massmatrix``) *recomputed at every step* on the current positions,
-    so that shrinking regions keep a consistent area weighting.  The vertices
-    move, the faces stay: vertex ``i`` of the result corresponds to vertex
-    ``i`` of ``V``.  Boundary vertices of open meshes move too (their
-    Laplacian rows are the one-sided cotangent sums).
-
-    Parameters
-    ----------
-    V : array_like, (n, 3) float64
-    F : array_like, (m, 3) int64
-    steps : int, optional
-        Number of implicit steps (>= 0; 0 returns a copy).
-    time_step : float, optional
-        Dimensionless step.  The actual ``dt = time_step * l**2`` with ``l``
-        the mean edge length of the input, which makes the flow invariant
-        under uniform scaling (``M`` scales as length squared, ``L`` not at
-        all) and under rigid motions.  Default 1.0: about one ring of
-        neighbours is smoothed per step.
-
-    Returns
-    -------
-    numpy.ndarray, (n, 3) float64
-        The base shape ``Vs``.
-
-    Raises
-    ------
-    InputError
-        Empty mesh, zero-area faces, non-manifold edges, unreferenced
-        vertices (see :func:`check_base_mesh`), a negative ``steps`` or a
-        non-positive ``time_step``.
-
-    Examples
-    --------
-    >>> from geotex.mesh.primitives import icosphere
-    >>> V, F = icosphere(2)
-    >>> smoothed_base(V, F).shape
-    (162, 3)
-    """
-    V, F = check_base_mesh(V, F)
-    if isinstance(steps, (bool, np.bool_)) or not isinstance(steps, (int, np.integer)) or steps < 0:
-        raise InputError(f"steps must be a non-negative integer, got {steps!r}")
-    if time_step is None:
-        time_step = 1.0
-    try:
-        ts = float(time_step)
-    except (TypeError, ValueError):
-        raise InputError(f"time_step must be a positive number, got {time_step!r}") from None
-    if not (np.isfinite(ts) and ts > 0):
-        raise InputError(f"time_step must be a positive number, got {time_step!r}")
-    topo = edge_topology(F, V.shape[0])
-    E = topo.edges
-    mean_len = float(np.linalg.norm(V[E[:, 1]] - V[E[:, 0]], axis=1).mean())
-    dt = ts * mean_len * mean_len
-    L = sp.csc_matrix(igl.cotmatrix(V, F))
-    Vk = V.copy()
-    for _ in range(int(steps)):
-        M = sp.csc_matrix(igl.massmatrix(Vk, F, igl.MASSMATRIX_TYPE_VORONOI))
-        solve = spla.factorized(sp.csc_matrix(M - dt * L))
-        rhs = M @ Vk
-        Vk = np.column_stack([solve(np.ascontiguousarray(rhs[:, d])) for d in range(3)])
-        if not np.isfinite(Vk).all():
-            raise InputError("smoothed_base diverged (non-finite positions); "
-                             "use a smaller time_step or fewer steps")
-    return np.ascontiguousarray(Vk)
+    return base_geometry(Vs, F, name="Vs").normals.copy()
 
 
 def tilt_frames(Vs, F) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -201,13 +157,29 @@ def tilt_frames(Vs, F) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     -------
     n, T1, T2 : numpy.ndarray, (n, 3) float64 each
     """
-    Vs, F = check_base_mesh(Vs, F, name="Vs")
-    return _frames(Vs, F, _normals(Vs, F), edge_topology(F, Vs.shape[0]))
+    return tuple(a.copy() for a in frames_of(base_geometry(Vs, F, name="Vs")))
 
 
-def _frames(Vs: np.ndarray, F: np.ndarray, nrm: np.ndarray, topo: EdgeTopology
-            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`tilt_frames` on validated arrays with normals and topology given."""
+def frames_of(g: BaseGeometry) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`tilt_frames` of a validated base geometry (cached on ``g``)."""
+    if g._frames is None:
+        Vs, nrm = g.V, g.normals
+        nb = lowest_neighbours(g.topo.edges, Vs.shape[0])
+        raw = Vs[nb] - Vs
+        vec = raw - np.einsum("kd,kd->k", raw, nrm)[:, None] * nrm
+        ln = np.linalg.norm(vec, axis=1)
+        ok = ln > 1e-9 * np.maximum(np.linalg.norm(raw, axis=1), 1e-300)
+        if ok.all():
+            T1 = vec / ln[:, None]
+            g._frames = (nrm, T1, np.cross(nrm, T1))
+        else:
+            g._frames = _frames_by_sorting(Vs, nrm, g.topo)
+    return g._frames
+
+
+def _frames_by_sorting(Vs: np.ndarray, nrm: np.ndarray, topo: EdgeTopology
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Frames through every neighbour in order (when a lowest edge is parallel to ``n``)."""
     E = topo.edges
     both = np.concatenate([E, E[:, ::-1]])
     order = np.lexsort((both[:, 1], both[:, 0]))
@@ -227,31 +199,50 @@ def _frames(Vs: np.ndarray, F: np.ndarray, nrm: np.ndarray, topo: EdgeTopology
 
 #: Conjugate-gradient iterations of the minimum-norm correction in :func:`encode_tilt`.
 CORRECTION_ITERATIONS = 400
+#: Tilt encodings accepted by :func:`encode_tilt` and the extraction.
+ENCODINGS = ("edge", "lsq")
 
 
-def encode_tilt(Vs, F, tilt, *, exact: bool = True,
+def check_encoding(encode) -> str:
+    """Return ``encode`` if it names a tilt encoding, else raise InputError."""
+    if not isinstance(encode, str) or encode not in ENCODINGS:
+        raise InputError(f"encode must be one of {', '.join(map(repr, ENCODINGS))}, "
+                         f"got {encode!r}")
+    return encode
+
+
+def encode_tilt(Vs, F, tilt, *, encode: str = "edge", exact: bool = False,
                 topology: EdgeTopology | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Encode per-vertex tilt vectors as a 1-form plus a per-vertex residual.
 
-    1. The paper's bounded least-squares encoding
-       ``c0 = encode_one_form(Vs, F, P t, at="vertices", bound=True)``
-       (``|c_e| <= |e|``, paper section 5), ``P`` the tangent projector.
+    1. The 1-form ``c`` from the tangential tilt ``P t`` (``P`` the projector
+       onto the tangent plane of :func:`base_normals`):
+
+       * ``encode="edge"`` (default, fast): ``c_ij = <(t_i + t_j) / 2, p_j - p_i>``,
+         the exact line integral of the linearly interpolated tilt along the
+         edge, clipped to the paper's bound ``|c_ij| <= |p_j - p_i|``.  One
+         gather per edge; no linear system.
+       * ``encode="lsq"``: the paper's bounded least squares
+         ``encode_one_form(Vs, F, P t, at="vertices", bound=True)`` (section 5),
+         which fits the decoded vertex vectors (slower: conjugate gradients and
+         an active-set solve on the normal equations).
+
     2. With ``exact=True``, the minimum-norm correction towards exact vertex
-       interpolation: ``c = c0 + B^T y``, ``(B B^T + eps I) y = t2 - B c0``,
+       interpolation: ``c <- c + B^T y``, ``(B B^T + eps I) y = t2 - B c``,
        with ``B`` (2n, e) the map from coefficients to the two tangent-frame
        components of ``decode_one_form_at_vertices(..., weighting="uniform")``
-       and ``eps = 1e-12 * mean(diag(B B^T))``, solved by Jacobi-preconditioned
+       (:func:`geotex.fields.oneforms.projected_decoder` in the frames) and
+       ``eps = 1e-12 * mean(diag(B B^T))``, solved by Jacobi-preconditioned
        conjugate gradients (at most ``CORRECTION_ITERATIONS``; ``B`` has full
        row rank on the closed meshes tried, e.g. icospheres, but loses rank on
-       discs: a grid plane has rank ``2n - 1``).  The correction may push a
-       few coefficients past ``|e|``.  Whatever it leaves is kept in the
-       residual, so exactness never depends on its convergence.
-    3. The residual ``r = t - P D(c)`` that the 1-form cannot represent, stored
-       as its two components in :func:`tilt_frames` (intrinsic: rigid-motion
-       and scale invariant).  On closed meshes it is at round-off level after
-       step 2; on open meshes it is the one or few unreachable directions.
-       ``P D(c) + r`` equals the target exactly (to round-off): this is what
-       makes extraction followed by reconstruction exact.
+       discs).  The correction may push a few coefficients past ``|e|``.
+       After it, the 1-form alone decodes to the tilt (to round-off on
+       closed meshes).
+    3. The residual ``r = t - P D(c)`` that the 1-form does not reproduce,
+       stored as its two components in :func:`tilt_frames` (intrinsic:
+       rigid-motion and scale invariant).  ``P D(c) + r`` equals the target
+       to round-off whatever the encoding: this is what makes extraction
+       followed by reconstruction exact.
 
     Parameters
     ----------
@@ -261,9 +252,10 @@ def encode_tilt(Vs, F, tilt, *, exact: bool = True,
     tilt : array_like, (n, 3) float64
         Target tilt per vertex; only its part tangent to :func:`base_normals`
         is encoded.
+    encode : {"edge", "lsq"}, optional
+        How the 1-form is computed (step 1).
     exact : bool, optional
-        Apply step 2 (default).  ``False`` keeps the paper's bounded
-        least-squares coefficients (the residual then holds the whole loss).
+        Apply step 2 (default False: the residual holds what the 1-form misses).
     topology : EdgeTopology, optional
         ``edge_topology(F, len(Vs))``, to reuse.
 
@@ -277,29 +269,42 @@ def encode_tilt(Vs, F, tilt, *, exact: bool = True,
     Raises
     ------
     InputError
-        See :func:`check_base_mesh`; malformed ``tilt``.
+        See :func:`check_base_mesh`; malformed ``tilt``; unknown ``encode``.
     """
-    Vs, F = check_base_mesh(Vs, F, name="Vs")
-    n = Vs.shape[0]
+    encode = check_encoding(encode)
+    g = base_geometry(Vs, F, name="Vs", topology=topology)
+    n = g.V.shape[0]
     try:
         t = np.ascontiguousarray(tilt, dtype=np.float64)
     except (TypeError, ValueError) as exc:
         raise InputError(f"tilt must be a numeric ({n}, 3) array: {exc}") from None
     if t.shape != (n, 3) or not np.isfinite(t).all():
         raise InputError(f"tilt must be a finite ({n}, 3) array, got shape {t.shape}")
-    topo = edge_topology(F, n) if topology is None else topology
-    nrm, T1, T2 = tilt_frames(Vs, F)
-    t = t - np.einsum("nd,nd->n", t, nrm)[:, None] * nrm
-    c = encode_one_form(Vs, F, t, at="vertices", bound=True, weighting="uniform",
-                        topology=topo)
-    B3, _ = _projected_decoder(Vs, F, topo, "uniform")
-    rows = np.repeat(np.arange(2 * n), 3)
-    cols = np.repeat((3 * np.arange(n)[:, None] + np.arange(3)), 2, axis=0)
-    vals = np.stack([T1, T2], axis=1)
-    S = sp.csr_matrix((vals.ravel(), (rows, cols.ravel())), shape=(2 * n, 3 * n))
-    B = (S @ B3).tocsr()
-    t2 = np.stack([np.einsum("nd,nd->n", t, T1), np.einsum("nd,nd->n", t, T2)], axis=1).ravel()
+    return encode_on(g, t, encode=encode, exact=bool(exact))
+
+
+def encode_on(g: BaseGeometry, t: np.ndarray, *, encode: str = "edge", exact: bool = False
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`encode_tilt` on a validated base geometry and a checked ``(n, 3)`` tilt."""
+    n = g.V.shape[0]
+    _, T1, T2 = frames_of(g)
+    t = g.tangent(t)
+    B3 = None
+    if encode == "edge":
+        c = edge_encode(g.V, g.topo.edges, t)
+    else:
+        B3, onrm = projected_decoder(g.V, g.F, topology=g.topo)
+        c = encode_one_form(g.V, g.F, t, at="vertices", bound=True, weighting="uniform",
+                            topology=g.topo, decoder=(B3, onrm))
     if exact:
+        if B3 is None:
+            B3, _ = projected_decoder(g.V, g.F, topology=g.topo)
+        rows = np.repeat(np.arange(2 * n), 3)
+        cols = np.repeat((3 * np.arange(n)[:, None] + np.arange(3)), 2, axis=0)
+        vals = np.stack([T1, T2], axis=1)
+        S = sp.csr_matrix((vals.ravel(), (rows, cols.ravel())), shape=(2 * n, 3 * n))
+        B = (S @ B3).tocsr()
+        t2 = np.stack([dot(t, T1), dot(t, T2)], axis=1).ravel()
         K = (B @ B.T).tocsr()
         eps = 1e-12 * float(K.diagonal().mean())
         K = K + eps * sp.identity(2 * n, format="csr")
@@ -309,8 +314,14 @@ def encode_tilt(Vs, F, tilt, *, exact: bool = True,
             y, _ = spla.cg(K, t2 - B @ c, rtol=1e-13, atol=0.0, maxiter=CORRECTION_ITERATIONS,
                            M=pre)
         c = c + B.T @ y
-    residual = (t2 - B @ c).reshape(n, 2)
-    return c, residual
+    Pc = g.tangent(g.decode(c))
+    r = np.stack([dot(t - Pc, T1), dot(t - Pc, T2)], axis=1)
+    # one step of iterative refinement against exactly what decode_on computes,
+    # so the decoded tilt is t to the last bit or so (|t| near 1 is ill-conditioned
+    # for the reconstruction's sqrt(1 - |t|^2))
+    miss = t - (Pc + (r[:, :1] * T1 + r[:, 1:] * T2))
+    r += np.stack([dot(miss, T1), dot(miss, T2)], axis=1)
+    return c, r
 
 
 def decode_tilt(Vs, F, c, residual=None, *, topology: EdgeTopology | None = None
@@ -330,21 +341,32 @@ def decode_tilt(Vs, F, c, residual=None, *, topology: EdgeTopology | None = None
     -------
     numpy.ndarray, (n, 3) float64
         Tangent to :func:`base_normals` (not clamped).
+
+    Raises
+    ------
+    InputError
+        See :func:`check_base_mesh`; ``c`` or ``residual`` of the wrong shape
+        or with non-finite values.
     """
-    Vs, F = check_base_mesh(Vs, F, name="Vs")
-    topo = edge_topology(F, Vs.shape[0]) if topology is None else topology
-    nrm = _normals(Vs, F)
-    return _decode(Vs, F, c, residual, nrm, _frames(Vs, F, nrm, topo), topo)
+    g = base_geometry(Vs, F, name="Vs", topology=topology)
+    e = g.topo.edges.shape[0]
+    try:
+        c = np.ascontiguousarray(c, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"c must be a numeric ({e},) array: {exc}") from None
+    if c.shape != (e,) or not np.isfinite(c).all():
+        raise InputError(f"c must be a finite ({e},) array, one coefficient per unique edge, "
+                         f"got shape {c.shape}")
+    return decode_on(g, c, residual)
 
 
-def _decode(Vs, F, c, residual, nrm, frames, topo) -> np.ndarray:
-    """:func:`decode_tilt` on validated arrays with normals, frames and topology given."""
-    _, T1, T2 = frames
-    t = decode_one_form_at_vertices(Vs, F, c, weighting="uniform", topology=topo)
-    t = t - np.einsum("nd,nd->n", t, nrm)[:, None] * nrm
+def decode_on(g: BaseGeometry, c: np.ndarray, residual=None) -> np.ndarray:
+    """:func:`decode_tilt` on a validated base geometry."""
+    t = g.tangent(g.decode(c))
     if residual is not None:
         r = np.asarray(residual, dtype=np.float64)
-        if r.shape != (Vs.shape[0], 2):
-            raise InputError(f"residual must have shape ({Vs.shape[0]}, 2), got {r.shape}")
-        t = t + r[:, :1] * T1 + r[:, 1:] * T2
+        if r.shape != (g.V.shape[0], 2):
+            raise InputError(f"residual must have shape ({g.V.shape[0]}, 2), got {r.shape}")
+        _, T1, T2 = frames_of(g)
+        t = t + (r[:, :1] * T1 + r[:, 1:] * T2)
     return t

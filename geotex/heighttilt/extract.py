@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from geotex.errors import InputError
-from geotex.heighttilt.base import base_normals, check_base_mesh, encode_tilt, smoothed_base
+from geotex.heighttilt.base import (base_geometry, check_base_mesh, check_encoding, encode_on,
+                                    smoothed_base)
 from geotex.heighttilt.texture import HeightTiltTexture
 from geotex.mesh.arrays import as_vertices
 
@@ -34,7 +35,8 @@ def displacement_to_height_tilt(d: np.ndarray, n: np.ndarray) -> tuple[np.ndarra
 
 
 def extract_texture(V0, F, *, base=None, steps: int = 3, time_step: float | None = None,
-                    exact: bool = True) -> tuple[HeightTiltTexture, np.ndarray]:
+                    encode: str = "edge", exact: bool = False
+                    ) -> tuple[HeightTiltTexture, np.ndarray]:
     """Split a textured mesh into a base shape and a height-and-tilt texture.
 
     Parameters
@@ -49,8 +51,15 @@ def extract_texture(V0, F, *, base=None, steps: int = 3, time_step: float | None
     steps, time_step
         Passed to :func:`~geotex.heighttilt.base.smoothed_base` when ``base``
         is not given.
+    encode : {"edge", "lsq"}, optional
+        Tilt 1-form encoding, passed to
+        :func:`~geotex.heighttilt.base.encode_tilt`: ``"edge"`` (default) the
+        direct per-edge integral of the interpolated tilt, ``"lsq"`` the
+        paper's bounded least squares (slower).  The round trip is exact
+        either way: the residual holds what the 1-form misses.
     exact : bool, optional
-        Passed to :func:`~geotex.heighttilt.base.encode_tilt`.
+        Passed to :func:`~geotex.heighttilt.base.encode_tilt` (minimum-norm
+        correction so that the 1-form alone decodes to the tilt; slow).
 
     Returns
     -------
@@ -70,7 +79,7 @@ def extract_texture(V0, F, *, base=None, steps: int = 3, time_step: float | None
     InputError
         Malformed arrays, empty mesh, zero-area faces or non-manifold edges
         (in ``V0`` when smoothing, in the base always), ``base`` of a different
-        shape than ``V0``.
+        shape than ``V0``, an unknown ``encode``.
 
     Examples
     --------
@@ -80,6 +89,7 @@ def extract_texture(V0, F, *, base=None, steps: int = 3, time_step: float | None
     >>> tex.height.shape
     (81,)
     """
+    encode = check_encoding(encode)
     V0 = as_vertices(V0, name="V0")
     if V0.shape[0] == 0:
         raise InputError("V0 is empty: a textured mesh needs vertices")
@@ -91,10 +101,9 @@ def extract_texture(V0, F, *, base=None, steps: int = 3, time_step: float | None
         if Vs.shape != V0.shape:
             raise InputError(f"base must have the shape of V0 {V0.shape} (same connectivity), "
                              f"got {Vs.shape}")
-    Vs, F = check_base_mesh(Vs, F, name="base")
-    n = base_normals(Vs, F)
-    h, t = displacement_to_height_tilt(V0 - Vs, n)
-    c, r = encode_tilt(Vs, F, t, exact=exact)
-    tex = HeightTiltTexture(height=h, tilt=c, faces=F, residual=r,
-                            metadata={"source": "extract_texture"})
-    return tex, Vs.copy()
+    g = base_geometry(Vs, F, name="base")
+    h, t = displacement_to_height_tilt(V0 - g.V, g.normals)
+    c, r = encode_on(g, t, encode=encode, exact=bool(exact))
+    tex = HeightTiltTexture._trusted(h, c, g.F, r, {"source": "extract_texture",
+                                                      "encode": encode}, topology=g.topo)
+    return tex, g.V.copy()

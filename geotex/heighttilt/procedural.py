@@ -102,7 +102,8 @@ def spiky_sphere(*, spikes: int = 24, lean_degrees: float = 60.0, subdivisions: 
 
 
 def bumpy_plane(nx: int = 32, ny: int = 32, *, bumps: int = 12, height: float = 0.08,
-                radius: float = 0.09, lean_degrees: float = 30.0, seed=None
+                radius: float = 0.09, lean_degrees: float = 30.0, seed=None,
+                periodic: bool = False, direction=None
                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """A unit grid plane with random (leaning) bumps.
 
@@ -116,6 +117,17 @@ def bumpy_plane(nx: int = 32, ny: int = 32, *, bumps: int = 12, height: float = 
     lean_degrees : float, optional
         Tilt of the bump tops towards a random direction, in ``[0, 90)``.
     seed : int or numpy.random.Generator, optional
+    periodic : bool, optional
+        ``False`` (default): bump centres in ``[0.1, 0.9]^2``, distances in the
+        plane.  ``True``: centres anywhere in ``[0, 1)^2`` and distances on the
+        unit torus (the shortest way around in x and y), so the texture tiles
+        the plane seamlessly with period 1: the opposite borders carry the
+        same heights and leans (as used by
+        :func:`geotex.heighttilt.planar.transfer_planar`).  Needs
+        ``radius < 0.5``.
+    direction : array_like (2,), optional
+        Lean every bump towards this ``(x, y)`` direction instead of a random
+        one (the random draws are the same, so only the leans change).
 
     Returns
     -------
@@ -132,10 +144,25 @@ def bumpy_plane(nx: int = 32, ny: int = 32, *, bumps: int = 12, height: float = 
     height = _positive("height", height)
     radius = _positive("radius", radius)
     lean = _lean("lean_degrees", lean_degrees)
+    if periodic and radius >= 0.5:
+        raise InputError(f"radius must be below 0.5 for a periodic plane, got {radius!r}")
+    if direction is not None:
+        try:
+            lean_dir = np.asarray(direction, dtype=np.float64).reshape(2)
+        except (TypeError, ValueError):
+            raise InputError(f"direction must be two numbers (x, y), got {direction!r}") from None
+        if not (np.isfinite(lean_dir).all() and np.linalg.norm(lean_dir) > 0):
+            raise InputError(f"direction must be a finite non-zero (x, y), got {direction!r}")
     rng = np.random.default_rng(seed)
-    centres = rng.uniform(0.1, 0.9, size=(bumps, 2))
+    centres = (rng.uniform(0.0, 1.0, size=(bumps, 2)) if periodic
+               else rng.uniform(0.1, 0.9, size=(bumps, 2)))
     dirs = np.column_stack([rng.normal(size=(bumps, 2)), np.zeros(bumps)])
-    r = np.linalg.norm(Vs[:, None, :2] - centres[None], axis=2)
+    if direction is not None:
+        dirs[:, :2] = lean_dir
+    delta = Vs[:, None, :2] - centres[None]
+    if periodic:
+        delta -= np.round(delta)
+    r = np.linalg.norm(delta, axis=2)
     prof = np.clip(1.0 - (r / radius) ** 2, 0.0, None) ** 2
     owner = np.argmax(prof, axis=1)
     p = prof[np.arange(Vs.shape[0]), owner]

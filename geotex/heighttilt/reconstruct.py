@@ -5,24 +5,32 @@ from __future__ import annotations
 import numpy as np
 
 from geotex.errors import InputError
-from geotex.heighttilt.base import _decode, _frames, _normals, check_base_mesh
-from geotex.mesh.topology import edge_topology
+from geotex.heighttilt._kernels import BaseGeometry, cross, dot
+from geotex.heighttilt.base import base_geometry, decode_on
 from geotex.heighttilt.texture import HeightTiltTexture
+from geotex.mesh.arrays import as_mesh_arrays
 
 __all__ = ["apply_texture", "displacements", "check_texture"]
 
 
 def check_texture(Vs, F, tex) -> tuple[np.ndarray, np.ndarray]:
     """Validate that ``tex`` belongs to the base mesh ``(Vs, F)``; return arrays."""
+    g = texture_base(Vs, F, tex)
+    return g.V, g.F
+
+
+def texture_base(Vs, F, tex) -> BaseGeometry:
+    """:func:`check_texture` returning the validated base geometry."""
     if not isinstance(tex, HeightTiltTexture):
         raise InputError(f"tex must be a HeightTiltTexture, got {type(tex).__name__}")
-    Vs, F = check_base_mesh(Vs, F, name="Vs")
-    if Vs.shape[0] != tex.n_vertices:
-        raise InputError(f"Vs has {Vs.shape[0]} vertices but tex has {tex.n_vertices}: "
+    V, F = as_mesh_arrays(Vs, F)
+    if V.shape[0] != tex.n_vertices:
+        raise InputError(f"Vs has {V.shape[0]} vertices but tex has {tex.n_vertices}: "
                          "connectivity mismatch")
     if F.shape != tex.faces.shape or not np.array_equal(F, tex.faces):
         raise InputError("F differs from tex.faces: connectivity mismatch")
-    return Vs, F
+    # a texture made by extraction or transfer remembers the edge topology of its faces
+    return base_geometry(V, F, name="Vs", topology=tex.__dict__.get("_topology"))
 
 
 def displacements(Vs, F, tex: HeightTiltTexture) -> np.ndarray:
@@ -56,15 +64,20 @@ def displacements(Vs, F, tex: HeightTiltTexture) -> np.ndarray:
     InputError
         See :func:`apply_texture`.
     """
-    Vs, F = check_texture(Vs, F, tex)
-    topo = edge_topology(F, Vs.shape[0])
-    n = _normals(Vs, F)
-    t = _decode(Vs, F, tex.tilt, tex.residual, n, _frames(Vs, F, n, topo), topo)
-    mag = np.linalg.norm(t, axis=1)
-    t = np.where(mag[:, None] > 1.0, t / np.maximum(mag, 1.0)[:, None], t)
-    s2 = np.clip(1.0 - np.einsum("nd,nd->n", t, t), 0.0, 1.0)
+    return _displacements(texture_base(Vs, F, tex), tex)
+
+
+def _displacements(g: BaseGeometry, tex: HeightTiltTexture) -> np.ndarray:
+    n = g.normals
+    t = decode_on(g, tex.tilt, tex.residual)
+    mag2 = dot(t, t)
+    big = mag2 > 1.0
+    if big.any():
+        t[big] /= np.sqrt(mag2[big])[:, None]
+        mag2[big] = dot(t[big], t[big])
+    s2 = np.clip(1.0 - mag2, 0.0, 1.0)
     sign = np.where(tex.height < 0, -1.0, 1.0)
-    u = (sign * np.sqrt(s2))[:, None] * n + np.cross(n, t)
+    u = (sign * np.sqrt(s2))[:, None] * n + cross(n, t)
     return np.abs(tex.height)[:, None] * u
 
 
@@ -106,5 +119,5 @@ def apply_texture(Vs, F, tex: HeightTiltTexture) -> np.ndarray:
     >>> bool(abs(apply_texture(Vs, F, tex) - V0).max() < 1e-9)
     True
     """
-    Vs, _ = check_texture(Vs, F, tex)
-    return Vs + displacements(Vs, F, tex)
+    g = texture_base(Vs, F, tex)
+    return g.V + _displacements(g, tex)

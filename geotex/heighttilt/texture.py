@@ -12,7 +12,7 @@ import numpy as np
 from geotex.errors import InputError, MeshFileError
 from geotex.io.atomic import atomic_output
 from geotex.mesh.arrays import as_faces
-from geotex.mesh.topology import edge_topology
+from geotex.heighttilt._kernels import edge_topology_fast
 
 __all__ = ["HeightTiltTexture", "save_texture", "load_texture", "FORMAT_TAG"]
 
@@ -60,7 +60,7 @@ class HeightTiltTexture:
         Fa = np.array(as_faces(self.faces, n, name="faces"), dtype=np.int64)
         if Fa.shape[0] == 0:
             raise InputError("faces is empty: a texture needs a connectivity")
-        e = edge_topology(Fa, n).edges.shape[0]
+        e = edge_topology_fast(Fa, n).edges.shape[0]
         t = np.array(self.tilt, dtype=np.float64)
         if t.shape != (e,):
             raise InputError(f"tilt must have shape ({e},), one coefficient per unique edge "
@@ -81,6 +81,28 @@ class HeightTiltTexture:
         object.__setattr__(self, "faces", Fa)
         object.__setattr__(self, "residual", r)
         object.__setattr__(self, "metadata", dict(self.metadata))
+
+    @classmethod
+    def _trusted(cls, height, tilt, faces, residual, metadata, topology=None
+                 ) -> "HeightTiltTexture":
+        """Build from arrays the caller has already checked (shapes, finiteness).
+
+        Skips the edge count of ``__post_init__`` (a sort of the half-edges),
+        which the extraction and transfer code know already.  Arrays are
+        copied and frozen.  ``topology`` (the ``EdgeTopology`` of ``faces``)
+        is remembered, not saved: reconstruction reuses it instead of sorting
+        the half-edges again.
+        """
+        tex = object.__new__(cls)
+        if topology is not None:
+            object.__setattr__(tex, "_topology", topology)
+        for name, a, dtype in (("height", height, np.float64), ("tilt", tilt, np.float64),
+                               ("faces", faces, np.int64), ("residual", residual, np.float64)):
+            arr = np.array(a, dtype=dtype)
+            arr.setflags(write=False)
+            object.__setattr__(tex, name, arr)
+        object.__setattr__(tex, "metadata", dict(metadata))
+        return tex
 
     @property
     def n_vertices(self) -> int:
