@@ -1,0 +1,89 @@
+"""The :class:`Exemplar` record: a planar patch of separate closed texture elements."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from geotex.mesh.arrays import as_faces, as_vertices
+from geotex.mesh.record import Mesh
+from geotex.mesh.topology import face_components
+
+__all__ = ["Exemplar"]
+
+
+@dataclass(frozen=True, eq=False)
+class Exemplar:
+    """A planar patch of geometric texture made of separate closed elements.
+
+    Units: one Wang tile is 1 x 1.  Elements stand on the plane ``z = 0`` and
+    sink to ``z = -depth`` so that a union with a base below ``z = 0`` fuses
+    them; every element lies over ``[0, lx] x [0, ly]``.
+
+    Parameters
+    ----------
+    vertices : array_like, (n, 3) float64
+    faces : array_like, (m, 3) int64
+        Outward oriented; every connected component is one closed element.
+    size : tuple of float
+        Patch extent ``(lx, ly)``.
+    height : float
+        The largest ``z`` of any element.
+    depth : float
+        Elements reach down to ``z = -depth``.
+    name : str
+        Kind name (``"studs"``, ...) or the stem of the file it was read from.
+    params : dict
+        JSON-serialisable recipe, seed and size included: for a procedural
+        exemplar ``geotex.exemplars.exemplar(name, **params)`` rebuilds it
+        byte-identically.  Empty for an exemplar read from a plain mesh file.
+
+    Raises
+    ------
+    InputError
+        If the arrays are malformed (see :func:`geotex.mesh.as_vertices`).
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    size: tuple
+    height: float
+    depth: float
+    name: str = ""
+    params: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        V = as_vertices(self.vertices, name="vertices")
+        F = as_faces(self.faces, V.shape[0], name="faces")
+        object.__setattr__(self, "vertices", V)
+        object.__setattr__(self, "faces", F)
+        object.__setattr__(self, "size", (float(self.size[0]), float(self.size[1])))
+        object.__setattr__(self, "height", float(self.height))
+        object.__setattr__(self, "depth", float(self.depth))
+
+    def elements(self) -> np.ndarray:
+        """Return the element id of every face.
+
+        Returns
+        -------
+        numpy.ndarray, (m,) int64
+            Connected components (faces sharing a vertex), numbered in the
+            order of their first face.
+        """
+        return face_components(self.faces, self.vertices.shape[0])[1]
+
+    @property
+    def n_elements(self) -> int:
+        """Number of elements (connected components)."""
+        return int(face_components(self.faces, self.vertices.shape[0])[0])
+
+    def mesh(self) -> Mesh:
+        """Return the elements as a :class:`~geotex.mesh.Mesh` (recipe in ``metadata``)."""
+        return Mesh(self.vertices, self.faces, name=self.name,
+                    metadata={"exemplar": self.name, "params": dict(self.params)})
+
+    def __repr__(self) -> str:
+        return (f"Exemplar({self.name!r}, size={self.size}, {self.n_elements} elements, "
+                f"{self.faces.shape[0]} faces, height={self.height:.4g}, "
+                f"depth={self.depth:.4g})")

@@ -1,0 +1,410 @@
+"""Merging two overlapping closed elements: graph cut, Laplacian pull, stitch.
+
+Element ``A`` (already in the texture; may carry fixed vertices) and element
+``B`` (from the newly placed exemplar copy) overlap.  The merge:
+
+0. **Alignment** (``align``).  The part of ``B`` over the footprint overlap
+   is translated onto ``A`` by ICP in the plane and the two meet half way
+   (``B`` goes all the way when ``A`` has fixed vertices): the paper's
+   "deform toward the midpoints" for elements that are copies of each
+   other.  If they then coincide (RMS distance under ``same_tol`` of the
+   footprint), ``A`` is kept alone.  When the shift or the residual is too
+   large the two do not correspond (``corresponding_only`` then drops ``B``).
+1. **Covered vertices.**  A vertex of ``A`` is *covered* when a probe point
+   just outside ``A`` (along its normal) lies inside ``B`` (winding number);
+   a vertex of ``B`` when a probe just *inside* ``B`` lies inside ``A``.  The
+   asymmetric probes break ties on coplanar parts (flat bottoms standing on
+   the same plane): there ``A`` keeps its faces and ``B`` gives them up.
+   Vertices of ``B`` outside the output domain count as covered.
+2. **Graph cut per element.**  Dual graph of the element's triangles, edge
+   weight ``(1 + |v_i - v_j| / h)(1 + (d(v_i) + d(v_j)) / h)`` over the shared
+   edge ``(v_i, v_j)``, ``d`` the distance to the other element, ``h`` the mean
+   edge length (the paper's weight made scale free).  Triangles with a
+   covered vertex, triangles crossing the other element's surface and
+   triangles of ``B`` leaving the domain are tied to SINK (removed);
+   triangles farther than ``band_rings`` face rings from them, and triangles
+   touching a fixed vertex, are tied to SOURCE (kept).  The cut chooses the
+   seam inside the band, where the elements are close and the cut is short.
+   Each piece keeps only faces clear of the other element, so the two
+   pieces cannot cross each other.
+3. **Laplacian pull.**  The kept pieces' boundary loops are paired by
+   proximity; every loop vertex gets the target "a fraction ``pull / 2`` of
+   the way to the closest point of the partner loop" (``pulls`` are tried in
+   turn, 0.5 first: full strength would make the strip degenerate), and
+   each piece is deformed by :func:`geotex.quilting.deform.laplacian_deformed`
+   (uniform Laplacian), with fixed vertices and vertices far from the seam
+   held exactly.
+4. **Stitch.**  Each loop pair is closed by a strip with the shortest total
+   diagonals (:mod:`geotex.quilting.seam`).  The result is validated: one
+   closed, edge- and vertex-manifold, consistently oriented component with
+   positive volume, no degenerate faces and no self-intersection
+   (:func:`geotex.check.intersections.self_intersecting_pairs`); fixed
+   vertices are untouched and no vertex moved out of the domain.
+5. **Fallback.**  If any step fails, the two (aligned, undeformed) elements
+   are united with manifold3d (exact boolean).  If ``B`` leaves the domain,
+   or the union would lose a fixed vertex or a cap, ``B`` is dropped and
+   ``A`` is returned as it was.  Never an open element.
+
+Why cut before pulling (the paper deforms first): "inside the other element"
+is only well defined while the two surfaces still cross cleanly; once pulled
+together they nearly coincide.  Pulling only the cut loops keeps the
+classification exact and still closes the gap the stitch has to bridge.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import igl
+import numpy as np
+from scipy.spatial import cKDTree
+
+from geotex.check.intersections import self_intersecting_pairs
+from geotex.errors import InputError
+from geotex.mesh.arrays import as_mesh_arrays
+from geotex.mesh.solid import arrays_of_manifold, manifold_of
+from geotex.mesh.topology import edge_topology
+from geotex.quilting.deform import laplacian_deformed
+from geotex.quilting.icp import ClosestPoints, icp_translation
+from geotex.quilting.mincut import min_cut_keep
+from geotex.quilting.elements import caps_like, closed_element_ok
+from geotex.quilting.seam import (boundary_loops, closest_on_polyline, pair_loops, seam_quality,
+                                 strip_between)
+
+__all__ = ["MergeResult", "merge_elements"]
+
+
+@dataclass
+class MergeResult:
+    """Outcome of :func:`merge_elements`.
+
+    Attributes
+    ----------
+    vertices : numpy.ndarray, (n, 3) float64
+    faces : numpy.ndarray, (m, 3) int64
+        One closed element, or both elements side by side when ``status`` is
+        ``"separate"``.
+    fixed : numpy.ndarray, (n,) bool
+        Output vertices that are fixed vertices of ``A`` (bit-exact).
+    status : str
+        ``"stitched"`` (graph cut + stitch), ``"union"`` (manifold3d fallback),
+        ``"separate"`` (they do not touch: both returned unchanged),
+        ``"absorbed"`` (one lies inside the other: the outer one returned),
+        ``"dropped"`` (``B`` could not be merged and was discarded).
+    seam_gap : float
+        Largest distance between a loop vertex and its partner loop after the
+        Laplacian pull (``nan`` unless stitched).
+    seam_normal_jump : float
+        Largest angle (degrees) between the face normals on either side of
+        the seam, across the strip (``nan`` unless stitched).
+    reason : str
+        Why the stitch was not used (empty when stitched).
+    parts : int
+        Number of elements in the result (2 when ``"separate"``).
+    cap : numpy.ndarray, (m,) bool
+        Faces that are caps of ``A`` (see ``cap_a``).
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    fixed: np.ndarray
+    status: str
+    seam_gap: float = float("nan")
+    seam_normal_jump: float = float("nan")
+    reason: str = ""
+    parts: int = field(default=1)
+    cap: np.ndarray = None
+
+    def __post_init__(self):
+        if self.cap is None:
+            self.cap = np.zeros(self.faces.shape[0], dtype=bool)
+
+
+def _compact(V, F, keep_faces, fixed):
+    F2 = F[keep_faces]
+    used = np.zeros(V.shape[0], dtype=bool)
+    used[F2.ravel()] = True
+    remap = np.cumsum(used) - 1
+    return V[used], remap[F2], fixed[used]
+
+
+def _same_a(VA, FA, fixA, capA, status, reason=""):
+    return MergeResult(VA, FA, fixA, status, reason=reason, cap=capA)
+
+
+def _covered(V, F, N, other_V, other_F, sign: float, eps: float) -> np.ndarray:
+    probes = V + sign * eps * N
+    return igl.winding_number(other_V, other_F, probes) > 0.5
+
+
+def _cut(V, F, covered, dist, fixed, force_sink, band_rings: int):
+    """Keep-mask of faces by the graph cut described in the module docstring."""
+    m = F.shape[0]
+    sink = covered[F].any(axis=1) | force_sink
+    near = np.zeros(V.shape[0], dtype=bool)
+    near[F[sink].ravel()] = True
+    band = sink.copy()
+    for _ in range(band_rings):
+        band = near[F].any(axis=1)
+        near[F[band].ravel()] = True
+    source = ~band | fixed[F].any(axis=1)
+    sink = sink & ~source
+    if not sink.any():
+        return np.ones(m, dtype=bool)
+    if not source.any():
+        return np.zeros(m, dtype=bool)
+    topo = edge_topology(F, V.shape[0])
+    ef = topo.edge_faces()
+    inner = (topo.face_count == 2)
+    E = topo.edges[inner]
+    pairs = ef[inner]
+    h = float(np.linalg.norm(V[topo.edges[:, 0]] - V[topo.edges[:, 1]], axis=1).mean()) or 1.0
+    length = np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1) / h
+    w = (1.0 + length) * (1.0 + (dist[E[:, 0]] + dist[E[:, 1]]) / h)
+    return min_cut_keep(m, pairs, w, source=source, sink=sink)
+
+
+def _outside_domain(V, domain):
+    if domain is None:
+        return np.zeros(V.shape[0], dtype=bool)
+    x0, y0, x1, y1 = domain
+    return (V[:, 0] < x0) | (V[:, 0] > x1) | (V[:, 1] < y0) | (V[:, 1] > y1)
+
+
+def merge_elements(VA, FA, VB, FB, *, fixed_a=None, domain=None, band_rings: int = 1,
+                   mu: float = 10.0, pull_radius: float = 3.0,
+                   pulls=(0.5, 0.25, 0.0), align: bool = True, max_shift: float = 0.5,
+                   same_tol: float = 0.04, match_tol: float = 0.05,
+                   corresponding_only: bool = False, cap_a=None) -> MergeResult:
+    """Merge element ``B`` into element ``A`` (see the module docstring).
+
+    Parameters
+    ----------
+    VA : array_like, (na, 3) float64
+    FA : array_like, (ma, 3) int64
+        Element already in the texture (closed, outward oriented).
+    VB : array_like, (nb, 3) float64
+    FB : array_like, (mb, 3) int64
+        Element of the placed copy (closed, outward oriented).
+    fixed_a : array_like (na,) bool, optional
+        Vertices of ``A`` that must not move; they are kept and bit-exact.
+    domain : tuple (xmin, ymin, xmax, ymax), optional
+        Nothing of ``B`` may end up outside this rectangle.
+    band_rings : int, optional
+        Width, in face rings, of the free band in which the cut may move.
+    mu : float, optional
+        Weight of the loop targets in the Laplacian pull.
+    pull_radius : float, optional
+        Vertices farther than ``pull_radius`` mean edge lengths from the seam
+        stay put during the pull.
+    pulls : sequence of float, optional
+        Pull strengths tried in turn until the stitched element validates:
+        1 moves each loop vertex to the midpoint between itself and the
+        partner loop, 0.5 half way there, 0 stitches the loops as cut.
+        (Full strength makes the strip degenerate: the loops coincide.)
+    align : bool, optional
+        First move the two elements toward each other by the translation that
+        best aligns the part of ``B`` over the footprint overlap onto ``A``
+        (ICP in the plane): each goes half way,
+        or ``B`` all the way when ``A`` has fixed vertices.  Corresponding
+        elements then overlap as much as they can, as in the paper's midpoint
+        deformation, and the merged element looks like one element.
+    max_shift : float, optional
+        Largest alignment shift, relative to the narrow width of ``B``'s
+        footprint; larger shifts are not applied.
+    match_tol : float, optional
+        Largest RMS distance (relative to the narrow width) of ``B``'s
+        overlapping vertices to ``A`` after alignment for the two to count
+        as corresponding; otherwise no shift is applied.
+    same_tol : float, optional
+        When, after alignment, the RMS distance of ``B``'s vertices to ``A`` is
+        below this fraction of ``B``'s footprint, the two are taken to be the
+        same element and the (moved) ``A`` is returned alone.
+    cap_a : array_like (ma,) bool, optional
+        Faces of ``A`` that only close a cut opening on the domain boundary
+        (see :func:`geotex.quilting.elements.capped`); carried through to
+        ``MergeResult.cap`` so that the caller can leave them out.
+    corresponding_only : bool, optional
+        With ``align``: when the pair does not correspond (see ``max_shift``,
+        ``match_tol``) the two are different elements that merely collide;
+        return ``B`` dropped instead of fusing them into one larger element.
+
+    Returns
+    -------
+    MergeResult
+    """
+    VA, FA = as_mesh_arrays(VA, FA, allow_empty=False)
+    VB, FB = as_mesh_arrays(VB, FB, allow_empty=False)
+    fixA = np.zeros(VA.shape[0], bool) if fixed_a is None else np.asarray(fixed_a, bool).copy()
+    fixB = np.zeros(VB.shape[0], bool)
+    capA = np.zeros(FA.shape[0], bool) if cap_a is None else np.asarray(cap_a, bool).copy()
+    if capA.shape != (FA.shape[0],):
+        raise InputError(f"cap_a must have shape ({FA.shape[0]},), got {capA.shape}")
+    if align:
+        VA, VB, same, shifted = _aligned(VA, FA, VB, fixA, max_shift, same_tol, match_tol)
+        if not shifted and corresponding_only:
+            return _same_a(VA, FA, fixA, capA, "dropped",
+                           "B is not a copy of A (alignment shift too large)")
+        if same:
+            return _same_a(VA, FA, fixA, capA, "absorbed", "corresponding elements coincide")
+    out_b = _outside_domain(VB, domain)
+
+    def keep_a(status, reason=""):
+        return _same_a(VA, FA, fixA, capA, status, reason)
+
+    lo = np.maximum(VA.min(0), VB.min(0))
+    hi = np.minimum(VA.max(0), VB.max(0))
+    if (lo > hi).any():
+        return _separate(VA, FA, fixA, capA, VB, FB, out_b)
+    diag = float(np.linalg.norm(np.r_[VA, VB].max(0) - np.r_[VA, VB].min(0)))
+    eps = 1e-5 * diag
+    NA = igl.per_vertex_normals(VA, FA)
+    NB = igl.per_vertex_normals(VB, FB)
+    cov_a = _covered(VA, FA, NA, VB, FB, +1.0, eps)
+    cov_b = _covered(VB, FB, NB, VA, FA, -1.0, eps)
+    if not cov_a.any() and not cov_b.any():
+        both_V = np.r_[VA, VB]
+        both_F = np.r_[FA, FB + VA.shape[0]]
+        if not self_intersecting_pairs(both_V, both_F, max_pairs=1).size:
+            return _separate(VA, FA, fixA, capA, VB, FB, out_b)
+        return _fallback(VA, FA, fixA, capA, VB, FB, out_b, "touching without covered vertices")
+    if cov_b.all():
+        return keep_a("absorbed")
+    if cov_a.all() and not fixA.any() and not capA.any() and not out_b.any():
+        return MergeResult(VB, FB, fixB, "absorbed")
+    dist_a = np.sqrt(ClosestPoints(VB, FB).query(VA)[0])
+    dist_b = np.sqrt(ClosestPoints(VA, FA).query(VB)[0])
+    # faces crossing the other surface go too, even with no covered vertex:
+    # then no kept face of A can cross a kept face of B
+    cross = self_intersecting_pairs(np.r_[VA, VB], np.r_[FA, FB + VA.shape[0]])
+    cross = cross[(cross[:, 0] < FA.shape[0]) & (cross[:, 1] >= FA.shape[0])]
+    sink_a = np.zeros(FA.shape[0], bool)
+    sink_a[cross[:, 0]] = True
+    sink_b = out_b[FB].any(axis=1)
+    sink_b[cross[:, 1] - FA.shape[0]] = True
+    keep_fa = _cut(VA, FA, cov_a, dist_a, fixA, sink_a, band_rings)
+    keep_fb = _cut(VB, FB, cov_b | out_b, dist_b, fixB, sink_b, band_rings)
+    if not keep_fa.any():
+        return _fallback(VA, FA, fixA, capA, VB, FB, out_b, "cut removed all of A")
+    if not keep_fb.any():
+        return keep_a("absorbed")
+    Va, Fa, fa = _compact(VA, FA, keep_fa, fixA)
+    ca = capA[keep_fa]
+    Vb, Fb, fb = _compact(VB, FB, keep_fb, fixB)
+    loops_a = boundary_loops(Fa, Va.shape[0])
+    loops_b = boundary_loops(Fb, Vb.shape[0])
+    if loops_a is None or loops_b is None:
+        return _fallback(VA, FA, fixA, capA, VB, FB, out_b, "non-simple cut boundary")
+    pairs = pair_loops(loops_a, Va, loops_b, Vb)
+    if not pairs:
+        return _fallback(VA, FA, fixA, capA, VB, FB, out_b, "cut loops do not pair up")
+    problem = ""
+    for pull in pulls:
+        if pull > 0:
+            Wa, Wb = _pull(Va, Fa, fa, loops_a, Vb, Fb, loops_b, pairs, mu, pull_radius, pull)
+        else:
+            Wa, Wb = Va, Vb
+        V = np.r_[Wa, Wb]
+        off = Wa.shape[0]
+        strips = [strip_between(loops_a[i], Wa[loops_a[i]], loops_b[j] + off, Wb[loops_b[j]])
+                  for i, j in pairs]
+        F = np.r_[Fa, Fb + off, *strips]
+        fixed = np.r_[fa, np.zeros(Wb.shape[0], bool)]
+        problem = closed_element_ok(V, F)
+        if not problem and domain is not None:
+            moved_out = _outside_domain(V, domain) & ~_outside_domain(np.r_[Va, Vb], domain)
+            if moved_out.any():
+                problem = "seam left the domain"
+        if not problem:
+            break
+    if problem:
+        return _fallback(VA, FA, fixA, capA, VB, FB, out_b, problem)
+    gap, jump = seam_quality(V, F, Fa.shape[0], Fb.shape[0], loops_a, loops_b, off, pairs)
+    cap = np.r_[ca, np.zeros(F.shape[0] - ca.size, bool)]
+    return MergeResult(V, F, fixed, "stitched", seam_gap=gap, seam_normal_jump=jump, cap=cap)
+
+
+def _aligned(VA, FA, VB, fixA, max_shift, same_tol, match_tol):
+    """Translate A and B toward each other (see ``align``).
+
+    Returns ``(VA, VB, same, corresponding)``.  The translation is found by ICP
+    of the vertices of ``B`` that lie over the overlap of the two footprints
+    (so that a strand overlapping another strand's end is not slid along
+    it); the pair corresponds when the shift is at most ``max_shift`` and the
+    residual at most ``match_tol`` of ``B``'s narrow width.
+    """
+    target = ClosestPoints(VA, FA)
+    ext = VB.max(0)[:2] - VB.min(0)[:2]
+    foot, narrow = float(ext.mean()), float(ext.min())
+    lo = np.maximum(VA.min(0), VB.min(0))[:2]
+    hi = np.minimum(VA.max(0), VB.max(0))[:2]
+    sel = ((VB[:, :2] >= lo) & (VB[:, :2] <= hi)).all(axis=1)
+    if sel.sum() < 3:
+        return VA, VB, False, False
+    s, info = icp_translation(VB[sel], target=target, free=(True, True, False),
+                              max_iterations=30, tol=1e-6 * foot, method="plane")
+    if not (np.linalg.norm(s) <= max_shift * narrow and info.rms <= match_tol * narrow):
+        return VA, VB, False, False
+    alpha = 0.0 if fixA.any() else 0.5
+    VA2 = VA - alpha * s if alpha else VA
+    VB2 = VB + (1.0 - alpha) * s
+    rms = float(np.sqrt(target.query(VB2 + alpha * s)[0].mean()))
+    return VA2, VB2, rms < same_tol * foot, True
+
+
+def _separate(VA, FA, fixA, capA, VB, FB, out_b):
+    if out_b.any():
+        return _same_a(VA, FA, fixA, capA, "dropped", "B leaves the domain")
+    return MergeResult(np.r_[VA, VB], np.r_[FA, FB + VA.shape[0]],
+                       np.r_[fixA, np.zeros(VB.shape[0], bool)], "separate", parts=2,
+                       cap=np.r_[capA, np.zeros(FB.shape[0], bool)])
+
+
+def _pull(Va, Fa, fa, loops_a, Vb, Fb, loops_b, pairs, mu, radius, strength):
+    """Laplacian-deform both pieces so that paired loops meet half way."""
+    out = []
+    for V, F, fix, loops, Vo, loops_o, side in ((Va, Fa, fa, loops_a, Vb, loops_b, 0),
+                                                  (Vb, Fb, None, loops_b, Va, loops_a, 1)):
+        idx, tgt = [], []
+        for pair in pairs:
+            mine, other = (pair[0], pair[1]) if side == 0 else (pair[1], pair[0])
+            P = V[loops[mine]]
+            C = closest_on_polyline(P, Vo[loops_o[other]])
+            idx.append(loops[mine])
+            tgt.append(P + 0.5 * strength * (C - P))
+        idx = np.concatenate(idx)
+        tgt = np.concatenate(tgt)
+        edges = np.r_[F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]
+        h = float(np.linalg.norm(V[edges[:, 0]] - V[edges[:, 1]], axis=1).mean()) or 1.0
+        far = cKDTree(V[idx]).query(V)[0] > radius * h
+        fixed = far if fix is None else (far | fix)
+        out.append(laplacian_deformed(V, F, (idx, tgt), mu=mu, fixed=fixed,
+                                      laplacian="uniform"))
+    return out[0], out[1]
+
+
+def _fallback(VA, FA, fixA, capA, VB, FB, out_b, reason):
+    if out_b.any():
+        return _same_a(VA, FA, fixA, capA, "dropped", reason + "; B leaves the domain")
+    solid = manifold_of(VA, FA) + manifold_of(VB, FB)
+    if solid.status().name != "NoError" or solid.is_empty():
+        return _same_a(VA, FA, fixA, capA, "dropped", reason + "; union failed")
+    V, F = arrays_of_manifold(solid)
+    fixed = np.zeros(V.shape[0], bool)
+    if fixA.any():
+        want = np.unique(VA[fixA], axis=0)
+        both = np.r_[want, V]
+        _, inv = np.unique(both, axis=0, return_inverse=True)
+        inv = inv.ravel()
+        fixed = np.isin(inv[want.shape[0]:], inv[:want.shape[0]])
+        if np.unique(inv[want.shape[0]:][fixed]).size < want.shape[0]:
+            return _same_a(VA, FA, fixA, capA, "dropped",
+                           reason + "; union would move fixed vertices")
+    if closed_element_ok(V, F, intersections=False):
+        return _same_a(VA, FA, fixA, capA, "dropped", reason + "; union not closed")
+    cap = np.zeros(F.shape[0], bool)
+    if capA.any():
+        cap = caps_like(V, F, VA, FA[capA])
+        if cap is None:
+            return _same_a(VA, FA, fixA, capA, "dropped", reason + "; union lost the caps")
+    return MergeResult(V, F, fixed, "union", reason=reason, cap=cap)
