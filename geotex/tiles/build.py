@@ -21,7 +21,8 @@ __all__ = ["build_tileset", "interior_paste", "INTERIOR_METHODS", "BUILD_STAGES"
 
 INTERIOR_METHODS = ("paste",)
 BUILD_STAGES = ("strips", "tiles")
-WINDOWS = 64                 # exemplar windows tried per tile interior
+WINDOWS = 64                 # exemplar windows tried per pass
+PASTE_PASSES = 4             # interior passes: the bulk, then gap filling
 STRIP_AXIS = {0: 0, 1: 1, 2: 0}   # class -> exemplar axis its strips run along
 
 
@@ -50,40 +51,52 @@ def interior_paste(V: np.ndarray, F: np.ndarray, labels: np.ndarray, lo: np.ndar
                    rng: np.random.Generator) -> tuple[tuple[np.ndarray, np.ndarray], dict]:
     """Fill a tile interior with exemplar elements that fit between the frame's.
 
-    Tries :data:`WINDOWS` random unit windows of the exemplar and keeps the one
-    whose elements, lying wholly inside the tile and clear of every frame
-    element's footprint (by :data:`~geotex.tiles.strips.GAP`), cover the most
-    area. Elements are copied unchanged, so they stay closed.
+    In each of :data:`PASTE_PASSES` passes, tries :data:`WINDOWS` random unit
+    windows of the exemplar and adds the elements of the best one: those lying
+    wholly inside the tile and clear (by :data:`~geotex.tiles.strips.GAP`) of the
+    footprint of every element placed so far; the best window adds the most
+    footprint area. The first pass lays down the bulk, later passes fill gaps.
+    Elements are copied unchanged, so they stay closed.
 
     Returns
     -------
     mesh : tuple of (V, F)
         The added elements in tile coordinates.
     stats : dict
-        ``elements`` added and ``coverage`` (footprint area / tile area).
+        ``elements`` added and ``coverage`` (their footprint area / tile area).
     """
     lx, ly = size
-    ox = rng.uniform(0.0, lx - 1.0, WINDOWS)
-    oy = rng.uniform(0.0, ly - 1.0, WINDOWS)
-    u0 = lo[None, :, 0] - ox[:, None]
-    u1 = hi[None, :, 0] - ox[:, None]
-    v0 = lo[None, :, 1] - oy[:, None]
-    v1 = hi[None, :, 1] - oy[:, None]
-    inside = (u0 >= GAP) & (v0 >= GAP) & (u1 <= 1 - GAP) & (v1 <= 1 - GAP)
-    fb = frame_boxes
-    clash = ((u0[..., None] < fb[:, 2] + GAP) & (u1[..., None] > fb[:, 0] - GAP)
-             & (v0[..., None] < fb[:, 3] + GAP) & (v1[..., None] > fb[:, 1] - GAP)).any(-1)
-    ok = inside & ~clash
-    area = np.where(ok, (u1 - u0) * (v1 - v0), 0.0).sum(axis=1)
-    best = int(np.argmax(area))
-    members = np.flatnonzero(ok[best])
-    keep = np.isin(labels, members)
-    Fk = F[keep]
-    used = np.unique(Fk)
-    remap = np.full(len(V), -1, dtype=np.int64)
-    remap[used] = np.arange(len(used))
-    Vk = V[used] - np.array([ox[best], oy[best], 0.0])
-    return (Vk, remap[Fk]), {"elements": int(len(members)), "coverage": float(area[best])}
+    placed = np.asarray(frame_boxes, dtype=np.float64).reshape(-1, 4)
+    parts, n_added, covered = [], 0, 0.0
+    for _ in range(PASTE_PASSES):
+        ox = rng.uniform(0.0, lx - 1.0, WINDOWS)
+        oy = rng.uniform(0.0, ly - 1.0, WINDOWS)
+        u0 = lo[None, :, 0] - ox[:, None]
+        u1 = hi[None, :, 0] - ox[:, None]
+        v0 = lo[None, :, 1] - oy[:, None]
+        v1 = hi[None, :, 1] - oy[:, None]
+        inside = (u0 >= GAP) & (v0 >= GAP) & (u1 <= 1 - GAP) & (v1 <= 1 - GAP)
+        pb = placed
+        clash = ((u0[..., None] < pb[:, 2] + GAP) & (u1[..., None] > pb[:, 0] - GAP)
+                 & (v0[..., None] < pb[:, 3] + GAP) & (v1[..., None] > pb[:, 1] - GAP)
+                 ).any(-1)
+        ok = inside & ~clash
+        area = np.where(ok, (u1 - u0) * (v1 - v0), 0.0).sum(axis=1)
+        best = int(np.argmax(area))
+        members = np.flatnonzero(ok[best])
+        if members.size == 0:
+            break
+        keep = np.isin(labels, members)
+        Fk = F[keep]
+        used = np.unique(Fk)
+        remap = np.full(len(V), -1, dtype=np.int64)
+        remap[used] = np.arange(len(used))
+        parts.append((V[used] - np.array([ox[best], oy[best], 0.0]), remap[Fk]))
+        placed = np.vstack([placed, np.stack([u0[best, members], v0[best, members],
+                                              u1[best, members], v1[best, members]], 1)])
+        n_added += int(members.size)
+        covered += float(area[best])
+    return concatenated(parts), {"elements": n_added, "coverage": covered}
 
 
 def build_tileset(exemplar, *, colors=2, planar: bool = False, seed: int = 0,
