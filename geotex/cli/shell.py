@@ -1,0 +1,107 @@
+"""``geotex shell build | list | show``: polycube shells over base meshes."""
+
+from __future__ import annotations
+
+from geotex.cli._common import EXIT_OK, UsageError, guard_output
+
+HELP = "build, list and show shells (base mesh + polycube parameterization)"
+
+
+def register(sub):
+    p = sub.add_parser("shell", help=HELP, description=HELP + ".")
+    ss = p.add_subparsers(dest="shell_command", metavar="ACTION", required=True,
+                          parser_class=type(p))
+
+    b = ss.add_parser("build", help="parameterize a closed base mesh by a polycube",
+                      description="Build the shell of BASE: polycube with chart planes on a "
+                      "grid of spacing --tile-size, quads, offset directions, max height.")
+    b.add_argument("base", help="closed base mesh file (run 'geotex repair' first if needed)")
+    b.add_argument("-o", "--output", required=True, help="shell file to write (.npz)")
+    b.add_argument("--tile-size", type=float, default=None,
+                   help="tile side in mesh units (default: 1/12 of the largest extent)")
+    b.add_argument("--name", default=None, help="shell name (default: the file stem)")
+    b.set_defaults(run=run_build)
+
+    ls = ss.add_parser("list", help="the catalog of ready shells",
+                       description="List the shells shipped with geotex.")
+    ls.set_defaults(run=run_list)
+
+    s = ss.add_parser("show", help="picture of a shell's polycube",
+                      description="Render SHELL (file or catalog name): base coloured by chart "
+                      "label, the polycube, and the base with the quad grid.")
+    s.add_argument("shell", help="shell file or catalog name")
+    s.add_argument("-o", "--output", required=True, help="PNG file to write")
+    s.set_defaults(run=run_show)
+
+
+def _describe(shell) -> str:
+    d = shell.distortion
+    return (f"{shell.n_quads} quads of {shell.tile_size:.4g}, "
+            f"{shell.polycube.chart_label.size} charts, max height {shell.max_height:.4g}; "
+            f"distortion area {d['area_mean']:.3f} (p95 {d['area_p95']:.3f}), "
+            f"angle {d['angle_mean']:.3f} (p95 {d['angle_p95']:.3f})")
+
+
+def run_build(args) -> int:
+    from pathlib import Path
+
+    import numpy as np
+
+    from geotex.io import read_mesh
+    from geotex.progress import stage_bar
+    from geotex.shells import SHELL_STAGES, build_shell, save_shell
+
+    out = guard_output(args.output, args.base)
+    if not str(out).lower().endswith(".npz"):
+        raise UsageError(f"{out}: shell files are .npz; use a .npz name for -o")
+    mesh = read_mesh(args.base)
+    ts = args.tile_size
+    if ts is None:
+        ext = float(np.ptp(mesh.vertices, axis=0).max()) if mesh.n_vertices else 0.0
+        ts = ext / 12 if ext > 0 else 1.0
+    if not ts > 0:
+        raise UsageError(f"--tile-size {args.tile_size}: give a positive number")
+    name = args.name or Path(args.base).stem
+    with stage_bar(len(SHELL_STAGES), "shell") as bar:
+        shell = build_shell(mesh.vertices, mesh.faces, tile_size=ts, name=name,
+                            source=Path(args.base).name,
+                            recipe={"source": Path(args.base).name, "tile_size": ts},
+                            progress=bar)
+    save_shell(out, shell)
+    print(f"{args.base}: {_describe(shell)}")
+    print(f"wrote {out}")
+    return EXIT_OK
+
+
+def run_list(args) -> int:
+    from geotex.shells import list_shells
+
+    rows = list_shells()
+    if not rows:
+        print("the shell catalog is empty")
+        return EXIT_OK
+    print(f"{'name':<8} {'faces':>6} {'tile':>7} {'quads':>6} {'max h':>7} "
+          f"{'area':>6} {'angle':>6}  source")
+    for r in rows:
+        d = r.get("distortion", {})
+        print(f"{r['name']:<8} {r.get('faces', 0):>6} {r.get('tile_size', 0):>7.4g} "
+              f"{r.get('quads', 0):>6} {r.get('max_height', 0):>7.4g} "
+              f"{d.get('area_mean', float('nan')):>6.3f} {d.get('angle_mean', float('nan')):>6.3f}"
+              f"  {r['recipe'].get('source', '')}")
+    return EXIT_OK
+
+
+def run_show(args) -> int:
+    from geotex.shells import load_named, shell_path
+    from geotex.shells.picture import shell_panels
+    from geotex.render import render_panels
+
+    src = shell_path(args.shell)
+    out = guard_output(args.output, src)
+    if not str(out).lower().endswith(".png"):
+        raise UsageError(f"{out}: pictures are PNG; use a .png name for -o")
+    shell = load_named(args.shell)
+    render_panels(shell_panels(shell), out, size=(600, 600))
+    print(f"{shell.name}: {_describe(shell)}")
+    print(f"wrote {out}")
+    return EXIT_OK

@@ -1,0 +1,80 @@
+"""Which tile goes on which polycube quad.
+
+Every global quad edge gets a random colour from its axis class; a quad with
+chart frame ``(a1, a2)`` takes the tile of group ``(a1, a2)`` whose side colours
+are the colours of its south, east, north and west edges. Neighbouring quads
+read the same colour on their shared edge, so their tiles are seam-compatible.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from geotex.errors import InputError
+from geotex.tiles.tileset import TileSet
+
+__all__ = ["edge_colors", "tiles_for_quads"]
+
+
+def edge_colors(edge_axis: np.ndarray, n_colors, *, seed: int = 0) -> np.ndarray:
+    """Random colour of every global edge within its axis class.
+
+    Parameters
+    ----------
+    edge_axis : numpy.ndarray, (E,) int64
+        Axis class of each edge (0 X, 1 Y, 2 Z).
+    n_colors : tuple of 3 int
+        Colours per class.
+    seed : int
+
+    Returns
+    -------
+    numpy.ndarray, (E,) int64
+    """
+    rng = np.random.default_rng(seed)
+    n = np.asarray(n_colors, dtype=np.int64)[edge_axis]
+    if np.any(n < 1):
+        missing = sorted({"XYZ"[a] for a in np.unique(edge_axis[n < 1])})
+        raise InputError(f"the tile set has no colours for {', '.join(missing)} edges; a "
+                         "complete (non-planar) set is needed on a closed shape")
+    return np.floor(rng.random(len(edge_axis)) * n).astype(np.int64)
+
+
+def tiles_for_quads(tiles: TileSet, quad_axes: np.ndarray, quad_edge: np.ndarray,
+                    colors: np.ndarray) -> np.ndarray:
+    """The tile of every quad.
+
+    Parameters
+    ----------
+    tiles : TileSet
+    quad_axes : numpy.ndarray, (q, 2) int64
+        In-plane axes ``(a1, a2)`` of each quad's chart (its tile group).
+    quad_edge : numpy.ndarray, (q, 4) int64
+        Global edge of sides south, east, north, west.
+    colors : numpy.ndarray, (E,) int64
+        Colour of every global edge.
+
+    Returns
+    -------
+    numpy.ndarray, (q,) int64
+
+    Raises
+    ------
+    InputError
+        The set lacks a needed tile (e.g. a planar set on a closed shape).
+    """
+    side = colors[quad_edge]                                    # (q, 4)
+    keys = np.hstack([quad_axes, side])
+    table = np.hstack([tiles.groups, tiles.colors])
+    radix = np.array([3, 3, 5, 5, 5, 5], dtype=np.int64)
+    weights = np.concatenate([np.cumprod(radix[::-1])[::-1][1:], [1]])
+    code_t = table @ weights
+    code_q = keys @ weights
+    order = np.argsort(code_t)
+    pos = np.clip(np.searchsorted(code_t[order], code_q), 0, len(order) - 1)
+    found = code_t[order][pos] == code_q
+    if not found.all():
+        k = keys[np.argmin(found)]
+        raise InputError(f"tile set {tiles.name!r} has no tile for group {tuple(k[:2])} with "
+                         f"colours {tuple(k[2:])}; build a complete set (not --planar)")
+    return order[pos]

@@ -1,0 +1,132 @@
+"""The catalog of ready-made shells shipped with geotex.
+
+Shells live in ``geotex/shells/catalog/NAME.npz``; ``recipes.json`` beside
+them holds each recipe (source mesh, its SHA-256, tile size), from which
+:func:`rebuild` makes the same file byte for byte.  The source meshes of the
+recipes that are not bundled with geotex (Bob, Blub) are read from the path
+recorded in the recipe.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from pathlib import Path
+
+from geotex.errors import InputError, MissingFileError
+
+__all__ = ["CATALOG_DIR", "recipes", "shell_path", "list_shells", "load_named", "rebuild",
+           "source_mesh"]
+
+CATALOG_DIR = Path(__file__).resolve().parent / "catalog"
+
+
+def recipes() -> dict:
+    """Return ``{name: recipe}`` of the catalog (empty if it has none)."""
+    f = CATALOG_DIR / "recipes.json"
+    if not f.is_file():
+        return {}
+    return json.loads(f.read_text())
+
+
+def shell_path(name_or_path) -> Path:
+    """Resolve a catalog name or a file path to a shell file.
+
+    Raises
+    ------
+    MissingFileError
+        Neither an existing file nor a catalog name (the message lists the names).
+    """
+    p = Path(name_or_path)
+    if p.is_file():
+        return p
+    q = CATALOG_DIR / f"{name_or_path}.npz"
+    if p.suffix == "" and q.is_file():
+        return q
+    names = ", ".join(sorted(recipes())) or "none"
+    raise MissingFileError(f"{p}: no such shell file or catalog name (catalog: {names})")
+
+
+def load_named(name_or_path):
+    """Load a shell by catalog name or path."""
+    from geotex.shells.store import load_shell
+
+    return load_shell(shell_path(name_or_path))
+
+
+def list_shells() -> list[dict]:
+    """Catalog entries with the metadata stored in each shell file."""
+    import numpy as np
+
+    out = []
+    for name, recipe in sorted(recipes().items()):
+        f = CATALOG_DIR / f"{name}.npz"
+        entry = {"name": name, "file": str(f), "bytes": f.stat().st_size if f.is_file() else 0,
+                 "recipe": recipe}
+        if f.is_file():
+            with np.load(f, allow_pickle=False) as z:
+                entry.update(json.loads(bytes(z["metadata"]).decode("utf-8")))
+        out.append(entry)
+    return out
+
+
+def source_mesh(recipe: dict):
+    """The base mesh ``(V, F)`` a recipe starts from.
+
+    Raises
+    ------
+    InputError
+        Unknown source kind, or a source file whose SHA-256 differs.
+    MissingFileError
+        The source file is not available.
+    """
+    src = recipe["source"]
+    if src.startswith("primitive:torus"):
+        from geotex.mesh.primitives import torus
+
+        return torus(**recipe.get("args", {}))
+    if src.startswith("sample:"):
+        from geotex.data import sample_path
+
+        path = sample_path(src.split(":", 1)[1])
+    else:
+        path = Path(src)
+    if not path.is_file():
+        raise MissingFileError(f"{path}: source mesh of the recipe not found")
+    digest = hashlib.sha256(path.read_bytes()).hexdigest()
+    if recipe.get("sha256") and digest != recipe["sha256"]:
+        raise InputError(f"{path}: its SHA-256 differs from the recipe's; not the same mesh")
+    from geotex.io import read_mesh
+
+    m = read_mesh(path)
+    return m.vertices, m.faces
+
+
+def rebuild(name: str, path=None, *, progress=None):
+    """Rebuild catalog shell ``name`` from its recipe; write it when ``path`` is given.
+
+    Returns
+    -------
+    Shell
+    """
+    from geotex.shells.build import build_shell
+    from geotex.shells.store import save_shell
+
+    rec = recipes()
+    if name not in rec:
+        raise InputError(f"unknown catalog shell {name!r}; choose one of {', '.join(sorted(rec))}")
+    r = rec[name]
+    V, F = source_mesh(r)
+    shell = build_shell(V, F, tile_size=r["tile_size"], name=name, source=r["source"],
+                        recipe=r, progress=progress)
+    if path is not None:
+        save_shell(path, shell)
+    return shell
+
+
+if __name__ == "__main__":  # pragma: no cover - maintenance entry point
+    import sys
+
+    for shell_name in sys.argv[1:] or sorted(recipes()):
+        s = rebuild(shell_name, CATALOG_DIR / f"{shell_name}.npz")
+        print(f"{shell_name}: {s.n_quads} quads, max height {s.max_height:.4g}")

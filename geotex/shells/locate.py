@@ -1,0 +1,85 @@
+"""Map tile points on polycube quads to the base mesh and into the shell.
+
+A tile point ``(u, v, w)`` on quad ``q`` (``u, v`` in ``[0, 1]``, see
+:mod:`geotex.param.polycube_quads` for the quad frame) lies at the polycube
+point ``corner0 + u e1 + v e2`` (tile units); the face of the polycube
+containing it and its barycentric coordinates give the base point
+``x = sum b_i V_i`` and the offset direction ``d = normalize(sum b_i D_i)``;
+the shell point is ``x + w * height * d``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from geotex.errors import InputError
+
+__all__ = ["locate_on_quads", "quad_points_to_base", "quad_points_to_shell"]
+
+
+def _args(shell, quad_ids, uv):
+    q = np.asarray(quad_ids)
+    if q.ndim != 1 or q.dtype.kind not in "iu":
+        raise InputError("quad_ids must be a 1-D integer array")
+    q = q.astype(np.int64)
+    UV = np.asarray(uv, dtype=np.float64)
+    if UV.shape != (q.size, 2):
+        raise InputError(f"uv must have shape ({q.size}, 2), got {UV.shape}")
+    if q.size and (q.min() < 0 or q.max() >= shell.n_quads):
+        raise InputError(f"quad_ids must lie in [0, {shell.n_quads})")
+    if not np.isfinite(UV).all():
+        raise InputError("uv has non-finite values")
+    return q, np.clip(UV, 0.0, 1.0)
+
+
+def locate_on_quads(shell, quad_ids, uv) -> tuple[np.ndarray, np.ndarray]:
+    """Face of the base mesh and barycentric coordinates of quad points.
+
+    Parameters
+    ----------
+    shell : Shell
+    quad_ids : array_like, (k,) int
+    uv : array_like, (k, 2) float64
+        Tile coordinates in ``[0, 1]`` (clamped).
+
+    Returns
+    -------
+    face : (k,) int64
+    bary : (k, 3) float64
+        Non-negative, summing to 1, with respect to ``shell.F[face]``.
+
+    Raises
+    ------
+    InputError
+        On malformed arguments or quad ids out of range.
+    """
+    q, UV = _args(shell, quad_ids, uv)
+    return shell.locator.locate(q, UV)
+
+
+def quad_points_to_base(shell, quad_ids, uv) -> tuple[np.ndarray, np.ndarray]:
+    """Base points and unit offset directions of quad points, each ``(k, 3)``."""
+    face, bary = locate_on_quads(shell, quad_ids, uv)
+    corners = shell.F[face]
+    x = np.einsum("ki,kij->kj", bary, shell.V[corners])
+    d = np.einsum("ki,kij->kj", bary, shell.D[corners])
+    d /= np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-300)
+    return x, d
+
+
+def quad_points_to_shell(shell, quad_ids, uvw, *, height: float) -> np.ndarray:
+    """Shell points ``x + w * height * d`` of tile points ``(u, v, w)``, ``(k, 3)``.
+
+    Raises
+    ------
+    InputError
+        If ``height`` is not in ``(0, shell.max_height]`` or ``uvw`` is malformed.
+    """
+    P = np.asarray(uvw, dtype=np.float64)
+    if P.ndim != 2 or P.shape[1] != 3:
+        raise InputError(f"uvw must have shape (k, 3), got {P.shape}")
+    if not (0 < float(height) <= shell.max_height * (1 + 1e-12)):
+        raise InputError(f"height {height} must lie in (0, {shell.max_height:.4g}] "
+                         "(the shell's max_height)")
+    x, d = quad_points_to_base(shell, quad_ids, P[:, :2])
+    return x + (P[:, 2:3] * float(height)) * d

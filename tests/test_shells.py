@@ -1,0 +1,182 @@
+"""Shells: construction, point location on quads, files, catalog and CLI."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from geotex.check.intersections import self_intersecting_pairs
+from geotex.cli import main
+from geotex.errors import InputError, MeshFileError, MissingFileError
+from geotex.mesh.primitives import box, torus
+from geotex.shells import (build_shell, list_shells, load_shell, locate_on_quads,
+                           quad_points_to_base, quad_points_to_shell, save_shell, shell_path)
+
+
+@pytest.fixture(scope="module")
+def torus_shell():
+    V, F = torus(n_major=48, n_minor=24)
+    return build_shell(V, F, tile_size=0.25, name="torus")
+
+
+def _edge_uv(side, t):
+    """(E, T, 2) points at parameter t along local edge ``side`` (in its running order)."""
+    z, o = np.zeros_like(t), np.ones_like(t)
+    choices = np.stack([np.stack([t, z], -1), np.stack([o, t], -1),
+                        np.stack([1 - t, o], -1), np.stack([z, 1 - t], -1)])  # (4, T, 2)
+    return choices[side]
+
+
+def test_box_shell_corners_exact():
+    V, F = box((0, 0, 0), (1, 1, 1), divisions=2)
+    s = build_shell(V, F, tile_size=0.25)
+    q = np.repeat(np.arange(s.n_quads), 4)
+    uv = np.tile([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]], (s.n_quads, 1))
+    x, d = quad_points_to_base(s, q, uv)
+    assert np.allclose(x, s.polycube.quad_corners.reshape(-1, 3) * 0.25, atol=1e-12)
+    assert np.allclose(np.linalg.norm(d, axis=1), 1.0)
+
+
+def test_locate_matches_polycube_point(torus_shell):
+    s = torus_shell
+    pc = s.polycube
+    rng = np.random.default_rng(0)
+    k = 5000
+    q = rng.integers(0, s.n_quads, k)
+    uv = rng.random((k, 2))
+    uv[:50] = 0.0  # quad corners
+    f, b = locate_on_quads(s, q, uv)
+    assert np.all(b >= 0) and np.allclose(b.sum(axis=1), 1.0)
+    assert np.all(pc.chart[f] == pc.quad_chart[q])
+    p = np.einsum("ki,kij->kj", b, pc.P[pc.F[f]])
+    c = pc.quad_corners[q].astype(float)
+    expected = c[:, 0] + uv[:, :1] * (c[:, 1] - c[:, 0]) + uv[:, 1:] * (c[:, 3] - c[:, 0])
+    assert np.abs(p - expected).max() < 1e-12
+
+
+def test_shared_edges_agree(torus_shell):
+    s = torus_shell
+    pc = s.polycube
+    t = np.linspace(0.0, 1.0, 7)
+    E = pc.edge_axis.size
+    qa, qb = pc.edge_quads[:, 0], pc.edge_quads[:, 1]
+    sa, sb = pc.edge_sides[:, 0], pc.edge_sides[:, 1]
+    uva = _edge_uv(sa, t).reshape(-1, 2)
+    uvb = _edge_uv(sb, 1.0 - t).reshape(-1, 2)  # the neighbour runs the other way
+    xa, _ = quad_points_to_base(s, np.repeat(qa, t.size), uva)
+    xb, _ = quad_points_to_base(s, np.repeat(qb, t.size), uvb)
+    assert np.abs(xa - xb).max() < 1e-12
+    assert E == pc.quad_edge.max() + 1
+
+
+def test_max_height_is_safe(torus_shell):
+    s = torus_shell
+    assert 0 < s.max_height
+    Vo = s.V + s.max_height * s.D
+    n = s.V.shape[0]
+    Vc = np.vstack([s.V, Vo])
+    Fc = np.vstack([s.F, s.F[:, ::-1] + n])
+    assert self_intersecting_pairs(Vc, Fc).shape[0] == 0
+    pts = quad_points_to_shell(s, np.array([0, 1]), [[0.5, 0.5, 1.0], [0.2, 0.3, 0.0]],
+                               height=s.max_height)
+    assert pts.shape == (2, 3)
+    with pytest.raises(InputError, match="max_height"):
+        quad_points_to_shell(s, np.array([0]), [[0.5, 0.5, 1.0]], height=2 * s.max_height)
+    with pytest.raises(InputError, match="quad_ids"):
+        locate_on_quads(s, np.array([s.n_quads]), [[0.5, 0.5]])
+
+
+def test_file_round_trip_and_reproducible(tmp_path, torus_shell):
+    a = tmp_path / "a.npz"
+    save_shell(a, torus_shell)
+    s2 = load_shell(a)
+    for k in ("V", "F", "P", "labels", "quad_corners", "quad_edge", "edge_axis"):
+        assert np.array_equal(getattr(s2.polycube, k), getattr(torus_shell.polycube, k))
+    assert np.array_equal(s2.D, torus_shell.D) and s2.max_height == torus_shell.max_height
+    # same input -> byte-identical file
+    V, F = torus(n_major=48, n_minor=24)
+    b = tmp_path / "b.npz"
+    save_shell(b, build_shell(V, F, tile_size=0.25, name="torus"))
+    assert a.read_bytes() == b.read_bytes()
+    # locate gives identical answers after loading
+    q = np.arange(s2.n_quads)
+    uv = np.full((q.size, 2), 0.3)
+    assert np.array_equal(locate_on_quads(s2, q, uv)[0], locate_on_quads(torus_shell, q, uv)[0])
+
+
+def test_corrupted_and_wrong_files(tmp_path, torus_shell):
+    good = tmp_path / "s.npz"
+    save_shell(good, torus_shell)
+    bad = tmp_path / "bad.npz"
+    bad.write_bytes(good.read_bytes()[: good.stat().st_size // 2])
+    with pytest.raises(MeshFileError, match="truncated or corrupted"):
+        load_shell(bad)
+    other = tmp_path / "other.npz"
+    np.savez(other, x=np.zeros(3))
+    with pytest.raises(MeshFileError, match="not a geotex shell"):
+        load_shell(other)
+    with pytest.raises(MissingFileError):
+        load_shell(tmp_path / "missing.npz")
+    with pytest.raises(InputError, match=".npz"):
+        save_shell(tmp_path / "x.obj", torus_shell)
+
+
+def test_catalog_is_shipped():
+    rows = list_shells()
+    names = {r["name"] for r in rows}
+    assert {"spot", "torus"} <= names
+    for r in rows:
+        assert r["bytes"] <= 2_000_000
+        assert shell_path(r["name"]).is_file()
+    s = load_shell(shell_path("torus"))
+    assert s.n_quads == next(r["quads"] for r in rows if r["name"] == "torus")
+    with pytest.raises(MissingFileError, match="catalog"):
+        shell_path("no-such-shell")
+
+
+def test_cli_build_list_and_errors(tmp_path, capsys):
+    from geotex.io import write_mesh
+    from geotex.mesh.record import Mesh
+
+    V, F = box((0, 0, 0), (1, 1, 1), divisions=2)
+    src = tmp_path / "cube.obj"
+    write_mesh(src, Mesh(V, F))
+    out = tmp_path / "cube.npz"
+    assert main(["shell", "build", str(src), "-o", str(out), "--tile-size", "0.25"]) == 0
+    text = capsys.readouterr().out
+    assert "96 quads" in text and "max height" in text and out.is_file()
+    assert load_shell(out).n_quads == 96
+    assert main(["shell", "list"]) == 0
+    assert "torus" in capsys.readouterr().out
+    # open mesh: one-line error, exit 2, no output file
+    open_src = tmp_path / "open.obj"
+    write_mesh(open_src, Mesh(V, F[1:]))
+    out2 = tmp_path / "open.npz"
+    assert main(["shell", "build", str(open_src), "-o", str(out2)]) == 2
+    err = capsys.readouterr().err
+    assert "geotex repair" in err and err.count("\n") == 1 and not out2.exists()
+    assert main(["shell", "build", str(src), "-o", str(src)]) == 2
+
+
+def test_side_coordinate_runs_the_same_way_in_both_quads(torus_shell):
+    """A point at coordinate t along a shared edge is the same seen from both quads."""
+    s = torus_shell
+    pc = s.polycube
+    t = np.linspace(0.0, 1.0, 5)
+
+    def side_uv(side):
+        z, o = np.zeros_like(t), np.ones_like(t)
+        table = np.stack([np.stack([t, z], -1), np.stack([o, t], -1), np.stack([t, o], -1),
+                          np.stack([z, t], -1)])
+        return table[side].reshape(-1, 2)
+
+    qa, qb = pc.edge_quads[:, 0], pc.edge_quads[:, 1]
+    uva, uvb = side_uv(pc.edge_sides[:, 0]), side_uv(pc.edge_sides[:, 1])
+    ca = pc.quad_corners[np.repeat(qa, t.size)].astype(float)
+    cb = pc.quad_corners[np.repeat(qb, t.size)].astype(float)
+    pa = ca[:, 0] + uva[:, :1] * (ca[:, 1] - ca[:, 0]) + uva[:, 1:] * (ca[:, 3] - ca[:, 0])
+    pb = cb[:, 0] + uvb[:, :1] * (cb[:, 1] - cb[:, 0]) + uvb[:, 1:] * (cb[:, 3] - cb[:, 0])
+    assert np.array_equal(pa, pb)
+    xa, _ = quad_points_to_base(s, np.repeat(qa, t.size), uva)
+    xb, _ = quad_points_to_base(s, np.repeat(qb, t.size), uvb)
+    assert np.abs(xa - xb).max() < 1e-12
