@@ -463,7 +463,8 @@ def _make_patch(F: np.ndarray, faces: np.ndarray, distances: np.ndarray, seed: i
 def grow_patch(V, F, seed_face, *, max_radius=None, max_normal_angle=None,
                accept: Callable[[np.ndarray], np.ndarray] | None = None,
                max_faces: int | None = None,
-               adjacency: FaceAdjacency | None = None) -> Patch:
+               adjacency: FaceAdjacency | None = None,
+               on_join: Callable[[int], None] | None = None) -> Patch:
     """Grow a topological disc around a seed face (lapped textures §3.3).
 
     Faces are visited in order of increasing distance from the seed face: a
@@ -505,6 +506,11 @@ def grow_patch(V, F, seed_face, *, max_radius=None, max_normal_angle=None,
         Stop after this many faces.
     adjacency : FaceAdjacency, optional
         Precomputed :func:`face_adjacency` of ``(V, F)`` (reuse it across calls).
+    on_join : callable, optional
+        ``on_join(face_id: int)`` is called as each face joins (the seed
+        first), before ``accept`` sees the faces newly reached from it; a
+        caller can map the new face (e.g. extend a parameterization) and then
+        judge its neighbours in ``accept``.
 
     Returns
     -------
@@ -548,6 +554,8 @@ def grow_patch(V, F, seed_face, *, max_radius=None, max_normal_angle=None,
             raise InputError(f"max_faces must be an integer >= 1, got {max_faces!r}")
     if accept is not None and not callable(accept):
         raise InputError("accept must be a callable taking face ids and returning booleans")
+    if on_join is not None and not callable(on_join):
+        raise InputError("on_join must be a callable taking a face id")
 
     FE, FF, W = adj.face_edges, adj.face_neighbors, adj.neighbor_distance
     normals = adj.normals
@@ -572,6 +580,8 @@ def grow_patch(V, F, seed_face, *, max_radius=None, max_normal_angle=None,
             ecount[e] += 1
         for v in F[f].tolist():
             vcount[v] += 1
+        if on_join is not None:
+            on_join(f)
         nb = FF[f].tolist()
         fresh = [g for g in nb if g >= 0 and state[g] == 0]
         if fresh:
