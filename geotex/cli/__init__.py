@@ -11,11 +11,11 @@ import os
 import sys
 
 from geotex import __version__
-from geotex.cli import check, convert, demo, field, heighttilt, render, repair, tiles, exemplar, shell, quilt
+from geotex.cli import check, convert, demo, field, heighttilt, render, repair, tiles, exemplar, shell, quilt, lapped
 from geotex.cli._common import EXIT_INTERNAL, EXIT_USAGE, Parser, fail
 from geotex.errors import GeotexError
 
-COMMANDS = (demo, check, repair, render, convert, field, heighttilt, tiles, exemplar, shell, quilt)
+COMMANDS = (demo, check, repair, render, convert, field, heighttilt, tiles, exemplar, shell, quilt, lapped)
 
 
 def build_parser() -> Parser:
