@@ -8,6 +8,7 @@ __all__ = [
     "face_cross",
     "face_areas",
     "face_normals",
+    "vertex_normals",
     "signed_volume",
     "component_volumes",
     "bounding_box",
@@ -31,6 +32,17 @@ def face_normals(V: np.ndarray, F: np.ndarray) -> np.ndarray:
     c = face_cross(V, F)
     n = np.linalg.norm(c, axis=1, keepdims=True)
     return np.divide(c, n, out=np.zeros_like(c), where=n > 0)
+
+
+def vertex_normals(V: np.ndarray, F: np.ndarray) -> np.ndarray:
+    """Return unit area-weighted vertex normals, ``(n, 3)`` float64 (zero if unused)."""
+    C = face_cross(V, F)
+    N = np.zeros((V.shape[0], 3))
+    for k in range(3):
+        N += np.stack([np.bincount(F[:, k], weights=C[:, d], minlength=V.shape[0])
+                       for d in range(3)], axis=1)
+    n = np.linalg.norm(N, axis=1, keepdims=True)
+    return np.divide(N, n, out=np.zeros_like(N), where=n > 0)
 
 
 def _centered(V: np.ndarray) -> np.ndarray:

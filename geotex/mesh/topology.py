@@ -25,6 +25,7 @@ __all__ = [
     "duplicate_face_groups",
     "referenced_vertices",
     "position_welded_faces",
+    "neighbour_mean",
 ]
 
 
@@ -122,6 +123,20 @@ def edge_topology(F: np.ndarray, n_vertices: int | None = None) -> EdgeTopology:
     return EdgeTopology(edges=edges, half_to_edge=inv.astype(np.int64),
                         face_count=counts.astype(np.int64),
                         forward_count=forward.astype(np.int64))
+
+
+def neighbour_mean(F: np.ndarray, n_vertices: int) -> sp.csr_matrix:
+    """Averaging operator over edge neighbours, ``(n, n)``: row ``i`` holds ``1/deg(i)``.
+
+    ``neighbour_mean(F, n) @ X`` replaces every vertex value by the mean of its
+    neighbours' (zero for vertices on no edge).
+    """
+    E = edge_topology(F, n_vertices).edges
+    i = np.concatenate([E[:, 0], E[:, 1]])
+    j = np.concatenate([E[:, 1], E[:, 0]])
+    deg = np.bincount(i, minlength=n_vertices).astype(np.float64)
+    w = 1.0 / deg[i]
+    return sp.csr_matrix((w, (i, j)), shape=(n_vertices, n_vertices))
 
 
 def referenced_vertices(F: np.ndarray, n_vertices: int) -> np.ndarray:

@@ -1,27 +1,27 @@
-"""PolyCube parameterization with chart planes on a grid of spacing ``tile_size``.
+"""PolyCube parameterization of closed meshes, on a grid whose cell is the tile.
 
-Pipeline (one module per step):
+The polycube is the boundary of a voxel solid (PolyCube-Maps, Tarini et al.
+2004): every boundary face of a voxel is one or more tile quads, so the
+polycube is valid by construction, its charts lie on grid planes, and any
+genus is handled as long as the voxels resolve the shape. Pipeline, one
+module per step:
 
 1. input check (closed, manifold, oriented outward, one component, no
-   self-intersections) - :func:`geotex.check.check_mesh`;
-2. face labels +-X/+-Y/+-Z from normals, smoothed and repaired
-   (:mod:`~geotex.param.polycube_labels`);
-3. chart layout and integer chart planes (:mod:`~geotex.param.polycube_layout`);
-4. deformed positions ``P`` on the polycube surface
-   (:mod:`~geotex.param.polycube_embed`).  Problems found on the way are
-   repaired and the steps repeated: faces that would lie flat along a
-   polycube edge and chart-interior edges joining two points of one polycube
-   edge are split (:mod:`~geotex.param.polycube_refine`, which changes the
-   base mesh but not its surface), invalid chart configurations and charts
-   that cannot be separated are relabelled, folds are untangled locally or
-   refined or relabelled.  The result must be free of folds and of
-   self-intersections, or an error is raised;
-5. grid quads with global edge ids (:mod:`~geotex.param.polycube_quads`);
-6. distortion between the base and the polycube.
+   self-intersections) - :func:`validate_input`;
+2. voxel solid at cell ``tiles_per_cell * tile_size`` by winding numbers,
+   made manifold, largest component (:mod:`~geotex.param.voxels`); a few grid
+   shifts and two repair strategies are tried and the first candidate whose
+   boundary has the Euler characteristic of the mesh is used;
+3. tile quads and their triangle sub-grid (:mod:`~geotex.param.polycube_surface`),
+   global quad edges (:func:`~geotex.param.polycube_quads.quad_edges`);
+4. the sub-grid fitted onto the base (:mod:`~geotex.param.polycube_fit`): the
+   fitted positions ``Y`` are the inverse map polycube -> base;
+5. distortion of the map and how well the fitted surface covers the base.
 
-``P`` is stored in *tile units*: the polycube point is ``P * tile_size``; the
-coordinate of every vertex along the axis of a chart it touches is an exact
-integer.
+Unlike a deformation of the input, the map is defined on the polycube's own
+triangulation: the tile point ``(u, v)`` of quad ``q`` lies in sub-cell
+``(floor(u res), floor(v res))`` of ``quad_grid[q]`` and its base point is
+interpolated from the fitted positions there (:meth:`PolyCube.locate`).
 """
 
 from __future__ import annotations
@@ -31,26 +31,24 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from geotex.check import check_mesh
-from geotex.check.intersections import self_intersecting_pairs
 from geotex.errors import GeotexError, InputError
-from geotex.mesh.arrays import as_mesh_arrays, as_vertices
+from geotex.mesh.arrays import as_mesh_arrays
+from geotex.mesh.geometry import face_areas
+from geotex.mesh.topology import edge_topology, vertex_components
 from geotex.param.distortion import distortion_summary
-from geotex.param.polycube_cuts import reflex_cuts
-from geotex.param.polycube_embed import embed_polycube, folded_faces, untangle
-from geotex.param.polycube_labels import (face_graph, fix_labels, flood_labels,
-                                          initial_labels, merge_chart,
-                                          smooth_labels)
-from geotex.param.polycube_layout import (LayoutError, chart_layout, flat_border_faces,
-                                          solve_planes)
-from geotex.param.polycube_quads import (chart_axes, enumerate_quads, face_coords_2d,
-                                         quad_edges)
-from geotex.param.polycube_refine import (border_chords, flat_face_chords, split_edges,
-                                          split_faces)
+from geotex.param.polycube_fit import SurfaceProjector, fitted_surface
+from geotex.param.polycube_quads import chart_axes, quad_edges
+from geotex.param.polycube_surface import boundary_quads, subdivided_quads
+from geotex.param.voxels import (largest_component, manifold_solid, occupancy,
+                                 voxel_grid)
 from geotex.progress import report
 
-__all__ = ["PolyCube", "polycube", "POLYCUBE_STAGES", "validate_input"]
+__all__ = ["PolyCube", "polycube", "POLYCUBE_STAGES", "validate_input", "GRID_SHIFTS"]
 
-POLYCUBE_STAGES = ("check", "labels", "layout", "embed", "quads", "distortion")
+POLYCUBE_STAGES = ("check", "voxels", "fit", "distortion")
+
+#: Grid offsets (in cells) tried in turn when a grid does not resolve the topology.
+GRID_SHIFTS = ((0.0, 0.0, 0.0), (0.5, 0.5, 0.5), (0.25, 0.25, 0.25), (0.5, 0.0, 0.25))
 
 
 @dataclass(frozen=True)
@@ -60,81 +58,108 @@ class PolyCube:
     Attributes
     ----------
     tile_size : float
-    V : (n, 3) float64
-        The base mesh the map is defined on: the input, plus vertices inserted
-        where a face would have been flat along a polycube edge (each split
-        keeps the surface geometry; the input vertices keep their indices).
-    F : (m, 3) int64
-        Faces of that mesh (split faces keep their index for one child).
-    labels : (m,) int64
-        Face labels 0..5 (``+X -X +Y -Y +Z -Z``).
-    chart : (m,) int64
-        Chart of every face.
-    chart_label : (c,) int64
-    planes : (c,) int64
-        Chart plane along the chart's axis, in tiles.
+        World length of a tile side (one polycube grid unit).
+    res : int
+        Sub-cells along a tile side in the triangle sub-grid.
+    origin : (3,) float64
+        World position of the polycube's tile coordinate ``(0, 0, 0)``.
     P : (n, 3) float64
-        Deformed vertex positions in tile units (polycube point ``P * tile_size``).
-    quad_chart : (q,) int64
-    quad_ij : (q, 2) int64
-        Lower cell corner in the chart's in-plane axes (see
-        :mod:`geotex.param.polycube_quads` for the frame convention).
+        Sub-grid vertices on the polycube, in tile units.
+    Y : (n, 3) float64
+        The same vertices fitted onto the base mesh (world units): the map.
+    F : (m, 3) int64
+        Sub-grid triangles, ``2 res^2`` per quad, quad by quad.
+    quad_grid : (q, res + 1, res + 1) int64
+        Vertex at tile point ``(i / res, j / res)`` of every quad.
+    quad_label : (q,) int64
+        Outward normal of every quad (``0 +X, 1 -X, 2 +Y, 3 -Y, 4 +Z, 5 -Z``).
     quad_corners : (q, 4, 3) int64
-        Quad corners ``c0..c3`` in tile units, counter-clockwise about the
-        outward normal.
+        Corners in tile units, counter-clockwise about the outward normal (see
+        :mod:`geotex.param.polycube_quads` for the frame).
     quad_edge : (q, 4) int64
-        Global edge id of quad edge ``k`` (from ``c_k`` to ``c_(k+1)%4``;
-        0 south, 1 east, 2 north, 3 west).
+        Global edge of sides south, east, north, west.
     quad_edge_forward : (q, 4) bool
-        Whether the quad runs along the edge toward increasing coordinate
-        (the neighbouring quad always runs the other way).
     edge_axis : (E,) int64
         Axis class of every global edge (0 X, 1 Y, 2 Z).
     edge_quads, edge_sides : (E, 2) int64
-        The two quads of every edge and the local edge index in each.
+        The two quads of every edge and the side index in each.
+    quad_folded : (q,) bool
+        Quads whose fitted image folds over (they are left bare by mapping).
     distortion : dict
-        ``area`` and ``angle`` statistics (``mean``, ``p95``) and counts.
-    attempts : int
-        Labelling rounds that were needed.
+        Area and angle distortion (mean, p95), folds, area ratio.
+    coverage : dict
+        How close the base is to the fitted surface (in tiles).
+    voxels : dict
+        The voxel candidate that was used (cell, shift, repair strategy, ...).
     """
 
     tile_size: float
-    V: np.ndarray
-    F: np.ndarray
-    labels: np.ndarray
-    chart: np.ndarray
-    chart_label: np.ndarray
-    planes: np.ndarray
+    res: int
+    origin: np.ndarray
     P: np.ndarray
-    quad_chart: np.ndarray
-    quad_ij: np.ndarray
+    Y: np.ndarray
+    F: np.ndarray
+    quad_grid: np.ndarray
+    quad_label: np.ndarray
     quad_corners: np.ndarray
     quad_edge: np.ndarray
     quad_edge_forward: np.ndarray
     edge_axis: np.ndarray
     edge_quads: np.ndarray
     edge_sides: np.ndarray
+    quad_folded: np.ndarray
     distortion: dict = field(default_factory=dict)
-    attempts: int = 1
+    coverage: dict = field(default_factory=dict)
+    voxels: dict = field(default_factory=dict)
+
+    @property
+    def n_quads(self) -> int:
+        return int(self.quad_label.size)
+
+    @property
+    def quad_axes(self) -> np.ndarray:
+        """In-plane axes ``(a1, a2)`` of every quad's frame, ``(q, 2)`` int64."""
+        _, a1, a2 = chart_axes(self.quad_label)
+        return np.stack([a1, a2], axis=1)
+
+    @property
+    def face_quad(self) -> np.ndarray:
+        """Quad of every sub-grid face, ``(m,)`` int64."""
+        return np.arange(self.F.shape[0], dtype=np.int64) // (2 * self.res ** 2)
 
     @property
     def positions(self) -> np.ndarray:
         """Polycube vertex positions in world units, ``(n, 3)``."""
-        return self.P * self.tile_size
+        return self.origin + self.P * self.tile_size
 
-    @property
-    def n_quads(self) -> int:
-        return int(self.quad_chart.size)
+    def locate(self, quad_ids: np.ndarray, uv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Sub-grid face and barycentric coordinates of tile points.
 
-    @property
-    def quad_axes(self) -> np.ndarray:
-        """In-plane axes ``(a1, a2)`` of every quad's frame (``e1``, ``e2``), ``(q, 2)``."""
-        _, a1, a2 = chart_axes(self.chart_label[self.quad_chart])
-        return np.stack([a1, a2], axis=1)
+        Parameters
+        ----------
+        quad_ids : numpy.ndarray, (k,) int64
+        uv : numpy.ndarray, (k, 2) float64
+            Tile coordinates in ``[0, 1]`` (clamped).
+
+        Returns
+        -------
+        face : numpy.ndarray, (k,) int64
+            Faces of :attr:`F`.
+        bary : numpy.ndarray, (k, 3) float64
+        """
+        r = self.res
+        x = np.clip(uv, 0.0, 1.0) * r
+        cell = np.minimum(np.floor(x).astype(np.int64), r - 1)
+        s, t = (x - cell).T
+        upper = t > s
+        face = quad_ids * (2 * r * r) + cell[:, 0] * r + cell[:, 1] + upper * (r * r)
+        bary = np.where(upper[:, None], np.stack([1.0 - t, s, t - s], axis=1),
+                        np.stack([1.0 - s, s - t, t], axis=1))
+        return face, bary
 
 
 def validate_input(V, F, *, name: str = "mesh"):
-    """Check that ``(V, F)`` can be parameterized; return the arrays.
+    """Check that ``(V, F)`` can be parameterized; return the arrays and the report.
 
     Raises
     ------
@@ -166,198 +191,7 @@ def validate_input(V, F, *, name: str = "mesh"):
         raise InputError(f"{name} cannot get a polycube: " + ", ".join(problems)
                          + "; run 'geotex repair' first (and split it into parts if it has "
                            "several components)")
-    return V, F
-
-
-def polycube(V, F, *, tile_size: float, smoothness: float = 1.0, min_chart_area=None,
-             max_attempts: int = 30, max_shift: float = 1.0, check_input: bool = True,
-             reference=None,
-             progress=None) -> PolyCube:
-    """Compute a polycube parameterization whose chart planes lie on a grid.
-
-    Parameters
-    ----------
-    V : array_like, (n, 3) float64
-    F : array_like, (m, 3) int64
-        A closed, edge-manifold, outward-oriented, single-component mesh
-        without self-intersections.
-    tile_size : float
-        Grid spacing: chart planes and polycube corners are multiples of it.
-    smoothness : float, optional
-        Weight of the boundary-length term of the label smoothing.
-    min_chart_area : float, optional
-        Smaller charts are merged into a neighbour (default ``0.3 tile_size**2``).
-    max_attempts : int, optional
-        Relabelling rounds allowed when the embedding folds.
-    max_shift : float, optional
-        Largest move of a chart plane from the chart's mean coordinate, in
-        tiles (larger means the tile size is too large for that part).
-    reference : array_like, (n, 3) float64, optional
-        Positions (same connectivity) from which labels, chart planes and the
-        shape of chart interiors are taken, e.g. a smoothed or pre-deformed
-        copy of ``V``; default ``V``.
-    check_input : bool, optional
-        Run the input check (skip only when the caller already did).
-    progress : callable, optional
-        Called with each stage of ``POLYCUBE_STAGES``.
-
-    Returns
-    -------
-    PolyCube
-
-    Raises
-    ------
-    InputError
-        On a bad mesh (see :func:`validate_input`) or a bad ``tile_size``.
-    GeotexError
-        When no valid polycube is found: the message says why (tile size too
-        large for a part, a chart that keeps folding, ...).
-
-    Examples
-    --------
-    >>> from geotex.mesh.primitives import box
-    >>> pc = polycube(*box(divisions=2), tile_size=0.5)
-    >>> pc.n_quads
-    24
-    """
-    report(progress, "check")
-    if check_input:
-        V, F = validate_input(V, F)
-    else:
-        V, F = as_mesh_arrays(V, F, allow_empty=False)
-    ts = _tile_size(tile_size, V)
-    if min_chart_area is None:
-        min_chart_area = 0.3 * ts * ts
-    report(progress, "labels")
-    Vd = V if reference is None else as_vertices(reference, name="reference")
-    if Vd.shape != V.shape:
-        raise InputError(f"reference must have the shape of V {V.shape}, got {Vd.shape}")
-    W = np.hstack([V, Vd])  # split together: input and reference positions
-    g = face_graph(Vd, F)
-    labels = smooth_labels(g, initial_labels(g.normals), smoothness=smoothness)
-    labels = fix_labels(Vd, F, g, labels, min_chart_area=min_chart_area)
-    last_error = shift_error = None
-    seen = set()
-    refine_left = 4
-    for attempt in range(1, max_attempts + 1):
-        if "layout" not in seen:
-            seen.add("layout")
-            report(progress, "layout")
-        V, Vd = W[:, :3], W[:, 3:]
-        try:
-            layout = chart_layout(Vd, F, g, labels)
-            flat, new = flat_border_faces(F, labels, layout)
-            if flat.size:
-                chords, rest = flat_face_chords(F, labels, layout.vertex_chart, layout.chart,
-                                                g.neighbors, flat)
-                last_error = GeotexError(f"{flat.size} faces lie flat along a polycube edge")
-                if rest.size:
-                    W, F, labels = split_faces(W, F, labels, rest)
-                if chords.size:
-                    W, F, labels = split_edges(W, F, labels, chords)
-                g = face_graph(W[:, 3:], F)
-                continue
-            chords = border_chords(g.edges, g.edge_faces, layout.chart, labels,
-                                   layout.vertex_chart)
-            if chords.size:
-                last_error = GeotexError(f"{chords.shape[0]} edges cut across polycube edges")
-                W, F, labels = split_edges(W, F, labels, chords)
-                g = face_graph(W[:, 3:], F)
-                continue
-            planes = solve_planes(layout, ts, max_shift=max_shift)
-            straight = _collinear_faces(F, labels, layout, planes)
-            if straight.size:
-                last_error = GeotexError(f"{straight.size} faces lie on one polycube line")
-                W, F, labels = split_faces(W, F, labels, straight)
-                g = face_graph(W[:, 3:], F)
-                continue
-        except LayoutError as exc:
-            last_error = exc
-            if str(exc).startswith("tile size too large"):
-                shift_error = exc
-            if exc.merge:
-                labels = merge_chart(g, labels, exc.faces)
-            else:
-                labels = flood_labels(g, labels, exc.faces)
-            labels = fix_labels(Vd, F, g, labels, min_chart_area=min_chart_area)
-            continue
-        if "embed" not in seen:
-            seen.add("embed")
-            report(progress, "embed")
-        bad = None
-        try:
-            P, bad = _best_embedding(V, Vd, F, g, layout, planes, labels, ts)
-        except GeotexError as exc:
-            last_error, bad = exc, None
-        else:
-            if bad.size:
-                last_error = GeotexError(f"{bad.size} faces fold in the polycube map")
-            else:
-                pairs = self_intersecting_pairs(P, F, max_pairs=64)
-                bad = np.unique(pairs.ravel())
-                if bad.size:
-                    last_error = GeotexError(f"the polycube intersects itself "
-                                             f"({pairs.shape[0]}+ face pairs)")
-        if bad is not None and bad.size == 0:
-            return _finish(V, F, ts, labels, layout, planes, P, attempt, progress)
-        if bad is not None and 0 < bad.size <= max(64, F.shape[0] // 100) and refine_left > 0:
-            # few folds: refine them (more room for the untangling) before relabelling
-            refine_left -= 1
-            ring = np.unique(np.concatenate([bad, g.neighbors[bad].ravel()]))
-            W, F, labels = split_faces(W, F, labels, ring)
-            g = face_graph(W[:, 3:], F)
-            continue
-        labels = fix_labels(Vd, F, g, labels, min_chart_area=min_chart_area,
-                            extra_bad_faces=bad if bad is not None else None)
-    if shift_error is not None:
-        raise GeotexError(f"{shift_error} (no valid polycube found after {max_attempts} "
-                          f"labelling rounds; last problem: {last_error})")
-    raise GeotexError(f"no valid polycube found after {max_attempts} labelling rounds: "
-                      f"{last_error}; try another tile size or a smoother, simpler mesh")
-
-
-def _collinear_faces(F, labels, layout, planes) -> np.ndarray:
-    """Faces whose corners all have one equal fixed coordinate off the face's axis."""
-    vc = layout.vertex_chart[F]  # (m, 3, 3)
-    fixed = (vc >= 0).all(axis=1)  # (m, 3 axes)
-    val = np.where(vc >= 0, planes[np.maximum(vc, 0)], 0)
-    same = fixed & (val[:, 0] == val[:, 1]) & (val[:, 0] == val[:, 2])
-    same[np.arange(F.shape[0]), labels // 2] = False
-    return np.flatnonzero(same.any(axis=1))
-
-
-def _best_embedding(V, Vd, F, g, layout, planes, labels, ts):
-    """Try the interior maps, then again with reflex-corner cuts; untangle the best."""
-    best = None
-    extra = None
-    variants = ((False, None), (True, None), (False, Vd / ts), (True, Vd / ts))
-    for stage in range(2):
-        for uniform, ref in variants:
-            try:
-                P = embed_polycube(V, F, g.edges, layout.vertex_chart, planes, uniform=uniform,
-                                   reference=ref, extra=extra)
-            except GeotexError:
-                if extra is None:
-                    raise
-                continue
-            bad = folded_faces(P, F, labels)
-            if bad.size == 0:
-                return P, bad
-            if best is None or bad.size < best[1].size:
-                best = (P, bad, extra)
-        if stage == 0:
-            extra = reflex_cuts(best[0], Vd, F, labels, layout.chart, layout.vertex_chart,
-                                g.neighbors, g.edges)
-            if np.isnan(extra).all():
-                break
-    P, bad, extra = best
-    if bad.size <= max(200, F.shape[0] // 20):
-        fixed = layout.vertex_chart >= 0
-        if extra is not None:
-            fixed = fixed | ~np.isnan(extra)
-        P = untangle(P, F, labels, fixed.sum(axis=1) == 1, sweeps=30, grow=1)
-        bad = folded_faces(P, F, labels)
-    return P, bad
+    return V, F, r
 
 
 def _tile_size(tile_size, V) -> float:
@@ -372,22 +206,165 @@ def _tile_size(tile_size, V) -> float:
         raise InputError(f"tile_size {ts:g} is too large for the mesh (largest extent "
                          f"{extent:.4g}): use at most {extent / 2:.4g}, so the polycube "
                          "is at least two tiles long")
+    if ts < extent / 400:
+        raise InputError(f"tile_size {ts:g} is too small for the mesh (largest extent "
+                         f"{extent:.4g}): use at least {extent / 400:.4g} (at most 400 "
+                         "tiles across)")
     return ts
 
 
-def _finish(V, F, ts, labels, layout, planes, P, attempt, progress) -> PolyCube:
-    report(progress, "quads")
-    qc, qij, corners = enumerate_quads(P, F, labels, layout.chart, layout.chart_label, planes)
-    qe, qf, eax, eq, es = quad_edges(corners)
+def _surface_topology(F: np.ndarray, n: int) -> tuple[int, int]:
+    """Euler characteristic and number of components of a closed surface."""
+    chi = n - edge_topology(F, n).edges.shape[0] + F.shape[0]
+    return int(chi), int(vertex_components(F, n)[0])
+
+
+def _candidates(V, F, *, cell, k, res, chi):
+    """Voxel polycubes in trial order (grid shifts x repair strategies), lazily."""
+    for shift in GRID_SHIFTS:
+        origin, shape = voxel_grid(V, cell=cell, shift=shift)
+        inside, winding = occupancy(V, F, cell=cell, origin=origin, shape=shape)
+        solid0, _ = largest_component(inside)
+        for strategy in ("flip", "fill"):
+            try:
+                solid, _ = manifold_solid(solid0, winding, strategy=strategy)
+            except GeotexError:
+                continue
+            solid, _ = largest_component(solid)
+            if not solid.any():
+                continue
+            corners, labels = boundary_quads(solid, tiles_per_cell=k)
+            P, Fq, grid = subdivided_quads(corners, labels, res=res)
+            topo = _surface_topology(Fq, P.shape[0])
+            yield {"origin": origin, "corners": corners, "labels": labels, "P": P,
+                   "F": Fq, "grid": grid, "chi": topo[0], "parts": topo[1],
+                   "ok": topo == (chi, 1),
+                   "info": {"cell": cell, "tiles_per_cell": k, "shift": list(shift),
+                            "strategy": strategy, "cells": int(solid.sum()),
+                            "changed": int(np.count_nonzero(solid != inside))}}
+
+
+def polycube(V, F, *, tile_size: float, tiles_per_cell: int = 1, res: int = 4,
+             iterations: int = 40, check_input: bool = True, progress=None) -> PolyCube:
+    """PolyCube parameterization of a closed mesh with tile-sized grid quads.
+
+    Parameters
+    ----------
+    V : array_like, (n, 3) float64
+    F : array_like, (m, 3) int64
+        Closed, manifold, outward oriented, one component, no self-intersections.
+    tile_size : float
+        Side of a tile (one polycube quad) in the units of ``V``.
+    tiles_per_cell : int, optional
+        Tiles along the side of a voxel: larger gives larger, flatter charts
+        but resolves less of the shape.
+    res : int, optional
+        Sub-grid cells per tile side (accuracy of the map).
+    iterations : int, optional
+        Fitting rounds.
+    check_input : bool, optional
+        Run the full input check (closed, manifold, no self-intersections).
+    progress : callable, optional
+        Called with each stage name of ``POLYCUBE_STAGES``.
+
+    Returns
+    -------
+    PolyCube
+
+    Raises
+    ------
+    InputError
+        Bad mesh (with a hint to run ``geotex repair``) or tile size.
+    GeotexError
+        The voxels cannot resolve the shape's topology at this tile size (the
+        message gives the genus found and suggests a smaller tile).
+
+    Examples
+    --------
+    >>> from geotex.mesh.primitives import icosphere
+    >>> V, F = icosphere(3)
+    >>> pc = polycube(V, F, tile_size=0.5)
+    >>> pc.n_quads > 0, bool(pc.quad_folded.any())
+    (True, False)
+    """
+    report(progress, "check")
+    if check_input:
+        V, F, rep = validate_input(V, F)
+        chi = int(rep.euler_characteristic)
+    else:
+        V, F = as_mesh_arrays(V, F, allow_empty=False)
+        chi = _surface_topology(F, V.shape[0])[0]
+    ts = _tile_size(tile_size, V)
+    k = int(tiles_per_cell)
+    r = int(res)
+    if k < 1 or k > 8:
+        raise InputError(f"tiles_per_cell must be an integer in [1, 8], got {tiles_per_cell!r}")
+    if r < 1 or r > 16:
+        raise InputError(f"res must be an integer in [1, 16], got {res!r}")
+    # work in tile units relative to the lowest corner: the result does not
+    # depend on where the mesh sits or on its unit
+    lo = V.min(axis=0)
+    V = (V - lo) / ts
+    report(progress, "voxels")
+    projector = None
+    best, seen, tried = None, [], 0
+    for c in _candidates(V, F, cell=float(k), k=k, res=r, chi=chi):
+        seen.append((c["chi"], c["parts"]))
+        if not c["ok"]:
+            continue
+        if projector is None:
+            report(progress, "fit")
+            projector = SurfaceProjector(V, F)
+        tried += 1
+        fit = fitted_surface(c["origin"] + c["P"], c["F"], projector,
+                             iterations=iterations)
+        if best is None or fit.folded.sum() < best[1].folded.sum():
+            best = (c, fit)
+        if not fit.folded.any() or tried == 3:
+            break
+    if best is None:
+        genus = (2 - chi) // 2
+        what = ", ".join(f"genus {(2 - x) // 2}" + (f" in {p} parts" if p > 1 else "")
+                         for x, p in sorted(set(seen))) or "nothing"
+        raise GeotexError(
+            f"tile size {ts:g} is too large to resolve the shape: the mesh has genus {genus} "
+            f"but its voxel polycube has {what} (thin parts or narrow gaps are smaller than "
+            f"a tile); use a smaller tile size (e.g. {ts / 2:.4g})")
+    c, fit = best
     report(progress, "distortion")
-    T = face_coords_2d(P, F, labels) * ts
-    m = F.shape[0]
-    s = distortion_summary(V, F, T.reshape(-1, 2), uv_faces=np.arange(3 * m).reshape(m, 3))
-    dist = {"area_mean": s.area_normalized.mean, "area_p95": s.area_normalized.p95,
+    corners, labels, Fq = c["corners"], c["labels"], c["F"]
+    qe, qf, eax, eq, es = quad_edges(corners)
+    face_quad = np.arange(Fq.shape[0]) // (2 * r * r)
+    folded_quads = np.zeros(labels.size, dtype=bool)
+    folded_quads[face_quad[fit.folded]] = True
+    return PolyCube(tile_size=ts, res=r, origin=lo + c["origin"] * ts, P=c["P"],
+                    Y=lo + fit.Y * ts, F=Fq,
+                    quad_grid=c["grid"], quad_label=labels, quad_corners=corners,
+                    quad_edge=qe, quad_edge_forward=qf, edge_axis=eax, edge_quads=eq,
+                    edge_sides=es, quad_folded=folded_quads,
+                    distortion=_distortion(c["P"], fit.Y, Fq, labels, face_quad, fit),
+                    coverage=_coverage(V, F, fit.Y, Fq),
+                    voxels=dict(c["info"], cell=k * ts, candidates=len(seen), fitted=tried))
+
+
+def _distortion(P, Y, F, labels, face_quad, fit) -> dict:
+    """Distortion of the map base -> polycube (each face in its quad's plane)."""
+    _, a1, a2 = chart_axes(labels[face_quad])
+    X = P[F]                                     # (m, 3, 3)
+    rows = np.arange(F.shape[0])[:, None]
+    uv = np.stack([X[rows, np.arange(3)[None], a1[:, None]],
+                   X[rows, np.arange(3)[None], a2[:, None]]], axis=-1).reshape(-1, 2)
+    s = distortion_summary(Y, F, uv, uv_faces=np.arange(3 * F.shape[0]).reshape(-1, 3))
+    return {"area_mean": s.area_normalized.mean, "area_p95": s.area_normalized.p95,
             "angle_mean": s.angle.mean, "angle_p95": s.angle.p95,
-            "area_ratio": s.area_ratio, "flipped": s.n_flipped}
-    return PolyCube(tile_size=ts, V=V, F=F, labels=labels, chart=layout.chart,
-                    chart_label=layout.chart_label, planes=planes, P=P, quad_chart=qc,
-                    quad_ij=qij, quad_corners=corners, quad_edge=qe, quad_edge_forward=qf,
-                    edge_axis=eax, edge_quads=eq, edge_sides=es, distortion=dist,
-                    attempts=attempt)
+            "area_ratio": s.area_ratio, "folded_faces": int(fit.folded.sum()),
+            "folded_before_repair": int(fit.repaired), "collapsed": s.n_collapsed}
+
+
+def _coverage(V, F, Y, Fq) -> dict:
+    """Distance from the base to the fitted surface, in tiles (area-weighted)."""
+    d = np.linalg.norm(SurfaceProjector(Y, Fq).closest(V[F].mean(axis=1))[0]
+                       - V[F].mean(axis=1), axis=1)
+    a = face_areas(V, F)
+    return {"mean": float(np.average(d, weights=a)), "max": float(d.max()),
+            "within_quarter_tile": float(a[d <= 0.25].sum() / a.sum())}

@@ -1,0 +1,233 @@
+"""Fit the polycube surface onto the base mesh: the map from tiles to the base.
+
+The triangle sub-grid of the polycube (:mod:`~geotex.param.polycube_surface`)
+starts at the voxel surface, which lies within about a cell of the base
+surface. It is moved onto the base by alternating
+
+1. projection of every vertex onto the base, restricted to base faces that
+   face the same way as the vertex's *reference normal* (the voxel surface's
+   vertex normals, smoothed, blended with the current normals), so the two
+   sides of a thin part never collapse onto one side; and
+2. tangential relaxation: every vertex moves toward the mean of its
+   neighbours within the base's tangent plane, which spreads the polycube's
+   unavoidable stretch evenly instead of leaving it at the voxel steps
+   (vertices whose polycube position already lies on the base, and that are
+   a few rings away from any that does not, stay where they are).
+
+Faces whose normal ends up opposite to the base normal below them are
+*folded*; a few local rounds of plain smoothing and projection around them
+untangle most folds. What remains is reported, never hidden.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.spatial import cKDTree
+
+from geotex.mesh.geometry import face_cross, face_normals
+from geotex.mesh.topology import neighbour_mean
+
+__all__ = ["closest_points_on_triangles", "SurfaceProjector", "SurfaceFit", "fitted_surface"]
+
+
+def closest_points_on_triangles(X: np.ndarray, A: np.ndarray, B: np.ndarray, C: np.ndarray
+                                ) -> np.ndarray:
+    """Closest point of triangle ``(A_i, B_i, C_i)`` to ``X_i``, all ``(k, 3)``.
+
+    Vectorized region test (vertex, edge or interior region of the triangle).
+    """
+    ab, ac = B - A, C - A
+    ap, bp, cp = X - A, X - B, X - C
+    d1, d2 = np.einsum("ij,ij->i", ab, ap), np.einsum("ij,ij->i", ac, ap)
+    d3, d4 = np.einsum("ij,ij->i", ab, bp), np.einsum("ij,ij->i", ac, bp)
+    d5, d6 = np.einsum("ij,ij->i", ab, cp), np.einsum("ij,ij->i", ac, cp)
+    va, vb, vc = d3 * d6 - d5 * d4, d5 * d2 - d1 * d6, d1 * d4 - d3 * d2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        den = va + vb + vc
+        out = A + (vb / den)[:, None] * ab + (vc / den)[:, None] * ac          # interior
+        t_bc = (d4 - d3) / ((d4 - d3) + (d5 - d6))
+        t_ac = d2 / (d2 - d6)
+        t_ab = d1 / (d1 - d3)
+        cases = [  # Voronoi regions; applied in reverse priority, so the first listed wins
+            ((va <= 0) & (d4 - d3 >= 0) & (d5 - d6 >= 0), B + t_bc[:, None] * (C - B)),
+            ((vb <= 0) & (d2 >= 0) & (d6 <= 0), A + t_ac[:, None] * ac),
+            ((d6 >= 0) & (d5 <= d6), C),
+            ((vc <= 0) & (d1 >= 0) & (d3 <= 0), A + t_ab[:, None] * ab),
+            ((d3 >= 0) & (d4 <= d3), B),
+            ((d1 <= 0) & (d2 <= 0), A),
+        ]
+        for mask, value in cases:
+            out[mask] = value[mask]
+    bad = ~np.isfinite(out).all(axis=1)          # degenerate triangles: nearest corner
+    if bad.any():
+        corners = np.stack([A[bad], B[bad], C[bad]], axis=1)
+        j = np.argmin(((corners - X[bad, None, :]) ** 2).sum(axis=2), axis=1)
+        out[bad] = corners[np.arange(j.size), j]
+    return out
+
+
+class SurfaceProjector:
+    """Closest points on a fixed triangle mesh.
+
+    Parameters
+    ----------
+    V : numpy.ndarray, (n, 3) float64
+    F : numpy.ndarray, (m, 3) int64
+    """
+
+    def __init__(self, V: np.ndarray, F: np.ndarray):
+        import igl
+
+        self.V = np.ascontiguousarray(V, dtype=np.float64)
+        self.F = np.ascontiguousarray(F, dtype=np.int64)
+        self.normals = face_normals(self.V, self.F)
+        self._tree = igl.AABB()
+        self._tree.init(self.V, self.F)
+        self._centroids = cKDTree(self.V[self.F].mean(axis=1))
+
+    def closest(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Closest points ``(k, 3)`` and their faces ``(k,)``."""
+        _, face, C = self._tree.squared_distance(self.V, self.F, np.ascontiguousarray(X))
+        return np.asarray(C, dtype=np.float64), np.asarray(face, dtype=np.int64)
+
+    def project(self, X: np.ndarray, N: np.ndarray, *, min_cos: float = 0.0,
+                candidates: int = 32) -> tuple[np.ndarray, np.ndarray]:
+        """Closest points on faces whose normal makes ``cos > min_cos`` with ``N``.
+
+        Points whose unrestricted closest face faces the wrong way look among
+        the ``candidates`` faces with the nearest centroids for the closest
+        compatible one; if there is none, the unrestricted point is kept.
+
+        Returns
+        -------
+        points : numpy.ndarray, (k, 3) float64
+        faces : numpy.ndarray, (k,) int64
+        """
+        C, face = self.closest(X)
+        wrong = np.flatnonzero(np.einsum("ij,ij->i", self.normals[face], N) <= min_cos)
+        if wrong.size == 0:
+            return C, face
+        k = min(candidates, self.F.shape[0])
+        _, cand = self._centroids.query(X[wrong], k=k)
+        cand = np.asarray(cand, dtype=np.int64).reshape(wrong.size, k)
+        ok = np.einsum("ijk,ik->ij", self.normals[cand], N[wrong]) > min_cos
+        flat = cand.ravel()
+        Xr = np.repeat(X[wrong], k, axis=0)
+        T = self.V[self.F[flat]]
+        Cc = closest_points_on_triangles(Xr, T[:, 0], T[:, 1], T[:, 2]).reshape(wrong.size, k, 3)
+        d2 = ((Cc - X[wrong, None, :]) ** 2).sum(axis=2)
+        d2[~ok] = np.inf
+        j = np.argmin(d2, axis=1)
+        rows = np.arange(wrong.size)
+        found = np.isfinite(d2[rows, j])
+        C[wrong[found]] = Cc[rows[found], j[found]]
+        face[wrong[found]] = cand[rows[found], j[found]]
+        return C, face
+
+
+@dataclass(frozen=True)
+class SurfaceFit:
+    """The polycube sub-grid moved onto the base.
+
+    Attributes
+    ----------
+    Y : numpy.ndarray, (n, 3) float64
+        Fitted vertex positions (on the base surface).
+    base_face : numpy.ndarray, (n,) int64
+        Base face under every vertex.
+    folded : numpy.ndarray, (m,) bool
+        Faces whose orientation disagrees with the base below them.
+    repaired : int
+        Folded faces before the local repair rounds.
+    """
+
+    Y: np.ndarray
+    base_face: np.ndarray
+    folded: np.ndarray
+    repaired: int
+
+
+def _unit(X: np.ndarray) -> np.ndarray:
+    n = np.linalg.norm(X, axis=1, keepdims=True)
+    return np.divide(X, n, out=np.zeros_like(X), where=n > 0)
+
+
+def folded_faces(Y: np.ndarray, F: np.ndarray, projector: SurfaceProjector) -> np.ndarray:
+    """Faces of ``(Y, F)`` facing away from the base face closest to their centroid."""
+    _, below = projector.closest(Y[F].mean(axis=1))
+    return np.einsum("ij,ij->i", face_normals(Y, F), projector.normals[below]) <= 0
+
+
+def fitted_surface(P: np.ndarray, F: np.ndarray, projector: SurfaceProjector, *,
+                   iterations: int = 40, step: float = 0.8, reference_smoothing: int = 16,
+                   repair_rounds: int = 8) -> SurfaceFit:
+    """Move the closed surface ``(P, F)`` onto the base of ``projector``.
+
+    Parameters
+    ----------
+    P : numpy.ndarray, (n, 3) float64
+        Start positions in world units (the voxel surface).
+    F : numpy.ndarray, (m, 3) int64
+    projector : SurfaceProjector
+        The base mesh.
+    iterations : int
+        Projection + relaxation rounds.
+    step : float
+        Fraction of the tangential move toward the neighbour mean per round.
+    reference_smoothing : int
+        Smoothing steps of the start normals that give every vertex its side.
+    repair_rounds : int
+        Local untangling rounds around folded faces.
+
+    Returns
+    -------
+    SurfaceFit
+    """
+    n = P.shape[0]
+    M = neighbour_mean(F, n)
+    m = F.shape[0]
+    incidence = sp.csr_matrix((np.ones(3 * m), (F.ravel(), np.repeat(np.arange(m), 3))),
+                              shape=(n, m))
+
+    def normals(Y):  # area-weighted vertex normals (unit)
+        return _unit(incidence @ face_cross(Y, F))
+
+    ref = normals(P)
+    for _ in range(reference_smoothing):
+        ref = _unit(M @ ref)
+
+    def side(Y):
+        return _unit(ref + normals(Y))
+
+    Y, face = projector.project(P, ref)
+    # relax only where the polycube does not already lie on the base (a grid-aligned
+    # box stays exact), and a few rings around such places
+    spacing = np.median(np.linalg.norm(P[F[:, 0]] - P[F[:, 1]], axis=1))
+    weight = np.clip(np.linalg.norm(Y - P, axis=1) / (0.1 * spacing), 0.0, 1.0)
+    for _ in range(4):
+        weight = np.maximum(weight, M @ weight)
+    for _ in range(iterations):
+        C, face = projector.project(Y, side(Y))
+        Nb = projector.normals[face]
+        d = M @ Y - Y
+        d -= np.einsum("ij,ij->i", d, Nb)[:, None] * Nb
+        Y = C + (step * weight)[:, None] * d
+    Y, face = projector.project(Y, side(Y))
+    bad = folded_faces(Y, F, projector)
+    before = int(bad.sum())
+    ring = (M != 0).astype(np.float64)
+    for _ in range(repair_rounds):
+        if not bad.any():
+            break
+        sel = np.zeros(n, dtype=bool)
+        sel[F[bad].ravel()] = True
+        for _ in range(2):
+            sel = (ring @ sel.astype(np.float64)) > 0
+        idx = np.flatnonzero(sel)
+        for _ in range(10):
+            Y[idx], face[idx] = projector.project((M @ Y)[idx], side(Y)[idx])
+        bad = folded_faces(Y, F, projector)
+    return SurfaceFit(Y=Y, base_face=face, folded=bad, repaired=before)
