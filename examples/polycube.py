@@ -1,10 +1,9 @@
-"""PolyCube shells of the catalog: Spot and the torus (genus 1).
+"""PolyCube shells of the catalog: Spot, Bob (genus 1), Blub and a torus.
 
-For each base mesh of the shell catalog: the base coloured by polycube chart
-label (+-X, +-Y, +-Z), the polycube itself, and the base with the polycube's
-quad grid mapped back onto it (every quad edge located in the polycube and
-carried to the base by barycentric coordinates). Each quad receives one Wang
-tile when a tile set is mapped onto the shell.
+For each shell of the catalog, one row: the voxel polycube coloured by quad
+direction (+-X, +-Y, +-Z), the same quads fitted onto the base (the map that
+carries tiles to the surface), and the base with the tile grid drawn on it.
+Each grid quad receives one Wang tile when a tile set is mapped onto the shell.
 
 Run:  python examples/polycube.py [OUT_DIR]     (default docs/gallery)
 """
@@ -14,39 +13,36 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from PIL import Image
+
+from geotex.io.atomic import atomic_output
 from geotex.render import render_panels
 from geotex.shells import load_named
 from geotex.shells.picture import shell_panels
 
+SHELLS = {"spot": "y", "bob": "z", "blub": "y", "torus": "z"}   # name -> up axis
+
 
 def main(out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
-    panels = []
-    for name in ("spot", "torus"):
-        shell = load_named(name)
-        panels += shell_panels(shell)
-        d = shell.distortion
-        print(f"{name}: {shell.n_quads} quads of {shell.tile_size:g}, "
-              f"{shell.polycube.chart_label.size} charts, max height {shell.max_height:.3g}, "
-              f"distortion area {d['area_mean']:.3f} angle {d['angle_mean']:.3f}")
-    # two rows would need a grid renderer; render one picture per row and stack them
-    from PIL import Image
-
     rows = []
-    for i, name in enumerate(("spot", "torus")):
+    for name, up in SHELLS.items():
+        shell = load_named(name)
+        d, c = shell.distortion, shell.polycube.coverage
+        print(f"{name}: {shell.n_quads} quads of {shell.tile_size:g}, "
+              f"{int(shell.polycube.quad_folded.sum())} folded, max height "
+              f"{shell.max_height:.3g}, distortion area {d['area_mean']:.3f} "
+              f"angle {d['angle_mean']:.3f}, base within 1/4 tile {c['within_quarter_tile']:.3f}")
         p = out / f".polycube_{name}.png"
-        render_panels(panels[3 * i:3 * i + 3], p, size=(600, 560), up="y" if name == "spot"
-                      else "z")
-        rows.append(Image.open(p).convert("RGB"))
+        render_panels(shell_panels(shell), p, size=(560, 520), up=up)
+        with Image.open(p) as im:
+            rows.append(im.convert("RGB"))
         p.unlink()
-    w = max(r.width for r in rows)
-    sheet = Image.new("RGB", (w, sum(r.height for r in rows)), "white")
+    sheet = Image.new("RGB", (max(r.width for r in rows), sum(r.height for r in rows)), "white")
     y = 0
     for r in rows:
         sheet.paste(r, (0, y))
         y += r.height
-    from geotex.io.atomic import atomic_output
-
     with atomic_output(out / "polycube.png", "wb") as fh:
         sheet.save(fh, format="PNG")
     print(f"wrote {out / 'polycube.png'}")

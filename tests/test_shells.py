@@ -33,8 +33,10 @@ def test_box_shell_corners_exact():
     q = np.repeat(np.arange(s.n_quads), 4)
     uv = np.tile([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]], (s.n_quads, 1))
     x, d = quad_points_to_base(s, q, uv)
-    assert np.allclose(x, s.polycube.quad_corners.reshape(-1, 3) * 0.25, atol=1e-12)
+    corners = s.polycube.origin + s.polycube.quad_corners.reshape(-1, 3) * 0.25
+    assert np.allclose(x, corners, atol=1e-12)
     assert np.allclose(np.linalg.norm(d, axis=1), 1.0)
+    assert np.array_equal(s.base_vertices, V) and np.array_equal(s.base_faces, F)
 
 
 def test_locate_matches_polycube_point(torus_shell):
@@ -47,7 +49,7 @@ def test_locate_matches_polycube_point(torus_shell):
     uv[:50] = 0.0  # quad corners
     f, b = locate_on_quads(s, q, uv)
     assert np.all(b >= 0) and np.allclose(b.sum(axis=1), 1.0)
-    assert np.all(pc.chart[f] == pc.quad_chart[q])
+    assert np.all(pc.face_quad[f] == q)
     p = np.einsum("ki,kij->kj", b, pc.P[pc.F[f]])
     c = pc.quad_corners[q].astype(float)
     expected = c[:, 0] + uv[:, :1] * (c[:, 1] - c[:, 0]) + uv[:, 1:] * (c[:, 3] - c[:, 0])
@@ -72,10 +74,11 @@ def test_shared_edges_agree(torus_shell):
 def test_max_height_is_safe(torus_shell):
     s = torus_shell
     assert 0 < s.max_height
-    Vo = s.V + s.max_height * s.D
-    n = s.V.shape[0]
-    Vc = np.vstack([s.V, Vo])
-    Fc = np.vstack([s.F, s.F[:, ::-1] + n])
+    Y, F = s.polycube.Y, s.polycube.F
+    Vo = Y + s.max_height * s.D
+    n = Y.shape[0]
+    Vc = np.vstack([Y, Vo])
+    Fc = np.vstack([F, F[:, ::-1] + n])
     assert self_intersecting_pairs(Vc, Fc).shape[0] == 0
     pts = quad_points_to_shell(s, np.array([0, 1]), [[0.5, 0.5, 1.0], [0.2, 0.3, 0.0]],
                                height=s.max_height)
@@ -90,8 +93,12 @@ def test_file_round_trip_and_reproducible(tmp_path, torus_shell):
     a = tmp_path / "a.npz"
     save_shell(a, torus_shell)
     s2 = load_shell(a)
-    for k in ("V", "F", "P", "labels", "quad_corners", "quad_edge", "edge_axis"):
+    for k in ("Y", "F", "P", "quad_grid", "quad_label", "quad_corners", "quad_edge",
+              "quad_edge_forward", "edge_axis", "edge_quads", "edge_sides", "quad_folded",
+              "origin"):
         assert np.array_equal(getattr(s2.polycube, k), getattr(torus_shell.polycube, k))
+    assert np.array_equal(s2.base_vertices, torus_shell.base_vertices)
+    assert s2.polycube.distortion == torus_shell.polycube.distortion
     assert np.array_equal(s2.D, torus_shell.D) and s2.max_height == torus_shell.max_height
     # same input -> byte-identical file
     V, F = torus(n_major=48, n_minor=24)
@@ -115,6 +122,24 @@ def test_corrupted_and_wrong_files(tmp_path, torus_shell):
     np.savez(other, x=np.zeros(3))
     with pytest.raises(MeshFileError, match="not a geotex shell"):
         load_shell(other)
+    # a shell whose quads no longer form a closed surface
+    import io
+    import zipfile
+    buf = io.BytesIO()
+    with zipfile.ZipFile(good) as zin, zipfile.ZipFile(buf, "w") as zout:
+        for item in zin.infolist():
+            data = zin.read(item.filename)
+            if item.filename == "quad_label.npy":
+                arr = np.load(io.BytesIO(data))
+                arr = arr[:-3]
+                out = io.BytesIO()
+                np.save(out, arr)
+                data = out.getvalue()
+            zout.writestr(item, data)
+    broken = tmp_path / "broken.npz"
+    broken.write_bytes(buf.getvalue())
+    with pytest.raises(MeshFileError, match="inconsistent shell file"):
+        load_shell(broken)
     with pytest.raises(MissingFileError):
         load_shell(tmp_path / "missing.npz")
     with pytest.raises(InputError, match=".npz"):
@@ -145,6 +170,7 @@ def test_cli_build_list_and_errors(tmp_path, capsys):
     assert main(["shell", "build", str(src), "-o", str(out), "--tile-size", "0.25"]) == 0
     text = capsys.readouterr().out
     assert "96 quads" in text and "max height" in text and out.is_file()
+    assert "distortion" in text
     assert load_shell(out).n_quads == 96
     assert main(["shell", "list"]) == 0
     assert "torus" in capsys.readouterr().out

@@ -10,7 +10,8 @@ from geotex.errors import InputError
 __all__ = ["sample_path", "SAMPLES"]
 
 #: Sample name -> file name inside this package.
-SAMPLES = {"spot": "spot_lowres.obj", "teapot-open": "teapot_open.stl"}
+SAMPLES = {"spot": "spot_lowres.obj", "bob": "bob.ply", "blub": "blub_lowres.obj",
+           "teapot-open": "teapot_open.stl"}
 
 
 def sample_path(name: str) -> Path:

@@ -1,4 +1,4 @@
-"""Shells: base meshes with their polycube parameterization, ready to receive tiles.
+"""Shells: base solids with their polycube map, ready to receive tiles.
 
 Build one with :func:`build_shell`, save and load with :func:`save_shell` /
 :func:`load_shell`, use the catalog shipped with geotex (:func:`list_shells`,

@@ -1,11 +1,16 @@
-"""Shells: a base mesh, its polycube, offset directions and a safe height.
+"""Shells: a base solid, its polycube map, offset directions and a safe height.
 
-The shell over a base mesh is ``{x + w h d(x) : x on the base, 0 <= w <= 1}``
-with ``d`` the offset direction field (smoothed area-weighted vertex normals,
-unit, interpolated linearly inside faces and renormalised) and ``h`` at most
-``max_height``: the largest height for which the offset surface ``V + h D``
-neither flips a face nor intersects itself or the base (bisection on the
-exact self-intersection test of :mod:`geotex.check.intersections`).
+The shell over a base is ``{x + w d(x) : x on the fitted polycube surface,
+0 <= w <= max_height}``: the polycube's sub-grid fitted onto the base
+(:attr:`geotex.param.polycube.PolyCube.Y`) carries a unit offset direction
+``d`` per vertex (smoothed area-weighted normals, interpolated linearly in
+faces and renormalised). ``max_height`` is the largest height for which the
+offset surface ``Y + h D`` neither flips a face nor intersects itself or the
+fitted surface (bisection on the exact self-intersection test of
+:mod:`geotex.check.intersections`).
+
+The base mesh itself (the solid the texture elements are united with) is
+kept beside the map, unchanged.
 """
 
 from __future__ import annotations
@@ -13,13 +18,13 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.sparse as sp
 
 from geotex.check.intersections import self_intersecting_pairs
 from geotex.errors import InputError
-from geotex.mesh.geometry import face_cross
+from geotex.mesh.arrays import as_mesh_arrays
+from geotex.mesh.geometry import face_cross, vertex_normals
+from geotex.mesh.topology import neighbour_mean
 from geotex.param.polycube import POLYCUBE_STAGES, PolyCube, polycube
-from geotex.param.polycube_quads import QuadLocator
 from geotex.progress import report
 
 __all__ = ["Shell", "build_shell", "offset_directions", "max_offset_height", "SHELL_STAGES"]
@@ -27,48 +32,37 @@ __all__ = ["Shell", "build_shell", "offset_directions", "max_offset_height", "SH
 SHELL_STAGES = POLYCUBE_STAGES + ("offsets", "height")
 
 
-@dataclass
+@dataclass(frozen=True)
 class Shell:
-    """A base mesh prepared to receive tiles.
+    """A base solid prepared to receive tiles.
 
     Attributes
     ----------
     name : str
     polycube : PolyCube
-        Its ``V``, ``F`` are the base mesh of the shell.
+        The map from tile quads onto the base (its ``Y``, ``F`` are the fitted
+        surface the tiles are laid on).
     D : (n, 3) float64
-        Unit offset direction per base vertex.
+        Unit offset direction per fitted-surface vertex.
     max_height : float
         Largest safe texture height (world units).
+    base_vertices : (p, 3) float64
+    base_faces : (r, 3) int64
+        The base solid, as given.
     source : str
         Where the base came from (file name), may be empty.
     recipe : dict
         How the shell was built (for rebuilding it).
-    locator : QuadLocator
-        Point location index (rebuilt from the data, never stored).
     """
 
     name: str
     polycube: PolyCube
     D: np.ndarray
     max_height: float
+    base_vertices: np.ndarray
+    base_faces: np.ndarray
     source: str = ""
     recipe: dict = field(default_factory=dict)
-    locator: QuadLocator | None = None
-
-    def __post_init__(self):
-        if self.locator is None:
-            pc = self.polycube
-            self.locator = QuadLocator.build(pc.P, pc.F, pc.labels, pc.chart, pc.quad_chart,
-                                             pc.quad_ij)
-
-    @property
-    def V(self) -> np.ndarray:
-        return self.polycube.V
-
-    @property
-    def F(self) -> np.ndarray:
-        return self.polycube.F
 
     @property
     def tile_size(self) -> float:
@@ -89,27 +83,17 @@ def offset_directions(V: np.ndarray, F: np.ndarray, *, smoothing: int = 3) -> np
     Each smoothing step replaces a normal by the mean of itself and the mean
     of its neighbours' normals, then renormalises.
     """
-    n = V.shape[0]
-    C = face_cross(V, F)  # area-weighted (twice the area) face normals
-    N = np.zeros((n, 3))
-    for k in range(3):
-        np.add.at(N, F[:, k], C)
-    N /= np.maximum(np.linalg.norm(N, axis=1, keepdims=True), 1e-300)
-    i = np.concatenate([F[:, 0], F[:, 1], F[:, 2]])
-    j = np.concatenate([F[:, 1], F[:, 2], F[:, 0]])
-    A = sp.coo_matrix((np.ones(i.size), (i, j)), shape=(n, n)).tocsr()
-    A = ((A + A.T) > 0).astype(np.float64)
-    deg = np.asarray(A.sum(axis=1)).ravel()
+    N = vertex_normals(V, F)
+    M = neighbour_mean(F, V.shape[0])
     for _ in range(smoothing):
-        N = 0.5 * N + 0.5 * (A @ N) / deg[:, None]
+        N = 0.5 * N + 0.5 * (M @ N)
         N /= np.maximum(np.linalg.norm(N, axis=1, keepdims=True), 1e-300)
     return N
 
 
 def _offset_ok(V, F, D, h, base_normals) -> bool:
     Vo = V + h * D
-    C = face_cross(Vo, F)
-    if np.any(np.einsum("ij,ij->i", C, base_normals) <= 0):
+    if np.any(np.einsum("ij,ij->i", face_cross(Vo, F), base_normals) <= 0):
         return False
     n = V.shape[0]
     Vc = np.vstack([V, Vo])
@@ -117,18 +101,27 @@ def _offset_ok(V, F, D, h, base_normals) -> bool:
     return self_intersecting_pairs(Vc, Fc, max_pairs=1).shape[0] == 0
 
 
-def max_offset_height(V: np.ndarray, F: np.ndarray, D: np.ndarray, *, steps: int = 12
-                      ) -> float:
+def max_offset_height(V: np.ndarray, F: np.ndarray, D: np.ndarray, *, steps: int = 10,
+                      upper: float | None = None) -> float:
     """Largest ``h`` (bisection) with ``V + h D`` free of flips and intersections.
 
-    The upper bound is a quarter of the largest extent of the mesh (returned
-    as is when it passes); otherwise the interval ``[0, bound]`` is bisected
-    ``steps`` times and the largest height that passed is returned, so the
-    result is safe (it passed the test) and within ``bound / 2**steps`` of the
-    limit.
+    Parameters
+    ----------
+    V, F, D : numpy.ndarray
+        Surface and unit offset directions.
+    steps : int
+        Bisection steps.
+    upper : float, optional
+        Largest height of interest (default: a quarter of the largest extent);
+        returned as is when it passes.
+
+    Returns
+    -------
+    float
+        A height that passed the test, within ``upper / 2**steps`` of the limit.
     """
     base_normals = face_cross(V, F)
-    hi = 0.25 * float((V.max(axis=0) - V.min(axis=0)).max())
+    hi = float(upper) if upper is not None else 0.25 * float(np.ptp(V, axis=0).max())
     if _offset_ok(V, F, D, hi, base_normals):
         return hi
     lo = 0.0
@@ -169,14 +162,27 @@ def build_shell(V, F, *, tile_size: float, name: str = "shell", source: str = ""
     InputError
         Bad mesh or tile size.
     GeotexError
-        No valid polycube (see :func:`~geotex.param.polycube.polycube`).
+        The tile size cannot resolve the shape (see :func:`~geotex.param.polycube.polycube`).
     """
     if not isinstance(name, str) or not name:
         raise InputError("name must be a non-empty string")
+    V, F = as_mesh_arrays(V, F, allow_empty=False)
     pc = polycube(V, F, tile_size=tile_size, progress=progress, **polycube_options)
     report(progress, "offsets")
-    D = offset_directions(pc.V, pc.F)
-    report(progress, "height")
-    h = max_offset_height(pc.V, pc.F, D)
-    return Shell(name=name, polycube=pc, D=D, max_height=float(h), source=source,
+    # Smoothing the directions over about a tile lets the shell rise higher in
+    # concave creases; too much makes them lean, so a lighter smoothing is
+    # tried as well when the first one does not reach half a tile.
+    h, D = -1.0, None
+    for steps in (8 * pc.res, 2 * pc.res):
+        Dk = offset_directions(pc.Y, pc.F, smoothing=steps)
+        if D is None:
+            report(progress, "height")
+        # a texture taller than two tiles is never wanted: that bounds the search
+        hk = max_offset_height(pc.Y, pc.F, Dk, upper=2.0 * pc.tile_size)
+        if hk > h:
+            h, D = hk, Dk
+        if h >= 0.5 * pc.tile_size:
+            break
+    return Shell(name=name, polycube=pc, D=D, max_height=float(h),
+                 base_vertices=V, base_faces=F, source=source,
                  recipe=dict(recipe or {}))

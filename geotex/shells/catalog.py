@@ -122,11 +122,3 @@ def rebuild(name: str, path=None, *, progress=None):
     if path is not None:
         save_shell(path, shell)
     return shell
-
-
-if __name__ == "__main__":  # pragma: no cover - maintenance entry point
-    import sys
-
-    for shell_name in sys.argv[1:] or sorted(recipes()):
-        s = rebuild(shell_name, CATALOG_DIR / f"{shell_name}.npz")
-        print(f"{shell_name}: {s.n_quads} quads, max height {s.max_height:.4g}")

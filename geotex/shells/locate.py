@@ -1,11 +1,11 @@
-"""Map tile points on polycube quads to the base mesh and into the shell.
+"""Map tile points on polycube quads onto the base and into the shell.
 
 A tile point ``(u, v, w)`` on quad ``q`` (``u, v`` in ``[0, 1]``, see
-:mod:`geotex.param.polycube_quads` for the quad frame) lies at the polycube
-point ``corner0 + u e1 + v e2`` (tile units); the face of the polycube
-containing it and its barycentric coordinates give the base point
-``x = sum b_i V_i`` and the offset direction ``d = normalize(sum b_i D_i)``;
-the shell point is ``x + w * height * d``.
+:mod:`geotex.param.polycube_quads` for the quad frame) lies in a face of the
+quad's triangle sub-grid (:meth:`geotex.param.polycube.PolyCube.locate`); its
+barycentric coordinates there give the base point ``x = sum b_i Y_i`` on the
+fitted surface and the offset direction ``d = normalize(sum b_i D_i)``; the
+shell point is ``x + w * height * d``.
 """
 
 from __future__ import annotations
@@ -29,11 +29,11 @@ def _args(shell, quad_ids, uv):
         raise InputError(f"quad_ids must lie in [0, {shell.n_quads})")
     if not np.isfinite(UV).all():
         raise InputError("uv has non-finite values")
-    return q, np.clip(UV, 0.0, 1.0)
+    return q, UV
 
 
 def locate_on_quads(shell, quad_ids, uv) -> tuple[np.ndarray, np.ndarray]:
-    """Face of the base mesh and barycentric coordinates of quad points.
+    """Face of the fitted surface and barycentric coordinates of quad points.
 
     Parameters
     ----------
@@ -45,8 +45,9 @@ def locate_on_quads(shell, quad_ids, uv) -> tuple[np.ndarray, np.ndarray]:
     Returns
     -------
     face : (k,) int64
+        Faces of ``shell.polycube.F``.
     bary : (k, 3) float64
-        Non-negative, summing to 1, with respect to ``shell.F[face]``.
+        Non-negative, summing to 1.
 
     Raises
     ------
@@ -54,15 +55,23 @@ def locate_on_quads(shell, quad_ids, uv) -> tuple[np.ndarray, np.ndarray]:
         On malformed arguments or quad ids out of range.
     """
     q, UV = _args(shell, quad_ids, uv)
-    return shell.locator.locate(q, UV)
+    return shell.polycube.locate(q, UV)
+
+
+def interpolated(values: np.ndarray, F: np.ndarray, face: np.ndarray, bary: np.ndarray
+                 ) -> np.ndarray:
+    """``sum_i bary_i values[F[face, i]]``, ``(k, d)``."""
+    c = F[face]
+    return (bary[:, 0:1] * values[c[:, 0]] + bary[:, 1:2] * values[c[:, 1]]
+            + bary[:, 2:3] * values[c[:, 2]])
 
 
 def quad_points_to_base(shell, quad_ids, uv) -> tuple[np.ndarray, np.ndarray]:
     """Base points and unit offset directions of quad points, each ``(k, 3)``."""
     face, bary = locate_on_quads(shell, quad_ids, uv)
-    corners = shell.F[face]
-    x = np.einsum("ki,kij->kj", bary, shell.V[corners])
-    d = np.einsum("ki,kij->kj", bary, shell.D[corners])
+    pc = shell.polycube
+    x = interpolated(pc.Y, pc.F, face, bary)
+    d = interpolated(shell.D, pc.F, face, bary)
     d /= np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-300)
     return x, d
 

@@ -1,4 +1,4 @@
-"""Pictures of shells: chart labels, the polycube, and the quad grid on the base."""
+"""Pictures of shells: the polycube, its map onto the base, and the quad grid."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ __all__ = ["quad_grid_lines", "shell_panels"]
 
 
 def quad_grid_lines(shell, *, samples: int = 8, lift: float = 0.0):
-    """Polylines of every quad edge mapped onto the base mesh.
+    """Polylines of every quad edge mapped onto the base.
 
     Parameters
     ----------
@@ -43,20 +43,22 @@ def quad_grid_lines(shell, *, samples: int = 8, lift: float = 0.0):
 
 
 def shell_panels(shell, *, title: str | None = None) -> list:
-    """Three panels: base by chart label, the polycube, base with the quad grid."""
+    """Three panels: the polycube, the base coloured by quad direction, the quad grid."""
     from geotex.render import Panel
 
     pc = shell.polycube
     name = title or shell.name
-    diag = float(np.linalg.norm(np.ptp(pc.V, axis=0)))
+    labels = pc.quad_label[pc.face_quad]
+    diag = float(np.linalg.norm(np.ptp(pc.Y, axis=0)))
     pts, seg = quad_grid_lines(shell, lift=2e-3 * diag)
-    Vg = np.vstack([pc.V, pts])
-    n = pc.V.shape[0]
+    n = shell.base_vertices.shape[0]
+    Vg = np.vstack([shell.base_vertices, pts])
+    folded = int(pc.quad_folded.sum())
     return [
-        Panel(pc.V, pc.F, scalars=pc.labels, cmap="Set2",
-              title=f"{name}: {pc.chart_label.size} charts"),
-        Panel(pc.positions, pc.F, scalars=pc.labels, cmap="Set2",
-              title=f"polycube: {pc.n_quads} quads"),
-        Panel(Vg, pc.F, color="#d9c7a3", highlight={"quad edge segments": seg + n},
-              title=f"quad grid, max height {shell.max_height:.3g}"),
+        Panel(pc.positions, pc.F, scalars=labels, cmap="Set2",
+              title=f"{name}: polycube, {pc.n_quads} quads"),
+        Panel(pc.Y, pc.F, scalars=labels, cmap="Set2",
+              title=f"mapped onto the base" + (f", {folded} folded" if folded else "")),
+        Panel(Vg, shell.base_faces, color="#d9c7a3", highlight={"quad edge segments": seg + n},
+              title=f"tile grid, max height {shell.max_height:.3g}"),
     ]

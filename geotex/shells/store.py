@@ -2,8 +2,9 @@
 
 Written as a deflate-compressed zip of ``.npy`` members with a fixed member
 order and fixed timestamps, so the same shell always gives the same bytes.
-Base vertices, offset directions and ``P`` (tile units) stay float64; the
-quad data is integral (exact), indices are int32.
+Positions and offset directions stay float64; the quad data is integral
+(exact), indices are int32. What can be recomputed exactly (the triangle
+sub-grid and the quad edges) is not stored.
 """
 
 from __future__ import annotations
@@ -15,25 +16,31 @@ from pathlib import Path
 
 import numpy as np
 
-from geotex.errors import InputError, MeshFileError, MissingFileError
+from geotex.errors import GeotexError, InputError, MeshFileError, MissingFileError
 from geotex.param.polycube import PolyCube
+from geotex.param.polycube_quads import quad_edges
+from geotex.param.polycube_surface import subdivided_quads
 from geotex.shells.build import Shell
 
 __all__ = ["save_shell", "load_shell", "shell_metadata", "FORMAT"]
 
-FORMAT = "geotex-shell-1"
+FORMAT = "geotex-shell-2"
 
-_ARRAYS = {  # name: (attribute of PolyCube or Shell, dtype)
-    "V": ("V", np.float64), "F": ("F", np.int32), "D": ("D", np.float64),
-    "labels": ("labels", np.int8), "chart": ("chart", np.int32),
-    "chart_label": ("chart_label", np.int8), "planes": ("planes", np.int32),
-    "P": ("P", np.float64), "quad_chart": ("quad_chart", np.int32),
-    "quad_ij": ("quad_ij", np.int32), "quad_corners": ("quad_corners", np.int32),
-    "quad_edge": ("quad_edge", np.int32), "quad_edge_forward": ("quad_edge_forward", np.bool_),
-    "edge_axis": ("edge_axis", np.int8), "edge_quads": ("edge_quads", np.int32),
-    "edge_sides": ("edge_sides", np.int8),
+#: stored arrays: name -> dtype. The sub-grid (P, F, quad grid) and the quad edges
+#: are recomputed from the quad corners and labels when a shell is loaded.
+_ARRAYS = {
+    "origin": np.float64, "quad_corners": np.int32, "quad_label": np.int8, "Y": np.float64,
+    "D": np.float64, "quad_folded": np.bool_, "base_vertices": np.float64,
+    "base_faces": np.int32,
 }
 _DATE = (2020, 1, 1, 0, 0, 0)
+
+
+def _arrays_of(shell: Shell) -> dict:
+    pc = shell.polycube
+    return {"origin": pc.origin, "quad_corners": pc.quad_corners, "quad_label": pc.quad_label,
+            "Y": pc.Y, "D": shell.D, "quad_folded": pc.quad_folded,
+            "base_vertices": shell.base_vertices, "base_faces": shell.base_faces}
 
 
 def shell_metadata(shell: Shell) -> dict:
@@ -42,12 +49,15 @@ def shell_metadata(shell: Shell) -> dict:
 
     pc = shell.polycube
     return {
-        "format": FORMAT, "name": shell.name, "tile_size": pc.tile_size,
-        "vertices": int(pc.V.shape[0]), "faces": int(pc.F.shape[0]),
-        "charts": int(pc.chart_label.size), "quads": pc.n_quads,
-        "edges": int(pc.edge_axis.size), "max_height": shell.max_height,
+        "format": FORMAT, "name": shell.name, "tile_size": pc.tile_size, "res": pc.res,
+        "vertices": int(pc.Y.shape[0]), "faces": int(pc.F.shape[0]),
+        "base_vertices": int(shell.base_vertices.shape[0]),
+        "base_faces": int(shell.base_faces.shape[0]), "quads": pc.n_quads,
+        "folded_quads": int(pc.quad_folded.sum()), "edges": int(pc.edge_axis.size),
+        "max_height": shell.max_height,
         "distortion": {k: float(v) for k, v in pc.distortion.items()},
-        "attempts": pc.attempts, "source": shell.source, "geotex_version": __version__,
+        "coverage": {k: float(v) for k, v in pc.coverage.items()},
+        "voxels": pc.voxels, "source": shell.source, "geotex_version": __version__,
         "recipe": shell.recipe,
     }
 
@@ -67,13 +77,10 @@ def save_shell(path, shell: Shell) -> Path:
     path = Path(path)
     if path.suffix.lower() != ".npz":
         raise InputError(f"{path}: shell files are .npz; use a .npz file name")
-    pc = shell.polycube
     buf = io.BytesIO()
     with zipfile.ZipFile(buf, "w", compression=zipfile.ZIP_DEFLATED) as zf:
-        for key, (attr, dtype) in _ARRAYS.items():
-            src = shell if attr == "D" else pc
-            arr = np.ascontiguousarray(np.asarray(getattr(src, attr)).astype(dtype))
-            _member(zf, key, arr)
+        for key, arr in _arrays_of(shell).items():
+            _member(zf, key, np.ascontiguousarray(np.asarray(arr).astype(_ARRAYS[key])))
         meta = json.dumps(shell_metadata(shell), sort_keys=True)
         _member(zf, "metadata", np.frombuffer(meta.encode("utf-8"), dtype=np.uint8))
     with atomic_output(path, "wb") as fh:
@@ -105,44 +112,54 @@ def load_shell(path) -> Shell:
         raise MissingFileError(f"{path}: shell file not found")
     try:
         with np.load(path, allow_pickle=False) as z:
+            if "metadata" in z.files:
+                meta = json.loads(bytes(z["metadata"]).decode("utf-8"))
+                if not isinstance(meta, dict) or meta.get("format") != FORMAT:
+                    fmt = meta.get("format") if isinstance(meta, dict) else None
+                    raise MeshFileError(path, f"unknown shell format {fmt!r} (expected "
+                                        f"{FORMAT}); rebuild it with 'geotex shell build'")
             missing = [k for k in list(_ARRAYS) + ["metadata"] if k not in z.files]
             if missing:
                 raise MeshFileError(path, "not a geotex shell file (missing "
                                     + ", ".join(missing) + "); build one with 'geotex shell build'")
             arrays = {k: z[k] for k in _ARRAYS}
-            meta = json.loads(bytes(z["metadata"]).decode("utf-8"))
     except MeshFileError:
         raise
     except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile, UnicodeDecodeError,
             json.JSONDecodeError) as exc:
         raise MeshFileError(path, f"cannot read the shell file (truncated or corrupted?): "
                             f"{exc}") from None
-    if meta.get("format") != FORMAT:
-        raise MeshFileError(path, f"unknown shell format {meta.get('format')!r} "
-                            f"(expected {FORMAT})")
-    a = {k: np.ascontiguousarray(v) for k, v in arrays.items()}
-    n, m = a["V"].shape[0], a["F"].shape[0]
-    ok = (a["V"].ndim == 2 and a["V"].shape[1] == 3 and a["D"].shape == a["V"].shape
-          and a["P"].shape == a["V"].shape and a["F"].ndim == 2 and a["F"].shape[1] == 3
-          and m > 0 and a["F"].min() >= 0 and a["F"].max() < n
-          and a["labels"].shape == (m,) and a["chart"].shape == (m,)
-          and a["quad_corners"].shape == (a["quad_chart"].size, 4, 3)
-          and a["quad_edge"].shape == (a["quad_chart"].size, 4)
-          and a["chart"].max() < a["chart_label"].size
-          and a["quad_edge"].max() < a["edge_axis"].size)
-    if not ok:
-        raise MeshFileError(path, "inconsistent shell file (array shapes or indices do not "
-                            "match); rebuild it with 'geotex shell build'")
-    i64 = lambda k: a[k].astype(np.int64)  # noqa: E731
-    pc = PolyCube(tile_size=float(meta["tile_size"]), V=a["V"].astype(np.float64),
-                  F=i64("F"), labels=i64("labels"), chart=i64("chart"),
-                  chart_label=i64("chart_label"), planes=i64("planes"),
-                  P=a["P"].astype(np.float64), quad_chart=i64("quad_chart"),
-                  quad_ij=i64("quad_ij"), quad_corners=i64("quad_corners"),
-                  quad_edge=i64("quad_edge"), quad_edge_forward=a["quad_edge_forward"].astype(bool),
-                  edge_axis=i64("edge_axis"), edge_quads=i64("edge_quads"),
-                  edge_sides=i64("edge_sides"), distortion=dict(meta.get("distortion", {})),
-                  attempts=int(meta.get("attempts", 1)))
-    return Shell(name=str(meta.get("name", path.stem)), polycube=pc,
+    try:
+        return _shell_of(arrays, meta, path)
+    except (KeyError, TypeError, ValueError, IndexError, GeotexError):
+        raise MeshFileError(path, "inconsistent shell file (array shapes, indices or metadata "
+                            "do not match); rebuild it with 'geotex shell build'") from None
+
+
+def _shell_of(a: dict, meta: dict, path) -> Shell:
+    corners = a["quad_corners"].astype(np.int64)
+    labels = a["quad_label"].astype(np.int64)
+    q = labels.size
+    res = int(meta["res"])
+    if (corners.shape != (q, 4, 3) or q == 0 or labels.min() < 0 or labels.max() > 5
+            or not 1 <= res <= 16 or a["origin"].shape != (3,)):
+        raise ValueError("quads")
+    P, F, grid = subdivided_quads(corners, labels, res=res)
+    n = P.shape[0]
+    bv, bf = a["base_vertices"], a["base_faces"].astype(np.int64)
+    if (a["Y"].shape != (n, 3) or a["D"].shape != (n, 3) or a["quad_folded"].shape != (q,)
+            or bv.ndim != 2 or bv.shape[1] != 3 or bf.ndim != 2 or bf.shape[1] != 3
+            or bf.shape[0] == 0 or bf.min() < 0 or bf.max() >= bv.shape[0]):
+        raise ValueError("arrays")
+    qe, qf, eax, eq, es = quad_edges(corners)
+    pc = PolyCube(tile_size=float(meta["tile_size"]), res=res,
+                  origin=a["origin"].astype(np.float64), P=P, Y=a["Y"].astype(np.float64),
+                  F=F, quad_grid=grid, quad_label=labels, quad_corners=corners, quad_edge=qe,
+                  quad_edge_forward=qf, edge_axis=eax, edge_quads=eq, edge_sides=es,
+                  quad_folded=a["quad_folded"].astype(bool),
+                  distortion=dict(meta.get("distortion", {})),
+                  coverage=dict(meta.get("coverage", {})), voxels=dict(meta.get("voxels", {})))
+    return Shell(name=str(meta.get("name", Path(path).stem)), polycube=pc,
                  D=a["D"].astype(np.float64), max_height=float(meta["max_height"]),
+                 base_vertices=bv.astype(np.float64), base_faces=bf,
                  source=str(meta.get("source", "")), recipe=dict(meta.get("recipe", {})))
