@@ -1,9 +1,10 @@
 """Which tile goes on which polycube quad.
 
 Every global quad edge gets a random colour from its axis class; a quad with
-chart frame ``(a1, a2)`` takes the tile of group ``(a1, a2)`` whose side colours
-are the colours of its south, east, north and west edges. Neighbouring quads
-read the same colour on their shared edge, so their tiles are seam-compatible.
+frame ``(a1, a2)`` takes the tile of group ``(a1, a2)`` whose side colours are
+the colours of its south, east, north and west edges (an isotropic set has one
+colour class for all axes and ignores the group). Neighbouring quads read the
+same colour on their shared edge, so their tiles are seam-compatible.
 """
 
 from __future__ import annotations
@@ -41,18 +42,23 @@ def edge_colors(edge_axis: np.ndarray, n_colors, *, seed: int = 0) -> np.ndarray
 
 
 def tiles_for_quads(tiles: TileSet, quad_axes: np.ndarray, quad_edge: np.ndarray,
-                    colors: np.ndarray) -> np.ndarray:
+                    colors: np.ndarray, *, bare=None) -> np.ndarray:
     """The tile of every quad.
 
     Parameters
     ----------
     tiles : TileSet
+        A complete set (one group per quad frame), or an isotropic set
+        (``tiles.isotropic``: one colour class shared by all axes, so the
+        group is ignored).
     quad_axes : numpy.ndarray, (q, 2) int64
-        In-plane axes ``(a1, a2)`` of each quad's chart (its tile group).
+        In-plane axes ``(a1, a2)`` of each quad's frame (its tile group).
     quad_edge : numpy.ndarray, (q, 4) int64
         Global edge of sides south, east, north, west.
     colors : numpy.ndarray, (E,) int64
         Colour of every global edge.
+    bare : numpy.ndarray, (q,) bool, optional
+        Quads that get no tile (``-1``).
 
     Returns
     -------
@@ -64,17 +70,25 @@ def tiles_for_quads(tiles: TileSet, quad_axes: np.ndarray, quad_edge: np.ndarray
         The set lacks a needed tile (e.g. a planar set on a closed shape).
     """
     side = colors[quad_edge]                                    # (q, 4)
-    keys = np.hstack([quad_axes, side])
-    table = np.hstack([tiles.groups, tiles.colors])
-    radix = np.array([3, 3, 5, 5, 5, 5], dtype=np.int64)
-    weights = np.concatenate([np.cumprod(radix[::-1])[::-1][1:], [1]])
+    if getattr(tiles, "isotropic", False):
+        keys, table = side, tiles.colors
+    else:
+        keys = np.hstack([quad_axes, side])
+        table = np.hstack([tiles.groups, tiles.colors])
+    weights = 5 ** np.arange(keys.shape[1] - 1, -1, -1, dtype=np.int64)
     code_t = table @ weights
     code_q = keys @ weights
-    order = np.argsort(code_t)
+    order = np.argsort(code_t, kind="stable")
     pos = np.clip(np.searchsorted(code_t[order], code_q), 0, len(order) - 1)
     found = code_t[order][pos] == code_q
+    out = order[pos].astype(np.int64)
+    if bare is not None:
+        out[np.asarray(bare, dtype=bool)] = -1
+        found |= np.asarray(bare, dtype=bool)
     if not found.all():
         k = keys[np.argmin(found)]
-        raise InputError(f"tile set {tiles.name!r} has no tile for group {tuple(k[:2])} with "
-                         f"colours {tuple(k[2:])}; build a complete set (not --planar)")
-    return order[pos]
+        what = (f"group {tuple(k[:2])} with colours {tuple(k[2:])}" if k.size == 6
+                else f"colours {tuple(k)}")
+        raise InputError(f"tile set {tiles.name!r} has no tile for {what}; a closed shape "
+                         "needs a complete or isotropic set (not --planar)")
+    return out

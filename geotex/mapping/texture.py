@@ -1,0 +1,141 @@
+"""The main job: a tile set laid over a shell, united with its base, checked.
+
+``textured_solid(shell, tiles)`` colours the polycube's quad edges at random
+within each axis class, picks the matching tile for every quad, maps and welds
+the tile geometry into the shell (:mod:`~geotex.mapping.place`), unites the
+closed elements with the base solid (:mod:`~geotex.mapping.union`) and runs
+the printability check on the result.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from geotex.check.report import CheckReport, check_mesh
+from geotex.errors import InputError
+from geotex.mapping.assign import edge_colors, tiles_for_quads
+from geotex.mapping.place import mapped_tiles
+from geotex.mapping.union import united_with_base
+from geotex.progress import report
+
+__all__ = ["TexturedSolid", "textured_solid", "MAP_STAGES", "texture_height"]
+
+MAP_STAGES = ("assign", "map", "union", "check")
+
+
+@dataclass(frozen=True)
+class TexturedSolid:
+    """A base with a geometric texture, as one solid.
+
+    Attributes
+    ----------
+    vertices : numpy.ndarray, (n, 3) float64
+    faces : numpy.ndarray, (m, 3) int64
+    tile_of_quad : numpy.ndarray, (q,) int64
+        Tile chosen for every quad (``-1``: left bare, its map folds).
+    report : CheckReport or None
+        Validity report of the solid (None when not checked).
+    stats : dict
+        Counts and timings of every stage.
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    tile_of_quad: np.ndarray
+    report: CheckReport | None
+    stats: dict = field(default_factory=dict)
+
+
+def texture_height(shell, tiles, height=None) -> float:
+    """World height of the texture's top: given, or the tile's own proportions.
+
+    Without ``height`` the tile keeps its proportions (``tiles.height`` tile
+    units times the tile size), lowered to the shell's safe ``max_height``.
+
+    Raises
+    ------
+    InputError
+        ``height`` not positive or above the shell's ``max_height``.
+    """
+    if height is None:
+        return float(min(tiles.height * shell.tile_size, shell.max_height))
+    try:
+        h = float(height)
+    except (TypeError, ValueError):
+        raise InputError(f"height must be a positive number, got {height!r}") from None
+    if not np.isfinite(h) or h <= 0:
+        raise InputError(f"height must be a positive number, got {height!r}")
+    if h > shell.max_height * (1 + 1e-12):
+        raise InputError(f"height {h:g} is above the shell's safe height "
+                         f"{shell.max_height:.4g} (taller texture would intersect itself); "
+                         "use a smaller height or a larger tile size")
+    return h
+
+
+def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = True,
+                   progress=None) -> TexturedSolid:
+    """Lay ``tiles`` over ``shell`` and unite them with its base.
+
+    Parameters
+    ----------
+    shell : Shell
+    tiles : TileSet
+        A complete or isotropic set (a planar set has no tiles for vertical
+        quad edges).
+    height : float, optional
+        World height of the texture (see :func:`texture_height`).
+    seed : int, optional
+        Seed of the random edge colouring: same inputs and seed, same bytes.
+    check : bool, optional
+        Run the full validity check (with self-intersections) on the result.
+    progress : callable, optional
+        Called with each stage of :data:`MAP_STAGES`.
+
+    Returns
+    -------
+    TexturedSolid
+
+    Raises
+    ------
+    InputError
+        Planar tile set, bad height or seed.
+    GeotexError
+        manifold3d rejects the base or the elements.
+    """
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise InputError(f"seed must be a non-negative integer, got {seed!r}")
+    h = texture_height(shell, tiles, height)
+    pc = shell.polycube
+    times = {}
+    t0 = time.perf_counter()
+    report(progress, "assign")
+    colors = edge_colors(pc.edge_axis, tiles.n_colors, seed=int(seed))
+    tile_of_quad = tiles_for_quads(tiles, pc.quad_axes, pc.quad_edge, colors,
+                                   bare=pc.quad_folded)
+    times["assign"] = time.perf_counter() - t0
+    report(progress, "map")
+    t = time.perf_counter()
+    mapped = mapped_tiles(shell, tiles, tile_of_quad, scale=h / tiles.height)
+    times["map"] = time.perf_counter() - t
+    report(progress, "union")
+    t = time.perf_counter()
+    V, F, union = united_with_base(shell.base_vertices, shell.base_faces, mapped.vertices,
+                                   mapped.faces)
+    times["union"] = time.perf_counter() - t
+    rep = None
+    if check:
+        report(progress, "check")
+        t = time.perf_counter()
+        rep = check_mesh(V, F, self_intersections=True)
+        times["check"] = time.perf_counter() - t
+    stats = {"quads": pc.n_quads, "bare_quads": int((tile_of_quad < 0).sum()),
+             "height": h, "seed": int(seed), "mapped_vertices": int(mapped.vertices.shape[0]),
+             "mapped_faces": int(mapped.faces.shape[0]), "welded": mapped.welded,
+             "open_faces_dropped": mapped.dropped_faces, "elements": union.elements,
+             "elements_dropped": union.dropped, "merged_groups": union.merged_groups,
+             "vertices": int(V.shape[0]), "faces": int(F.shape[0]),
+             "seconds": {k: round(v, 3) for k, v in times.items()}}
+    return TexturedSolid(V, F, tile_of_quad, rep, stats)
