@@ -13,8 +13,9 @@ def register(sub):
                           parser_class=type(p))
 
     b = ss.add_parser("build", help="parameterize a closed base mesh by a polycube",
-                      description="Build the shell of BASE: polycube with chart planes on a "
-                      "grid of spacing --tile-size, quads, offset directions, max height.")
+                      description="Build the shell of BASE: a voxel polycube whose grid "
+                      "quads are tiles of side --tile-size, fitted onto BASE, with offset "
+                      "directions and the largest safe texture height.")
     b.add_argument("base", help="closed base mesh file (run 'geotex repair' first if needed)")
     b.add_argument("-o", "--output", required=True, help="shell file to write (.npz)")
     b.add_argument("--tile-size", type=float, default=None,
@@ -36,10 +37,15 @@ def register(sub):
 
 def _describe(shell) -> str:
     d = shell.distortion
-    return (f"{shell.n_quads} quads of {shell.tile_size:.4g}, "
-            f"{shell.polycube.chart_label.size} charts, max height {shell.max_height:.4g}; "
+    pc = shell.polycube
+    folded = int(pc.quad_folded.sum())
+    return (f"{shell.n_quads} quads of {shell.tile_size:.4g}"
+            + (f" ({folded} folded, left bare)" if folded else "")
+            + f", max height {shell.max_height:.4g}; "
             f"distortion area {d['area_mean']:.3f} (p95 {d['area_p95']:.3f}), "
-            f"angle {d['angle_mean']:.3f} (p95 {d['angle_p95']:.3f})")
+            f"angle {d['angle_mean']:.3f} (p95 {d['angle_p95']:.3f}); "
+            f"{100 * pc.coverage.get('within_quarter_tile', 1.0):.1f}% of the base within "
+            "a quarter tile")
 
 
 def run_build(args) -> int:
@@ -84,7 +90,7 @@ def run_list(args) -> int:
           f"{'area':>6} {'angle':>6}  source")
     for r in rows:
         d = r.get("distortion", {})
-        print(f"{r['name']:<8} {r.get('faces', 0):>6} {r.get('tile_size', 0):>7.4g} "
+        print(f"{r['name']:<8} {r.get('base_faces', 0):>6} {r.get('tile_size', 0):>7.4g} "
               f"{r.get('quads', 0):>6} {r.get('max_height', 0):>7.4g} "
               f"{d.get('area_mean', float('nan')):>6.3f} {d.get('angle_mean', float('nan')):>6.3f}"
               f"  {r['recipe'].get('source', '')}")
