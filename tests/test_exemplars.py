@@ -134,6 +134,7 @@ def test_npz_round_trip_is_exact(small, tmp_path):
     assert (back.size, back.height, back.depth, back.name) == \
         (small.size, small.height, small.depth, small.name)
     assert back.params == small.params
+    assert back.period == small.period
     json.dumps(back.params)
     assert exemplar(back.name, **back.params).vertices.tobytes() == small.vertices.tobytes()
 
@@ -165,6 +166,47 @@ def test_parameters_change_the_geometry():
     regular = exemplar("studs", size=SMALL, jitter=0.0, seed=1)
     assert np.array_equal(regular.vertices, exemplar("studs", size=SMALL, jitter=0.0,
                                                      seed=5).vertices)
+
+
+def _shifted_elements_match(ex, shift):
+    """Fraction of elements whose copy moved by ``shift`` is an element of ``ex``.
+
+    Elements are compared by centroid and second moments (which a random
+    spin of a ring's vertices about its axis leaves unchanged).
+    """
+    V, F, el = ex.vertices, ex.faces, ex.elements()
+    parts = [V[np.unique(F[el == e])] for e in range(ex.n_elements)]
+    cent = np.array([P.mean(axis=0) for P in parts])
+    cov = np.array([np.cov(P.T) for P in parts])
+    hits = tested = 0
+    for e in range(ex.n_elements):
+        target = cent[e] + [shift[0], shift[1], 0.0]
+        if not (0.3 < target[0] < ex.size[0] - 0.3 and 0.3 < target[1] < ex.size[1] - 0.3):
+            continue
+        tested += 1
+        k = int(np.argmin(np.linalg.norm(cent - target, axis=1)))
+        hits += bool(np.linalg.norm(cent[k] - target) < 1e-9
+                     and np.abs(cov[k] - cov[e]).max() < 1e-6)
+    return hits / max(tested, 1), tested
+
+
+@pytest.mark.parametrize("name, symmetries, not_symmetries", [
+    # chain mail: one ring spacing along a row, two rows across (rows alternate their tilt)
+    ("chainmail", [(1, 0), (0, 1), (1, 1)], [(0, 0.5), (0.5, 0.5)]),
+    # scales: odd rows are offset by half a pitch, so the symmetries are the cell
+    # multiples (m, n) with m + n even
+    ("scales", [(2, 0), (1, 1), (0, 2), (-1, 1)], [(1, 0), (0, 1)]),
+])
+def test_period_lattice_holds_the_pattern_symmetries(name, symmetries, not_symmetries):
+    ex = exemplar(name, size=(3.0, 3.0), jitter=0.0)
+    px, py = ex.period
+    for m, n in symmetries:
+        frac, tested = _shifted_elements_match(ex, (m * px, n * py))
+        assert tested >= 3 and frac == 1.0, ((m, n), frac)
+    for m, n in not_symmetries:
+        frac, tested = _shifted_elements_match(ex, (m * px, n * py))
+        assert tested >= 3 and frac == 0.0, ((m, n), frac)
+    assert exemplar("studs", size=SMALL).period is None       # the pitch serves
 
 
 def test_weave_strands_run_across_the_patch():

@@ -69,6 +69,16 @@ def centre_line_clearance(R: float, k: int) -> float:
     return best
 
 
+def period(size, p: dict) -> tuple[float, float]:
+    """Lattice of the layout: one ring spacing along a row, two row spacings across.
+
+    Rows alternate their tilt, so shifting by one row maps rings onto rings
+    tilted the other way; two rows map the pattern onto itself.
+    """
+    R = p["radius"]
+    return (COL_STEP * R, 2 * ROW_STEP * R)
+
+
 def build(size, rng: np.random.Generator, p: dict):
     """Return ``(V, F)`` of the rings; see :data:`PARAMS`."""
     R, rw, depth = p["radius"], p["wire"] / 2, p["depth"]

@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
+
+from geotex.errors import InputError
 
 from geotex.mesh.arrays import as_faces, as_vertices
 from geotex.mesh.record import Mesh
@@ -38,6 +41,14 @@ class Exemplar:
         JSON-serialisable recipe, seed and size included: for a procedural
         exemplar ``geotex.exemplars.exemplar(name, **params)`` rebuilds it
         byte-identically.  Empty for an exemplar read from a plain mesh file.
+    period : tuple of float, optional
+        ``(px, py)``: the lattice of cell multiples ``(m px, n py)`` that
+        holds the translations mapping the pattern onto itself (up to the
+        jitter): all of them for chain mail (one ring spacing along a row,
+        two row spacings across, since the rows alternate their tilt), those
+        with ``m + n`` even for rows offset by half a step (scales).  Mesh
+        quilting places copies on this lattice and its matching energy
+        picks the right ones.  None when unknown.
 
     Raises
     ------
@@ -52,6 +63,7 @@ class Exemplar:
     depth: float
     name: str = ""
     params: dict = field(default_factory=dict)
+    period: tuple | None = None
 
     def __post_init__(self):
         V = as_vertices(self.vertices, name="vertices")
@@ -61,6 +73,16 @@ class Exemplar:
         object.__setattr__(self, "size", (float(self.size[0]), float(self.size[1])))
         object.__setattr__(self, "height", float(self.height))
         object.__setattr__(self, "depth", float(self.depth))
+        if self.period is not None:
+            try:
+                px, py = (float(c) for c in self.period)
+            except (TypeError, ValueError):
+                raise InputError(f"period must be two positive numbers (px, py), "
+                                 f"got {self.period!r}") from None
+            if not (math.isfinite(px) and math.isfinite(py) and px > 0 and py > 0):
+                raise InputError(f"period must be two positive numbers (px, py), "
+                                 f"got {self.period!r}")
+            object.__setattr__(self, "period", (px, py))
 
     def elements(self) -> np.ndarray:
         """Return the element id of every face.

@@ -83,7 +83,9 @@ def exemplar(name: str, *, size=(4.0, 4.0), seed: int = 0, **params) -> Exemplar
     -------
     Exemplar
         ``params`` holds size, seed and every kind parameter, so
-        ``exemplar(ex.name, **ex.params)`` rebuilds it.
+        ``exemplar(ex.name, **ex.params)`` rebuilds it; ``period`` is the
+        lattice of the layout for kinds whose pattern repeats in two
+        different steps (chain mail, scales), else None (the pitch serves).
 
     Raises
     ------
@@ -108,5 +110,6 @@ def exemplar(name: str, *, size=(4.0, 4.0), seed: int = 0, **params) -> Exemplar
         raise InputError(f"exemplar {name!r}: no element fits a {lx:g} x {ly:g} patch with "
                          "these parameters; use a larger size or a smaller pitch")
     recipe = {"size": [lx, ly], "seed": seed, **resolved}
+    period = module.period((lx, ly), resolved) if hasattr(module, "period") else None
     return Exemplar(V, F, size=(lx, ly), height=float(V[:, 2].max()),
-                    depth=float(-V[:, 2].min()), name=name, params=recipe)
+                    depth=float(-V[:, 2].min()), name=name, params=recipe, period=period)

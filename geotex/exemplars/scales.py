@@ -57,6 +57,16 @@ def _layout(size, p):
     return np.vstack(roots), rx
 
 
+def period(size, p: dict) -> tuple[float, float]:
+    """Lattice of the layout: half a pitch along the rows, one row spacing across.
+
+    Odd rows are offset by half a pitch, so a shift by ``(pitch / 2,
+    row_spacing)`` maps the pattern onto itself (quilting picks the right
+    parity of the cell multiples by the matching energy).
+    """
+    return (0.5 * p["pitch"], p["row_spacing"])
+
+
 def build(size, rng: np.random.Generator, p: dict):
     """Return ``(V, F)`` of the scales; see :data:`PARAMS`."""
     root, rx = _layout(size, p)

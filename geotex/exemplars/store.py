@@ -27,7 +27,7 @@ def save_exemplar(path, ex: Exemplar) -> Path:
     ----------
     path : str or os.PathLike
         ``.npz``: vertices, faces and a JSON ``metadata`` string (size, height,
-        depth, name, params): a lossless round trip.  Any extension
+        depth, name, params, period): a lossless round trip.  Any extension
         :func:`geotex.io.write_mesh` supports (``.stl``, ``.obj``, ``.ply``,
         ``.off``, ``.3mf``, ``.glb``): the geometry only (the recipe is lost;
         float32 formats round the coordinates).
@@ -52,7 +52,8 @@ def save_exemplar(path, ex: Exemplar) -> Path:
         return write_mesh(path, ex.mesh())
     try:
         meta = json.dumps({"format": FORMAT_TAG, "size": list(ex.size), "height": ex.height,
-                           "depth": ex.depth, "name": ex.name, "params": ex.params},
+                           "depth": ex.depth, "name": ex.name, "params": ex.params,
+                           "period": None if ex.period is None else list(ex.period)},
                           sort_keys=True)
     except (TypeError, ValueError) as exc:
         raise InputError(f"ex.params is not JSON serialisable: {exc}") from None
@@ -76,7 +77,7 @@ def _load_npz(path: Path) -> Exemplar:
         if m.get("format") != FORMAT_TAG:
             raise ValueError(f"format tag {m.get('format')!r}, expected {FORMAT_TAG!r}")
         return Exemplar(V, F, size=tuple(m["size"]), height=m["height"], depth=m["depth"],
-                        name=m["name"], params=m["params"])
+                        name=m["name"], params=m["params"], period=m.get("period"))
     except (ValueError, KeyError, TypeError, InputError) as exc:
         raise MeshFileError(path, f"bad exemplar metadata: {exc}") from None
 
