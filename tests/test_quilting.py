@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import itertools
 
+import igl
 import manifold3d
 import numpy as np
 import pytest
+from scipy.sparse import csr_matrix as sp_csr
 
 from geotex.check.report import check_mesh
 from geotex.errors import InputError
@@ -169,6 +171,41 @@ def test_laplacian_identity():
     assert np.abs(Wu - V).max() < 1e-9
 
 
+def test_laplacian_preserves_laplacian_coordinates_where_unconstrained():
+    V, F = icosphere(3)
+    L = sp_csr(igl.cotmatrix(V, F))
+    # targets that only translate: the Laplacian coordinates are kept exactly and
+    # every vertex follows the translation (to within the tiny regularisation
+    # towards the rest positions: measured 8e-5 of a 0.37 shift)
+    top = np.flatnonzero(V[:, 2] > 0.8)
+    shift = np.array([0.2, -0.1, 0.3])
+    W = laplacian_deformed(V, F, (top, V[top] + shift), mu=100.0)
+    np.testing.assert_allclose(W - V, np.broadcast_to(shift, V.shape), atol=1e-3)
+    delta = L @ V
+    assert np.abs(L @ W - delta).max() < 1e-3 * np.abs(delta).max()     # measured 1.5e-4
+    # a real edit (lift the top, hold the bottom): the result is the least-squares
+    # optimum of sum |L w - L v|^2 + mu sum |w_c - p_c|^2 over the free vertices
+    fixed = np.flatnonzero(V[:, 2] < -0.5)
+    goal = V[top] + [0.0, 0.0, 0.4]
+    mu = 10.0
+    W = laplacian_deformed(V, F, (top, goal), mu=mu, fixed=fixed)
+    free = np.setdiff1d(np.arange(len(V)), fixed)
+    scale = float(abs(L.diagonal()).mean()) ** 2
+    grad = L.T @ (L @ W - L @ V)
+    grad[top] += mu * scale * (W[top] - goal)
+    grad += 1e-8 * scale * (W - V)                       # the documented regularisation
+    assert np.abs(grad[free]).max() < 1e-8 * np.abs(L.T @ (L @ V)).max()
+    assert np.array_equal(W[fixed], V[fixed])
+    # so it changes the Laplacian coordinates less than a plain stretch that meets
+    # the same constraints (a linear ramp of the lift from the held to the lifted part)
+    ramp = V.copy()
+    ramp[:, 2] += 0.4 * np.clip((V[:, 2] + 0.5) / 1.3, 0.0, 1.0)
+    def objective(X):
+        return (np.sum((L @ X - L @ V) ** 2)
+                + mu * scale * np.sum((X[top] - goal) ** 2))
+    assert objective(W) < 0.8 * objective(ramp)               # measured 0.70
+
+
 def test_laplacian_errors():
     V, F = icosphere(1)
     with pytest.raises(InputError, match="mu"):
@@ -226,6 +263,96 @@ def test_merge_never_leaves_the_domain(center):
             assert np.array_equal(r.vertices, VA)
     else:
         assert r.status == "stitched", r.reason
+
+
+def test_matching_energy_counts_only_covered_vertices_and_finds_the_weave_phase():
+    from geotex.exemplars import exemplar
+    from geotex.quilting import ExemplarIndex, matching_energy
+    ex = exemplar("weave", size=(2.0, 2.0), seed=0)
+    V, F = ex.vertices, ex.faces
+    N = igl.per_vertex_normals(V, F)
+    index = ExemplarIndex(V, F)
+    # the texture is the exemplar itself; a copy shifted by an odd number of
+    # pitches along one axis swaps over and under, a diagonal or even shift does not
+    good = [(1.0, 0.0, 0.0), (0.0, -1.0, 0.0), (0.5, 0.5, 0.0), (-0.5, 0.5, 0.0)]
+    bad = [(0.5, 0.0, 0.0), (0.0, 0.5, 0.0), (-1.5, 0.0, 0.0)]
+    E = matching_energy(V, N, index, good + bad, lam=2.0, footprint=ex.size)
+    assert E[:len(good)].max() + 0.2 < E[len(good):].min()      # measured 1.33 vs 1.64
+    # counting every vertex instead rewards copies that stay over the texture
+    E_all = matching_energy(V, N, index, [(0.5, 0.0, 0.0), (1.0, 0.0, 0.0)], lam=2.0)
+    assert E_all[0] < E_all[1]
+    # a copy that covers no vertex cannot be scored
+    assert np.isinf(matching_energy(V, N, index, [(5.0, 5.0, 0.0)], lam=2.0,
+                                    footprint=ex.size)[0])
+
+
+def _weave_strand(k=0):
+    from geotex.exemplars import exemplar
+    from geotex.quilting import split_elements
+    ex = exemplar("weave", size=(2.0, 2.0), seed=0)
+    e = split_elements(ex.vertices, ex.faces, element_ids=ex.elements())[k]
+    return e.V, e.F
+
+
+@pytest.mark.parametrize("k, shift", [(0, (1.0, 0.0)), (0, (-1.0, 0.0)), (4, (0.0, 1.0))])
+def test_merge_two_pieces_of_a_strand_into_one_longer_strand(k, shift):
+    VB, FB = _weave_strand(k)
+    VA = VB + [shift[0], shift[1], 0.0]
+    r = merge_elements(VA, FB, VB, FB, corresponding_only=True)
+    assert r.status == "stitched", r.reason
+    assert closed_element_ok(r.vertices, r.faces) == ""
+    assert_printable(r.vertices, r.faces)
+    axis = 0 if k < 4 else 1
+    assert np.ptp(r.vertices[:, axis]) == pytest.approx(3.0, abs=0.05)   # 2 + 2 - overlap 1
+    # one and a half strands of material (measured +0.7 % .. +0.9 %: the caps)
+    assert signed_volume(r.vertices, r.faces) == pytest.approx(
+        1.5 * signed_volume(VB, FB), rel=0.02)
+    h = np.linalg.norm(VB[FB[:, 0]] - VB[FB[:, 1]], axis=1).mean()
+    assert r.seam_gap < 0.6 * h                       # measured 0.03 .. 0.5 mean edges
+    assert r.seam_normal_jump < 20.0                  # measured 2.6 .. 13 degrees
+
+
+def test_quilted_weave_joins_strands_and_prints_on_a_slab():
+    from geotex.exemplars import exemplar
+    ex = exemplar("weave", size=(2.0, 2.0), seed=0)
+    r = quilt_texture(ex, out_size=(3.0, 3.0), seed=1, boundary="clip")
+    rep = r.report
+    assert rep.valid and rep.merges["stitched"] >= 6, rep.summary()
+    # strands of successive copies became longer strands: 6 + 6 strands cross a
+    # 3 x 3 patch; a few may stay in two pieces where a merge was refused
+    spans = np.array([np.ptp(r.vertices[np.unique(r.faces[r.element_ids == e])][:, :2],
+                             axis=0).max() for e in range(rep.elements)])
+    assert (spans > 2.1).sum() >= 6 and rep.elements <= 16
+    # seams close (gap relative to the cell) and do not fold (a fold is ~180 degrees;
+    # the strands' own cross-section creases reach 130): measured gap 0.10,
+    # jump mean 24 and max 46 degrees
+    assert rep.seam_gap_max < 0.5
+    assert rep.seam_normal_jump_mean < 35.0 and rep.seam_normal_jump_max < 90.0
+    assert abs(rep.height_mean - rep.exemplar_height_mean) < 0.01
+    assert_printable(*_slab_union(r.vertices, r.faces, 3.0, 3.0))
+
+
+def test_quilted_chain_mail_copies_land_on_its_lattice():
+    from geotex.exemplars import exemplar
+    ex = exemplar("chainmail", size=(2.0, 2.0), seed=0, resolution=12, wire=0.07)
+    r = quilt_texture(ex, out_size=(3.0, 2.5), seed=0, boundary="clip")
+    rep = r.report
+    assert rep.cell == pytest.approx([3.0 / round(3.0 / ex.period[0]),
+                                      2.5 / round(2.5 / ex.period[1])])
+    assert rep.valid, rep.summary()
+    # every copy's ring either coincides with a ring already there (absorbed) or
+    # links in without touching: nothing had to be dropped
+    assert sum(rep.dropped.values()) == 0 and rep.merges["dropped"] == 0
+    assert rep.elements >= 50
+
+
+def test_quilt_cell_pair_and_errors():
+    V, F = texture("studs")
+    r = quilt_texture(V, F, size=(1.5, 1.5), out_size=(2.0, 1.5), cell=(0.5, 0.375), seed=0)
+    assert r.report.cells == [4, 4] and r.report.cell == [0.5, 0.375]
+    for bad in ((0.5, 0.0), (0.1, 0.2, 0.3), "x", float("nan")):
+        with pytest.raises(InputError, match="cell"):
+            quilt_texture(V, F, size=(1.5, 1.5), out_size=(2.0, 1.5), cell=bad)
 
 
 # ----------------------------------------------------------------------------

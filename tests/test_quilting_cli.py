@@ -76,3 +76,25 @@ def test_quilt_refuses_to_overwrite_its_input(capsys, tmp_path):
     code, _, err = run(capsys, "quilt", src, "--size", 2, 2, "-o", tmp_path / "x.ply",
                        "--report", tmp_path / "x.ply")
     assert code == 2 and "different files" in err
+
+
+def test_progress_bar_counts_filled_cells_and_stays_off_without_a_terminal(capsys, tmp_path):
+    from geotex.cli.quilt import cell_bar
+    with cell_bar(10, "quilt studs", enabled=True) as bar:
+        bar("placement 1: 0/10 cells")
+        bar("placement 2: 4/10 cells")
+    err = capsys.readouterr().err
+    assert "4/10" in err and "placement 2" in err and "cell/s" in err
+    # under pytest stderr is not a terminal: the command prints no bar
+    code, _, err = run(capsys, "quilt", "studs", "--size", 2, 2, "-o", tmp_path / "q.ply")
+    assert code == 0 and err == ""
+
+
+def test_quilt_library_reports_filled_cells(tmp_path):
+    from geotex.exemplars import exemplar
+    from geotex.quilting import quilt_texture
+    stages = []
+    quilt_texture(exemplar("studs", size=(1.5, 1.5)), out_size=(2.0, 2.0), progress=stages.append)
+    counts = [tuple(map(int, s.split(": ")[1].split()[0].split("/"))) for s in stages]
+    assert counts[0] == (0, 16) and all(a[0] <= b[0] for a, b in zip(counts, counts[1:]))
+    assert stages[-1].startswith(f"placement {len(stages)}:")

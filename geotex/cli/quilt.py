@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import re
+import sys
+from contextlib import contextmanager
 from pathlib import Path
 
 from geotex.cli._common import EXIT_OK, UsageError, guard_output
@@ -41,11 +44,43 @@ def _load(spec: str, size, seed):
     return load_exemplar(path), path
 
 
+_CELLS = re.compile(r"(\d+)/(\d+) cells")
+
+
+@contextmanager
+def cell_bar(total: int, desc: str, *, enabled: bool | None = None):
+    """A tqdm bar on stderr (only on a terminal) counting the filled grid cells.
+
+    Yields the ``progress`` callback for :func:`geotex.quilting.quilt_texture`,
+    which reports ``"placement K: FILLED/TOTAL cells"`` before every
+    placement; the bar shows FILLED of TOTAL and the placement number, and
+    is completed when the loop ends.
+    """
+    from tqdm import tqdm
+
+    if enabled is None:
+        enabled = sys.stderr.isatty()
+    bar = tqdm(total=total, desc=desc, unit="cell", leave=False, disable=not enabled,
+               file=sys.stderr)
+
+    def advance(stage: str) -> None:
+        m = _CELLS.search(stage)
+        if m:
+            done, bar.total = int(m.group(1)), int(m.group(2))
+            bar.update(done - bar.n)
+        bar.set_postfix_str(stage.split(":")[0], refresh=True)
+
+    try:
+        yield advance
+        bar.update(bar.total - bar.n)
+    finally:
+        bar.close()
+
+
 def run(args) -> int:
     from geotex.io import write_mesh
     from geotex.io.atomic import atomic_output
     from geotex.mesh.record import Mesh
-    from geotex.progress import stage_bar
     from geotex.quilting import default_cell, quilt_texture, split_elements
 
     W, H = args.size
@@ -62,9 +97,10 @@ def run(args) -> int:
         raise UsageError(f"{report_path}: the report and the mesh need different files")
     ex, _ = _load(args.exemplar, args.exemplar_size, args.seed)
     cell = args.cell or default_cell(split_elements(ex.vertices, ex.faces), ex.size,
-                                     getattr(ex, "params", None))
-    stages = max(1, round(W / cell)) * max(1, round(H / cell))
-    with stage_bar(stages, f"quilt {ex.name}") as bar:
+                                     getattr(ex, "params", None), getattr(ex, "period", None))
+    cx, cy = (cell, cell) if isinstance(cell, float) else cell
+    cells = max(1, round(W / cx)) * max(1, round(H / cy))
+    with cell_bar(cells, f"quilt {ex.name}") as bar:
         result = quilt_texture(ex, out_size=(W, H), cell=cell, seed=args.seed,
                                boundary=args.boundary, progress=bar)
     write_mesh(out, Mesh(result.vertices, result.faces, name=f"{ex.name}_quilted"))

@@ -8,9 +8,18 @@ The energy of placing the exemplar ``M`` translated by ``t`` under the region
 
 where ``f`` is the face of ``M`` closest to ``v - t`` (the minimum over faces
 is approximated by the closest face, as the closest face almost always
-minimises both factors).  All candidate translations are evaluated in one
-vectorized closest-point query; the best few are refined by translation-only
-ICP (in the plane) and re-scored.
+minimises both factors).  Only the vertices that the translated exemplar
+covers count (``v - t`` inside its rectangle ``[0, lx] x [0, ly]``): a
+vertex beyond the copy cannot correspond to anything in it, and counting it
+would favour copies that stay over the texture already built instead of
+the pattern's phase (for a weave, shifts by an odd number of pitches along
+one axis swap over and under; they score clearly worse once only the
+covered vertices count: mean energy 1.65 against 1.30 measured on the
+default weave).  The energy is the mean over those vertices; a candidate
+covering fewer than ``min_overlap`` of the best-covered candidate's count is
+discarded.  All candidate translations are evaluated in one vectorized
+closest-point query; the best few are refined by translation-only ICP (in
+the plane, with the covered vertices only) and re-scored.
 """
 
 from __future__ import annotations
@@ -23,7 +32,7 @@ from geotex.errors import InputError
 from geotex.mesh.geometry import face_normals
 from geotex.quilting.icp import ClosestPoints, icp_translation
 
-__all__ = ["ExemplarIndex", "matching_energy", "best_translation", "Match"]
+__all__ = ["ExemplarIndex", "matching_energy", "best_translation", "Match", "covered_by"]
 
 _QUERY_CHUNK = 400_000
 
@@ -68,7 +77,25 @@ class Match:
     alternatives: np.ndarray = None
 
 
-def matching_energy(P, N, index: ExemplarIndex, translations, *, lam: float) -> np.ndarray:
+def covered_by(P, translations, footprint) -> np.ndarray:
+    """Which points the exemplar translated by each ``t`` covers, ``(c, k)`` bool.
+
+    Point ``v`` is covered by the copy at ``t`` when ``(v - t)[:2]`` lies in
+    the exemplar's rectangle ``[0, lx] x [0, ly]``; with ``footprint=None``
+    every point counts.
+    """
+    P = np.asarray(P, np.float64).reshape(-1, 3)
+    T = np.asarray(translations, np.float64).reshape(-1, 3)
+    if footprint is None:
+        return np.ones((T.shape[0], P.shape[0]), dtype=bool)
+    lx, ly = (float(s) for s in footprint)
+    x = P[None, :, 0] - T[:, None, 0]
+    y = P[None, :, 1] - T[:, None, 1]
+    return (x >= 0.0) & (x <= lx) & (y >= 0.0) & (y <= ly)
+
+
+def matching_energy(P, N, index: ExemplarIndex, translations, *, lam: float,
+                    footprint=None) -> np.ndarray:
     """Mean matching energy of every candidate translation.
 
     Parameters
@@ -81,11 +108,30 @@ def matching_energy(P, N, index: ExemplarIndex, translations, *, lam: float) -> 
     translations : numpy.ndarray, (c, 3) float64
     lam : float
         Weight of the distance (1 / length).
+    footprint : tuple (lx, ly), optional
+        Exemplar rectangle: only the vertices the translated exemplar covers
+        count (see :func:`covered_by`).  Default: every vertex counts.
 
     Returns
     -------
     numpy.ndarray, (c,) float64
-        ``E(t) / k`` for every candidate.
+        ``E(t)`` divided by the number of vertices counted, for every
+        candidate (``inf`` when the copy covers none of them).
+
+    Raises
+    ------
+    InputError
+        If ``P`` is empty.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from geotex.mesh.primitives import icosphere
+    >>> V, F = icosphere(2)
+    >>> idx = ExemplarIndex(V, F)
+    >>> E = matching_energy(V + [0.5, 0, 0], V, idx, [[0.5, 0, 0], [0.0, 0, 0]], lam=1.0)
+    >>> bool(E[0] < 1.2 < E[1])
+    True
     """
     P = np.asarray(P, np.float64).reshape(-1, 3)
     N = np.asarray(N, np.float64).reshape(-1, 3)
@@ -96,17 +142,22 @@ def matching_energy(P, N, index: ExemplarIndex, translations, *, lam: float) -> 
     out = np.empty(T.shape[0])
     per = max(1, _QUERY_CHUNK // k)
     for s in range(0, T.shape[0], per):
-        Q = (P[None] - T[s:s + per, None]).reshape(-1, 3)
+        Ts = T[s:s + per]
+        inside = covered_by(P, Ts, footprint)
+        Q = (P[None] - Ts[:, None]).reshape(-1, 3)
         d2, face, _ = index.points.query(Q)
-        dn = np.linalg.norm(np.tile(N, (Q.shape[0] // k, 1)) - index.normals[face], axis=1)
-        e = (1.0 + lam * np.sqrt(d2)) * (1.0 + dn)
-        out[s:s + per] = e.reshape(-1, k).mean(axis=1)
+        dn = np.linalg.norm(np.tile(N, (Ts.shape[0], 1)) - index.normals[face], axis=1)
+        e = ((1.0 + lam * np.sqrt(d2)) * (1.0 + dn)).reshape(-1, k)
+        count = inside.sum(axis=1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            out[s:s + per] = np.where(count > 0, (e * inside).sum(axis=1) / count, np.inf)
     return out
 
 
 def best_translation(P, N, index: ExemplarIndex, candidates, *, lam: float, refine: int = 3,
                      lo=None, hi=None, max_iterations: int = 10,
-                     max_points: int = 1500, icp_points: int = 400) -> Match:
+                     max_points: int = 1500, icp_points: int = 400, footprint=None,
+                     min_overlap: float = 0.3) -> Match:
     """Best exemplar translation for the region ``P`` among ``candidates``, ICP-refined.
 
     Parameters
@@ -129,10 +180,21 @@ def best_translation(P, N, index: ExemplarIndex, candidates, *, lam: float, refi
     icp_points : int, optional
         About this many of them drive the ICP (every k-th point); ICP stops
         when an update is below ``1e-4`` of the region's diagonal.
+    footprint : tuple (lx, ly), optional
+        Exemplar rectangle: only the region vertices a candidate copy covers
+        are scored and drive its ICP (see :func:`matching_energy`).
+    min_overlap : float, optional
+        With ``footprint``: candidates covering fewer than this fraction of
+        the largest covered count are discarded (unless none is left).
 
     Returns
     -------
     Match
+
+    Raises
+    ------
+    InputError
+        If there is no candidate or no point.
     """
     C = np.asarray(candidates, np.float64).reshape(-1, 3)
     if C.shape[0] == 0:
@@ -142,14 +204,22 @@ def best_translation(P, N, index: ExemplarIndex, candidates, *, lam: float, refi
     if P.shape[0] > max_points:  # an even, deterministic subsample
         keep = np.linspace(0, P.shape[0] - 1, max_points).round().astype(np.int64)
         P, N = P[keep], N[keep]
-    E = matching_energy(P, N, index, C, lam=lam)
+    if P.shape[0] == 0:
+        raise InputError("best_translation needs at least one point")
+    E = matching_energy(P, N, index, C, lam=lam, footprint=footprint)
+    inside = covered_by(P, C, footprint)
+    count = inside.sum(axis=1)
+    few = count < min_overlap * count.max()
+    if not few.all():
+        E = np.where(few, np.inf, E)
     order = np.argsort(E, kind="stable")[:max(1, refine)]
     best_t, best_e, iters = C[order[0]].copy(), float(E[order[0]]), 0
     refined = []
-    step = max(1, P.shape[0] // icp_points)
     scale = float(np.linalg.norm(P.max(axis=0) - P.min(axis=0))) or 1.0
     for c in order:
-        s, info = icp_translation(P[::step], t0=-C[c], target=index.points,
+        Pc = P[inside[c]] if inside[c].sum() >= 3 else P
+        step = max(1, Pc.shape[0] // icp_points)
+        s, info = icp_translation(Pc[::step], t0=-C[c], target=index.points,
                                   free=(True, True, False), max_iterations=max_iterations,
                                   method="plane",
                                   tol=1e-4 * scale)
@@ -159,7 +229,7 @@ def best_translation(P, N, index: ExemplarIndex, candidates, *, lam: float, refi
             t[:2] = np.clip(t[:2], lo, hi)
         refined.append(t)
     R = np.array(refined)
-    ER = matching_energy(P, N, index, R, lam=lam)
+    ER = matching_energy(P, N, index, R, lam=lam, footprint=footprint)
     j = int(np.argmin(ER))
     if ER[j] < best_e:
         best_t, best_e = R[j], float(ER[j])

@@ -139,7 +139,6 @@ def _covered(V, F, N, other_V, other_F, sign: float, eps: float) -> np.ndarray:
 
 def _cut(V, F, covered, dist, fixed, force_sink, band_rings: int):
     """Keep-mask of faces by the graph cut described in the module docstring."""
-    m = F.shape[0]
     sink = covered[F].any(axis=1) | force_sink
     near = np.zeros(V.shape[0], dtype=bool)
     near[F[sink].ravel()] = True
@@ -148,7 +147,12 @@ def _cut(V, F, covered, dist, fixed, force_sink, band_rings: int):
         band = near[F].any(axis=1)
         near[F[band].ravel()] = True
     source = ~band | fixed[F].any(axis=1)
-    sink = sink & ~source
+    return _dual_cut(V, F, dist, source, sink & ~source)
+
+
+def _dual_cut(V, F, dist, source, sink):
+    """Graph cut of the dual graph with the paper's weights; keep-mask of faces."""
+    m = F.shape[0]
     if not sink.any():
         return np.ones(m, dtype=bool)
     if not source.any():
@@ -162,6 +166,71 @@ def _cut(V, F, covered, dist, fixed, force_sink, band_rings: int):
     length = np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1) / h
     w = (1.0 + length) * (1.0 + (dist[E[:, 0]] + dist[E[:, 1]]) / h)
     return min_cut_keep(m, pairs, w, source=source, sink=sink)
+
+
+def _corresponding_cut(VA, FA, VB, FB, NA, NB, fixA, out_b, eps, band_rings):
+    """Keep-masks of faces for two elements that coincide where they overlap.
+
+    The paper's rule for corresponding elements (copies of one element, or
+    two pieces of one strand after the alignment shift): where the surfaces
+    coincide (closer than ``tau``, a quarter of the mean edge length) the
+    cut may run; the part of an element that has no counterpart (farther
+    than ``tau`` from the other and not inside it) or lies outside the two
+    elements' common box is kept (SOURCE); the part inside the other element
+    (an end cap inside the other strand) and the vertices whose counterpart
+    on the other element lies outside the common box go (SINK).  ``A`` is
+    cut first; ``B`` then gives up every face whose counterpart on ``A`` was
+    kept and may cut only within ``band_rings + 1`` of its mean edge lengths
+    of ``A``'s seam, so the two seams lie next to each other and the kept
+    pieces do not overlap.  Returns ``None`` when the elements do not
+    coincide anywhere (the general path then applies).
+    """
+    h = float(np.mean([_mean_edge(VA, FA), _mean_edge(VB, FB)]))
+    tau = 0.25 * h
+    dA2, fA, _ = ClosestPoints(VB, FB).query(VA)
+    dB2, fB, _ = ClosestPoints(VA, FA).query(VB)
+    dA, dB = np.sqrt(dA2), np.sqrt(dB2)
+    nearA, nearB = dA < tau, dB < tau
+    if nearA.sum() < 3 or nearB.sum() < 3:
+        return None
+    lo = np.maximum(VA.min(0), VB.min(0))[:2] - tau
+    hi = np.minimum(VA.max(0), VB.max(0))[:2] + tau
+    boxA = ((VA[:, :2] >= lo) & (VA[:, :2] <= hi)).all(axis=1)
+    boxB = ((VB[:, :2] >= lo) & (VB[:, :2] <= hi)).all(axis=1)
+    covA = _covered(VA, FA, NA, VB, FB, +1.0, eps)
+    covB = _covered(VB, FB, NB, VA, FA, -1.0, eps)
+    # A: keep what B has no counterpart for, remove A inside B and A where B goes on
+    excl_B_face = (~boxB)[FB].any(axis=1)
+    sink_v = (~nearA & covA) | (nearA & excl_B_face[fA])
+    source_v = ((~nearA & ~covA) | ~boxA) & ~sink_v
+    sinkA = sink_v[FA].any(axis=1)
+    sourceA = (source_v[FA].all(axis=1) & ~sinkA) | fixA[FA].any(axis=1)
+    keep_a = _dual_cut(VA, FA, dA, sourceA, sinkA & ~sourceA)
+    if keep_a.all() or not keep_a.any():
+        return None
+    # B: give up what A kept, cut next to A's seam (within (band_rings + 1)
+    # of B's own mean edge lengths of it, whatever A's triangles are like)
+    on_kept = np.zeros(VA.shape[0], bool)
+    on_kept[FA[keep_a].ravel()] = True
+    on_gone = np.zeros(VA.shape[0], bool)
+    on_gone[FA[~keep_a].ravel()] = True
+    seam = VA[on_kept & on_gone]
+    if seam.shape[0] == 0:
+        return None
+    hB = _mean_edge(VB, FB)
+    near_seam = cKDTree(seam).query(VB)[0] <= band_rings * hB
+    sink_v = (~nearB & covB) | (nearB & keep_a[fB]) | out_b
+    free_v = nearB & near_seam & ~sink_v
+    source_v = ~sink_v & ~free_v
+    sinkB = sink_v[FB].any(axis=1)
+    sourceB = source_v[FB].all(axis=1) & ~sinkB
+    keep_b = _dual_cut(VB, FB, dB, sourceB, sinkB)
+    return keep_a, keep_b
+
+
+def _mean_edge(V, F):
+    E = np.r_[F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]
+    return float(np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1).mean()) or 1.0
 
 
 def _outside_domain(V, domain):
@@ -240,6 +309,7 @@ def merge_elements(VA, FA, VB, FB, *, fixed_a=None, domain=None, band_rings: int
     capA = np.zeros(FA.shape[0], bool) if cap_a is None else np.asarray(cap_a, bool).copy()
     if capA.shape != (FA.shape[0],):
         raise InputError(f"cap_a must have shape ({FA.shape[0]},), got {capA.shape}")
+    shifted = False
     if align:
         VA, VB, same, shifted = _aligned(VA, FA, VB, fixA, max_shift, same_tol, match_tol)
         if not shifted and corresponding_only:
@@ -272,18 +342,23 @@ def merge_elements(VA, FA, VB, FB, *, fixed_a=None, domain=None, band_rings: int
         return keep_a("absorbed")
     if cov_a.all() and not fixA.any() and not capA.any() and not out_b.any():
         return MergeResult(VB, FB, fixB, "absorbed")
-    dist_a = np.sqrt(ClosestPoints(VB, FB).query(VA)[0])
-    dist_b = np.sqrt(ClosestPoints(VA, FA).query(VB)[0])
-    # faces crossing the other surface go too, even with no covered vertex:
-    # then no kept face of A can cross a kept face of B
-    cross = self_intersecting_pairs(np.r_[VA, VB], np.r_[FA, FB + VA.shape[0]])
-    cross = cross[(cross[:, 0] < FA.shape[0]) & (cross[:, 1] >= FA.shape[0])]
-    sink_a = np.zeros(FA.shape[0], bool)
-    sink_a[cross[:, 0]] = True
-    sink_b = out_b[FB].any(axis=1)
-    sink_b[cross[:, 1] - FA.shape[0]] = True
-    keep_fa = _cut(VA, FA, cov_a, dist_a, fixA, sink_a, band_rings)
-    keep_fb = _cut(VB, FB, cov_b | out_b, dist_b, fixB, sink_b, band_rings)
+    kept = (_corresponding_cut(VA, FA, VB, FB, NA, NB, fixA, out_b, eps, band_rings)
+            if shifted else None)
+    if kept is not None:
+        keep_fa, keep_fb = kept
+    else:
+        dist_a = np.sqrt(ClosestPoints(VB, FB).query(VA)[0])
+        dist_b = np.sqrt(ClosestPoints(VA, FA).query(VB)[0])
+        # faces crossing the other surface go too, even with no covered vertex:
+        # then no kept face of A can cross a kept face of B
+        cross = self_intersecting_pairs(np.r_[VA, VB], np.r_[FA, FB + VA.shape[0]])
+        cross = cross[(cross[:, 0] < FA.shape[0]) & (cross[:, 1] >= FA.shape[0])]
+        sink_a = np.zeros(FA.shape[0], bool)
+        sink_a[cross[:, 0]] = True
+        sink_b = out_b[FB].any(axis=1)
+        sink_b[cross[:, 1] - FA.shape[0]] = True
+        keep_fa = _cut(VA, FA, cov_a, dist_a, fixA, sink_a, band_rings)
+        keep_fb = _cut(VB, FB, cov_b | out_b, dist_b, fixB, sink_b, band_rings)
     if not keep_fa.any():
         return _fallback(VA, FA, fixA, capA, VB, FB, out_b, "cut removed all of A")
     if not keep_fb.any():

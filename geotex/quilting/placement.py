@@ -76,24 +76,40 @@ def inside_domain(p: Element, W: float, H: float) -> bool:
     return bool(p.lo[0] >= 0 and p.lo[1] >= 0 and p.hi[0] <= W and p.hi[1] <= H)
 
 
-def place_element(p: Element, elements: list, domain, stats: PlacementStats) -> bool:
-    """Add, merge or drop one placed element; True when it was used."""
+def place_element(p: Element, elements: list, domain, stats: PlacementStats, *,
+                  optional: bool = False) -> bool:
+    """Add, merge or drop one placed element; True when it was used.
+
+    With ``optional`` (an element of the copy that only reaches into the
+    claimed cells) nothing is counted as dropped: the element is added when
+    it touches nothing and stays in the domain (a gap fill), merged when it
+    touches exactly one element that it corresponds to (the way strands of
+    successive copies join into one), and left out otherwise.
+    """
     W, H = domain[2], domain[3]
     partners = [k for k, e in enumerate(elements) if touching(e, p)]
     if not partners:
         if p.lo[0] < 0 or p.lo[1] < 0 or p.hi[0] > W or p.hi[1] > H:
-            stats.dropped["domain"] += 1
+            if not optional:
+                stats.dropped["domain"] += 1
             return False
         elements.append(p)
+        if optional:
+            stats.gap_fills += 1
         return True
     if len(partners) > 1:
-        stats.dropped["several_partners"] += 1
+        if not optional:
+            stats.dropped["several_partners"] += 1
         return False
     k = partners[0]
     e = elements[k]
     r = merge_elements(e.V, e.F, p.V, p.F, fixed_a=e.fixed, domain=domain,
                        corresponding_only=True, cap_a=e.cap)
+    if optional and r.status not in ("stitched", "union", "absorbed"):
+        return False
     if r.status not in ("separate", "dropped") and _collides(r, elements, k):
+        if optional:
+            return False
         r = merge_elements(e.V, e.F, p.V, p.F, fixed_a=e.fixed, domain=domain, align=False,
                            cap_a=e.cap)
         if r.status == "separate" or _collides(r, elements, k):

@@ -1,6 +1,7 @@
 """Constrained mesh quilting: fill a rectangle with copies of an exemplar texture.
 
-The plane is cut into square-ish cells about one element pitch wide.  Cells
+The plane is cut into cells about one element pitch wide (one period of the
+exemplar's layout when it reports one, e.g. chain mail).  Cells
 are *occupied* when the caller says so (``occupied`` rectangles, or the
 centre lies under a ``prefilled`` element) or once an exemplar copy has
 covered them.  Until every cell of the output domain ``[0, W] x [0, H]`` is occupied:
@@ -8,8 +9,8 @@ covered them.  Until every cell of the output domain ``[0, W] x [0, H]`` is occu
 1. **Seed**: the free cell with the most occupied neighbours (8-neighbourhood;
    ties broken by the seeded generator).
 2. **Match** (:mod:`~geotex.quilting.match`): every translation of the
-   exemplar on the lattice of cell multiples (``m * cell``, one lattice for
-   the whole output) that covers the seed cell (and ``cover`` rings around
+   exemplar on the lattice of cell multiples (``(m cx, n cy)``, one lattice
+   for the whole output) that covers the seed cell (and ``cover`` rings around
    it, when possible) is scored by the matching energy over the texture's
    vertices in the ``window`` rings of cells around the seed, and the best
    few are refined by ICP in the plane.  With nothing to match (first copy)
@@ -26,8 +27,11 @@ covered them.  Until every cell of the output domain ``[0, W] x [0, H]`` is occu
    partner (the merge itself removes any part of it outside the domain).  A
    merge whose result would touch a third element is retried without the
    alignment shift, and dropped if it still does.
-   Elements of the copy centred elsewhere that reach into the claim are
-   added only when they touch nothing (``fill_gaps``); the rest is unused.
+   Elements of the copy centred elsewhere that reach into the claim
+   (``fill_gaps``) are added when they touch nothing, and merged when they
+   touch exactly one element they correspond to: that is how the strands of
+   successive copies (weave, bark ridges) join into longer strands.  The
+   rest of the copy is unused.
    A claimed cell that lost its element is freed again (at most ``retries``
    times) so that a later copy can fill it.
 
@@ -66,8 +70,7 @@ from geotex.quilting.elements import (Element, capped, closed_element_ok,
                                       concatenate_elements, split_elements, texture_arrays)
 from geotex.quilting.grid import CellGrid, lattice, under
 from geotex.quilting.match import ExemplarIndex, best_translation
-from geotex.quilting.placement import (PlacementStats, clipped_to, inside_domain,
-                                       place_element, touching)
+from geotex.quilting.placement import PlacementStats, clipped_to, place_element
 from geotex.quilting.quality import QuiltReport, quilt_report
 
 __all__ = ["QuiltResult", "quilt_texture", "default_cell"]
@@ -101,14 +104,28 @@ class QuiltResult:
     element_prefilled: np.ndarray = None
 
 
-def default_cell(elements: list[Element], size, params=None) -> float:
-    """About one element pitch.
+def default_cell(elements: list[Element], size, params=None, period=None):
+    """About one element pitch: the grid cell and the lattice of copy translations.
 
-    The exemplar's own ``params["pitch"]`` when it has one (procedural
-    exemplars do: copies placed at multiples of the pitch keep the pattern's
-    phase, which matters for weaves and knurls), else
-    ``sqrt(exemplar area / element count)``.
+    In order of preference: the exemplar's ``period`` (``(px, py)``: the
+    translations that map its pattern onto itself, which procedural
+    exemplars with a lattice layout report, e.g. chain mail rows alternate
+    their tilt so the period across the rows is two row spacings), its
+    ``params["pitch"]`` (procedural exemplars: copies placed at multiples of
+    the pitch keep the pattern's phase, which matters for weaves and
+    knurls), else ``sqrt(exemplar area / element count)``.
+
+    Returns
+    -------
+    float or tuple (cx, cy)
     """
+    if period is not None:
+        try:
+            px, py = (float(c) for c in period)
+        except (TypeError, ValueError):
+            px = py = float("nan")
+        if np.isfinite([px, py]).all() and 0 < px <= size[0] and 0 < py <= size[1]:
+            return (px, py)
     pitch = (params or {}).get("pitch") if isinstance(params, dict) else None
     if pitch is not None:
         try:
@@ -118,6 +135,18 @@ def default_cell(elements: list[Element], size, params=None) -> float:
     if pitch is not None and np.isfinite(pitch) and 0 < pitch <= min(size):
         return pitch
     return float(np.sqrt(size[0] * size[1] / max(len(elements), 1)))
+
+
+def _cell_pair(cell) -> tuple[float, float]:
+    try:
+        c = np.asarray(cell, dtype=np.float64).reshape(-1)
+    except (TypeError, ValueError):
+        c = np.zeros(0)
+    if c.size == 1:
+        c = np.r_[c, c]
+    if c.size != 2 or not (np.isfinite(c).all() and (c > 0).all()):
+        raise InputError(f"cell must be a positive number or a pair (cx, cy), got {cell!r}")
+    return float(c[0]), float(c[1])
 
 
 def _rects(occupied) -> np.ndarray:
@@ -150,9 +179,10 @@ def quilt_texture(V, F=None, *, size=None, out_size, cell=None, seed=0, prefille
         Exemplar extent (defaults to the object's ``size``).
     out_size : tuple (W, H)
         Output domain ``[0, W] x [0, H]``.
-    cell : float, optional
-        Grid cell size; default :func:`default_cell` (the exemplar's pitch,
-        or about one element pitch).  Cells are stretched slightly so the domain holds a whole
+    cell : float or tuple (cx, cy), optional
+        Grid cell size, also the lattice of copy translations; default
+        :func:`default_cell` (the exemplar's period or pitch, or about one
+        element pitch).  Cells are stretched slightly so the domain holds a whole
         number of them.
     seed : int, optional
         Seed of the random generator (ties, first placement).  Same inputs and
@@ -174,7 +204,8 @@ def quilt_texture(V, F=None, *, size=None, out_size, cell=None, seed=0, prefille
         intersection (a flat cut face on the boundary; better coverage for
         long elements such as strands).
     lam : float, optional
-        Distance weight of the matching energy (default ``1 / cell``).
+        Distance weight of the matching energy (default ``1 / cell``, the
+        mean of the two sides for a pair).
     refine : int, optional
         Best candidates refined by ICP at each step.
     window : int, optional
@@ -193,14 +224,17 @@ def quilt_texture(V, F=None, *, size=None, out_size, cell=None, seed=0, prefille
         When the best match would put elements onto elements of the texture,
         take the finalist (refined or not) whose copy collides least.
     fill_gaps : bool, optional
-        Also add elements of the copy that are centred outside the claim but
-        reach into it, when they touch nothing (fills the gaps that long
-        elements leave).
+        Also use elements of the copy that are centred outside the claim but
+        reach into it: added when they touch nothing (fills the gaps that
+        long elements leave), merged when they touch exactly one element
+        they correspond to (joins strands).
     max_steps : int, optional
         Stop after this many placements (default: ``(retries + 1)`` times
         the number of cells).
     progress : callable, optional
-        Called with a short stage name at each placement.
+        Called at each placement with ``"placement K: FILLED/TOTAL cells"``
+        (the cells occupied before it; the command line draws its bar from
+        these counts).
 
     Returns
     -------
@@ -239,22 +273,22 @@ def quilt_texture(V, F=None, *, size=None, out_size, cell=None, seed=0, prefille
                              f"{e.V.mean(axis=0).round(3).tolist()}) is not a closed solid: {problem}; repair the "
                              "exemplar (geotex repair) first")
     if cell is None:
-        cell = default_cell(ex_elements, size, getattr(V, "params", None))
-    if not (np.isfinite(cell) and cell > 0):
-        raise InputError(f"cell must be a positive number, got {cell!r}")
+        cell = default_cell(ex_elements, size, getattr(V, "params", None),
+                            getattr(V, "period", None))
+    pitch_x, pitch_y = _cell_pair(cell)
     if boundary not in ("drop", "clip"):
         raise InputError(f"boundary must be 'drop' or 'clip', got {boundary!r}")
     if int(window) < 0 or int(cover) < 0:
         raise InputError(f"window and cover must be >= 0, got {window}, {cover}")
-    nx, ny = max(1, int(round(W / cell))), max(1, int(round(H / cell)))
+    nx, ny = max(1, int(round(W / pitch_x))), max(1, int(round(H / pitch_y)))
     cw, ch = W / nx, H / ny
     window, cover = int(window), int(cover)
     while cover > 0 and ((2 * cover + 1) * cw > size[0] or (2 * cover + 1) * ch > size[1]):
         cover -= 1
     if cw > size[0] or ch > size[1]:
-        raise InputError(f"cell {cell:g} is larger than the exemplar {size}; "
+        raise InputError(f"cell {cell!r} is larger than the exemplar {size}; "
                          "give a smaller cell or a larger exemplar")
-    lam = 1.0 / cell if lam is None else float(lam)
+    lam = 2.0 / (pitch_x + pitch_y) if lam is None else float(lam)
     rng = np.random.default_rng(seed)
     domain = (0.0, 0.0, W, H)
 
@@ -300,7 +334,7 @@ def quilt_texture(V, F=None, *, size=None, out_size, cell=None, seed=0, prefille
     limit = (retries + 1) * nx * ny if max_steps is None else int(max_steps)
     while not occ.all() and steps < limit:
         steps += 1
-        report_progress(progress, f"placement {steps}")
+        report_progress(progress, f"placement {steps}: {int(occ.sum())}/{occ.size} cells")
         # (a) seed
         pad = np.pad(occ, 1).astype(np.int64)
         nb = sum(pad[1 + dx:nx + 1 + dx, 1 + dy:ny + 1 + dy]
@@ -313,8 +347,8 @@ def quilt_texture(V, F=None, *, size=None, out_size, cell=None, seed=0, prefille
         for ring in (cover, 0):
             cx0, cy0 = (si - ring) * cw, (sj - ring) * ch
             cx1, cy1 = (si + ring + 1) * cw, (sj + ring + 1) * ch
-            tx = lattice(cx0, cx1, size[0], cell)
-            ty = lattice(cy0, cy1, size[1], cell)
+            tx = lattice(cx0, cx1, size[0], pitch_x)
+            ty = lattice(cy0, cy1, size[1], pitch_y)
             if tx.size and ty.size:
                 break
         else:  # the stretched grid is off the lattice: cell multiples of the grid
@@ -328,7 +362,8 @@ def quilt_texture(V, F=None, *, size=None, out_size, cell=None, seed=0, prefille
                               (si + window + 1) * cw, (sj + window + 1) * ch)
         if P.shape[0] >= 3:
             m = best_translation(P, N, index, cand, lam=lam, refine=refine,
-                                 lo=[cx1 - size[0], cy1 - size[1]], hi=[cx0, cy0])
+                                 lo=[cx1 - size[0], cy1 - size[1]], hi=[cx0, cy0],
+                                 footprint=size)
             t = m.t
             icp_iterations += m.icp_iterations
             if avoid_collisions and grid.collisions(t, si, sj, elements):
@@ -361,9 +396,7 @@ def quilt_texture(V, F=None, *, size=None, out_size, cell=None, seed=0, prefille
                     stats.dropped["domain"] += 1
             if not centred:
                 for q in pieces:
-                    if not any(touching(e, q) for e in elements) and inside_domain(q, W, H):
-                        elements.append(q)
-                        stats.gap_fills += 1
+                    place_element(q, elements, domain, stats, optional=True)
                 continue
             ok = [place_element(q, elements, domain, stats) for q in pieces]
             failed[ci, cj] = not all(ok) or not ok

@@ -114,9 +114,10 @@ def strip_between(a: np.ndarray, Pa: np.ndarray, b: np.ndarray, Pb: np.ndarray
     """Triangulate the band between two loops with the shortest total diagonals.
 
     Dynamic programming over the two loops (the shortest-diagonal rule made
-    globally optimal): after aligning the start of ``b`` with the vertex
-    closest to ``a[0]``, every triangle spans one edge of one loop and a
-    vertex of the other, and the sum of the diagonals' lengths is minimal.
+    globally optimal): after choosing the start of ``b`` that lines the two
+    loops up best (centroids matched, vertices walked in step), every
+    triangle spans one edge of one loop and a vertex of the other, and the
+    sum of the diagonals' lengths is minimal.
 
     Parameters
     ----------
@@ -134,14 +135,21 @@ def strip_between(a: np.ndarray, Pa: np.ndarray, b: np.ndarray, Pb: np.ndarray
         Strip triangles; each boundary half-edge of both loops appears once,
         reversed, so the result is closed and consistently oriented.
     """
-    # B runs the other way along the seam: walk it backwards, from the vertex
-    # closest to a[0]
+    # B runs the other way along the seam: walk it backwards, starting where
+    # the two loops line up best once their centroids are matched (the loops
+    # may be offset by more than the element is thick, e.g. two cross-sections
+    # of a strand on a slope: then the vertex of B nearest to a[0] can lie on
+    # the wrong side and the strip would twist)
     b = b[::-1]
     Pb = Pb[::-1]
-    start = int(np.argmin(np.linalg.norm(Pb - Pa[0], axis=1)))
+    na, nb = a.size, b.size
+    Ra, Rb = Pa - Pa.mean(axis=0), Pb - Pb.mean(axis=0)
+    walk = np.floor(np.arange(na) * nb / na + 0.5).astype(np.int64)
+    idx = (np.arange(nb)[:, None] + walk[None, :]) % nb                 # (starts, na)
+    spread = np.linalg.norm(Rb[idx] - Ra[None], axis=2).sum(axis=1)
+    start = int(np.argmin(spread))
     b = np.roll(b, -start)
     Pb = np.roll(Pb, -start, axis=0)
-    na, nb = a.size, b.size
     ia = np.arange(na + 1) % na
     ib = np.arange(nb + 1) % nb
     D = np.linalg.norm(Pa[ia][:, None, :] - Pb[ib][None, :, :], axis=2)  # (na+1, nb+1)
@@ -188,23 +196,24 @@ def strip_between(a: np.ndarray, Pa: np.ndarray, b: np.ndarray, Pb: np.ndarray
 def seam_quality(V, F, ma, mb, loops_a, loops_b, off, pairs):
     """Largest loop-to-loop gap and largest normal jump (degrees) across the seam.
 
-    The jump compares every face of piece A along the seam with the nearest
-    (by centroid) face of piece B along the seam.
+    ``F`` holds piece A's ``ma`` faces, then piece B's ``mb`` faces, then the
+    strips.  The gap is the largest distance of a vertex of an A loop to its
+    partner B loop.  The normal jump is the largest angle between the normals
+    of the two faces on a loop edge, one of the piece and one of the strip:
+    the bend the seam puts into the surface.  Loop edges run across the
+    element (along a cut through it), so where the strip continues the two
+    pieces smoothly the angle is as small as the element's own bends along
+    its length, whatever creases its cross-section has.
     """
     gaps = [np.linalg.norm(V[loops_a[i]] - closest_on_polyline(V[loops_a[i]],
                                                                V[loops_b[j] + off]), axis=1).max()
             for i, j in pairs]
     topo = edge_topology(F, V.shape[0])
     ef = topo.edge_faces()[topo.face_count == 2]
-    strip_first = ma + mb
-    cross = (ef[:, 0] >= strip_first) != (ef[:, 1] >= strip_first)
-    piece = np.where(ef[cross, 0] >= strip_first, ef[cross, 1], ef[cross, 0])
-    fa = np.unique(piece[piece < ma])
-    fb = np.unique(piece[piece >= ma])
-    if fa.size == 0 or fb.size == 0:
+    strip = ma + mb
+    across = (ef[:, 0] >= strip) != (ef[:, 1] >= strip)
+    if not across.any():
         return float(max(gaps)), float("nan")
     N = face_normals(V, F)
-    C = V[F].mean(axis=1)
-    nearest = np.argmin(np.linalg.norm(C[fa][:, None] - C[fb][None], axis=2), axis=1)
-    cosang = np.clip(np.einsum("ij,ij->i", N[fa], N[fb[nearest]]), -1.0, 1.0)
-    return float(max(gaps)), float(np.degrees(np.arccos(cosang)).max())
+    cosang = np.einsum("ij,ij->i", N[ef[across, 0]], N[ef[across, 1]])
+    return float(max(gaps)), float(np.degrees(np.arccos(np.clip(cosang, -1.0, 1.0))).max())
