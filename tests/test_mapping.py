@@ -1,0 +1,181 @@
+"""Tile sets over shells: identity on flat quads, welding, union, determinism, CLI."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from geotex.check import check_mesh
+from geotex.cli import main
+from geotex.errors import InputError
+from geotex.exemplars import exemplar
+from geotex.io import read_mesh, write_mesh
+from geotex.mapping import (edge_colors, mapped_tiles, textured_solid, texture_height,
+                            tiles_for_quads)
+from geotex.mapping.place import gathered_tiles
+from geotex.mesh.primitives import box, torus
+from geotex.mesh.record import Mesh
+from geotex.mesh.topology import edge_topology
+from geotex.shells import build_shell, quad_points_to_shell, save_shell
+from geotex.tiles import build_tileset, save_tileset
+
+
+@pytest.fixture(scope="module")
+def studs():
+    """A complete one-colour set (6 tiles)."""
+    return build_tileset(exemplar("studs", seed=1, resolution=6), colors=1, seed=0, interior="paste")
+
+
+@pytest.fixture(scope="module")
+def iso_studs():
+    """An isotropic two-colour set (16 tiles)."""
+    return build_tileset(exemplar("studs", seed=1, resolution=6), colors=2, isotropic=True, seed=0,
+                         interior="paste")
+
+
+@pytest.fixture(scope="module")
+def torus_shell():
+    V, F = torus(1.0, 0.4, n_major=48, n_minor=24)
+    return build_shell(V, F, tile_size=0.4, name="torus")
+
+
+def test_flat_tile_on_flat_quad_is_the_identity_up_to_scale(studs):
+    # a 6 x 6 x 1 box on a 0.25 grid: its faces are whole polycube charts; the
+    # middle of the top face is farther from any edge than the offset smoothing reaches
+    V, F = box((0, 0, 0), (6, 6, 1), divisions=6)
+    shell = build_shell(V, F, tile_size=0.25)
+    pc = shell.polycube
+    colors = edge_colors(pc.edge_axis, studs.n_colors, seed=0)
+    tiles = tiles_for_quads(studs, pc.quad_axes, pc.quad_edge, colors)
+    centre = pc.origin + pc.quad_corners[:, 0] * 0.25
+    top = np.flatnonzero((pc.quad_label == 4) & (np.abs(centre[:, 0] - 2.9) < 0.2)
+                         & (np.abs(centre[:, 1] - 2.9) < 0.2))
+    assert top.size >= 1
+    only = np.full(pc.n_quads, -1)
+    only[top] = tiles[top]
+    uvw, quad, _ = gathered_tiles(studs, only)
+    got = quad_points_to_shell(shell, quad, uvw, height=0.25)
+    c0 = pc.origin + pc.quad_corners[quad, 0] * 0.25
+    # the tile moved rigidly into the +X, +Y, +Z frame of the top face and scaled
+    assert np.abs(got - (c0 + uvw * 0.25)).max() < 1e-12
+    # and the elements that lie wholly inside these quads come out of the full map the same
+    m = mapped_tiles(shell, studs, only, scale=0.25)
+    assert m.vertices.shape[0] > 0
+    d = np.abs(m.vertices[:, None, :] - got[None, :, :]).max(axis=2).min(axis=1)
+    assert d.max() < 1e-12
+
+
+def test_welded_elements_are_closed_and_the_union_printable(torus_shell, studs):
+    res = textured_solid(torus_shell, studs, seed=3)
+    s = res.stats
+    assert s["welded"] > 0 and s["open_faces_dropped"] == 0 and s["bare_quads"] == 0
+    # every mapped element is closed: no boundary edge after welding
+    pc = torus_shell.polycube
+    colors = edge_colors(pc.edge_axis, studs.n_colors, seed=3)
+    m = mapped_tiles(torus_shell, studs, tiles_for_quads(studs, pc.quad_axes, pc.quad_edge,
+                                                         colors), scale=s["height"] / studs.height)
+    topo = edge_topology(m.faces, m.vertices.shape[0])
+    assert np.all(topo.face_count == 2)
+    assert m.faces.shape[0] == s["mapped_faces"]
+    assert res.report.printable, res.report.reasons
+    assert res.report.self_intersecting_pairs == 0
+    # the texture sits on the base: the solid is larger than the torus alone
+    V0 = torus_shell.base_vertices
+    assert np.ptp(res.vertices, axis=0).max() > np.ptp(V0, axis=0).max()
+
+
+def test_isotropic_set_covers_a_closed_shape(torus_shell, iso_studs):
+    assert iso_studs.isotropic and len(iso_studs) == 16
+    res = textured_solid(torus_shell, iso_studs, seed=0)
+    assert res.report.printable, res.report.reasons
+    assert (res.tile_of_quad >= 0).all()
+
+
+def test_same_seed_same_bytes_other_seed_other_layout(tmp_path, torus_shell, studs, iso_studs):
+    a = textured_solid(torus_shell, iso_studs, seed=5, check=False)
+    b = textured_solid(torus_shell, iso_studs, seed=5, check=False)
+    c = textured_solid(torus_shell, iso_studs, seed=6, check=False)
+    assert a.vertices.tobytes() == b.vertices.tobytes()
+    assert a.faces.tobytes() == b.faces.tobytes()
+    assert not np.array_equal(a.tile_of_quad, c.tile_of_quad)
+    write_mesh(tmp_path / "a.stl", Mesh(a.vertices, a.faces))
+    write_mesh(tmp_path / "b.stl", Mesh(b.vertices, b.faces))
+    assert (tmp_path / "a.stl").read_bytes() == (tmp_path / "b.stl").read_bytes()
+
+
+def test_neighbouring_quads_agree_on_their_edge_colours(torus_shell, studs):
+    pc = torus_shell.polycube
+    colors = edge_colors(pc.edge_axis, (2, 2, 2), seed=1)
+    assert set(np.unique(colors)) == {0, 1}
+    side = colors[pc.quad_edge]
+    qa, qb = pc.edge_quads[:, 0], pc.edge_quads[:, 1]
+    sa, sb = pc.edge_sides[:, 0], pc.edge_sides[:, 1]
+    assert np.array_equal(side[qa, sa], side[qb, sb])
+
+
+def test_planar_set_and_bad_heights_are_refused(torus_shell):
+    planar = build_tileset(exemplar("studs", seed=1, resolution=6), colors=1, planar=True, interior="paste")
+    with pytest.raises(InputError, match="no colours for Z"):
+        textured_solid(torus_shell, planar)
+    iso = build_tileset(exemplar("studs", seed=1, resolution=6), colors=1, isotropic=True, interior="paste")
+    with pytest.raises(InputError, match="safe height"):
+        texture_height(torus_shell, iso, 10 * torus_shell.max_height)
+    with pytest.raises(InputError, match="positive"):
+        texture_height(torus_shell, iso, -1.0)
+    with pytest.raises(InputError, match="seed"):
+        textured_solid(torus_shell, iso, seed=-1)
+    h = texture_height(torus_shell, iso)
+    assert h == min(iso.height * torus_shell.tile_size, torus_shell.max_height)
+
+
+def test_cli_map_texture_and_errors(tmp_path, capsys, torus_shell, iso_studs):
+    tiles = tmp_path / "iso.npz"
+    save_tileset(tiles, iso_studs)
+    shell = tmp_path / "torus.npz"
+    save_shell(shell, torus_shell)
+    out = tmp_path / "t.stl"
+    rep = tmp_path / "t.json"
+    assert main(["map", "--tiles", str(tiles), "--shell", str(shell), "-o", str(out),
+                 "--report", str(rep), "--size-mm", "60", "--seed", "2"]) == 0
+    text = capsys.readouterr().out
+    assert "printable" in text and out.is_file()
+    m = read_mesh(out)
+    assert abs(np.ptp(m.vertices, axis=0).max() - 60.0) < 1e-3
+    assert check_mesh(m.vertices, m.faces).printable
+    doc = json.loads(rep.read_text())
+    assert doc["stats"]["seed"] == 2 and doc["check"]["printable"]
+    # the one-shot from a mesh file
+    src = tmp_path / "torus.obj"
+    V, F = torus(1.0, 0.4, n_major=40, n_minor=20)
+    write_mesh(src, Mesh(V, F))
+    out2 = tmp_path / "t2.3mf"
+    assert main(["texture", str(src), "--tiles", str(tiles), "--tile-size", "0.45", "-o",
+                 str(out2), "--shell-out", str(tmp_path / "s2.npz")]) == 0
+    assert out2.is_file() and (tmp_path / "s2.npz").is_file()
+    capsys.readouterr()
+    # errors: one line, exit 2, nothing written, inputs never overwritten
+    cases = [
+        ["map", "--tiles", str(tiles), "--shell", str(shell), "-o", str(tiles)],
+        ["map", "--tiles", "no-such-set", "--shell", str(shell), "-o", str(tmp_path / "x.stl")],
+        ["map", "--tiles", str(tiles), "--shell", "no-such-shell", "-o", str(tmp_path / "x.stl")],
+        ["map", "--tiles", str(tiles), "--shell", str(shell), "-o", str(tmp_path / "x.png")],
+        ["map", "--tiles", str(tiles), "--shell", str(shell), "-o", str(tmp_path / "x.stl"),
+         "--height", "100"],
+        ["texture", str(tmp_path / "missing.obj"), "--tiles", str(tiles), "-o",
+         str(tmp_path / "x.stl")],
+    ]
+    before = tiles.read_bytes()
+    for argv in cases:
+        assert main(argv) == 2, argv
+        err = capsys.readouterr().err
+        assert err.startswith("geotex: error:") and err.count("\n") == 1, err
+    assert not (tmp_path / "x.stl").exists() and tiles.read_bytes() == before
+    # an open base: the one-shot says to repair it
+    open_src = tmp_path / "open.obj"
+    write_mesh(open_src, Mesh(V, F[1:]))
+    assert main(["texture", str(open_src), "--tiles", str(tiles), "-o",
+                 str(tmp_path / "y.stl")]) == 2
+    assert "geotex repair" in capsys.readouterr().err
+    assert not (tmp_path / "y.stl").exists()
