@@ -156,3 +156,66 @@ def test_planar_transfer_with_a_field_file(capsys, tmp_path, planar_files):
                        "--refine", "subdivide", "-o", out, "--base-out", refined)
     assert code == 0, err
     assert load_texture(out).height.shape == (read_mesh(refined).n_vertices,)
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["extract", "{textured}", "-o", "{tmp}/o.npz", "--base-out", "{tmp}/b.xyz"], ".xyz"),
+    (["transfer", "{tex}", "--source-base", "{base}", "--target", "{base}", "-o", "{tmp}/o.npz",
+      "--apply", "{tmp}/b.npz"], ".npz"),
+    (["apply", "{tex}", "--base", "{base}", "-o", "{tmp}/b.xyz"], ".xyz"),
+    (["edit", "{tex}", "--set-tilt", "30", "--direction", "0,0,0", "--base", "{base}",
+      "-o", "{tmp}/o.npz"], "non-zero"),
+    (["edit", "{tex}", "--scale-height", "2", "--phase", "1", "-o", "{tmp}/o.npz"],
+     "--phase belongs to --wiggle"),
+    (["edit", "{tex}", "--set-tilt", "20", "--phase", "1", "--base", "{base}",
+      "-o", "{tmp}/o.npz"], "--phase belongs to --wiggle"),
+    (["edit", "{tex}", "--scale-height", "2", "--direction", "1,0,0", "-o", "{tmp}/o.npz"],
+     "--direction belongs"),
+    (["apply", "{textured}", "--base", "{base}", "-o", "{tmp}/b.ply"], "not a zip archive"),
+])
+def test_bad_outputs_and_options_fail_before_writing_anything(capsys, tmp_path, files, argv,
+                                                              message):
+    textured, base, *_ = files
+    tex = tmp_path / "t.npz"
+    run(capsys, "heighttilt", "extract", textured, "--base", base, "-o", tex)
+    before = sorted(p.name for p in tmp_path.iterdir())
+    subs = dict(tex=tex, base=base, tmp=tmp_path, textured=textured)
+    code, out, err = run(capsys, "heighttilt", *[a.format(**subs) for a in argv])
+    assert code == 2 and message in err and err.count("\n") == 1, err
+    assert "Traceback" not in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == before     # nothing written
+
+
+def test_a_failing_second_output_removes_the_first(capsys, tmp_path, files, monkeypatch):
+    import geotex.heighttilt as ht
+    from geotex.errors import MeshFileError
+    textured, base, *_ = files
+
+    def broken(path, tex):
+        raise MeshFileError(path, "cannot write: disk full")
+
+    monkeypatch.setattr(ht, "save_texture", broken)
+    code, _, err = run(capsys, "heighttilt", "extract", textured, "--smooth-steps", "1",
+                       "-o", tmp_path / "t.npz", "--base-out", tmp_path / "b.ply")
+    assert code == 2 and "disk full" in err
+    assert not (tmp_path / "b.ply").exists() and not (tmp_path / "t.npz").exists()
+
+
+def test_wrap_and_wiggle_frames_from_the_command_line(capsys, tmp_path, files):
+    from geotex.heighttilt import wiggle, wrap
+    textured, base, V0, F, Vs = files
+    tex = tmp_path / "t.npz"
+    run(capsys, "heighttilt", "extract", textured, "--base", base, "-o", tex)
+    t = load_texture(tex)
+    frames = []
+    for k, phase in enumerate(("0", "1.5")):
+        out = tmp_path / f"w{k}.npz"
+        assert run(capsys, "heighttilt", "edit", tex, "--wiggle", "25", "--phase", phase,
+                   "--direction", "0,0,1", "--base", base, "-o", out)[0] == 0
+        ref = wiggle(Vs, F, t, amplitude=25, phase=float(phase), direction=[0, 0, 1])
+        np.testing.assert_allclose(load_texture(out).tilt, ref.tilt, atol=1e-12)
+        frames.append(load_texture(out).tilt)
+    assert np.abs(frames[0] - frames[1]).max() > 1e-3          # the phase moves the wave
+    out = tmp_path / "wrap.npz"
+    assert run(capsys, "heighttilt", "edit", tex, "--wrap", "2", "--base", base, "-o", out)[0] == 0
+    np.testing.assert_allclose(load_texture(out).tilt, wrap(Vs, F, t, k=2.0).tilt, atol=1e-12)

@@ -237,3 +237,51 @@ def test_transfer_bad_correspondence(sphere):
     with pytest.raises(InputError, match="connectivity mismatch"):
         transfer_texture(Vd, Fd, tex, Vd, Fd, correspondence=(fc, B))
     assert check_correspondence((fc, B), n, F.shape[0])[0].dtype == np.int64
+
+
+# --------------------------------------------------------------------------- invariance
+
+def _motion(seed=4):
+    q, _ = np.linalg.qr(np.random.default_rng(seed).normal(size=(3, 3)))
+    return q * np.sign(np.linalg.det(q)), 1.7, np.array([0.4, -2.0, 1.1])
+
+
+def test_edits_are_invariant_under_rigid_motion_and_uniform_scaling(sphere):
+    from geotex.heighttilt import displacements, set_tilt, wiggle, wrap
+    V0, F, Vs, tex = sphere
+    R, s, shift = _motion()
+    Ts = s * Vs @ R.T + shift
+    tex2, _ = extract_texture(s * V0 @ R.T + shift, F, base=Ts)
+    d = [u @ [0.3, 1.0, 0.2] for u in (np.eye(3), R)]
+    cases = [
+        (lambda B, t, k: set_tilt(B, F, t, angle_degrees=30.0, direction=d[k])),
+        (lambda B, t, k: set_tilt(B, F, t, angle_degrees=20.0)),
+        # wrap leans by k |h| radians: k is per unit of height, so it scales by 1 / s
+        (lambda B, t, k: wrap(B, F, t, k=2.0 / (s if k else 1.0), direction=d[k])),
+        # the default wavelength follows the base's size, the wave starts at the base
+        (lambda B, t, k: wiggle(B, F, t, amplitude=25.0, phase=0.7,
+                                direction=[u @ [0.0, 0.3, 1.0] for u in (np.eye(3), R)][k])),
+    ]
+    for edit in cases:
+        a = displacements(Vs, F, edit(Vs, tex, 0))
+        b = displacements(Ts, F, edit(Ts, tex2, 1))
+        np.testing.assert_allclose(b, s * a @ R.T, atol=1e-9 * s)
+
+
+def test_transfer_is_invariant_under_rigid_motion_and_uniform_scaling(sphere):
+    V0, F, Vs, tex = sphere
+    Vd, Fd = icosphere(4)
+    R, s, shift = _motion(5)
+
+    def moved(X):
+        return s * X @ R.T + shift
+
+    out = transfer_texture(Vs, F, tex, Vd, Fd,
+                           correspondence=closest_point_correspondence(Vd, Vs, F))
+    tex2, _ = extract_texture(moved(V0), F, base=moved(Vs))
+    out2 = transfer_texture(moved(Vs), F, tex2, moved(Vd), Fd,
+                            correspondence=closest_point_correspondence(moved(Vd), moved(Vs), F))
+    np.testing.assert_allclose(out2.height, s * out.height, atol=1e-9 * s)
+    np.testing.assert_allclose(out2.tilt, s * out.tilt, atol=1e-9 * s)
+    np.testing.assert_allclose(apply_texture(moved(Vd), Fd, out2),
+                               moved(apply_texture(Vd, Fd, out)), atol=1e-9 * s)

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+from contextlib import contextmanager, suppress
+from pathlib import Path
+
 from geotex.cli._common import EXIT_OK, UsageError, guard_output
 
 HELP = "extract, apply, edit and transfer height-and-tilt geometric textures"
@@ -71,8 +74,11 @@ def register(sub):
                      help="travelling wave of lean, AMP degrees at most; see --phase")
     how.add_argument("--scale-height", type=float, metavar="S", help="multiply heights by S")
     d.add_argument("--direction", metavar="X,Y,Z", help="lean direction (default: as extracted)")
-    d.add_argument("--phase", type=float, default=0.0, help="wave phase for --wiggle (radians)")
-    d.add_argument("--base", help="base mesh file (needed by --set-tilt, --wrap, --wiggle)")
+    d.add_argument("--phase", type=float, metavar="P",
+                   help="wave phase for --wiggle, radians (default 0); step it for animation "
+                   "frames")
+    d.add_argument("--base", help="base mesh file (needed by --set-tilt, --wrap, --wiggle; "
+                   "checked against the texture with --scale-height)")
     d.add_argument("-o", "--output", required=True, help="texture file to write (.npz)")
     d.set_defaults(run=run_edit)
 
@@ -92,13 +98,49 @@ def _npz(path, option="-o"):
         raise UsageError(f"{path}: texture files are .npz; use a .npz name for {option}")
 
 
+def _mesh_out(path):
+    """Check a mesh output's extension before any work is done."""
+    from geotex.io import format_of
+
+    if path is not None:
+        format_of(path, writing=True)
+    return path
+
+
+@contextmanager
+def _all_or_none():
+    """Collect the outputs of one command: if a later one fails, the earlier go too.
+
+    Yields ``done(path)``, to be called after each file is written.  Each file
+    is itself written atomically; on an exception the files of this run that
+    did not exist before it are removed again, so a failed command leaves no
+    new output behind.
+    """
+    written = []
+
+    def done(path, existed):
+        if not existed:
+            written.append(Path(path))
+
+    try:
+        yield done
+    except BaseException:
+        for path in written:
+            with suppress(OSError):
+                path.unlink()
+        raise
+
+
 def run_extract(args) -> int:
     from geotex.heighttilt import extract_texture, save_texture
     from geotex.io import read_mesh, write_mesh
 
     out = guard_output(args.output, args.textured, args.base)
     _npz(out)
-    base_out = guard_output(args.base_out, args.textured, args.base) if args.base_out else None
+    base_out = (_mesh_out(guard_output(args.base_out, args.textured, args.base))
+                if args.base_out else None)
+    if args.smooth_steps < 1:
+        raise UsageError(f"--smooth-steps {args.smooth_steps}: give at least 1")
     mesh = read_mesh(args.textured)
     base = None
     if args.base:
@@ -107,12 +149,13 @@ def run_extract(args) -> int:
             raise UsageError(f"{args.base}: the base must have the same faces as "
                              f"{args.textured} ({b.n_faces} vs {mesh.n_faces} faces)")
         base = b.vertices
-    if args.smooth_steps < 1:
-        raise UsageError(f"--smooth-steps {args.smooth_steps}: give at least 1")
     tex, Vs = extract_texture(mesh.vertices, mesh.faces, base=base, steps=args.smooth_steps)
-    save_texture(out, tex)
-    if base_out is not None:
-        write_mesh(base_out, mesh.with_geometry(Vs, mesh.faces))
+    with _all_or_none() as done:
+        if base_out is not None:
+            existed = base_out.exists()
+            write_mesh(base_out, mesh.with_geometry(Vs, mesh.faces))
+            done(base_out, existed)
+        save_texture(out, tex)
     h = tex.height
     print(f"{args.textured}: {mesh.n_vertices} vertices, heights {h.min():.4g} .. {h.max():.4g}")
     print(f"wrote {out}" + (f" and {base_out}" if base_out else ""))
@@ -123,7 +166,7 @@ def run_apply(args) -> int:
     from geotex.heighttilt import apply_texture, load_texture
     from geotex.io import read_mesh, write_mesh
 
-    out = guard_output(args.output, args.texture, args.base)
+    out = _mesh_out(guard_output(args.output, args.texture, args.base))
     tex = load_texture(args.texture)
     base = read_mesh(args.base)
     V = apply_texture(base.vertices, base.faces, tex)
@@ -134,13 +177,22 @@ def run_apply(args) -> int:
 
 def run_edit(args) -> int:
     from geotex.heighttilt import load_texture, save_texture, scale_height, set_tilt, wiggle, wrap
+    from geotex.heighttilt.reconstruct import check_texture
     from geotex.io import read_mesh
 
     out = guard_output(args.output, args.texture, args.base)
     _npz(out)
+    if args.phase is not None and args.wiggle is None:
+        raise UsageError("--phase belongs to --wiggle")
+    if args.direction and args.scale_height is not None:
+        raise UsageError("--direction belongs to --set-tilt, --wrap and --wiggle, "
+                         "not to --scale-height")
     tex = load_texture(args.texture)
     direction = _vector(args.direction, "--direction") if args.direction else None
     if args.scale_height is not None:
+        if args.base:
+            base = read_mesh(args.base)
+            check_texture(base.vertices, base.faces, tex)
         new = scale_height(tex, args.scale_height)
     else:
         if not args.base:
@@ -155,7 +207,7 @@ def run_edit(args) -> int:
         else:
             if direction is None:
                 raise UsageError("--wiggle needs --direction X,Y,Z (the wave's direction)")
-            new = wiggle(Vs, F, tex, amplitude=args.wiggle, phase=args.phase,
+            new = wiggle(Vs, F, tex, amplitude=args.wiggle, phase=args.phase or 0.0,
                          direction=direction)
     save_texture(out, new)
     print(f"wrote {out}")
@@ -173,7 +225,7 @@ def run_transfer(args) -> int:
 
     out = guard_output(args.output, args.texture, args.source_base, args.target)
     _npz(out)
-    applied = (guard_output(args.apply, args.texture, args.source_base, args.target)
+    applied = (_mesh_out(guard_output(args.apply, args.texture, args.source_base, args.target))
                if args.apply else None)
     tex = load_texture(args.texture)
     src = read_mesh(args.source_base)
@@ -181,10 +233,13 @@ def run_transfer(args) -> int:
     corr = closest_point_correspondence(dst.vertices, src.vertices, src.faces)
     new = transfer_texture(src.vertices, src.faces, tex, dst.vertices, dst.faces,
                            correspondence=corr, samples=args.samples)
-    save_texture(out, new)
-    if applied is not None:
-        V = apply_texture(dst.vertices, dst.faces, new)
-        write_mesh(applied, dst.with_geometry(V, dst.faces))
+    with _all_or_none() as done:
+        if applied is not None:
+            V = apply_texture(dst.vertices, dst.faces, new)
+            existed = applied.exists()
+            write_mesh(applied, dst.with_geometry(V, dst.faces))
+            done(applied, existed)
+        save_texture(out, new)
     print(f"transferred onto {args.target} ({dst.n_vertices} vertices); wrote {out}"
           + (f" and {applied}" if applied else ""))
     return EXIT_OK
@@ -209,9 +264,9 @@ def _run_planar(args) -> int:
         inputs += (field,)
     out = guard_output(args.output, *inputs)
     _npz(out)
-    base_out = guard_output(args.base_out, *inputs)
-    applied = guard_output(args.apply, *inputs) if args.apply else None
-    outs = [str(p) for p in (out, base_out, applied) if p is not None]
+    base_out = _mesh_out(guard_output(args.base_out, *inputs))
+    applied = _mesh_out(guard_output(args.apply, *inputs)) if args.apply else None
+    outs = [str(p.resolve()) for p in (out, base_out, applied) if p is not None]
     if len(set(outs)) != len(outs):
         raise UsageError("-o, --base-out and --apply must be different files")
     up = _vector(args.up, "--up")
@@ -225,11 +280,16 @@ def _run_planar(args) -> int:
         res = transfer_planar(src.vertices, src.faces, tex, dst.vertices, dst.faces,
                               scale=args.scale, field=field, up=up, refine=args.refine,
                               samples=args.samples, seed=args.seed, progress=bar)
-    save_texture(out, res.texture)
-    write_mesh(base_out, dst.with_geometry(res.vertices, res.faces))
-    if applied is not None:
-        V = apply_texture(res.vertices, res.faces, res.texture)
-        write_mesh(applied, dst.with_geometry(V, res.faces))
+    with _all_or_none() as done:
+        existed = base_out.exists()
+        write_mesh(base_out, dst.with_geometry(res.vertices, res.faces))
+        done(base_out, existed)
+        if applied is not None:
+            V = apply_texture(res.vertices, res.faces, res.texture)
+            existed = applied.exists()
+            write_mesh(applied, dst.with_geometry(V, res.faces))
+            done(applied, existed)
+        save_texture(out, res.texture)
     print(f"{args.target}: refined to {res.vertices.shape[0]} vertices, {res.faces.shape[0]} "
           f"faces; {res.n_patches} patches")
     print(f"wrote {out} and {base_out}" + (f" and {applied}" if applied else ""))

@@ -66,6 +66,8 @@ def _lean_dirs(Vs, F, nrm, direction, current) -> np.ndarray:
             raise InputError("direction must be None, a (3,) vector or an (n, 3) or (m, 3) "
                              "field") from None
         if d.shape == (3,):
+            if np.isfinite(d).all() and not np.any(d):
+                raise InputError("direction must be a non-zero vector, got (0, 0, 0)")
             u = np.broadcast_to(d, (n, 3)).copy()
         elif d.shape == (n, 3):
             u = d.copy()
@@ -132,10 +134,12 @@ def set_tilt(Vs, F, tex: HeightTiltTexture, *, angle_degrees, direction=None,
     angle_degrees : float
         Lean angle in ``[0, 90]``.
     direction : None, array_like (3,), (n, 3) or (m, 3), optional
-        Lean direction: one vector for all, per vertex, or per face (summed
-        at the vertices); projected onto each tangent plane.  ``None`` keeps
-        each vertex's current lean direction (vertices without tilt stay
-        untilted).  If ``n == m`` an array of that length is taken per vertex.
+        Lean direction: one non-zero vector for all, per vertex, or per face
+        (summed at the vertices); projected onto each tangent plane (where
+        it is normal to the surface, or a field vector is zero, the vertex
+        gets no tilt).  ``None`` keeps each vertex's current lean direction
+        (vertices without tilt stay untilted).  If ``n == m`` an array of
+        that length is taken per vertex.
     mask : array_like, (n,), optional
         Per-vertex weights.
 
@@ -148,7 +152,8 @@ def set_tilt(Vs, F, tex: HeightTiltTexture, *, angle_degrees, direction=None,
     Raises
     ------
     InputError
-        Connectivity mismatch, angle outside ``[0, 90]``, bad direction or mask.
+        Connectivity mismatch, angle outside ``[0, 90]``, bad direction (wrong
+        shape, non-finite, the zero vector) or mask.
     """
     Vs, F = check_texture(Vs, F, tex)
     a = _number("angle_degrees", angle_degrees)
@@ -203,9 +208,11 @@ def wiggle(Vs, F, tex: HeightTiltTexture, *, amplitude, phase, direction,
     """Travelling wave of lean along a direction, for animation.
 
     At vertex ``v`` the lean angle is
-    ``a_v = amplitude * sin(2 pi <Vs_v, w> / wavelength - phase)`` towards the
-    tangent projection of the unit ``w``; stepping ``phase`` over time moves the
-    wave along ``w``.
+    ``a_v = amplitude * sin(2 pi s_v / wavelength - phase)`` towards the
+    tangent projection of the unit ``w``, where ``s_v = <Vs_v, w> - min_u <Vs_u, w>``
+    is the distance along ``w`` from the base's first point in that direction
+    (so the wave does not depend on where the base sits); stepping ``phase``
+    over time moves the wave along ``w``.
 
     Parameters
     ----------
@@ -218,7 +225,8 @@ def wiggle(Vs, F, tex: HeightTiltTexture, *, amplitude, phase, direction,
     direction : array_like, (3,)
         Wave (and lean) direction ``w``.
     wavelength : float, optional
-        Default: a quarter of the bounding-box diagonal of ``Vs``.
+        Default: a quarter of the extent of ``Vs`` along ``w`` (four waves
+        across the base, whatever its position, orientation and size).
     mask : array_like, (n,), optional
 
     Returns
@@ -242,8 +250,11 @@ def wiggle(Vs, F, tex: HeightTiltTexture, *, amplitude, phase, direction,
     if wdir.shape != (3,) or not np.isfinite(wdir).all() or np.linalg.norm(wdir) == 0:
         raise InputError(f"direction must be a finite non-zero (3,) vector, got {direction!r}")
     wdir = wdir / np.linalg.norm(wdir)
+    along = Vs @ wdir
     if wavelength is None:
-        lam = 0.25 * float(np.linalg.norm(Vs.max(axis=0) - Vs.min(axis=0)))
+        lam = 0.25 * float(np.ptp(along))
+        if not lam > 0:
+            raise InputError("the base has no extent along direction; give a wavelength")
     else:
         lam = _number("wavelength", wavelength)
         if lam <= 0:
@@ -251,6 +262,6 @@ def wiggle(Vs, F, tex: HeightTiltTexture, *, amplitude, phase, direction,
     w = _mask(mask, Vs.shape[0])
     nrm = base_normals(Vs, F)
     u = _lean_dirs(Vs, F, nrm, wdir, None)
-    a = np.radians(amp) * np.sin(2 * np.pi * (Vs @ wdir) / lam - ph)
+    a = np.radians(amp) * np.sin(2 * np.pi * (along - along.min()) / lam - ph)
     new = np.sin(a)[:, None] * np.cross(u, nrm)
     return _retilt(Vs, F, tex, new, w, f"wiggle({amp!r}, {ph!r})")

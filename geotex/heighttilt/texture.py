@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import io
 import json
+import os
 import zipfile
 from dataclasses import dataclass, field
 
@@ -169,6 +170,10 @@ def load_texture(path) -> HeightTiltTexture:
         wrong format tag, or its arrays disagree with the header counts or
         with each other.
     """
+    if os.path.isfile(path) and not zipfile.is_zipfile(path):
+        raise MeshFileError(path, "not a readable .npz texture file: not a zip archive "
+                            "(truncated, or another kind of file; textures are written "
+                            "by 'geotex heighttilt extract')")
     try:
         with np.load(path, allow_pickle=False) as z:
             arrays = {k: z[k] for k in ("height", "tilt", "faces", "residual", "header")}
