@@ -78,7 +78,7 @@ def cell_bar(total: int, desc: str, *, enabled: bool | None = None):
 
 
 def run(args) -> int:
-    from geotex.io import write_mesh
+    from geotex.io import format_of, write_mesh
     from geotex.io.atomic import atomic_output
     from geotex.mesh.record import Mesh
     from geotex.quilting import default_cell, quilt_texture, split_elements
@@ -92,6 +92,7 @@ def run(args) -> int:
         raise UsageError(f"--cell {args.cell:g}: give a positive number")
     source = Path(args.exemplar) if Path(args.exemplar).exists() else None
     out = guard_output(args.output, source)
+    format_of(out, writing=True)           # an unsupported extension fails before the work
     report_path = guard_output(args.report, source) if args.report else None
     if report_path is not None and report_path.resolve() == out.resolve():
         raise UsageError(f"{report_path}: the report and the mesh need different files")
