@@ -15,7 +15,9 @@ from geotex.mesh.primitives import icosphere
 from geotex.mesh.topology import edge_topology
 from geotex.tiles import (TileSet, build_tileset, check_seams, load_tileset, on_slab,
                           planar_tiling, random_arrangement, save_tileset, tile_count)
+from geotex.quilting import closed_element_ok
 from geotex.tiles.clip import split_by_plane
+from geotex.tiles.colors import side_classes
 from geotex.tiles.verify import side_boundaries
 
 
@@ -36,6 +38,84 @@ def studs(size=(3.0, 3.0), pitch=0.34, seed=0):
 @pytest.fixture(scope="module")
 def planar_set():
     return build_tileset(studs(), colors=2, planar=True, seed=3)
+
+
+@pytest.fixture(scope="module")
+def complete_set():
+    return build_tileset(studs(), colors=(2, 1, 1), seed=0)
+
+
+@pytest.fixture(scope="module")
+def iso_set():
+    return build_tileset(studs(), colors=2, isotropic=True, seed=3)
+
+
+@pytest.fixture(scope="module")
+def paste_iso_set():
+    return build_tileset(studs(), colors=2, isotropic=True, seed=3, interior="paste")
+
+
+# a side as a line: point at parameter t, and the inward direction (into the tile)
+_LINES = {0: (lambda t: np.c_[t, 0 * t], (0.0, 1.0)),
+          1: (lambda t: np.c_[1 + 0 * t, t], (-1.0, 0.0)),
+          2: (lambda t: np.c_[t, 1 + 0 * t], (0.0, -1.0)),
+          3: (lambda t: np.c_[0 * t, t], (1.0, 0.0))}
+
+
+def _side_frame(V, side):
+    """(t along the side, d inward from it) of tile points."""
+    u, v = V[:, 0], V[:, 1]
+    return {0: (u, v), 1: (v, 1.0 - u), 2: (u, 1.0 - v), 3: (v, u)}[side]
+
+
+def placed_against(V, side_j, side_i):
+    """Tile j moved rigidly (no mirror) so that its side ``side_j`` lies on tile i's
+    side ``side_i``, outside tile i, running the same way (as on the plane or unfolded
+    over a polycube edge)."""
+    t, d = _side_frame(V, side_j)
+    line, inward = _LINES[side_i]
+    P = line(t) - d[:, None] * np.asarray(inward)
+    return np.c_[P, V[:, 2]]
+
+
+def seam_closes(Va, Fa, Vb, Fb, side):
+    """Weld two tiles by exact position on tile a's side; True when that side is closed."""
+    V = np.vstack([Va, Vb])
+    F = np.vstack([Fa, Fb + len(Va)])
+    _, inv = np.unique(V, axis=0, return_inverse=True)
+    G = inv.ravel()[F]
+    topo = edge_topology(G, int(inv.max()) + 1)
+    Vu = np.zeros((int(inv.max()) + 1, 3))
+    Vu[inv.ravel()] = V
+    coord, value = {0: (1, 0.0), 1: (0, 1.0), 2: (1, 1.0), 3: (0, 0.0)}[side]
+    e = topo.edges[topo.boundary]
+    on = (Vu[e[:, 0], coord] == value) & (Vu[e[:, 1], coord] == value)
+    return not on.any() and not topo.non_manifold.any()
+
+
+def exhaustive_pairs(ts):
+    """Every ordered pair of tile sides that may meet (same class and colour, or same
+    colour in an isotropic set; one side an "above" half S/E, the other a "below" N/W)."""
+    keys = []
+    for i in range(len(ts)):
+        cls = side_classes(ts.groups[i])
+        for s in range(4):
+            keys.append((0 if ts.isotropic else int(cls[s]), int(ts.colors[i, s]), i, s))
+    for ka in keys:
+        for kb in keys:
+            if ka[:2] == kb[:2] and ka[3] in (0, 1) and kb[3] in (2, 3):
+                yield ka[2], ka[3], kb[2], kb[3]
+
+
+def physically_seamless(ts):
+    count = 0
+    for i, si, j, sj in exhaustive_pairs(ts):
+        Va, Fa = ts.tile(i)
+        Vb, Fb = ts.tile(j)
+        if not seam_closes(Va, Fa, placed_against(Vb, sj, si), Fb, si):
+            return False, (i, si, j, sj)
+        count += 1
+    return True, count
 
 
 def test_split_by_plane_halves_share_their_cut_and_weld_shut():
@@ -66,8 +146,9 @@ def test_planar_set_has_every_colour_combination(planar_set):
     assert np.all(planar_set.groups == [0, 1])
 
 
-def test_complete_set_counts_and_is_seamless():
-    ts = build_tileset(studs(), colors=(2, 1, 1), seed=0)
+def test_complete_set_counts_and_is_seamless(complete_set):
+    ts = complete_set
+    assert ts.kind == "complete"
     assert len(ts) == 2 * (4 * 1 + 4 * 1 + 1 * 1) == tile_count((2, 1, 1), planar=False)
     rep = check_seams(ts)
     assert rep.ok, rep.problems[:3]
@@ -124,34 +205,88 @@ def test_neighbours_in_a_tiling_agree_on_colours(planar_set):
 
 
 def test_same_seed_same_bytes_and_file_round_trip(tmp_path, planar_set):
-    again = build_tileset(studs(), colors=2, planar=True, seed=3)
-    a, b = tmp_path / "a.npz", tmp_path / "b.npz"
+    # quilted builds are deterministic: same seed, same file bytes
+    one = [build_tileset(studs(), colors=1, isotropic=True, seed=s) for s in (7, 7, 8)]
+    files = []
+    for k, ts in enumerate(one):
+        files.append(tmp_path / f"s{k}.npz")
+        save_tileset(files[-1], ts)
+    digest = [hashlib.sha256(f.read_bytes()).digest() for f in files]
+    assert digest[0] == digest[1] != digest[2]
+    a = tmp_path / "a.npz"
     save_tileset(a, planar_set)
-    save_tileset(b, again)
-    assert hashlib.sha256(a.read_bytes()).digest() == hashlib.sha256(b.read_bytes()).digest()
     back = load_tileset(a)
     assert np.array_equal(back.vertices, planar_set.vertices)
     assert np.array_equal(back.faces, planar_set.faces)
+    assert np.array_equal(back.vertex_offsets, planar_set.vertex_offsets)
+    assert np.array_equal(back.colors, planar_set.colors)
     assert back.n_colors == planar_set.n_colors and back.name == planar_set.name
-    other = build_tileset(studs(), colors=2, planar=True, seed=4)
-    assert not np.array_equal(other.vertices, planar_set.vertices)
+    assert back.metadata["recipe"] == planar_set.metadata["recipe"]
+    # saving the loaded set again gives the same bytes
+    save_tileset(tmp_path / "b.npz", back)
+    assert (tmp_path / "b.npz").read_bytes() == a.read_bytes()
 
 
 def test_corrupted_and_truncated_files_give_clear_errors(tmp_path, planar_set):
     f = tmp_path / "set.npz"
     save_tileset(f, planar_set)
     data = f.read_bytes()
-    (tmp_path / "cut.npz").write_bytes(data[: len(data) // 2])
-    with pytest.raises(MeshFileError, match="unreadable tile set"):
-        load_tileset(tmp_path / "cut.npz")
-    bad = bytearray(data)
-    bad[len(bad) // 3] ^= 0xFF
-    (tmp_path / "bad.npz").write_bytes(bytes(bad))
-    with pytest.raises(MeshFileError):
-        load_tileset(tmp_path / "bad.npz")
+    for k, cut in enumerate((0, 10, len(data) // 3, len(data) // 2, len(data) - 30)):
+        (tmp_path / f"cut{k}.npz").write_bytes(data[:cut])
+        with pytest.raises(MeshFileError, match="unreadable tile set|not a geotex tile set"):
+            load_tileset(tmp_path / f"cut{k}.npz")
+    # flipped bytes anywhere: either a clear MeshFileError or (a byte nobody
+    # reads, e.g. in a header comment field) the very same set
+    rng = np.random.default_rng(0)
+    errors = 0
+    for k, pos in enumerate(rng.choice(len(data), 40, replace=False)):
+        bad = bytearray(data)
+        bad[int(pos)] ^= 0x5A
+        g = tmp_path / f"bad{k}.npz"
+        g.write_bytes(bytes(bad))
+        try:
+            back = load_tileset(g)
+        except MeshFileError as exc:
+            assert str(g) in str(exc)
+            errors += 1
+        else:
+            assert np.array_equal(back.vertices, planar_set.vertices)
+            assert np.array_equal(back.faces, planar_set.faces)
+    assert errors >= 30
     np.savez(tmp_path / "other.npz", x=np.arange(3))
     with pytest.raises(MeshFileError, match="not a geotex tile set"):
         load_tileset(tmp_path / "other.npz")
+    (tmp_path / "text.npz").write_text("hello")
+    with pytest.raises(MeshFileError, match="unreadable"):
+        load_tileset(tmp_path / "text.npz")
+
+
+def _rewritten(path, tmp_path, name, **changes):
+    with np.load(path) as z:
+        arrays = {k: z[k] for k in z.files}
+    arrays.update(changes)
+    out = tmp_path / name
+    np.savez_compressed(out, **arrays)
+    return out
+
+
+def test_inconsistent_tile_set_files_are_refused(tmp_path, planar_set):
+    f = tmp_path / "set.npz"
+    save_tileset(f, planar_set)
+    with np.load(f) as z:
+        vo, faces, colors = z["vertex_offsets"], z["faces"], z["colors"]
+        meta = str(z["metadata"])
+    cases = {
+        "offsets": dict(vertex_offsets=vo[::-1].copy()),
+        "outside their tile": dict(faces=faces + 10_000),
+        "colours exceed": dict(colors=(colors + 3).astype(np.int8)),
+        "not valid JSON": dict(metadata=np.array(meta[:-5])),
+        "shapes": dict(groups=np.zeros((3, 2), np.int8)),
+    }
+    for message, change in cases.items():
+        g = _rewritten(f, tmp_path, "x.npz", **change)
+        with pytest.raises(MeshFileError, match=message):
+            load_tileset(g)
 
 
 def test_bad_build_arguments():
@@ -182,3 +317,131 @@ def test_cli_check_tile_and_errors(tmp_path, planar_set, capsys):
     assert not (tmp_path / "x.stl").exists()
     assert main(["tiles", "tile", str(f), "--grid", "2", "2", "-o", str(f)]) == 2
     assert load_tileset(f).name == planar_set.name
+
+
+# ----------------------------------------------------------------------------
+# exhaustive adjacency by actually placing every legal pair side by side
+
+
+def test_exhaustive_adjacency_planar_and_complete(planar_set, complete_set):
+    ok, n = physically_seamless(planar_set)
+    assert ok, f"tile sides {n} do not weld shut"
+    assert n == 2 * 2 * 8 * 8          # per class, per colour: 8 above x 8 below sides
+    ok, n = physically_seamless(complete_set)
+    assert ok, f"tile sides {n} do not weld shut"
+
+
+def test_isotropic_set_contract_and_cross_class_adjacency(iso_set):
+    ts = iso_set
+    assert len(ts) == 16 == tile_count((2, 2, 2), planar=False, isotropic=True)
+    assert ts.isotropic and ts.kind == "isotropic" and not ts.planar
+    assert ts.n_colors == (2, 2, 2) and ts.metadata["isotropic"] is True
+    assert np.all(ts.groups == [0, 1])
+    assert {tuple(c) for c in ts.colors.tolist()} == set(
+        __import__("itertools").product(range(2), repeat=4))
+    rep = check_seams(ts)
+    assert rep.ok, rep.problems[:3]
+    # all 64 sides of one colour class: 32 per colour, every ordered pair compared
+    assert rep.pairs_checked == 2 * 32 * 31
+    # a south side (class X) welds to the east side (class Y) of another tile of
+    # the same colour, as across a folded polycube edge
+    pairs = list(exhaustive_pairs(ts))
+    assert any(si == 0 and sj == 3 for _, si, _, sj in pairs)
+    ok, n = physically_seamless(ts)
+    assert ok, f"tile sides {n} do not weld shut"
+    assert n == 2 * 16 * 16            # per colour: 16 above (S, E) x 16 below (N, W) sides
+    # and a plain planar tiling of it is printable
+    V, F = planar_tiling(ts, random_arrangement(ts, 3, 3, seed=5))
+    assert check_mesh(*on_slab(V, F, (3, 3))).printable
+
+
+def test_check_seams_compares_across_classes_only_for_isotropic_sets(planar_set):
+    # a planar set's X and Y strips differ: fine for a planar set, a seam
+    # error once the same tiles claim to be isotropic
+    assert check_seams(planar_set).ok
+    fake = TileSet(planar_set.vertices, planar_set.faces, planar_set.vertex_offsets,
+                   planar_set.face_offsets, planar_set.groups, planar_set.colors, (2, 2, 2),
+                   planar_set.height, planar_set.depth, "fake", {"isotropic": True})
+    assert fake.isotropic
+    rep = check_seams(fake)
+    assert not rep.ok and "share colour" in rep.problems[0]
+    ok, where = physically_seamless(fake)
+    assert not ok
+    # old files without the flag are not isotropic
+    assert not planar_set.isotropic and planar_set.kind == "planar"
+
+
+def test_quilted_interiors_keep_side_vertices_bit_exact_and_elements_closed(
+        iso_set, paste_iso_set):
+    # the same seed draws the same strips; quilting only changes the interior
+    assert iso_set.metadata["paste_fallbacks"] == 0
+    assert iso_set.metadata["recipe"]["interior"] == "quilt"
+    differ = 0
+    for i in range(len(iso_set)):
+        Vq, Fq = iso_set.tile(i)
+        Vp, Fp = paste_iso_set.tile(i)
+        sq, stray = side_boundaries(Vq, Fq)
+        sp, _ = side_boundaries(Vp, Fp)
+        assert stray == 0
+        for a, b in zip(sq, sp):
+            assert np.array_equal(a, b)
+        for coord in (0, 1):
+            for value in (0.0, 1.0):
+                on_q = {tuple(p) for p in Vq[Vq[:, coord] == value]}
+                on_p = {tuple(p) for p in Vp[Vp[:, coord] == value]}
+                assert on_q == on_p and on_q
+        differ += not (len(Vq) == len(Vp) and np.array_equal(Vq, Vp))
+        # every element that touches no side is a closed valid solid
+        from geotex.quilting import split_elements
+        for e in split_elements(Vq, Fq):
+            on_side = ((e.V[:, :2] == 0.0) | (e.V[:, :2] == 1.0)).any()
+            if not on_side:
+                assert closed_element_ok(e.V, e.F) == ""
+            assert e.V[:, :2].min() >= 0 and e.V[:, :2].max() <= 1
+    assert differ == len(iso_set)     # quilting made every interior its own
+    assert iso_set.metadata["merged_elements"] > 0
+
+
+def test_quilted_tiling_is_watertight_and_printable(iso_set):
+    a = random_arrangement(iso_set, 4, 4, seed=11)
+    V, F = planar_tiling(iso_set, a)
+    rep = check_mesh(V, F)
+    assert rep.printable, rep.reasons
+    assert check_mesh(*on_slab(V, F, (4, 4))).printable
+
+
+def test_lattice_option_needs_a_pitch_dividing_the_tile():
+    ex = studs()                         # pitch 0.34: not a divisor of 1
+    ex.params = {"pitch": 0.34}
+    with pytest.raises(InputError, match="lattice"):
+        build_tileset(ex, colors=1, isotropic=True, lattice=True)
+    ex = studs(size=(2.0, 2.0), pitch=0.25)
+    ex.params = {"pitch": 0.25}
+    ts = build_tileset(ex, colors=1, isotropic=True, lattice=True, seed=1)
+    assert check_seams(ts).ok and ts.metadata["lattice"][0] == 0.25
+
+
+def test_isotropic_argument_errors():
+    with pytest.raises(InputError, match="isotropic"):
+        build_tileset(studs(), colors="2,1,1", isotropic=True)
+    with pytest.raises(InputError, match="planar"):
+        build_tileset(studs(), colors=2, isotropic=True, planar=True)
+
+
+def test_cli_build_isotropic_and_list(tmp_path, capsys):
+    out = tmp_path / "iso.npz"
+    assert main(["tiles", "build", "studs", "-o", str(out), "--colors", "1", "--isotropic",
+                 "--interior", "paste"]) == 0
+    msg = capsys.readouterr().out
+    assert "isotropic set, 1 tiles" in msg
+    ts = load_tileset(out)
+    assert ts.isotropic and len(ts) == 1 and ts.metadata["recipe"]["interior"] == "paste"
+    assert main(["tiles", "check", str(out)]) == 0
+    assert main(["tiles", "build", "studs", "-o", str(tmp_path / "x.npz"), "--colors",
+                 "2,1,1", "--isotropic"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("geotex: error:") and err.count("\n") == 1
+    assert not (tmp_path / "x.npz").exists()
+    assert main(["tiles", "build", "studs", "-o", str(tmp_path / "y.npz"), "--interior",
+                 "magic"]) == 2
+    assert not (tmp_path / "y.npz").exists()

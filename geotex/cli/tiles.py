@@ -22,6 +22,15 @@ def register(sub):
     b.add_argument("--colors", default="2", help="colours per axis class: N or NX,NY,NZ "
                    "(default 2)")
     b.add_argument("--planar", action="store_true", help="only the planar tiles")
+    b.add_argument("--isotropic", action="store_true",
+                   help="one colour class for all axes: N^4 tiles that cover a closed "
+                   "polycube when their group is ignored (use one N in --colors)")
+    b.add_argument("--interior", choices=("quilt", "paste"), default="quilt",
+                   help="tile interiors: constrained mesh quilting (default) or whole "
+                   "exemplar elements pasted between the frame's (fast)")
+    b.add_argument("--lattice", action="store_true",
+                   help="keep the exemplar's lattice (period = its pitch, which must divide "
+                   "the tile) in every tile: for regular textures such as knurl")
     b.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     b.add_argument("--name", help="set name (default: the exemplar's)")
     b.set_defaults(run=run_build)
@@ -72,7 +81,7 @@ def run_build(args) -> int:
     import time
 
     from geotex.progress import stage_bar
-    from geotex.tiles.build import BUILD_STAGES, build_tileset
+    from geotex.tiles.build import build_tileset
     from geotex.tiles.colors import parse_colors, tile_count
     from geotex.tiles.tileset import save_tileset
 
@@ -80,15 +89,22 @@ def run_build(args) -> int:
     if out.suffix.lower() != ".npz":
         raise UsageError(f"{out}: tile sets are written as .npz files")
     ex = _exemplar(args.exemplar, args.seed)
-    n = tile_count(parse_colors(args.colors, planar=args.planar), planar=args.planar)
+    n_colors = parse_colors(args.colors, planar=args.planar)
+    n = tile_count(n_colors, planar=args.planar, isotropic=args.isotropic)
     start = time.perf_counter()
-    with stage_bar(len(BUILD_STAGES), f"tiles ({n})") as bar:
-        tiles = build_tileset(ex, colors=args.colors, planar=args.planar, seed=args.seed,
-                              name=args.name, progress=bar)
+    with stage_bar(1 + n, f"tiles ({n})") as bar:
+        tiles = build_tileset(ex, colors=args.colors, planar=args.planar,
+                              isotropic=args.isotropic, lattice=args.lattice,
+                              interior=args.interior, seed=args.seed, name=args.name,
+                              progress=bar)
     elapsed = time.perf_counter() - start
     save_tileset(out, tiles)
-    print(f"{out}: {len(tiles)} tiles, colours X/Y/Z {tiles.n_colors}, height "
-          f"{tiles.height:.3g}, {elapsed:.2f} s ({1000 * elapsed / len(tiles):.0f} ms per tile)")
+    extra = ""
+    if tiles.metadata.get("paste_fallbacks"):
+        extra = f", {tiles.metadata['paste_fallbacks']} tiles pasted after quilting failed"
+    print(f"{out}: {tiles.kind} set, {len(tiles)} tiles, colours X/Y/Z {tiles.n_colors}, "
+          f"height {tiles.height:.3g}, coverage {tiles.metadata['coverage_mean']:.0%}{extra}, "
+          f"{elapsed:.2f} s ({1000 * elapsed / len(tiles):.0f} ms per tile)")
     return EXIT_OK
 
 
@@ -137,11 +153,12 @@ def run_list(args) -> int:
     if not rows:
         print("the tile catalog is empty")
         return EXIT_OK
-    print(f"{'name':<14}{'tiles':>6}  {'colours':<10}{'size':>9}  exemplar")
+    print(f"{'name':<16}{'kind':<11}{'tiles':>6}  {'colours':<9}{'size':>8}  "
+          f"{'exemplar':<10} description")
     for r in rows:
         cols = ",".join(str(c) for c in r["colors"])
-        print(f"{r['name']:<14}{r['tiles']:>6}  {cols:<10}{r['bytes'] / 1e6:>7.2f}MB  "
-              f"{r['exemplar']}  {r['description']}")
+        print(f"{r['name']:<16}{r['kind']:<11}{r['tiles']:>6}  {cols:<9}"
+              f"{r['bytes'] / 1e6:>6.2f}MB  {r['exemplar']:<10} {r['description']}")
     return EXIT_OK
 
 

@@ -3,31 +3,94 @@
 Steps (``../shared/DESIGN.md`` §5.3): one edge strip per colour of every axis
 class (:mod:`geotex.tiles.strips`); for each tile the four strip halves of its
 side colours form its frame (:mod:`geotex.tiles.frame`); the interior is then
-filled from the exemplar (:func:`interior_paste`).
+synthesized around the frame by constrained mesh quilting
+(:func:`interior_quilt`, the default) or filled with whole exemplar elements
+(:func:`interior_paste`, fast).
+
+An *isotropic* set uses one colour class for all three axes: the strips are
+cut once per colour and serve the sides of every class, so a side of colour
+``c`` is seamless with any other side of colour ``c``. It holds the
+``n^4`` tiles of group (0, 1) and covers a closed polycube when the group is
+ignored.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-from geotex.errors import InputError
+from geotex.errors import GeotexError, InputError
 from geotex.progress import report
 from geotex.tiles.colors import COMPLETE_GROUPS, PLANAR_GROUPS, parse_colors, tile_keys
 from geotex.tiles.frame import concatenated, frame_of
-from geotex.tiles.strips import GAP, corner_margin, element_boxes, pick_strips
+from geotex.tiles.strips import GAP, corner_margin, element_boxes, lattice_phase, pick_strips
 from geotex.tiles.tileset import TileSet
+from geotex.tiles.verify import side_boundaries
 
-__all__ = ["build_tileset", "interior_paste", "INTERIOR_METHODS", "BUILD_STAGES"]
+__all__ = ["build_tileset", "interior_quilt", "interior_paste", "INTERIOR_METHODS",
+           "BUILD_STAGES", "Source"]
 
-INTERIOR_METHODS = ("paste",)
+INTERIOR_METHODS = ("quilt", "paste")
 BUILD_STAGES = ("strips", "tiles")
-WINDOWS = 64                 # exemplar windows tried per pass
-PASTE_PASSES = 4             # interior passes: the bulk, then gap filling
+QUILT_WINDOW = 2.0           # side of the exemplar window a tile is quilted from
+QUILT_ATTEMPTS = 3           # quilting tries per tile before the paste fallback
+CLEAR = 0.5 * GAP            # clearance of interior elements from the tile sides
+OVERSIZE = 0.2               # merged elements this much (x largest element) larger are undone
 STRIP_AXIS = {0: 0, 1: 1, 2: 0}   # class -> exemplar axis its strips run along
 
 
+@dataclass(frozen=True)
+class Source:
+    """An exemplar split into elements, as the builders use it.
+
+    Attributes
+    ----------
+    V : numpy.ndarray, (n, 3) float64
+    F : numpy.ndarray, (m, 3) int64
+    labels : numpy.ndarray, (m,) int64
+        Element of every face.
+    lo, hi : numpy.ndarray, (E, 3) float64
+        Element bounding boxes.
+    size : tuple of 2 float
+        Exemplar extent ``(lx, ly)``.
+    params : dict
+        Exemplar parameters (``pitch`` sets the quilting cell when present).
+    """
+
+    V: np.ndarray
+    F: np.ndarray
+    labels: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+    size: tuple
+    params: dict
+
+    def window(self, origin, extent) -> tuple[np.ndarray, np.ndarray]:
+        """The elements lying wholly in the rectangle ``origin + [0, extent]``, moved to 0.
+
+        Returns
+        -------
+        V : numpy.ndarray, (n, 3) float64
+        F : numpy.ndarray, (m, 3) int64
+        """
+        o = np.asarray(origin, dtype=np.float64)
+        inside = ((self.lo[:, :2] >= o) & (self.hi[:, :2] <= o + np.asarray(extent))
+                  ).all(axis=1)
+        return _subset(self.V, self.F, inside[self.labels], shift=np.r_[o, 0.0])
+
+
+def _subset(V, F, keep_faces, shift=None):
+    Fk = F[keep_faces]
+    used = np.unique(Fk)
+    remap = np.full(len(V), -1, dtype=np.int64)
+    remap[used] = np.arange(len(used))
+    Vk = V[used] if shift is None else V[used] - shift
+    return Vk, remap[Fk]
+
+
 def _exemplar_arrays(exemplar):
-    """(V, F, size, height, depth, name, recipe) of an exemplar object or name."""
+    """(Source, height, depth, recipe) of an exemplar object or name."""
     if isinstance(exemplar, str):
         from geotex.exemplars import exemplar as make
         exemplar = make(exemplar)
@@ -41,68 +104,231 @@ def _exemplar_arrays(exemplar):
     if len(F) == 0:
         raise InputError("exemplar has no faces")
     depth = float(getattr(exemplar, "depth", max(0.0, -V[:, 2].min())))
-    recipe = {"name": getattr(exemplar, "name", ""),
-              "params": dict(getattr(exemplar, "params", {}) or {})}
-    return V, F, size, float(V[:, 2].max()), depth, recipe
+    params = dict(getattr(exemplar, "params", {}) or {})
+    recipe = {"name": getattr(exemplar, "name", ""), "params": params}
+    labels, lo, hi = element_boxes(V, F)
+    return Source(V, F, labels, lo, hi, size, params), float(V[:, 2].max()), depth, recipe
 
 
-def interior_paste(V: np.ndarray, F: np.ndarray, labels: np.ndarray, lo: np.ndarray,
-                   hi: np.ndarray, size, frame_boxes: np.ndarray,
-                   rng: np.random.Generator) -> tuple[tuple[np.ndarray, np.ndarray], dict]:
-    """Fill a tile interior with exemplar elements that fit between the frame's.
+def interior_paste(src: Source, frame, rng: np.random.Generator, *, pixels=None,
+                   lattice=None) -> tuple[tuple[np.ndarray, np.ndarray], dict]:
+    """Fill a tile interior with whole exemplar elements that fit between the frame's.
 
-    In each of :data:`PASTE_PASSES` passes, tries :data:`WINDOWS` random unit
-    windows of the exemplar and adds the elements of the best one: those lying
-    wholly inside the tile and clear (by :data:`~geotex.tiles.strips.GAP`) of the
-    footprint of every element placed so far; the best window adds the most
-    footprint area. The first pass lays down the bulk, later passes fill gaps.
-    Elements are copied unchanged, so they stay closed.
+    Elements of random unit windows of the exemplar join where their
+    footprint, grown by :data:`~geotex.tiles.strips.GAP`, is free
+    (:func:`geotex.tiles.fill.fill_gaps`). They are copied unchanged, so they
+    stay closed; the frame is not touched.
+
+    Parameters
+    ----------
+    src : Source
+        The exemplar.
+    frame : tuple of (V (n, 3) float64, F (m, 3) int64)
+        The tile frame.
+    rng : numpy.random.Generator
+    pixels : ExemplarPixels, optional
+        The exemplar's footprint rasters (built when not given).
+    lattice : tuple (pitch, phase_x, phase_y), optional
+        Windows on the exemplar's lattice points only.
 
     Returns
     -------
-    mesh : tuple of (V, F)
-        The added elements in tile coordinates.
+    tile : tuple of (V, F)
+        Frame plus the added elements, in tile coordinates.
     stats : dict
-        ``elements`` added and ``coverage`` (their footprint area / tile area).
+        ``elements`` added.
     """
-    lx, ly = size
-    placed = np.asarray(frame_boxes, dtype=np.float64).reshape(-1, 4)
-    parts, n_added, covered = [], 0, 0.0
-    for _ in range(PASTE_PASSES):
-        ox = rng.uniform(0.0, lx - 1.0, WINDOWS)
-        oy = rng.uniform(0.0, ly - 1.0, WINDOWS)
-        u0 = lo[None, :, 0] - ox[:, None]
-        u1 = hi[None, :, 0] - ox[:, None]
-        v0 = lo[None, :, 1] - oy[:, None]
-        v1 = hi[None, :, 1] - oy[:, None]
-        inside = (u0 >= GAP) & (v0 >= GAP) & (u1 <= 1 - GAP) & (v1 <= 1 - GAP)
-        pb = placed
-        clash = ((u0[..., None] < pb[:, 2] + GAP) & (u1[..., None] > pb[:, 0] - GAP)
-                 & (v0[..., None] < pb[:, 3] + GAP) & (v1[..., None] > pb[:, 1] - GAP)
-                 ).any(-1)
-        ok = inside & ~clash
-        area = np.where(ok, (u1 - u0) * (v1 - v0), 0.0).sum(axis=1)
-        best = int(np.argmax(area))
-        members = np.flatnonzero(ok[best])
-        if members.size == 0:
-            break
-        keep = np.isin(labels, members)
-        Fk = F[keep]
-        used = np.unique(Fk)
-        remap = np.full(len(V), -1, dtype=np.int64)
-        remap[used] = np.arange(len(used))
-        parts.append((V[used] - np.array([ox[best], oy[best], 0.0]), remap[Fk]))
-        placed = np.vstack([placed, np.stack([u0[best, members], v0[best, members],
-                                              u1[best, members], v1[best, members]], 1)])
-        n_added += int(members.size)
-        covered += float(area[best])
-    return concatenated(parts), {"elements": n_added, "coverage": covered}
+    from geotex.tiles.fill import ExemplarPixels, fill_gaps
+
+    pixels = pixels or ExemplarPixels(src.V, src.F, src.labels, src.lo, src.hi)
+    added, count = fill_gaps(frame[0], frame[1], pixels, src.size, rng, lattice=lattice)
+    return concatenated([frame, added]), {"elements": count}
 
 
-def build_tileset(exemplar, *, colors=2, planar: bool = False, seed: int = 0,
-                  interior: str = "paste", name: str | None = None,
-                  progress=None) -> TileSet:
-    """Build a planar or complete geometric Wang tile set.
+def interior_quilt(src: Source, frame, frame_boxes: np.ndarray, rng: np.random.Generator,
+                   *, window: float = QUILT_WINDOW, attempts: int = QUILT_ATTEMPTS,
+                   lattice=None) -> tuple[tuple[np.ndarray, np.ndarray] | None, dict]:
+    """Synthesize a tile around its frame by constrained mesh quilting.
+
+    The tile ``[0, 1]^2`` is the quilting domain of
+    :func:`geotex.quilting.quilt_texture`; the frame is its prefilled geometry
+    (open only along the tile sides, so its cut vertices are fixed and come
+    back bit-exact) and the frame footprints count as occupied. Copies come
+    from a random ``window x window`` part of the exemplar (smaller matching
+    problems, and every tile draws from a different part). The result is
+    accepted only when, after rounding to float32, its open boundary on every
+    side is bit-identical to the frame's, every element is a valid solid,
+    no vertex leaves the tile, and interior elements keep :data:`CLEAR` from
+    the sides (those that do not are dropped); otherwise quilting is retried
+    with another seed, ``attempts`` times in all.
+
+    Parameters
+    ----------
+    src : Source
+    frame : tuple of (V (n, 3) float64, F (m, 3) int64)
+        The tile frame (:func:`geotex.tiles.frame.frame_of`).
+    frame_boxes : numpy.ndarray, (k, 4) float64
+        Its element footprints.
+    rng : numpy.random.Generator
+    window : float
+        Side of the exemplar window copies are taken from.
+    attempts : int
+        Quilting tries.
+    lattice : tuple (pitch, phase_x, phase_y), optional
+        Take windows only at the exemplar's lattice points, so that copies
+        (placed at multiples of the pitch) stay on the tile's lattice.
+
+    Returns
+    -------
+    tile : tuple of (V, F) or None
+        The whole tile (frame, possibly merged with copies, plus the interior),
+        or None when no attempt was accepted.
+    stats : dict
+        ``elements``, ``attempts``, ``merges`` (stitched + union) and, on
+        failure, the last ``problem``.
+    """
+    from geotex.quilting import quilt_texture
+
+    wx, wy = min(window, src.size[0]), min(window, src.size[1])
+    pitch = src.params.get("pitch")
+    cell = float(pitch) if isinstance(pitch, (int, float)) and 0 < pitch <= min(wx, wy) \
+        else None
+    from geotex.quilting import split_elements
+
+    Vf = frame[0].astype(np.float32).astype(np.float64)
+    want, _ = side_boundaries(Vf, frame[1])
+    frame_elements = [(e.V, e.F) for e in split_elements(Vf, frame[1])]
+    max_foot = float((src.hi - src.lo)[:, :2].max())
+    occupied = np.clip(np.asarray(frame_boxes, dtype=np.float64).reshape(-1, 4), 0.0, 1.0)
+    problem = "no attempt"
+    for attempt in range(1, attempts + 1):
+        origin = _window_origin(rng, src.size, (wx, wy), lattice)
+        seed = int(rng.integers(2 ** 31))
+        Vw, Fw = src.window(origin, (wx, wy))
+        if len(Fw) == 0:
+            problem = "empty exemplar window"
+            continue
+        try:
+            res = quilt_texture(Vw, Fw, size=(wx, wy), out_size=(1.0, 1.0), cell=cell,
+                                seed=seed, prefilled=frame, occupied=occupied)
+        except GeotexError as exc:
+            problem = f"quilting failed: {exc}"
+            continue
+        if not res.report.valid:
+            problem = "quilting gave invalid elements: " + res.report.summary()
+            continue
+        tile, problem, changes = _accepted(res, want, frame_elements, max_foot)
+        if tile is not None:
+            m = res.report.merges
+            return tile, {"elements": res.report.elements - changes["dropped"],
+                          "attempts": attempt, "reverted": changes["reverted"],
+                          "dropped": changes["dropped"],
+                          "merges": int(m.get("stitched", 0) + m.get("union", 0))}
+    return None, {"attempts": attempts, "problem": problem}
+
+
+def _window_origin(rng, size, extent, lattice):
+    """Random origin of an ``extent`` window of the exemplar (on the lattice if given)."""
+    room = np.maximum(np.asarray(size) - np.asarray(extent), 0.0)
+    if lattice is None:
+        return rng.uniform(0.0, 1.0, 2) * room
+    p, phase = lattice[0], np.asarray(lattice[1:])
+    top = np.maximum(np.floor((room - phase) / p), 0).astype(np.int64)
+    k = np.array([rng.integers(0, top[0] + 1), rng.integers(0, top[1] + 1)])
+    return np.minimum(phase + k * p, room)
+
+
+def _accepted(res, want, frame_elements, max_foot):
+    """Check a quilted tile (see :func:`interior_quilt`).
+
+    Returns
+    -------
+    tile : tuple of (V, F) or None
+    problem : str
+    changes : dict
+        ``dropped`` interior elements, ``reverted`` frame elements.
+    """
+    from geotex.check.intersections import self_intersecting_pairs
+
+    V = res.vertices.astype(np.float32).astype(np.float64)
+    F, eids, fixed = res.faces, res.element_ids, res.fixed
+    pre = np.asarray(res.element_prefilled, dtype=bool)
+    k = len(pre)
+    uv = V[F][:, :, :2]
+    lo = np.full((k, 2), np.inf)
+    hi = np.full((k, 2), -np.inf)
+    np.minimum.at(lo, eids, uv.min(axis=1))
+    np.maximum.at(hi, eids, uv.max(axis=1))
+    if (lo < 0).any() or (hi > 1).any():
+        return None, "an element leaves the tile", {}
+    # distance of every element to the south, east, north, west side
+    dist = np.stack([lo[:, 1], 1 - hi[:, 0], 1 - hi[:, 1], lo[:, 0]], 1)
+    cut = np.zeros((k, 4), dtype=bool)          # sides an element is cut by (frame halves)
+    vert_el = np.full(len(V), -1, dtype=np.int64)
+    vert_el[F.ravel()] = np.repeat(eids, 3)
+    fv = np.flatnonzero(fixed & (vert_el >= 0))
+    for s, (axis, value) in enumerate(((1, 0.0), (0, 1.0), (1, 1.0), (0, 0.0))):
+        cut[vert_el[fv[V[fv, axis] == value]], s] = True
+    # merges of two elements that did not coincide look like two fused elements
+    # (or a frame half cut back): undo them, frame elements go back to their
+    # frame half (its footprint box moved by more than OVERSIZE of the largest
+    # element), interior ones larger than the largest element by as much go
+    n_pre = int(pre.sum())
+    if n_pre != len(frame_elements):
+        return None, "frame elements were lost or split", {}
+    grown = np.zeros(k, dtype=bool)             # frame elements changed too much by a merge
+    for i, (Ve, _) in enumerate(frame_elements):
+        change = np.r_[Ve[:, :2].min(axis=0) - lo[i], hi[i] - Ve[:, :2].max(axis=0)]
+        grown[i] = np.abs(change).max() > OVERSIZE * max_foot
+    oversized = ~pre & ((hi - lo).max(axis=1) > (1.0 + OVERSIZE) * max_foot)
+    near = (dist < CLEAR) & ~cut
+    if (near.any(axis=1) & pre & ~grown).any():
+        return None, "a frame element grew within the side clearance", {}
+    drop = ~pre & (near.any(axis=1) | oversized)
+    on_side = ((V[:, :2] == 0.0) | (V[:, :2] == 1.0)).any(axis=1) & ~fixed & (vert_el >= 0)
+    if (on_side & ~(drop | grown)[np.maximum(vert_el, 0)]).any():
+        return None, "a vertex off the frame cut lies on a tile side", {}
+    parts = []
+    for i in range(k):
+        if drop[i]:
+            continue
+        if grown[i]:
+            parts.append(frame_elements[i])
+        else:
+            parts.append(_subset(V, F, eids == i))
+    if grown.any():
+        # the restored frame halves must not cut into elements placed beside the merge
+        kept = np.flatnonzero(~drop)              # element of every part
+        owner = np.concatenate([np.full(len(Fp), j) for j, (_, Fp) in enumerate(parts)])
+        pairs = self_intersecting_pairs(*concatenated(parts))
+        a, b = kept[owner[pairs[:, 0]]], kept[owner[pairs[:, 1]]]
+        cross = (a != b) & (grown[a] | grown[b])
+        other = np.unique(np.where(grown[a[cross]], b[cross], a[cross]))
+        if pre[other].any():
+            return None, "a restored frame element cuts another frame element", {}
+        if other.size:
+            drop[other] = True
+            parts = [p for j, p in enumerate(parts) if not drop[kept[j]]]
+    Vt, Ft = concatenated(parts)
+    got, stray = side_boundaries(Vt, Ft)
+    if stray or any(not np.array_equal(a, b) for a, b in zip(got, want)):
+        return None, "the quilted tile's side boundaries differ from its frame's", {}
+    return (Vt, Ft), "", {"dropped": int(drop.sum()), "reverted": int(grown.sum())}
+
+
+def _lattice(src: Source) -> tuple[float, float, float]:
+    """``(pitch, phase_x, phase_y)`` of the exemplar lattice (``lattice=True``)."""
+    p = src.params.get("pitch")
+    if not isinstance(p, (int, float)) or not p > 0 or abs(1 / p - round(1 / p)) > 1e-9:
+        raise InputError(f"lattice: needs an exemplar whose pitch divides the tile "
+                         f"(1 / pitch a whole number), got pitch {p!r}")
+    return (float(p),) + lattice_phase(src.lo, src.hi, float(p))
+
+
+def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool = False,
+                  lattice: bool = False, seed: int = 0, interior: str = "quilt",
+                  name: str | None = None, progress=None) -> TileSet:
+    """Build a planar, complete or isotropic geometric Wang tile set.
 
     Parameters
     ----------
@@ -111,19 +337,39 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, seed: int = 0,
         elements, in tile units (one tile is 1 x 1), e.g.
         ``geotex.exemplars.exemplar("studs")``; a name is looked up there.
     colors : int, str or sequence of 3 int
-        Colours per axis class: ``N`` or ``(n_x, n_y, n_z)`` (1 to 4 each).
+        Colours per axis class: ``N`` or ``(n_x, n_y, n_z)`` (1 to 4 each);
+        an isotropic set takes one ``N``.
     planar : bool
         Build only the ``n_x^2 n_y^2`` tiles of the plane (group (0, 1));
         otherwise the complete polycube set of
         ``2 (n_x^2 n_y^2 + n_x^2 n_z^2 + n_y^2 n_z^2)`` tiles.
+    isotropic : bool
+        One colour class shared by all three axes: ``N`` strips, each used for
+        sides of every class, and the ``N^4`` tiles of group (0, 1), which
+        cover a closed polycube when the group is ignored (a side of colour
+        ``c`` meets any other side of colour ``c``). ``n_colors`` is
+        ``(N, N, N)`` and ``metadata["isotropic"]`` is True. Best for
+        textures without a preferred direction (strips are turned a quarter
+        on the west and east sides).
+    lattice : bool
+        For exemplars laid out on a lattice of period ``params["pitch"]``
+        (``1 / pitch`` a whole number): strips and quilting windows start
+        only on lattice points (phase from :func:`~geotex.tiles.strips.lattice_phase`),
+        so every tile holds the lattice in the same phase and neighbouring
+        elements do not collide across the tiles. Tile corners then sit on a
+        lattice point that no element may cross: one gap per tile corner.
     seed : int
         Random seed; same inputs and seed give the same set, byte for byte.
-    interior : {"paste"}
-        How tile interiors are filled.
+    interior : {"quilt", "paste"}
+        How tile interiors are filled: constrained mesh quilting around the
+        frame (:func:`interior_quilt`; a tile whose quilting is not accepted
+        after :data:`QUILT_ATTEMPTS` tries is pasted instead, counted in
+        ``metadata["paste_fallbacks"]``), or whole exemplar elements placed
+        between the frame's (:func:`interior_paste`, fast).
     name : str, optional
         Set name (default: the exemplar's).
     progress : callable, optional
-        Called with each stage name of :data:`BUILD_STAGES`.
+        Called with ``"strips"`` and then ``"tile i/T"`` for every tile.
 
     Returns
     -------
@@ -132,41 +378,78 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, seed: int = 0,
     Raises
     ------
     InputError
-        Unknown interior method, bad colours, elements too large for a tile,
-        or an exemplar with too few distinct strips.
+        Unknown interior method, bad colours (or unequal colours for an
+        isotropic set, or ``planar`` with ``isotropic``), elements too large
+        for a tile, or an exemplar with too few distinct strips.
+
+    Examples
+    --------
+    >>> from geotex.exemplars import exemplar
+    >>> ts = build_tileset(exemplar("studs", size=(3, 3)), colors=1, isotropic=True,
+    ...                    interior="paste")
+    >>> len(ts), ts.isotropic, ts.n_colors
+    (1, True, (1, 1, 1))
     """
     if interior not in INTERIOR_METHODS:
         raise InputError(f"interior: {interior!r} is not one of {', '.join(INTERIOR_METHODS)}")
-    V, F, size, height, depth, recipe = _exemplar_arrays(exemplar)
+    if isotropic and planar:
+        raise InputError("isotropic and planar exclude each other: an isotropic set is "
+                         "already the n^4 tiles of the plane, usable on a closed polycube")
+    src, height, depth, recipe = _exemplar_arrays(exemplar)
     n_colors = parse_colors(colors, planar=planar)
+    if isotropic and len(set(n_colors)) != 1:
+        raise InputError(f"colors: an isotropic set has one colour count for all axes, got "
+                         f"{colors!r}")
     rng = np.random.default_rng(seed)
     report(progress, "strips")
-    labels, lo, hi = element_boxes(V, F)
-    margin = corner_margin(lo, hi)
+    margin = corner_margin(src.lo, src.hi)
+    grid = _lattice(src) if lattice else None
     strips, taken = {}, set()
-    for cls in range(3):
+    for cls in ((0,) if isotropic else range(3)):
         if n_colors[cls]:
-            strips[cls], taken = pick_strips(V, F, size, count=n_colors[cls],
+            strips[cls], taken = pick_strips(src.V, src.F, src.size, count=n_colors[cls],
                                              along=STRIP_AXIS[cls], rng=rng, margin=margin,
-                                             taken=taken)
-    report(progress, "tiles")
-    groups, cols = tile_keys(n_colors, PLANAR_GROUPS if planar else COMPLETE_GROUPS)
-    tiles, coverage = [], []
-    for (a, b), c in zip(groups.tolist(), cols.tolist()):
+                                             taken=taken, lattice=grid)
+    if isotropic:
+        strips[1] = strips[2] = strips[0]
+    groups, cols = tile_keys(n_colors, PLANAR_GROUPS if planar or isotropic
+                             else COMPLETE_GROUPS)
+    from geotex.quilting import coverage_fraction
+    from geotex.tiles.fill import ExemplarPixels, fill_gaps
+
+    pixels = ExemplarPixels(src.V, src.F, src.labels, src.lo, src.hi)
+    tiles, coverage, fallbacks, merges, filled = [], [], 0, 0, 0
+    for t, ((a, b), c) in enumerate(zip(groups.tolist(), cols.tolist())):
+        report(progress, f"tile {t + 1}/{len(groups)}")
         frame, boxes = frame_of((strips[a], strips[b]), c)
-        inner, stats = interior_paste(V, F, labels, lo, hi, size, boxes, rng)
-        tiles.append(concatenated([frame, inner]))
-        fb = np.clip(boxes, 0.0, 1.0)
-        coverage.append(stats["coverage"] + float(((fb[:, 2] - fb[:, 0])
-                                                   * (fb[:, 3] - fb[:, 1])).sum()))
+        tile = None
+        if interior == "quilt":
+            tile, stats = interior_quilt(src, frame, boxes, rng, lattice=grid)
+            merges += stats.get("merges", 0)
+            if tile is not None:
+                added, count = fill_gaps(tile[0], tile[1], pixels, src.size, rng,
+                                         lattice=grid)
+                tile = concatenated([tile, added])
+                filled += count
+        if tile is None:
+            fallbacks += interior == "quilt"
+            tile, _ = interior_paste(src, frame, rng, pixels=pixels, lattice=grid)
+        tiles.append(tile)
+        coverage.append(coverage_fraction(tile[0], tile[1], (0.0, 0.0, 1.0, 1.0),
+                                          resolution=100))
     meta = {
         "exemplar": recipe,
         "recipe": {"exemplar": recipe, "colors": list(n_colors), "planar": bool(planar),
-                   "seed": int(seed), "interior": interior},
+                   "isotropic": bool(isotropic), "lattice": bool(lattice), "seed": int(seed),
+                   "interior": interior},
+        "isotropic": bool(isotropic),
         "corner_margin": margin,
-        "footprint_coverage_mean": round(float(np.mean(coverage)), 6),
+        "lattice": None if grid is None else [round(float(g), 9) for g in grid],
+        "coverage_mean": round(float(np.mean(coverage)), 6),
     }
-    ts = TileSet.from_tiles(tiles, groups, cols, n_colors=n_colors, height=height,
-                            depth=depth, name=name or recipe["name"] or "tileset",
-                            metadata=meta)
-    return ts
+    if interior == "quilt":
+        meta.update(paste_fallbacks=int(fallbacks), merged_elements=int(merges),
+                    gap_fill_elements=int(filled))
+    return TileSet.from_tiles(tiles, groups, cols, n_colors=n_colors, height=height,
+                              depth=depth, name=name or recipe["name"] or "tileset",
+                              metadata=meta)

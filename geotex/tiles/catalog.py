@@ -1,21 +1,25 @@
 """The catalog of ready-made tile sets shipped with geotex.
 
-Sets live in ``geotex/tiles/catalog/NAME.npz``; ``recipes.json`` beside them
-holds the recipe of each (exemplar, its parameters, colours, seed, ...), from
-which :func:`rebuild` makes the same file byte for byte.
+Sets live in ``geotex/tiles/catalog/NAME.npz`` (package data); ``recipes.json``
+beside them holds the recipe of each (exemplar and its parameters, colours,
+kind, interior method, seed, ...), from which :func:`rebuild` makes the same
+file byte for byte. ``python -m geotex.tiles.catalog [NAME ...]`` rebuilds
+the files (all of them by default) and checks each one.
 """
 
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 
 from geotex.errors import InputError, MissingFileError
 
-__all__ = ["CATALOG_DIR", "recipes", "tileset_path", "list_tilesets", "rebuild",
-           "load_named"]
+__all__ = ["CATALOG_DIR", "MAX_BYTES", "recipes", "tileset_path", "list_tilesets",
+           "rebuild", "load_named", "main"]
 
 CATALOG_DIR = Path(__file__).resolve().parent / "catalog"
+MAX_BYTES = 2_000_000          # size limit of one catalog file
 
 
 def recipes() -> dict:
@@ -45,27 +49,48 @@ def tileset_path(name_or_path) -> Path:
 
 
 def load_named(name_or_path):
-    """Load a tile set by catalog name or path."""
+    """Load a tile set by catalog name or path.
+
+    Returns
+    -------
+    TileSet
+    """
     from geotex.tiles.tileset import load_tileset
 
     return load_tileset(tileset_path(name_or_path))
 
 
+def _kind(recipe: dict) -> str:
+    if recipe.get("isotropic"):
+        return "isotropic"
+    return "planar" if recipe.get("planar") else "complete"
+
+
 def list_tilesets() -> list[dict]:
-    """Catalog entries: name, file, size in bytes, tiles, colours, recipe."""
+    """Catalog entries: name, kind, file, size in bytes, tiles, colours, exemplar, description."""
     out = []
     for name, recipe in sorted(recipes().items()):
         f = CATALOG_DIR / f"{name}.npz"
-        out.append({"name": name, "file": str(f), "bytes": f.stat().st_size if f.is_file()
-                    else 0, "tiles": recipe.get("tiles"), "colors": recipe.get("colors"),
+        out.append({"name": name, "kind": _kind(recipe), "file": str(f),
+                    "bytes": f.stat().st_size if f.is_file() else 0,
+                    "tiles": recipe.get("tiles"), "colors": recipe.get("colors"),
                     "planar": recipe.get("planar", False),
+                    "isotropic": recipe.get("isotropic", False),
                     "exemplar": recipe.get("exemplar", {}).get("name"),
                     "description": recipe.get("description", "")})
     return out
 
 
-def rebuild(name: str, *, progress=None):
+def rebuild(name: str, *, progress=None, table: dict | None = None):
     """Build the catalog set ``name`` from its recipe.
+
+    Parameters
+    ----------
+    name : str
+    progress : callable, optional
+        Passed to :func:`~geotex.tiles.build.build_tileset`.
+    table : dict, optional
+        Recipes to use instead of ``recipes.json``.
 
     Returns
     -------
@@ -79,11 +104,52 @@ def rebuild(name: str, *, progress=None):
     from geotex.exemplars import exemplar
     from geotex.tiles.build import build_tileset
 
-    table = recipes()
+    table = recipes() if table is None else table
     if name not in table:
         raise InputError(f"{name!r} is not in the tile catalog ({', '.join(sorted(table))})")
     r = table[name]
     ex = exemplar(r["exemplar"]["name"], **r["exemplar"].get("params", {}))
     return build_tileset(ex, colors=r["colors"], planar=r.get("planar", False),
+                         isotropic=r.get("isotropic", False), lattice=r.get("lattice", False),
                          seed=r["seed"], interior=r.get("interior", "paste"), name=name,
                          progress=progress)
+
+
+def main(argv=None) -> int:
+    """Rebuild catalog files from ``recipes.json`` (all, or the names given).
+
+    Each set is built, checked for seams (:func:`~geotex.tiles.verify.check_seams`)
+    and written to ``CATALOG_DIR/NAME.npz`` when seamless and at most
+    :data:`MAX_BYTES`. Returns 0 when every set passed, 1 otherwise.
+    """
+    import time
+
+    from geotex.tiles.tileset import save_tileset
+    from geotex.tiles.verify import check_seams
+
+    names = list(argv if argv is not None else sys.argv[1:]) or sorted(recipes())
+    status = 0
+    for name in names:
+        start = time.perf_counter()
+        tiles = rebuild(name)
+        elapsed = time.perf_counter() - start
+        rep = check_seams(tiles)
+        out = CATALOG_DIR / f"{name}.npz"
+        if not rep.ok:
+            print(f"{name}: NOT seamless: {rep.problems[0]}", file=sys.stderr)
+            status = 1
+            continue
+        save_tileset(out, tiles)
+        size = out.stat().st_size
+        print(f"{name}: {tiles.kind}, {len(tiles)} tiles, {size / 1e6:.2f} MB, "
+              f"{elapsed:.1f} s ({elapsed / len(tiles):.2f} s per tile), "
+              f"{rep.pairs_checked} side pairs seamless, coverage "
+              f"{tiles.metadata['coverage_mean']:.0%}")
+        if size > MAX_BYTES:
+            print(f"{name}: {size} bytes is over the {MAX_BYTES} byte limit", file=sys.stderr)
+            status = 1
+    return status
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

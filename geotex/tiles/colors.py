@@ -16,7 +16,9 @@ axis along +X and its second along +Y, so it takes a tile of group (0, 1); a
 group (1, 0); and likewise for the other four chart directions (see
 :data:`CHART_FRAMES`). A planar set is group (0, 1) alone: ``n_x^2 n_y^2``
 tiles. A complete set holds all six groups:
-``2 (n_x^2 n_y^2 + n_x^2 n_z^2 + n_y^2 n_z^2)`` tiles.
+``2 (n_x^2 n_y^2 + n_x^2 n_z^2 + n_y^2 n_z^2)`` tiles. An isotropic set uses
+one colour class for every axis: its ``n^4`` tiles of group (0, 1) serve
+every quad of a polycube, the group ignored.
 """
 
 from __future__ import annotations
@@ -82,9 +84,16 @@ def tile_keys(n_colors: tuple[int, int, int], groups) -> tuple[np.ndarray, np.nd
             np.array(rows_c, dtype=np.int64).reshape(-1, 4))
 
 
-def tile_count(n_colors: tuple[int, int, int], *, planar: bool) -> int:
-    """Number of tiles of a planar or complete set."""
+def tile_count(n_colors: tuple[int, int, int], *, planar: bool,
+               isotropic: bool = False) -> int:
+    """Number of tiles of a planar, complete or isotropic set.
+
+    ``n_x^2 n_y^2`` (planar), ``2 (n_x^2 n_y^2 + n_x^2 n_z^2 + n_y^2 n_z^2)``
+    (complete) or ``n^4`` (isotropic, ``n = n_x``).
+    """
     nx, ny, nz = n_colors
+    if isotropic:
+        return nx ** 4
     if planar:
         return nx * nx * ny * ny
     return 2 * (nx * nx * ny * ny + nx * nx * nz * nz + ny * ny * nz * nz)

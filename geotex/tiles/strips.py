@@ -19,7 +19,7 @@ from geotex.errors import InputError
 from geotex.mesh.topology import face_components
 from geotex.tiles.clip import split_by_plane
 
-__all__ = ["Strip", "element_boxes", "pick_strips", "corner_margin"]
+__all__ = ["Strip", "element_boxes", "pick_strips", "corner_margin", "lattice_phase"]
 
 GAP = 0.02          # clearance between elements and tile corners / other elements
 CANDIDATES = 96     # random segment positions tried per colour
@@ -84,6 +84,34 @@ def corner_margin(lo: np.ndarray, hi: np.ndarray) -> float:
     return margin
 
 
+def lattice_phase(lo: np.ndarray, hi: np.ndarray, pitch: float) -> tuple[float, float]:
+    """Phase of the exemplar's element lattice of period ``pitch`` in x and y.
+
+    The element centres (of their boxes) taken modulo ``pitch``; the phase is
+    the circular mean of the largest cluster (the centres within
+    ``pitch / 5`` of the centre with most such neighbours, on the torus).
+
+    Parameters
+    ----------
+    lo, hi : numpy.ndarray, (E, 3) float64
+        Element bounding boxes.
+    pitch : float
+
+    Returns
+    -------
+    tuple of 2 float
+        ``(phase_x, phase_y)`` in ``[0, pitch)``.
+    """
+    c = (0.5 * (lo[:, :2] + hi[:, :2])) % pitch
+    d = np.abs(c[:, None, :] - c[None, :, :])
+    d = np.minimum(d, pitch - d)
+    close = np.hypot(d[..., 0], d[..., 1]) < pitch / 5
+    members = close[int(np.argmax(close.sum(axis=1)))]
+    z = np.exp(2j * np.pi * c[members] / pitch).mean(axis=0)
+    phase = (np.angle(z) / (2 * np.pi) * pitch) % pitch
+    return float(phase[0]), float(phase[1])
+
+
 def _to_strip(P: np.ndarray, origin, along: int) -> np.ndarray:
     """Exemplar points -> strip coordinates (a rotation, never a mirror)."""
     d = P[..., :2] - np.asarray(origin)
@@ -96,7 +124,8 @@ def _to_strip(P: np.ndarray, origin, along: int) -> np.ndarray:
 
 
 def pick_strips(V: np.ndarray, F: np.ndarray, size, *, count: int, along: int,
-                rng: np.random.Generator, margin: float, taken=()) -> tuple[list[Strip], set]:
+                rng: np.random.Generator, margin: float, taken=(),
+                lattice=None) -> tuple[list[Strip], set]:
     """Choose ``count`` distinct edge strips from an exemplar.
 
     Parameters
@@ -114,6 +143,10 @@ def pick_strips(V: np.ndarray, F: np.ndarray, size, *, count: int, along: int,
         Corner clearance from :func:`corner_margin`.
     taken : iterable of frozenset
         Element sets already used by other strips; not reused.
+    lattice : tuple (pitch, phase_x, phase_y), optional
+        Segments start only on the exemplar's lattice points
+        ``phase + (i, j) pitch``, so that the strip elements sit on the lattice
+        of the tile (see :func:`lattice_phase`); otherwise anywhere.
 
     Returns
     -------
@@ -128,8 +161,19 @@ def pick_strips(V: np.ndarray, F: np.ndarray, size, *, count: int, along: int,
         raise InputError(f"exemplar is {span:g} long along {'xy'[along]}; an edge strip "
                          "needs at least one tile length (1.0)")
     # element boxes in candidate strip coordinates, vectorized over candidates
-    a0 = rng.uniform(0.0, span - 1.0, CANDIDATES)
-    a1 = rng.uniform(margin, (ly, lx)[along] - margin, CANDIDATES)
+    width = (ly, lx)[along]
+    if lattice is None:
+        a0 = rng.uniform(0.0, span - 1.0, CANDIDATES)
+        a1 = rng.uniform(margin, width - margin, CANDIDATES)
+    else:
+        p, ph_along, ph_across = lattice[0], lattice[1 + along], lattice[2 - along]
+        k = np.arange(np.ceil(-ph_along / p), np.floor((span - 1.0 - ph_along) / p) + 1)
+        j = np.arange(np.ceil((margin - ph_across) / p),
+                      np.floor((width - margin - ph_across) / p) + 1)
+        K, J = np.meshgrid(k, j, indexing="ij")
+        pick = rng.permutation(K.size)[:CANDIDATES]
+        a0 = ph_along + K.ravel()[pick] * p
+        a1 = ph_across + J.ravel()[pick] * p
     origin = np.stack([a0, a1], 1) if along == 0 else np.stack([a1, a0], 1)
     if along == 0:
         t0 = lo[None, :, 0] - origin[:, 0:1]

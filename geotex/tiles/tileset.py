@@ -8,8 +8,10 @@ height, depth, seed, the recipe that rebuilds the set, geotex version).
 
 from __future__ import annotations
 
+import io
 import json
 import zipfile
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -20,6 +22,7 @@ from geotex.errors import InputError, MeshFileError, MissingFileError
 __all__ = ["TileSet", "save_tileset", "load_tileset", "FORMAT_VERSION"]
 
 FORMAT_VERSION = 1
+_DATE = (1980, 1, 1, 0, 0, 0)       # fixed member time stamps: same set, same bytes
 _KEYS = ("vertices", "faces", "vertex_offsets", "face_offsets", "groups", "colors",
          "metadata")
 
@@ -70,8 +73,24 @@ class TileSet:
 
     @property
     def planar(self) -> bool:
-        """True for a planar set (group (0, 1) only)."""
+        """True for a planar set (group (0, 1) only, ``n_z = 0``)."""
         return self.n_colors[2] == 0
+
+    @property
+    def isotropic(self) -> bool:
+        """True for an isotropic set: one colour class for all axes (False for old files).
+
+        Its ``n^4`` tiles are group (0, 1), ``n_colors`` is ``(n, n, n)``, and a
+        side of colour ``c`` is seamless with every other side of colour ``c``,
+        whatever the axis classes, so the set covers a closed polycube when the
+        group is ignored.
+        """
+        return bool(self.metadata.get("isotropic", False))
+
+    @property
+    def kind(self) -> str:
+        """``"planar"``, ``"complete"`` or ``"isotropic"``."""
+        return "isotropic" if self.isotropic else "planar" if self.planar else "complete"
 
     def tile(self, i: int) -> tuple[np.ndarray, np.ndarray]:
         """Return tile ``i`` as ``(V (n, 3) float64, F (m, 3) int64)``."""
@@ -100,6 +119,9 @@ class TileSet:
 def save_tileset(path, tiles: TileSet) -> None:
     """Write a tile set file (compressed ``.npz``), atomically.
 
+    The same set always gives the same bytes (fixed member time stamps), so a
+    catalog set rebuilt from its recipe can be compared byte for byte.
+
     Parameters
     ----------
     path : str or os.PathLike
@@ -114,14 +136,23 @@ def save_tileset(path, tiles: TileSet) -> None:
     meta = dict(tiles.metadata)
     meta.update(format="geotex-tileset", format_version=FORMAT_VERSION, name=tiles.name,
                 n_colors=list(tiles.n_colors), height=tiles.height, depth=tiles.depth)
+    arrays = {"vertices": tiles.vertices.astype(np.float32),
+              "faces": tiles.faces.astype(np.int32),
+              "vertex_offsets": tiles.vertex_offsets.astype(np.int64),
+              "face_offsets": tiles.face_offsets.astype(np.int64),
+              "groups": tiles.groups.astype(np.int8), "colors": tiles.colors.astype(np.int8),
+              "metadata": np.array(json.dumps(meta, sort_keys=True))}
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", compression=zipfile.ZIP_DEFLATED) as zf:
+        for key, arr in arrays.items():
+            member = io.BytesIO()
+            np.lib.format.write_array(member, arr, allow_pickle=False)
+            info = zipfile.ZipInfo(f"{key}.npy", date_time=_DATE)
+            info.compress_type = zipfile.ZIP_DEFLATED
+            info.external_attr = 0o644 << 16
+            zf.writestr(info, member.getvalue(), compresslevel=9)
     with atomic_output(path, "wb") as fh:
-        np.savez_compressed(
-            fh, vertices=tiles.vertices.astype(np.float32),
-            faces=tiles.faces.astype(np.int32),
-            vertex_offsets=tiles.vertex_offsets.astype(np.int64),
-            face_offsets=tiles.face_offsets.astype(np.int64),
-            groups=tiles.groups.astype(np.int8), colors=tiles.colors.astype(np.int8),
-            metadata=np.array(json.dumps(meta, sort_keys=True)))
+        fh.write(buf.getvalue())
 
 
 def load_tileset(path) -> TileSet:
@@ -144,7 +175,7 @@ def load_tileset(path) -> TileSet:
                 raise MeshFileError(path, "not a geotex tile set (missing "
                                     f"{', '.join(missing)})")
             data = {k: z[k] for k in _KEYS}
-    except (zipfile.BadZipFile, OSError, ValueError, EOFError, KeyError) as exc:
+    except (zipfile.BadZipFile, OSError, ValueError, EOFError, KeyError, zlib.error) as exc:
         raise MeshFileError(path, f"unreadable tile set file ({exc})") from None
     except zipfile.LargeZipFile as exc:  # pragma: no cover
         raise MeshFileError(path, f"unreadable tile set file ({exc})") from None
@@ -162,9 +193,17 @@ def load_tileset(path) -> TileSet:
     vo, fo = data["vertex_offsets"].astype(np.int64), data["face_offsets"].astype(np.int64)
     groups, colors = data["groups"].astype(np.int64), data["colors"].astype(np.int64)
     _validate(path, V, F, vo, fo, groups, colors)
-    n_colors = tuple(int(c) for c in meta.pop("n_colors"))
-    name = meta.pop("name", path.stem)
-    height, depth = float(meta.pop("height")), float(meta.pop("depth"))
+    try:
+        n_colors = tuple(int(c) for c in meta.pop("n_colors"))
+        name = str(meta.pop("name", path.stem))
+        height, depth = float(meta.pop("height")), float(meta.pop("depth"))
+    except (KeyError, TypeError, ValueError):
+        raise MeshFileError(path, "tile set metadata lacks n_colors, height or depth") from None
+    if len(n_colors) != 3 or (groups.min() < 0 or groups.max() > 2):
+        raise MeshFileError(path, "tile set groups or colour counts are corrupted")
+    side_class = groups[:, [0, 1, 0, 1]]
+    if colors.min() < 0 or np.any(colors >= np.asarray(n_colors)[side_class]):
+        raise MeshFileError(path, "tile set side colours exceed the colour counts")
     for k in ("format", "format_version"):
         meta.pop(k, None)
     return TileSet(V, F, vo, fo, groups, colors, n_colors, height, depth, name, meta)

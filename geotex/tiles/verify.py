@@ -1,7 +1,8 @@
 """Seamlessness check of a tile set: every legal neighbour pair welds shut.
 
 Two tile sides may meet whenever they carry the same axis class and colour
-(on the plane and across polycube edges alike). Each side's open boundary is
+(on the plane and across polycube edges alike); in an isotropic set, whenever
+they carry the same colour, whatever their classes. Each side's open boundary is
 summarised in edge coordinates ``(t, w)`` (``t`` along the side, ``w`` the
 height); the set is seamless when every tile's open boundary lies on its sides
 and all sides of one class and colour carry bit-identical boundaries, which
@@ -74,6 +75,12 @@ def side_boundaries(V: np.ndarray, F: np.ndarray) -> tuple[list, int]:
 def check_seams(tiles: TileSet) -> SeamReport:
     """Check every pair of tile sides that may meet, exhaustively.
 
+    Sides are grouped by ``(axis class, colour)``, or by colour alone for an
+    isotropic set (:attr:`TileSet.isotropic`), so there the cross-class
+    pairs (a south side of class X against a west side of class Y, ...) are
+    compared too. Every tile must also be open only along its sides and be
+    edge-manifold; an isotropic set must hold group (0, 1) only.
+
     Parameters
     ----------
     tiles : TileSet
@@ -83,6 +90,9 @@ def check_seams(tiles: TileSet) -> SeamReport:
     SeamReport
     """
     problems = []
+    iso = tiles.isotropic
+    if iso and np.any(tiles.groups != [0, 1]):
+        problems.append("isotropic set holds tiles outside group (0, 1)")
     first = {}                      # (class, colour) -> (digest, tile, side)
     keys = []
     for i in range(len(tiles)):
@@ -95,16 +105,17 @@ def check_seams(tiles: TileSet) -> SeamReport:
             problems.append(f"tile {i}: {int(topo.non_manifold.sum())} non-manifold edges")
         classes = side_classes(tiles.groups[i])
         for s in range(4):
-            key = (int(classes[s]), int(tiles.colors[i, s]))
+            key = (0 if iso else int(classes[s]), int(tiles.colors[i, s]))
             digest = hashlib.sha1(np.ascontiguousarray(sides[s]).tobytes()).hexdigest()
             keys.append(key)
             if key not in first:
                 first[key] = (digest, i, s)
             elif first[key][0] != digest:
                 d0, i0, s0 = first[key]
+                shared = f"colour {key[1]}" if iso else \
+                    f"axis class {'XYZ'[key[0]]} colour {key[1]}"
                 problems.append(f"tiles {i0} ({_SIDE_NAMES[s0]}) and {i} ({_SIDE_NAMES[s]}) "
-                                f"share axis class {'XYZ'[key[0]]} colour {key[1]} but "
-                                "their boundaries differ")
+                                f"share {shared} but their boundaries differ")
     _, counts = np.unique(np.array(keys).reshape(-1, 2), axis=0, return_counts=True)
     pairs = int((counts * (counts - 1)).sum())
     return SeamReport(not problems, pairs, problems)
