@@ -1,6 +1,6 @@
 """Deforming a textured stick: texture reapplied versus naive space deformation.
 
-A tentacle stick (leaning bumps on a cylinder) is bent by 120 degrees. Left:
+A tentacle stick (leaning bumps on a cylinder) is bent by 240 degrees. Left:
 the original. Middle: the base is bent and the height-and-tilt texture is
 reapplied (element heights and lean angles kept; measured). Right: the same
 bend applied to the detailed mesh as a space deformation, which stretches the
@@ -25,7 +25,7 @@ def main(out: Path) -> None:
     V0, F, Vs = tentacle_stick(n_along=120, n_around=32, suckers=40, height=0.18, size=0.16,
                                seed=3)
     tex, Vs = extract_texture(V0, F, base=Vs)
-    angle = np.radians(120)
+    angle = np.radians(240)
     Vb = bend(Vs, angle=angle, axis=2, toward=0)
     kept = reapplied(Vb, F, tex, base=Vs)
     naive = bend(V0, angle=angle, axis=2, toward=0)

@@ -23,7 +23,7 @@ from geotex.render import Panel, render_panels
 
 def main(out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
-    V0, F, Vs = spiky_sphere(subdivisions=5, spikes=14, lean_degrees=50, width=0.22, seed=7)
+    V0, F, Vs = spiky_sphere(subdivisions=5, spikes=36, lean_degrees=50, width=0.17, seed=7)
     tex, Vs = extract_texture(V0, F, base=Vs)
     back = apply_texture(Vs, F, tex)
     diag = float(np.linalg.norm(np.ptp(V0, axis=0)))
@@ -32,7 +32,7 @@ def main(out: Path) -> None:
     hf = apply_texture(Vs, F, flat)
     hf_err = np.linalg.norm(hf - V0, axis=1).max() / diag
     tilted = apply_texture(Vs, F, set_tilt(Vs, F, tex, angle_degrees=30, direction=[1, 0, 0]))
-    wrapped = apply_texture(Vs, F, wrap(Vs, F, tex, k=4.0))
+    wrapped = apply_texture(Vs, F, wrap(Vs, F, tex, k=3.0))
     frames = [apply_texture(Vs, F, wiggle(Vs, F, tex, amplitude=35, phase=p, direction=[0, 0, 1]))
               for p in (0.0, 2.1, 4.2)]
     color = "#c9a26b"
@@ -40,7 +40,7 @@ def main(out: Path) -> None:
               Panel(back, F, color=color, title=f"height + tilt: error {err:.1e} of bbox"),
               Panel(hf, F, color="#9aa7b8", title=f"height only: error {hf_err:.1%} of bbox"),
               Panel(tilted, F, color=color, title="set tilt 30 deg towards +x"),
-              Panel(wrapped, F, color=color, title="wrap k = 4")]
+              Panel(wrapped, F, color=color, title="wrap k = 3: tips curl over")]
     panels += [Panel(f, F, color=color, title=f"wiggle frame {i + 1}") for i, f in enumerate(frames)]
     render_panels(panels[:4], out / "heighttilt_edits.png", size=(600, 560))
     render_panels(panels[4:], out / "heighttilt_edits_animation.png", size=(600, 560))

@@ -2,11 +2,13 @@
 
 For each exemplar kind of ``geotex.exemplars`` (a 2 x 2 patch), a 4 x 4 texture
 (four times the area) is quilted: copies of the exemplar are placed where they
-match what is already there (matching energy + ICP), corresponding elements are
-merged (graph cut + Laplacian pull + stitch, exact union as the fallback) and
-elements crossing the border are clipped to it.  Each caption gives the element
-count and the fraction of the plane covered (the report compares it with the
-exemplar's; the script prints every report's one-line summary).
+match what is already there (matching energy + ICP, on the exemplar's
+lattice), corresponding elements are merged (graph cut + Laplacian pull +
+stitch, exact union as the fallback: the weave's strands of successive copies
+join into strands that run across the patch) and elements crossing the border
+are clipped to it.  Each caption gives the element count, the joins, and the
+fraction of the plane covered (the report compares it with the exemplar's;
+the script prints every report's one-line summary and its seam measures).
 
 Run:  python examples/quilting.py [OUT_DIR]     (default docs/gallery)
 """
@@ -48,10 +50,17 @@ def main(out: Path) -> None:
                 c = COLORS.get(kind, "#b0a090")
                 panels.append(Panel(ex.vertices, ex.faces, color=c,
                                     title=f"{kind} exemplar, {ex.n_elements} el."))
+                joined = rep.merges.get("stitched", 0) + rep.merges.get("union", 0)
                 panels.append(Panel(res.vertices, res.faces, color=c,
-                                    title=f"quilted x4: {rep.elements} el., "
-                                          f"cover {rep.coverage:.0%}"))
+                                    title=f"quilted x4: {rep.elements} el."
+                                          + (f", {joined} joins" if joined else "")
+                                          + f", cover {rep.coverage:.0%}"))
                 lines.append(f"{kind:10s} {rep.summary()}")
+                if np.isfinite(rep.seam_gap_max):
+                    lines.append(f"{'':10s} seams: gap {rep.seam_gap_mean:.3f} mean, "
+                                 f"{rep.seam_gap_max:.3f} max (of the cell); normal jump "
+                                 f"{rep.seam_normal_jump_mean:.1f} mean, "
+                                 f"{rep.seam_normal_jump_max:.1f} max (degrees)")
             path = Path(tmp) / f"row{r}.png"
             render_panels(panels, path, size=(520, 420), up="z")
             rows.append(np.asarray(Image.open(path).convert("RGB")))
