@@ -5,6 +5,7 @@ import sys
 import numpy as np
 import pytest
 
+from geotex.check import check_mesh
 from geotex.cli import main
 from geotex.io import read_mesh, write_mesh
 from geotex.mesh import Mesh
@@ -85,15 +86,17 @@ def test_demo_writes_real_files(capsys, tmp_path):
     out = tmp_path / "demo"
     code, text, _ = run(capsys, "demo", "-o", str(out))
     assert code == 0, text
-    for name in ("spot.stl", "spot.3mf", "spot.png", "teapot_repaired.stl",
-                 "teapot_repair.png", "report.json"):
+    for name in ("spot_studs.stl", "spot_studs.3mf", "spot_studs.png", "report.json"):
         assert (out / name).stat().st_size > 0, name
+    assert "printable: yes" in text and str(out / "spot_studs.stl") in text
     report = json.loads((out / "report.json").read_text())
-    assert report["spot"]["report"]["printable"] and report["teapot"]["after"]["printable"]
-    assert not report["teapot"]["before"]["printable"]
-    spot = read_mesh(out / "spot.3mf")
-    size = spot.vertices.max(axis=0) - spot.vertices.min(axis=0)
-    assert size.max() == pytest.approx(80.0) and spot.vertices[:, 2].min() == pytest.approx(0.0)
+    assert report["check"]["printable"] and report["map"]["elements"] > 100
+    solid = read_mesh(out / "spot_studs.3mf")
+    assert check_mesh(solid.vertices, solid.faces).printable
+    size = solid.vertices.max(axis=0) - solid.vertices.min(axis=0)
+    # the body is 80 mm long; the studs stand out by at most their height
+    assert 80.0 < size.max() < 80.0 + 2 * report["map"]["height"] + 1e-9
+    assert solid.vertices[:, 2].min() == pytest.approx(0.0, abs=2 * report["map"]["height"])
 
 
 def test_real_process_no_traceback(tmp_path):

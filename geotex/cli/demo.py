@@ -1,21 +1,28 @@
-"""``geotex demo``: the main job on bundled meshes, writing real files.
+"""``geotex demo``: the main job on bundled data, writing real files.
 
-Until the tile pipeline lands, the demo runs the most complete job geotex has:
-scale a bundled mesh to print size, check it and export it for printing (STL
-and 3MF), and repair a bundled broken mesh into a printable solid, with
-pictures of both.
+Spot the cow (bundled) is turned to print orientation and scaled to print
+size, its polycube shell is built, a bundled geometric Wang tile set is laid
+over it, the elements are united with the body into one solid, the solid is
+checked and written as STL and 3MF, with a picture and a JSON report.
 """
 
 from __future__ import annotations
 
 import json
+import sys
+import time
 from pathlib import Path
 
 import numpy as np
 
 from geotex.cli._common import EXIT_NOT_PRINTABLE, EXIT_OK, UsageError
 
-HELP = "run the main job on bundled meshes and write the results"
+HELP = "texture a bundled model with a bundled tile set and write a printable solid"
+
+#: What the demo uses: bundled base, catalog tile set, tiles across the model.
+DEMO_BASE = "spot"
+DEMO_TILES = "studs"
+DEMO_TILES_ACROSS = 15
 
 
 def register(sub):
@@ -24,6 +31,9 @@ def register(sub):
                    help="folder for the results (default ./geotex-demo)")
     p.add_argument("--size-mm", type=float, default=80.0,
                    help="largest extent of the printed model in millimetres (default 80)")
+    p.add_argument("--tiles", default=DEMO_TILES,
+                   help=f"tile set: catalog name or file (default {DEMO_TILES})")
+    p.add_argument("--seed", type=int, default=0, help="seed of the tile layout (default 0)")
     p.set_defaults(run=run)
 
 
@@ -40,70 +50,72 @@ def print_ready(V: np.ndarray, *, size_mm: float, y_up: bool) -> np.ndarray:
 
 
 def run(args) -> int:
-    from geotex.check import check_mesh
     from geotex.data import sample_path
+    from geotex.errors import NotPrintableError
     from geotex.io import read_mesh
     from geotex.io.atomic import atomic_output
-    from geotex.mesh.topology import edge_topology
+    from geotex.mapping import MAP_STAGES, textured_solid
     from geotex.printing import export_printable
     from geotex.progress import stage_bar
     from geotex.render import Panel, render_panels
-    from geotex.repair import repair_mesh
+    from geotex.shells import SHELL_STAGES, build_shell
+    from geotex.tiles.catalog import load_named
 
     out = Path(args.output_dir)
     if out.exists() and not out.is_dir():
         raise UsageError(f"{out}: exists and is not a folder")
-    if not (1.0 <= args.size_mm <= 1000.0):
-        raise UsageError(f"--size-mm {args.size_mm}: choose a size between 1 and 1000 mm")
+    if not (10.0 <= args.size_mm <= 1000.0):
+        raise UsageError(f"--size-mm {args.size_mm}: choose a size between 10 and 1000 mm")
+    if args.seed < 0:
+        raise UsageError(f"--seed {args.seed}: give a non-negative integer")
+    tiles = load_named(args.tiles)
     out.mkdir(parents=True, exist_ok=True)
-    with stage_bar(6, "geotex demo") as stage:
-        stage("read spot")
-        spot = read_mesh(sample_path("spot"))
-        V = print_ready(spot.vertices, size_mm=args.size_mm, y_up=True)
-        stage("check and export spot")
-        spot_report = check_mesh(V, spot.faces, source="spot")
-        export_printable(out / "spot.stl", V, spot.faces, name="spot", report=spot_report)
-        export_printable(out / "spot.3mf", V, spot.faces, name="spot", report=spot_report)
-        stage("check teapot")
-        teapot = read_mesh(sample_path("teapot-open"))
-        before = check_mesh(teapot.vertices, teapot.faces, source="teapot_open.stl")
-        stage("repair teapot")
-        fixed = repair_mesh(teapot.vertices, teapot.faces)
-        if fixed.printable:
-            export_printable(out / "teapot_repaired.stl", fixed.vertices, fixed.faces,
-                             name="teapot", report=fixed.report)
-        stage("render spot")
-        topo = edge_topology(teapot.faces, teapot.n_vertices)
-        render_panels([Panel(V, spot.faces, title=f"spot, {args.size_mm:g} mm, printable: "
-                             f"{'yes' if spot_report.printable else 'no'}")],
-                      out / "spot.png", size=(1000, 900))
-        stage("render teapot")
-        render_panels([
-            Panel(teapot.vertices, teapot.faces, title="teapot as read: not printable",
-                  highlight={"boundary edges": topo.edges[topo.boundary],
-                             "non-manifold edges": topo.edges[topo.non_manifold]}),
-            Panel(fixed.vertices, fixed.faces, color="#9cc3a5",
-                  title=f"after geotex repair: printable {'yes' if fixed.printable else 'no'}"),
-        ], out / "teapot_repair.png", size=(900, 800))
-        stage("done")
-    summary = {"spot": {"files": ["spot.stl", "spot.3mf", "spot.png"],
-                        "report": spot_report.to_dict()},
-               "teapot": {"changes": fixed.changes, "before": before.to_dict(),
-                          "after": fixed.report.to_dict(),
-                          "files": (["teapot_repaired.stl"] if fixed.printable else [])
-                          + ["teapot_repair.png"]}}
+    start = time.perf_counter()
+    base = read_mesh(sample_path(DEMO_BASE))
+    V = print_ready(base.vertices, size_mm=args.size_mm, y_up=True)
+    tile_mm = args.size_mm / DEMO_TILES_ACROSS
+    with stage_bar(len(SHELL_STAGES) + len(MAP_STAGES), "geotex demo") as bar:
+        shell = build_shell(V, base.faces, tile_size=tile_mm, name=DEMO_BASE,
+                            source=f"sample:{DEMO_BASE}", progress=bar)
+        result = textured_solid(shell, tiles, seed=args.seed, progress=bar)
+    rep, s = result.report, result.stats
+    name = f"{DEMO_BASE}_{tiles.name}"
+    files = []
+    try:
+        for ext in (".stl", ".3mf"):
+            export_printable(out / f"{name}{ext}", result.vertices, result.faces, name=name,
+                             report=rep)
+            files.append(f"{name}{ext}")
+    except NotPrintableError as exc:
+        print(f"geotex: error: {exc}", file=sys.stderr)
+        return EXIT_NOT_PRINTABLE
+    render_panels([
+        Panel(V, base.faces, color="#d9c7a3", title=f"{DEMO_BASE}: {base.n_faces} faces, "
+              f"{args.size_mm:g} mm"),
+        Panel(shell.polycube.Y, shell.polycube.F, scalars=shell.polycube.quad_label[
+            shell.polycube.face_quad], cmap="Set2",
+            title=f"polycube map: {shell.n_quads} tiles of {tile_mm:.3g} mm"),
+        Panel(result.vertices, result.faces, color="#c9b38f",
+              title=f"{tiles.name}: {s['elements']} elements, printable"),
+    ], out / f"{name}.png", size=(700, 700))
+    files.append(f"{name}.png")
+    elapsed = time.perf_counter() - start
+    summary = {"base": DEMO_BASE, "tiles": tiles.name, "size_mm": args.size_mm,
+               "tile_mm": tile_mm, "seconds": round(elapsed, 2), "files": files,
+               "shell": {"quads": shell.n_quads, "max_height_mm": shell.max_height,
+                         "distortion": shell.distortion, "coverage": shell.polycube.coverage},
+               "map": s, "check": rep.to_dict()}
     with atomic_output(out / "report.json", "w") as fh:
-        json.dump(summary, fh, indent=2)
-
-    print(f"spot: {spot.n_faces} faces scaled to {args.size_mm:g} mm, printable: "
-          f"{'yes' if spot_report.printable else 'no'}")
-    print(f"teapot: printable before repair: {'yes' if before.printable else 'no'} "
-          f"({'; '.join(before.reasons)})")
-    for c in fixed.changes:
-        print(f"  - {c}")
-    print(f"teapot: printable after repair: {'yes' if fixed.printable else 'no'}")
+        json.dump(summary, fh, indent=2, sort_keys=True)
+    files.append("report.json")
+    d = shell.distortion
+    print(f"{DEMO_BASE}: {base.n_faces} faces scaled to {args.size_mm:g} mm; polycube of "
+          f"{shell.n_quads} tiles of {tile_mm:.3g} mm (distortion area {d['area_mean']:.2f}, "
+          f"angle {d['angle_mean']:.2f})")
+    print(f"{tiles.name}: {s['elements']} elements, {s['height']:.3g} mm high, united with "
+          f"the body: {s['faces']} faces, printable: {'yes' if rep.printable else 'no'} "
+          f"({elapsed:.1f} s)")
     print(f"results in {out}/:")
-    for name in sorted(p.name for p in out.iterdir()):
-        print(f"  {out / name}")
-    ok = spot_report.printable and fixed.printable
-    return EXIT_OK if ok else EXIT_NOT_PRINTABLE
+    for f in files:
+        print(f"  {out / f}")
+    return EXIT_OK if rep.printable else EXIT_NOT_PRINTABLE

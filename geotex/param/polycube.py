@@ -31,9 +31,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from geotex.check import check_mesh
+from geotex.check.intersections import self_intersecting_pairs
 from geotex.errors import GeotexError, InputError
 from geotex.mesh.arrays import as_mesh_arrays
-from geotex.mesh.geometry import face_areas
+from geotex.mesh.geometry import face_areas, vertex_normals
 from geotex.mesh.topology import edge_topology, vertex_components
 from geotex.param.distortion import distortion_summary
 from geotex.param.polycube_fit import SurfaceProjector, fitted_surface
@@ -84,7 +85,9 @@ class PolyCube:
     edge_quads, edge_sides : (E, 2) int64
         The two quads of every edge and the side index in each.
     quad_folded : (q,) bool
-        Quads whose fitted image folds over (they are left bare by mapping).
+        Quads whose fitted image folds over or crosses another part of the
+        fitted surface (where the voxels bridge a gap narrower than a tile);
+        they are left bare by mapping.
     distortion : dict
         Area and angle distortion (mean, p95), folds, area ratio.
     coverage : dict
@@ -318,9 +321,10 @@ def polycube(V, F, *, tile_size: float, tiles_per_cell: int = 1, res: int = 4,
         tried += 1
         fit = fitted_surface(c["origin"] + c["P"], c["F"], projector,
                              iterations=iterations)
-        if best is None or fit.folded.sum() < best[1].folded.sum():
-            best = (c, fit)
-        if not fit.folded.any() or tried == 3:
+        bad = _bad_quads(fit, c["F"], c["labels"].size, r)
+        if best is None or bad.sum() < best[2].sum():
+            best = (c, fit, bad)
+        if not bad.any() or tried == 3:
             break
     if best is None:
         genus = (2 - chi) // 2
@@ -330,13 +334,11 @@ def polycube(V, F, *, tile_size: float, tiles_per_cell: int = 1, res: int = 4,
             f"tile size {ts:g} is too large to resolve the shape: the mesh has genus {genus} "
             f"but its voxel polycube has {what} (thin parts or narrow gaps are smaller than "
             f"a tile); use a smaller tile size (e.g. {ts / 2:.4g})")
-    c, fit = best
+    c, fit, folded_quads = best
     report(progress, "distortion")
     corners, labels, Fq = c["corners"], c["labels"], c["F"]
     qe, qf, eax, eq, es = quad_edges(corners)
     face_quad = np.arange(Fq.shape[0]) // (2 * r * r)
-    folded_quads = np.zeros(labels.size, dtype=bool)
-    folded_quads[face_quad[fit.folded]] = True
     return PolyCube(tile_size=ts, res=r, origin=lo + c["origin"] * ts, P=c["P"],
                     Y=lo + fit.Y * ts, F=Fq,
                     quad_grid=c["grid"], quad_label=labels, quad_corners=corners,
@@ -345,6 +347,24 @@ def polycube(V, F, *, tile_size: float, tiles_per_cell: int = 1, res: int = 4,
                     distortion=_distortion(c["P"], fit.Y, Fq, labels, face_quad, fit),
                     coverage=_coverage(V, F, fit.Y, Fq),
                     voxels=dict(c["info"], cell=k * ts, candidates=len(seen), fitted=tried))
+
+
+def _bad_quads(fit, F, n_quads, res, *, clearance: float = 0.05) -> np.ndarray:
+    """Quads whose fitted image folds over or comes too close to another part of itself.
+
+    The second happens where the voxels bridge a gap narrower than a tile: the
+    two sides of the bridge land on (nearly) the same surface. It is found as
+    the faces where the fitted surface meets its own offset by ``clearance``
+    tiles along the vertex normals. Such quads are left bare.
+    """
+    Y = fit.Y
+    n = Y.shape[0]
+    lifted = Y + clearance * vertex_normals(Y, F)
+    pairs = self_intersecting_pairs(np.vstack([Y, lifted]), np.vstack([F, F[:, ::-1] + n]))
+    faces = np.concatenate([np.flatnonzero(fit.folded), pairs.ravel() % F.shape[0]])
+    bad = np.zeros(n_quads, dtype=bool)
+    bad[faces // (2 * res * res)] = True
+    return bad
 
 
 def _distortion(P, Y, F, labels, face_quad, fit) -> dict:

@@ -173,12 +173,14 @@ def build_shell(V, F, *, tile_size: float, name: str = "shell", source: str = ""
     # concave creases; too much makes them lean, so a lighter smoothing is
     # tried as well when the first one does not reach half a tile.
     h, D = -1.0, None
+    used = pc.F[~pc.quad_folded[pc.face_quad]]
     for steps in (8 * pc.res, 2 * pc.res):
         Dk = offset_directions(pc.Y, pc.F, smoothing=steps)
         if D is None:
             report(progress, "height")
-        # a texture taller than two tiles is never wanted: that bounds the search
-        hk = max_offset_height(pc.Y, pc.F, Dk, upper=2.0 * pc.tile_size)
+        # a texture taller than two tiles is never wanted: that bounds the search;
+        # quads left bare carry no texture and do not limit it
+        hk = max_offset_height(pc.Y, used, Dk, upper=2.0 * pc.tile_size)
         if hk > h:
             h, D = hk, Dk
         if h >= 0.5 * pc.tile_size:
