@@ -55,7 +55,7 @@ def test_flat_tile_on_flat_quad_is_the_identity_up_to_scale(studs):
     assert top.size >= 1
     only = np.full(pc.n_quads, -1)
     only[top] = tiles[top]
-    uvw, quad, _ = gathered_tiles(studs, only)
+    uvw, quad, _, _ = gathered_tiles(studs, only)
     got = quad_points_to_shell(shell, quad, uvw, height=0.25)
     c0 = pc.origin + pc.quad_corners[quad, 0] * 0.25
     # the tile moved rigidly into the +X, +Y, +Z frame of the top face and scaled

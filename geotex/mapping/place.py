@@ -33,7 +33,7 @@ def _ranges(starts: np.ndarray, counts: np.ndarray) -> np.ndarray:
 
 
 def gathered_tiles(tiles: TileSet, tile_of_quad: np.ndarray
-                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Copies of the chosen tiles, one per quad (``-1``: none), in tile coordinates.
 
     Returns
@@ -41,16 +41,18 @@ def gathered_tiles(tiles: TileSet, tile_of_quad: np.ndarray
     uvw : numpy.ndarray, (N, 3) float64
     quad_of_vertex : numpy.ndarray, (N,) int64
     faces : numpy.ndarray, (M, 3) int64
+    source : numpy.ndarray, (N,) int64
+        Index of every copied vertex in ``tiles.vertices``.
     """
+    tile_of_quad = np.asarray(tile_of_quad, dtype=np.int64)
     quads = np.flatnonzero(tile_of_quad >= 0)
     t = tile_of_quad[quads]
     nv = np.diff(tiles.vertex_offsets)[t]
     nf = np.diff(tiles.face_offsets)[t]
-    vidx = _ranges(tiles.vertex_offsets[t], nv)
+    source = _ranges(tiles.vertex_offsets[t], nv)
     fidx = _ranges(tiles.face_offsets[t], nf)
-    base = np.cumsum(nv) - nv
-    faces = tiles.faces[fidx] + np.repeat(base, nf)[:, None]
-    return tiles.vertices[vidx], np.repeat(quads, nv), faces
+    faces = tiles.faces[fidx] + np.repeat(np.cumsum(nv) - nv, nf)[:, None]
+    return tiles.vertices[source], np.repeat(quads, nv), faces, source
 
 
 def side_keys(uvw: np.ndarray, quad_of_vertex: np.ndarray, quad_edge: np.ndarray
@@ -60,8 +62,10 @@ def side_keys(uvw: np.ndarray, quad_of_vertex: np.ndarray, quad_edge: np.ndarray
     Returns
     -------
     on_side : numpy.ndarray, (N,) bool
-    keys : numpy.ndarray, (k, 3) float64
-        ``(global edge, t, w)`` of the side vertices, in order.
+    keys : numpy.ndarray, (k, 2) int64
+        ``(global edge, bits of (t, w))`` of the side vertices, in order: ``t``
+        (the coordinate along the side) and ``w`` are float32 values in a tile
+        set, so their two 32-bit patterns identify them exactly.
     """
     u, v, w = uvw.T
     side = np.full(len(uvw), -1, dtype=np.int64)
@@ -71,9 +75,36 @@ def side_keys(uvw: np.ndarray, quad_of_vertex: np.ndarray, quad_edge: np.ndarray
     side[v == 1.0] = 2
     on = side >= 0
     s = side[on]
-    t = np.where((s == 0) | (s == 2), u[on], v[on])
+    t = np.where((s == 0) | (s == 2), u[on], v[on]).astype(np.float32)
+    bits = (t.view(np.uint32).astype(np.int64) << 32) | w[on].astype(np.float32).view(
+        np.uint32).astype(np.int64)
     edge = quad_edge[quad_of_vertex[on], s]
-    return on, np.stack([edge.astype(np.float64), t, w[on]], axis=1)
+    return on, np.stack([edge, bits], axis=1)
+
+
+def _tile_components(tiles: TileSet) -> tuple[np.ndarray, np.ndarray]:
+    """Element (connected component) of every tile-set vertex, numbered per tile.
+
+    Returns
+    -------
+    element : numpy.ndarray, (N,) int64
+        Element index within its tile.
+    count : numpy.ndarray, (T,) int64
+        Elements per tile.
+    """
+    from geotex.mesh.topology import vertex_components
+
+    tile_of_face = np.repeat(np.arange(len(tiles)), np.diff(tiles.face_offsets))
+    F = tiles.faces + tiles.vertex_offsets[tile_of_face][:, None]
+    _, label = vertex_components(F, tiles.vertices.shape[0])
+    tile_of_vertex = np.repeat(np.arange(len(tiles)), np.diff(tiles.vertex_offsets))
+    label = np.where(label < 0, 0, label)
+    first = np.full(len(tiles), np.iinfo(np.int64).max)
+    np.minimum.at(first, tile_of_vertex, label)
+    last = np.full(len(tiles), -1)
+    np.maximum.at(last, tile_of_vertex, label)
+    first = np.where(last < 0, 0, first)
+    return label - first[tile_of_vertex], np.maximum(last - first + 1, 0)
 
 
 @dataclass(frozen=True)
@@ -114,24 +145,42 @@ def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: floa
     -------
     MappedTiles
     """
-    from geotex.tiles.tiling import closed_elements
-
     pc = shell.polycube
-    uvw, quad_of_vertex, faces = gathered_tiles(tiles, tile_of_quad)
+    uvw, quad_of_vertex, faces, source = gathered_tiles(tiles, tile_of_quad)
+    # elements numbered per copy, so one copy's elements stay apart from another's
+    element, count = _tile_components(tiles)
+    tile_of_vertex = np.searchsorted(tiles.vertex_offsets, source, side="right") - 1
+    copy = np.concatenate([[0], np.cumsum(quad_of_vertex[1:] != quad_of_vertex[:-1])])
+    per_copy = count[tile_of_vertex[np.r_[0, np.flatnonzero(np.diff(copy)) + 1]]] \
+        if len(uvw) else np.zeros(0, np.int64)
+    element = element[source] + (np.cumsum(per_copy) - per_copy)[copy]
+    n_elements = int(per_copy.sum())
+    # weld side vertices with their twins across quad edges
     on, keys = side_keys(uvw, quad_of_vertex, pc.quad_edge)
+    side_idx = np.flatnonzero(on)
+    order = np.lexsort((keys[:, 1], keys[:, 0]))
+    ks = keys[order]
+    start = np.ones(order.size, dtype=bool)
+    start[1:] = (ks[1:] != ks[:-1]).any(axis=1)
+    group = np.cumsum(start) - 1
+    first = order[start]                                  # representative of every key
     target = np.arange(len(uvw))
-    if on.any():
-        side_idx = np.flatnonzero(on)
-        _, first, inv = np.unique(keys, axis=0, return_index=True, return_inverse=True)
-        target[side_idx] = side_idx[first][inv.ravel()]
-    keep = target == np.arange(len(uvw))
-    new_index = np.cumsum(keep) - 1
-    faces = new_index[target][faces]
-    kept = np.flatnonzero(keep)
+    target[side_idx[order]] = side_idx[first[group]]
+    # an element with a side vertex that found no twin is open: drop it
+    sizes = np.bincount(group)
+    lonely = side_idx[order[sizes[group] == 1]]
+    open_element = np.zeros(n_elements, dtype=bool)
+    open_element[element[lonely]] = True
+    keep_face = ~open_element[element[faces[:, 0]]]
+    faces = target[faces[keep_face]]
+    used = np.zeros(len(uvw), dtype=bool)
+    used[faces.ravel()] = True
+    new_index = np.cumsum(used) - 1
+    kept = np.flatnonzero(used)
     face, bary = pc.locate(quad_of_vertex[kept], uvw[kept, :2])
-    x = interpolated(pc.Y, pc.F, face, bary)
-    d = interpolated(shell.D, pc.F, face, bary)
+    YD = interpolated(np.hstack([pc.Y, shell.D]), pc.F, face, bary)
+    d = YD[:, 3:]
     d /= np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-300)
-    X = x + (uvw[kept, 2] * float(scale))[:, None] * d
-    V2, F2 = closed_elements(X, faces)
-    return MappedTiles(V2, F2, int(len(uvw) - len(kept)), int(len(faces) - len(F2)))
+    X = YD[:, :3] + (uvw[kept, 2] * float(scale))[:, None] * d
+    return MappedTiles(X, new_index[faces], int(on.sum() - start.sum()),
+                       int((~keep_face).sum()))
