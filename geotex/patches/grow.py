@@ -565,9 +565,9 @@ def grow_patch(V, F, seed_face, *, max_radius=None, max_normal_angle=None,
     # 3 rejected for good.  Counters are flat arrays indexed by Python ints, so
     # every step is O(1) apart from the heap.
     state = bytearray(m)
-    dist = np.full(m, np.inf)
-    ecount = np.zeros(efc.shape[0], np.int32)
-    vcount = np.zeros(adj.n_vertices, np.int32)
+    dist = [math.inf] * m
+    ecount = [0] * efc.shape[0]          # Python lists: scalar access is the hot path
+    vcount = [0] * adj.n_vertices
     order: list[int] = []
     dists: list[float] = []
     heap: list[tuple[float, int]] = []
@@ -600,7 +600,7 @@ def grow_patch(V, F, seed_face, *, max_radius=None, max_normal_angle=None,
             g = nb[k]
             if g >= 0 and state[g] == 1:
                 dg = d + w[k]
-                old = float(dist[g])
+                old = dist[g]
                 if dg < old:
                     dist[g] = dg
                     old = dg
