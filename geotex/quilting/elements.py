@@ -37,6 +37,12 @@ class Element:
     cap : numpy.ndarray, (m,) bool, optional
         Faces that only close a prefilled element cut open by a domain side
         (see :func:`capped`); they are left out of the output.
+
+    Notes
+    -----
+    Elements are replaced, never edited: the bounding box is computed on
+    construction and the closest-point tree (:attr:`closest`) on first use,
+    so the many contact tests of the quilting loop share them.
     """
 
     V: np.ndarray
@@ -46,11 +52,20 @@ class Element:
     cap: np.ndarray = None
 
     def __post_init__(self):
-        #: bounding box corners, (3,) each (elements are replaced, never edited)
+        #: bounding box corners, (3,) each
         self.lo = self.V.min(axis=0)
         self.hi = self.V.max(axis=0)
         if self.cap is None:
             self.cap = np.zeros(self.F.shape[0], dtype=bool)
+        self._closest = None
+
+    @property
+    def closest(self):
+        """:class:`~geotex.quilting.icp.ClosestPoints` of the element (its AABB tree)."""
+        if self._closest is None:
+            from geotex.quilting.icp import ClosestPoints
+            self._closest = ClosestPoints(self.V, self.F)
+        return self._closest
 
 
 def texture_arrays(texture, F=None, size=None) -> tuple[np.ndarray, np.ndarray, tuple, object]:

@@ -67,6 +67,22 @@ class ClosestPoints:
             self._normals = face_normals(self.V, self.F)
         return self._normals
 
+    def first_hits(self, origins: np.ndarray, directions: np.ndarray, *, max_t: float = 1.0
+                   ) -> np.ndarray:
+        """Face hit first by each segment ``origins + t directions``, ``0 <= t <= max_t``.
+
+        Returns
+        -------
+        numpy.ndarray, (k,) int64
+            Face index, -1 where the segment hits nothing.
+        """
+        # libigl's binding calls the largest ray parameter "min_t" (measured:
+        # a segment crossing a face at t = 0.5 is found with min_t=1, not with 0)
+        hit, _, _ = self._tree.intersect_ray_first(
+            self.V, self.F, np.ascontiguousarray(origins, dtype=np.float64),
+            np.ascontiguousarray(directions, dtype=np.float64), min_t=max_t)
+        return np.asarray(hit, dtype=np.int64).ravel()
+
     def query(self, P: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Return ``(squared distances (k,), face indices (k,), closest points (k, 3))``."""
         P = np.ascontiguousarray(P, dtype=np.float64).reshape(-1, 3)

@@ -14,7 +14,6 @@ import igl
 import numpy as np
 
 from geotex.quilting.elements import Element, closed_element_ok, split_elements
-from geotex.quilting.icp import ClosestPoints
 from geotex.quilting.merge import merge_elements
 
 __all__ = ["PlacementStats", "place_element", "touching", "clipped_to", "inside_domain"]
@@ -42,7 +41,7 @@ def touching(e: Element, p: Element) -> bool:
         # vertices on the other surface: coincident copies (winding number 1/2)
         # and contacts count as touching
         tol = 1e-7 * float(np.linalg.norm(np.maximum(e.hi, p.hi) - np.minimum(e.lo, p.lo)))
-        if (ClosestPoints(e.V, e.F).query(p.V[inside_p])[0] <= tol * tol).any():
+        if (e.closest.query(p.V[inside_p])[0] <= tol * tol).any():
             return True
     return _edges_pierce(e, p, lo, hi) or _edges_pierce(p, e, lo, hi)
 
@@ -55,11 +54,7 @@ def _edges_pierce(a: Element, b: Element, lo, hi) -> bool:
     near = ((np.maximum(P, Q) >= lo).all(axis=1) & (np.minimum(P, Q) <= hi).all(axis=1))
     if not near.any():
         return False
-    tree = igl.AABB()
-    tree.init(b.V, b.F)
-    hit, _, _ = tree.intersect_ray_first(b.V, b.F, np.ascontiguousarray(P[near]),
-                                         np.ascontiguousarray(Q[near] - P[near]), min_t=1.0)
-    return bool((np.asarray(hit) >= 0).any())
+    return bool((b.closest.first_hits(P[near], Q[near] - P[near], max_t=1.0) >= 0).any())
 
 
 class PlacementStats:
