@@ -370,6 +370,31 @@ def test_coverage_fraction_and_element_stats():
     assert st["height_mean"] == pytest.approx(0.2) and st["height_std"] == pytest.approx(0)
 
 
+def test_report_counts_crossing_and_nested_elements():
+    from geotex.quilting import quilt_report
+    big, F = stud((0.5, 0.5), r=0.3, height=0.3)
+    small, _ = stud((0.5, 0.5), r=0.05, height=0.05, depth=0.01)       # inside big
+    apart, _ = stud((1.5, 0.5))
+    crossing, _ = stud((0.75, 0.5))                                    # crosses big's surface
+
+    def report(*parts):
+        V = np.concatenate(parts)
+        FF = np.concatenate([F + i * len(big) for i in range(len(parts))])
+        ids = np.repeat(np.arange(len(parts)), len(F))
+        return quilt_report(V, FF, ids, exemplar=(big, F, (1.0, 1.0)), domain=(0, 0, 2, 1),
+                            merges={}, dropped={}, seams=[], placements=0, icp_iterations=0,
+                            cells=(1, 1), cell=(1.0, 1.0))
+
+    ok = report(big, apart)
+    assert ok.valid and ok.nested_element_pairs == 0 and ok.intersecting_element_pairs == 0
+    nested = report(big, small, apart)
+    assert nested.nested_element_pairs == 1 and nested.intersecting_element_pairs == 0
+    assert not nested.valid and "1 nested" in nested.summary()
+    cross = report(big, crossing)
+    assert cross.intersecting_element_pairs == 1 and cross.nested_element_pairs == 0
+    assert not cross.valid
+
+
 # ----------------------------------------------------------------------------
 # the quilting loop
 

@@ -14,9 +14,9 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from geotex.check.intersections import self_intersecting_pairs
-from geotex.mesh.topology import face_components
+from geotex.mesh.topology import edge_topology, face_components
 
-__all__ = ["QuiltReport", "quilt_report", "element_stats", "coverage_fraction"]
+__all__ = ["QuiltReport", "quilt_report", "element_stats", "coverage_fraction", "nested_pairs"]
 
 
 @dataclass
@@ -37,6 +37,10 @@ class QuiltReport:
         Elements that intersect themselves.
     intersecting_element_pairs : int
         Pairs of distinct (unmerged) elements whose surfaces intersect.
+    nested_element_pairs : int
+        Pairs of distinct elements of which one lies inside the other without
+        the surfaces crossing (a vertex of one has winding number above 1/2
+        with respect to the other).
     placements : int
         Exemplar copies placed.
     gap_fills : int
@@ -78,6 +82,7 @@ class QuiltReport:
     bad_elements: int = 0
     self_intersecting_elements: int = 0
     intersecting_element_pairs: int = 0
+    nested_element_pairs: int = 0
     placements: int = 0
     gap_fills: int = 0
     merges: dict = field(default_factory=dict)
@@ -104,9 +109,9 @@ class QuiltReport:
 
     @property
     def valid(self) -> bool:
-        """True when every element is a valid solid and no two elements intersect."""
+        """True when every element is a valid solid and no two elements intersect or nest."""
         return (self.bad_elements == 0 and self.self_intersecting_elements == 0
-                and self.intersecting_element_pairs == 0)
+                and self.intersecting_element_pairs == 0 and self.nested_element_pairs == 0)
 
     def to_dict(self) -> dict:
         """Plain dict (``nan`` becomes ``None``)."""
@@ -128,7 +133,8 @@ class QuiltReport:
         """One line: validity, counts, statistics against the exemplar, time."""
         m = self.merges
         return (f"{self.elements} elements ({'valid' if self.valid else 'INVALID'}: "
-                f"{self.bad_elements} bad, {self.intersecting_element_pairs} intersecting pairs), "
+                f"{self.bad_elements} bad, {self.intersecting_element_pairs} intersecting "
+                f"and {self.nested_element_pairs} nested pairs), "
                 f"{self.placements} placements, merges {m.get('stitched', 0)} stitched / "
                 f"{self.fallback_unions} union fallback, "
                 f"{sum(self.dropped.values()) + m.get('dropped', 0)} copies' elements "
@@ -156,6 +162,42 @@ def element_stats(V: np.ndarray, F: np.ndarray, element_ids: np.ndarray) -> dict
     top = hi[:, 2]
     return {"footprint_mean": float(foot.mean()), "footprint_std": float(foot.std()),
             "height_mean": float(top.mean()), "height_std": float(top.std())}
+
+
+def nested_pairs(V: np.ndarray, F: np.ndarray, element_ids: np.ndarray) -> np.ndarray:
+    """Pairs ``(a, b)`` of elements where ``a`` lies inside ``b`` (one vertex tested).
+
+    Only pairs whose bounding boxes contain each other's tested vertex are
+    examined, and only closed elements ``b`` (a Wang tile's frame halves are
+    open along the sides); a vertex of ``a`` with winding number above 1/2
+    with respect to ``b`` means ``a`` starts inside ``b`` (elements whose
+    surfaces cross are counted by the intersection test instead).
+
+    Returns
+    -------
+    numpy.ndarray, (p, 2) int64
+    """
+    import igl
+
+    k = int(element_ids.max()) + 1 if element_ids.size else 0
+    if k < 2:
+        return np.zeros((0, 2), np.int64)
+    order = np.argsort(element_ids, kind="stable")
+    bounds = np.searchsorted(element_ids[order], np.arange(k + 1))
+    faces = [F[order[bounds[e]:bounds[e + 1]]] for e in range(k)]
+    probe = np.array([V[f[0, 0]] for f in faces])
+    lo = np.array([V[f].reshape(-1, 3).min(axis=0) for f in faces])
+    hi = np.array([V[f].reshape(-1, 3).max(axis=0) for f in faces])
+    inside_box = ((probe[:, None] >= lo[None]) & (probe[:, None] <= hi[None])).all(axis=2)
+    np.fill_diagonal(inside_box, False)
+    out = []
+    closed = {}
+    for a, b in zip(*np.nonzero(inside_box)):
+        if b not in closed:          # open elements (frame halves cut by a side) are skipped
+            closed[b] = edge_topology(faces[b], V.shape[0]).boundary.size == 0
+        if closed[b] and igl.winding_number(V, faces[b], probe[a:a + 1])[0] > 0.5:
+            out.append((int(a), int(b)))
+    return np.array(out, dtype=np.int64).reshape(-1, 2)
 
 
 def coverage_fraction(V: np.ndarray, F: np.ndarray, rect, *, resolution: int = 200) -> float:
@@ -236,6 +278,11 @@ def quilt_report(V, F, element_ids, *, exemplar, domain, merges, dropped, seams,
     rep.self_intersecting_elements = int(np.unique(ea[ea == eb]).size)
     cross = np.unique(np.sort(np.c_[ea, eb][ea != eb], axis=1), axis=0)
     rep.intersecting_element_pairs = int(cross.shape[0])
+    nest = nested_pairs(V, F, element_ids)
+    if nest.size:                            # crossing pairs are already counted
+        crossing = {tuple(x) for x in cross.tolist()}
+        nest = [p for p in np.sort(nest, axis=1).tolist() if tuple(p) not in crossing]
+    rep.nested_element_pairs = int(len({tuple(p) for p in np.asarray(nest).reshape(-1, 2).tolist()}))
     rep.placements = int(placements)
     rep.gap_fills = int(gap_fills)
     rep.merges = {k2: int(v) for k2, v in merges.items()}
