@@ -147,8 +147,14 @@ def test_spiky_sphere_overhangs_and_height_field_baseline_fails():
     hf = tex.replace(tilt=np.zeros_like(tex.tilt), residual=np.zeros_like(tex.residual))
     err_hf = np.abs(apply_texture(Vs, F, hf) - V0).max() / _diag(V0)
     err_ht = np.abs(apply_texture(Vs, F, tex) - V0).max() / _diag(V0)
-    assert err_hf > 0.05
-    assert err_ht <= 1e-9
+    assert err_hf > 0.05                                   # measured 9.4 % of the bbox
+    assert err_ht <= 1e-9                                  # measured 5.6e-17
+    # the best any height field over this base can do: the normal component of
+    # every displacement (the tangential lean is lost)
+    n = base_normals(Vs, F)
+    d = V0 - Vs
+    proj = Vs + np.einsum("ij,ij->i", d, n)[:, None] * n
+    assert np.abs(proj - V0).max() / _diag(V0) > 0.05      # measured 8.2 %
 
 
 # --------------------------------------------------------------------------- base shape
