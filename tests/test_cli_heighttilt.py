@@ -219,3 +219,28 @@ def test_wrap_and_wiggle_frames_from_the_command_line(capsys, tmp_path, files):
     out = tmp_path / "wrap.npz"
     assert run(capsys, "heighttilt", "edit", tex, "--wrap", "2", "--base", base, "-o", out)[0] == 0
     np.testing.assert_allclose(load_texture(out).tilt, wrap(Vs, F, t, k=2.0).tilt, atol=1e-12)
+
+
+def test_apply_on_a_deformed_base_keeps_elements_with_original(capsys, tmp_path, files):
+    from geotex.heighttilt import displacements, reapplied, scale_base
+    textured, base, V0, F, Vs = files
+    tex = tmp_path / "t.npz"
+    run(capsys, "heighttilt", "extract", textured, "--base", base, "-o", tex)
+    Vd = scale_base(Vs, 2.0)
+    big = write_mesh(tmp_path / "big.ply", Mesh(Vd, F))
+    kept, plain = tmp_path / "kept.ply", tmp_path / "plain.ply"
+    assert run(capsys, "heighttilt", "apply", tex, "--base", big, "--original", base,
+               "-o", kept)[0] == 0
+    assert run(capsys, "heighttilt", "apply", tex, "--base", big, "-o", plain)[0] == 0
+    t = load_texture(tex)
+    np.testing.assert_allclose(read_mesh(kept).vertices, reapplied(Vd, F, t, base=Vs),
+                               atol=1e-12)
+    # with the original the elements are the original ones, rotated with the surface
+    # (here: unchanged, a uniform scaling); without it the lean angles shrink
+    d_kept = read_mesh(kept).vertices - Vd
+    np.testing.assert_allclose(d_kept, displacements(Vs, F, t), atol=1e-9)
+    assert np.abs((read_mesh(plain).vertices - Vd) - d_kept).max() > 1e-2
+    other = write_mesh(tmp_path / "other.ply", Mesh(Vs, F[:, [0, 2, 1]]))
+    code, _, err = run(capsys, "heighttilt", "apply", tex, "--base", big, "--original", other,
+                       "-o", tmp_path / "x.ply")
+    assert code == 2 and "same faces" in err and not (tmp_path / "x.ply").exists()

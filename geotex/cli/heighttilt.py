@@ -28,9 +28,15 @@ def register(sub):
     e.set_defaults(run=run_extract)
 
     a = hs.add_parser("apply", help="put a texture on a base mesh",
-                      description="Reconstruct the detailed mesh from BASE and the texture.")
+                      description="Reconstruct the detailed mesh from BASE and the texture. "
+                      "BASE may be a deformed or resized copy of the base the texture was "
+                      "extracted on (same connectivity); give that one with --original to "
+                      "keep every element's height and lean angle.")
     a.add_argument("texture", help="texture file (.npz)")
     a.add_argument("--base", required=True, help="base mesh file (the texture's connectivity)")
+    a.add_argument("--original", metavar="BASE0",
+                   help="the base the texture was extracted on (e.g. from --base-out), when "
+                   "BASE is a deformed copy of it")
     a.add_argument("-o", "--output", required=True, help="mesh file to write")
     a.set_defaults(run=run_apply)
 
@@ -163,13 +169,20 @@ def run_extract(args) -> int:
 
 
 def run_apply(args) -> int:
-    from geotex.heighttilt import apply_texture, load_texture
+    from geotex.heighttilt import apply_texture, load_texture, reapplied
     from geotex.io import read_mesh, write_mesh
 
-    out = _mesh_out(guard_output(args.output, args.texture, args.base))
+    out = _mesh_out(guard_output(args.output, args.texture, args.base, args.original))
     tex = load_texture(args.texture)
     base = read_mesh(args.base)
-    V = apply_texture(base.vertices, base.faces, tex)
+    if args.original:
+        original = read_mesh(args.original)
+        if original.n_faces != base.n_faces or not (original.faces == base.faces).all():
+            raise UsageError(f"{args.original}: the original base must have the same faces "
+                             f"as {args.base} ({original.n_faces} vs {base.n_faces} faces)")
+        V = reapplied(base.vertices, base.faces, tex, base=original.vertices)
+    else:
+        V = apply_texture(base.vertices, base.faces, tex)
     write_mesh(out, base.with_geometry(V, base.faces))
     print(f"wrote {out}: {base.n_vertices} vertices, {base.n_faces} faces")
     return EXIT_OK
