@@ -332,6 +332,17 @@ def test_quilted_weave_joins_strands_and_prints_on_a_slab():
     assert_printable(*_slab_union(r.vertices, r.faces, 3.0, 3.0))
 
 
+def test_quilted_weave_same_seed_same_bytes():
+    from geotex.exemplars import exemplar
+    ex = exemplar("weave", size=(2.0, 1.5), seed=2)
+    a = quilt_texture(ex, out_size=(3.0, 2.0), seed=5, boundary="clip")
+    b = quilt_texture(ex, out_size=(3.0, 2.0), seed=5, boundary="clip")
+    assert a.report.merges["stitched"] > 0                  # the merge path ran
+    assert a.vertices.tobytes() == b.vertices.tobytes()
+    assert a.faces.tobytes() == b.faces.tobytes()
+    assert a.element_ids.tobytes() == b.element_ids.tobytes()
+
+
 def test_quilted_chain_mail_copies_land_on_its_lattice():
     from geotex.exemplars import exemplar
     ex = exemplar("chainmail", size=(2.0, 2.0), seed=0, resolution=12, wire=0.07)
