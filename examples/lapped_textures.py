@@ -1,0 +1,207 @@
+"""Lapped textures: image patches pasted over Spot and Bob, isotropic and along fields.
+
+Pictures (written to OUT_DIR):
+
+* ``lapped_textures.png`` - per row (Spot, Bob): the direction field the
+  anisotropic pastes follow (arrows, singular vertices as dots), the texture
+  pasted along it, and the same texture pasted isotropically (each paste
+  with a random orientation propagated over its patch).
+* ``lapped_textures_gallery.png`` - every image in ``../shared/data/images``
+  (see its MANIFEST) on Spot or Bob; structured textures (bricks, weave,
+  tiles, net) follow the field, stochastic ones are pasted isotropically.
+* ``lapped_textures_relief.png`` - the composited texture used as a height
+  field: a refined copy of Spot displaced into a solid that passes the
+  printability check.
+
+Every textured surface is the mesh with a packed xatlas atlas and the pastes
+composited into it (what ``geotex lapped`` writes as GLB / OBJ).  Without
+the shared data, the bundled low-resolution Spot and a synthetic image are
+used.
+
+Run:  python examples/lapped_textures.py [OUT_DIR]     (default docs/gallery)
+"""
+
+from __future__ import annotations
+
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+from PIL import Image
+
+from geotex.check import check_mesh
+from geotex.data import sample_path
+from geotex.fields.directions import principal_direction_field, projected_direction_field
+from geotex.fields.singularities import singularities
+from geotex.image import (alignment_errors, displace, lapped_texture, texture_patches,
+                          textured_mesh)
+from geotex.io import read_mesh
+from geotex.render import Panel, render_panels
+
+SHARED = Path(__file__).resolve().parents[2] / "shared" / "data"
+IMAGES = SHARED / "images"
+SPOT = SHARED / "base" / "spot_uv" / "spot.obj"
+BOB = SHARED / "base" / "bob_uv" / "bob_tri.obj"
+#: Textures with a direction (pasted along the field in the gallery).
+STRUCTURED = ("bricks", "weave", "slate", "rope")
+SIZE = (480, 520)
+
+
+def z_up(mesh):
+    return np.ascontiguousarray(mesh.vertices[:, [0, 2, 1]] * [-1, 1, 1]), mesh.faces
+
+
+def load_bases():
+    spot = z_up(read_mesh(SPOT if SPOT.exists() else sample_path("spot")))
+    bob = z_up(read_mesh(BOB)) if BOB.exists() else None
+    return spot, bob
+
+
+def images() -> list[tuple[str, object]]:
+    found = sorted(IMAGES.rglob("*.png")) + sorted(IMAGES.rglob("*.jpg"))
+    if not found:
+        rng = np.random.default_rng(0)
+        y, x = np.mgrid[0:96, 0:96]
+        stripes = (np.sin(x / 4.0) > 0)[..., None] * [150, 60, 40] + [90, 80, 70]
+        img = np.clip(stripes + rng.normal(0, 12, (96, 96, 3)), 0, 255).astype(np.uint8)
+        return [("synthetic stripes", img)]
+    return [(f"{p.parent.name}_{p.stem}" if p.parent.name == "embark" else p.stem, p)
+            for p in found]
+
+
+def split_by_uv(m):
+    """Per-vertex uv for the renderer: one vertex per distinct (vertex, uv) corner."""
+    key = m.faces.ravel() * np.int64(len(m.uv)) + m.uv_faces.ravel()
+    _, first, inv = np.unique(key, return_index=True, return_inverse=True)
+    V = m.vertices[m.faces.ravel()[first]]
+    uv = m.uv[m.uv_faces.ravel()[first]]
+    return V, inv.reshape(-1, 3), uv
+
+
+def paste(V, F, image, *, field=None, symmetry=None, scale, seed=0, mask="splotch",
+          resolution=1024):
+    t = time.perf_counter()
+    patches = texture_patches(image, mask=mask, seed=seed)
+    lt = lapped_texture(V, F, patches, field=field, symmetry=symmetry, scale=scale, seed=seed)
+    m = textured_mesh(V, F, lt, resolution=resolution)
+    err = np.degrees(alignment_errors(V, F, lt))
+    dt = time.perf_counter() - t
+    print(f"  {lt.n_pastes} pastes, complete {lt.complete}, angle error median "
+          f"{np.median(err):.1f} deg, {dt:.1f} s")
+    return m, lt, err
+
+
+def textured_panel(m, title):
+    Vs, Fs, uv = split_by_uv(m)
+    return Panel(Vs, Fs, uv=uv, texture=m.texture, title=title)
+
+
+def field_panel(V, F, vectors, symmetry, title, count=900):
+    C = V[F].mean(axis=1)
+    pick = np.random.default_rng(0).choice(len(F), size=min(count, len(F)), replace=False)
+    L = 0.025 * float(np.linalg.norm(V.max(axis=0) - V.min(axis=0)))
+    P, D = C[pick], vectors[pick] * L
+    if symmetry == 2:                                   # lines: draw both ways
+        P, D = np.concatenate([P, P]), np.concatenate([D, -D])
+    sing = singularities(V, F, vectors, symmetry=symmetry)
+    plus = np.array([V[v] for v, k in sing if k > 0]).reshape(-1, 3)
+    minus = np.array([V[v] for v, k in sing if k < 0]).reshape(-1, 3)
+    return Panel(V, F, color="#e8e2d4", arrows=(P, D), title=title,
+                 markers={"index > 0": (plus, "#d62728"), "index < 0": (minus, "#1f77b4")})
+
+
+def stitch(rows: list[list[Panel]], path: Path) -> None:
+    with tempfile.TemporaryDirectory() as tmp:
+        pics = []
+        for i, row in enumerate(rows):
+            p = render_panels(row, Path(tmp) / f"row{i}.png", size=SIZE, up="z")
+            with Image.open(p) as im:
+                pics.append(im.convert("RGB").copy())
+    w = max(p.width for p in pics)
+    canvas = Image.new("RGB", (w, sum(p.height for p in pics)), "white")
+    y = 0
+    for p in pics:
+        canvas.paste(p, (0, y))
+        y += p.height
+    canvas.save(path)
+    print(f"wrote {path}")
+
+
+def diag(V):
+    return float(np.linalg.norm(V.max(axis=0) - V.min(axis=0)))
+
+
+def main(out: Path) -> None:
+    out.mkdir(parents=True, exist_ok=True)
+    (spot, bob) = load_bases()
+    imgs = dict(images())
+    bricks = next((v for k, v in imgs.items() if "bricks" in k and "embark" not in k),
+                  next(iter(imgs.values())))
+    weave = next((v for k, v in imgs.items() if "weave" in k), bricks)
+
+    # ---------------------------------------------------------------- fields
+    rows = []
+    V, F = spot
+    up, _ = projected_direction_field(V, F, [0.0, 0.0, 1.0])
+    print("Spot, up field:")
+    m_a, lt_a, err = paste(V, F, bricks, field=up, scale=0.3 * diag(V))
+    print("Spot, isotropic:")
+    m_i, lt_i, _ = paste(V, F, bricks, scale=0.3 * diag(V))
+    rows.append([field_panel(V, F, up, 1, "Spot: up field"),
+                 textured_panel(m_a, f"up field: {lt_a.n_pastes} pastes, "
+                                     f"error {np.median(err):.1f} deg"),
+                 textured_panel(m_i, f"isotropic: {lt_i.n_pastes} pastes")])
+    if bob is not None:
+        V, F = bob
+        lines = principal_direction_field(V, F).directions
+        print("Bob, curvature lines:")
+        m_a, lt_a, err = paste(V, F, weave, field=lines, symmetry=2, scale=0.25 * diag(V))
+        print("Bob, isotropic:")
+        m_i, lt_i, _ = paste(V, F, weave, scale=0.25 * diag(V))
+        rows.append([field_panel(V, F, lines, 2, "Bob: curvature lines"),
+                     textured_panel(m_a, f"lines: {lt_a.n_pastes} pastes, "
+                                         f"error {np.median(err):.1f} deg"),
+                     textured_panel(m_i, f"isotropic: {lt_i.n_pastes} pastes")])
+    stitch(rows, out / "lapped_textures.png")
+
+    # ---------------------------------------------------------------- gallery
+    panels = []
+    for i, (name, img) in enumerate(imgs.items()):
+        V, F = bob if (bob is not None and i % 2) else spot
+        who = "Bob" if (bob is not None and i % 2) else "Spot"
+        structured = any(s in name for s in STRUCTURED)
+        print(f"{name} on {who} ({'field' if structured else 'isotropic'}):")
+        fld = projected_direction_field(V, F, [0.0, 0.0, 1.0])[0] if structured else None
+        m, lt, _ = paste(V, F, img, field=fld, scale=0.25 * diag(V), seed=i, resolution=512)
+        label = name.replace("bricks_with_alpha_hole", "bricks+hole")
+        panels.append(textured_panel(m, f"{label} ({'field' if structured else 'isotropic'})"))
+    stitch([panels[k:k + 4] for k in range(0, len(panels), 4)], out / "lapped_textures_gallery.png")
+
+    # ---------------------------------------------------------------- relief
+    V, F = spot
+    relief_img = next((v for k, v in imgs.items() if "cracker" in k), bricks)
+    print("Spot relief:")
+    _, lt, _ = paste(V, F, relief_img, scale=0.2 * diag(V))
+    t = time.perf_counter()
+    depth = 0.008 * diag(V)
+    Vd, Fd = displace(V, F, lt, depth=depth, edge_length=0.2 * diag(V) / 40)
+    rep = check_mesh(Vd, Fd)
+    print(f"  relief: {len(Fd)} faces, printable {rep.printable}, {time.perf_counter() - t:.1f} s")
+    # close up: a cap around the point of the flank that faces the camera
+    view = np.array([0.75, -1.0, 0.55]) / np.linalg.norm([0.75, -1.0, 0.55])
+    c = 0.5 * (Vd.min(axis=0) + Vd.max(axis=0))
+    flank = np.abs(Vd[:, 2] - c[2]) < 0.15
+    p = Vd[flank][np.argmax((Vd[flank] - c) @ view)]
+    near = np.linalg.norm(Vd[Fd].mean(axis=1) - p, axis=1) < 0.45
+    used, Fk = np.unique(Fd[near], return_inverse=True)
+    stitch([[Panel(Vd, Fd, color="#c9b28f",
+                   title=f"relief {depth:.3f}, {len(Fd) // 1000}k faces, "
+                         f"{'printable' if rep.printable else 'NOT printable'}"),
+             Panel(Vd[used], Fk.reshape(-1, 3), color="#c9b28f", title="close up")]],
+           out / "lapped_textures_relief.png")
+
+
+if __name__ == "__main__":
+    main(Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).parents[1] / "docs" / "gallery")
