@@ -239,17 +239,19 @@ def test_lapped_texture_errors():
         lapped_texture(V, F, pt, field=np.ones((3, 3)))
     with pytest.raises(InputError, match="scale"):
         lapped_texture(V, F, pt, scale=-1.0)
+    with pytest.raises(InputError, match="smaller than the mean edge length"):
+        lapped_texture(V, F, pt, scale=0.01)
     with pytest.raises(InputError, match="TexturePatch"):
         lapped_texture(V, F, [])
     with pytest.raises(InputError, match="symmetry"):
-        lapped_texture(V, F, pt, field=V[F].mean(1) * 0 + [0, 0, 1.0], symmetry=3)
+        lapped_texture(V, F, pt, field=V[F].mean(1) * 0 + [0, 0, 1.0], symmetry=3, scale=1.0)
     Vd = np.vstack([V, V[0]])
     Fd = np.vstack([F, [[0, 1, len(V)]]])
     with pytest.raises(InputError, match="degenerate"):
-        lapped_texture(Vd, Fd, pt)
+        lapped_texture(Vd, Fd, pt, scale=1.0)
     normal = V[F].mean(axis=1)                               # radial: normal to the sphere
     with pytest.raises(InputError, match="normal to the surface"):
-        lapped_texture(V, F, pt, field=normal)
+        lapped_texture(V, F, pt, field=normal, scale=1.0)
 
 
 def test_max_pastes_stops_early_and_says_incomplete():

@@ -198,8 +198,8 @@ def lapped_texture(V, F, patches, *, field=None, symmetry: int | None = None, sc
     Raises
     ------
     InputError
-        On malformed or empty meshes, degenerate faces, bad options, or no
-        texture patch.
+        On malformed or empty meshes, degenerate faces, bad options, no
+        texture patch, or a scale below the mean edge length.
 
     Examples
     --------
@@ -242,6 +242,11 @@ def lapped_texture(V, F, patches, *, field=None, symmetry: int | None = None, sc
         raise InputError(f"rounds must be an integer >= 1, got {rounds!r}")
     rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
 
+    edge = float(np.mean(np.linalg.norm(V[F] - V[np.roll(F, 1, axis=1)], axis=2)))
+    if float(np.median(h)) < edge:
+        raise InputError(f"scale {float(np.median(h)):.3g} is smaller than the mean edge length "
+                         f"{edge:.3g}: a texture patch would cover less than a face; use a "
+                         "larger scale or refine the mesh")
     conn = face_connection(V, F)
     if up is not None:
         up = up - np.einsum("ij,ij->i", up, conn.N)[:, None] * conn.N
