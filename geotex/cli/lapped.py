@@ -139,6 +139,19 @@ def _field(args, V, F):
     raise UsageError(f"--field {kind!r}: give isotropic, up, curvature, FILE.npz or FILE.json")
 
 
+def _save_records(args, lapped, written) -> None:
+    """Write the paste records last; on failure remove the files just written."""
+    if not args.pastes:
+        return
+    from geotex.image.records import save_lapped
+    try:
+        save_lapped(args.pastes, lapped)
+    except BaseException:
+        for path in written[:-1]:
+            path.unlink(missing_ok=True)
+        raise
+
+
 def run(args) -> int:
     from geotex.image.lapped import default_scale, lapped_texture
     from geotex.image.patches import texture_patches
@@ -184,10 +197,8 @@ def run(args) -> int:
                 print(f"geotex: error: the relief is not printable ({'; '.join(report.reasons)});"
                       " try a smaller --displace or a larger --scale", file=sys.stderr)
                 return EXIT_NOT_PRINTABLE
-            if args.pastes:
-                from geotex.image.records import save_lapped
-                save_lapped(args.pastes, lapped)
             export_printable(out, Vd, Fd, name=mesh.name or out.stem, report=report)
+            _save_records(args, lapped, written)
             print(f"{args.base}: {lapped.n_pastes} pastes; relief of {Fd.shape[0]} faces, "
                   f"depth {args.displace:g}, printable")
         else:
@@ -196,10 +207,8 @@ def run(args) -> int:
             textured = textured_mesh(V, F, lapped, resolution=args.resolution,
                                      name=mesh.name or out.stem)
             bar.close()
-            if args.pastes:
-                from geotex.image.records import save_lapped
-                save_lapped(args.pastes, lapped)
             write_mesh(out, textured)
+            _save_records(args, lapped, written)
             print(f"{args.base}: {lapped.n_pastes} pastes over {F.shape[0]} faces; atlas "
                   f"{textured.texture.shape[1]}x{textured.texture.shape[0]} with "
                   f"{textured.metadata['atlas_charts']} charts")
