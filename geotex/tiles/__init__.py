@@ -1,14 +1,14 @@
 """Geometric Wang tile sets: colours, edge strips, frames, interiors, tilings.
 
-Build a set from an exemplar (:func:`build_tileset`), verify that every pair of
-tiles that may meet is seamless (:func:`check_seams`), lay out random legal
+Build a set from an exemplar (:func:`build_tileset`: planar, complete or
+isotropic, interiors by constrained quilting or paste), verify that every pair
+of tiles that may meet is seamless (:func:`check_seams`), lay out random legal
 tilings of the plane (:func:`random_arrangement`, :func:`planar_tiling`), save
 and load sets (:func:`save_tileset`, :func:`load_tileset`), and use the catalog
 shipped with geotex (:func:`list_tilesets`, :func:`load_named`).
 """
 
 from geotex.tiles.build import build_tileset
-from geotex.tiles.catalog import list_tilesets, load_named, tileset_path
 from geotex.tiles.colors import COMPLETE_GROUPS, PLANAR_GROUPS, tile_count
 from geotex.tiles.tileset import TileSet, load_tileset, save_tileset
 from geotex.tiles.tiling import on_slab, planar_tiling, random_arrangement
@@ -17,3 +17,14 @@ from geotex.tiles.verify import check_seams
 __all__ = ["build_tileset", "check_seams", "TileSet", "load_tileset", "save_tileset",
            "random_arrangement", "planar_tiling", "on_slab", "list_tilesets", "load_named",
            "tileset_path", "tile_count", "PLANAR_GROUPS", "COMPLETE_GROUPS"]
+
+_CATALOG = ("list_tilesets", "load_named", "tileset_path")
+
+
+def __getattr__(name):
+    # the catalog module is imported on first use, so that
+    # ``python -m geotex.tiles.catalog`` runs it without a second copy
+    if name in _CATALOG:
+        from geotex.tiles import catalog
+        return getattr(catalog, name)
+    raise AttributeError(f"module 'geotex.tiles' has no attribute {name!r}")

@@ -119,7 +119,9 @@ def parse_colors(spec, *, planar: bool) -> tuple[int, int, int]:
         values = [int(v) for v in spec]
     if len(values) == 1:
         values = values * 3
-    if len(values) != 3 or any(v < 1 or v > 4 for v in values):
+    # a planar set has no Z colours: its recorded (n_x, n_y, 0) is accepted back
+    checked = values[:2] if planar and len(values) == 3 and values[2] == 0 else values
+    if len(values) != 3 or any(v < 1 or v > 4 for v in checked):
         raise InputError(f"colors: expected 1 to 4 colours per axis class, got {spec!r}")
     if planar:
         values[2] = 0

@@ -74,8 +74,11 @@ def tiles_laid_out(tiles: TileSet, *, columns: int | None = None, spacing: float
 
 
 def _render(parts: dict, path, *, size, title: str = "", zoom: float = 1.0,
-            lines=None) -> Path:
-    """Render named parts (key: colour or "elements"/"plates") looking down at an angle."""
+            lines=None, view=(0.25, -1.0, 1.35)) -> Path:
+    """Render named parts (key: colour or "elements"/"plates") looking down along ``-view``.
+
+    Saved as a 256-colour PNG (the shading needs no more, the file is half the size).
+    """
     from PIL import Image
 
     from geotex.io.atomic import atomic_output
@@ -109,7 +112,7 @@ def _render(parts: dict, path, *, size, title: str = "", zoom: float = 1.0,
         lo, hi = P.min(axis=0), P.max(axis=0)
         center = 0.5 * (lo + hi)
         extent = float(max(hi[0] - lo[0], hi[1] - lo[1]))
-        direction = np.array([0.25, -1.0, 1.35])
+        direction = np.asarray(view, dtype=np.float64)
         direction /= np.linalg.norm(direction)
         plotter.camera_position = [tuple(center + direction * extent * 2.0), tuple(center),
                                    (0.0, 0.0, 1.0)]
@@ -121,10 +124,17 @@ def _render(parts: dict, path, *, size, title: str = "", zoom: float = 1.0,
     finally:
         plotter.close()
     buf = io.BytesIO()
-    Image.fromarray(np.asarray(image)).save(buf, format="PNG")
+    _palette(Image.fromarray(np.asarray(image))).save(buf, format="PNG", optimize=True)
     with atomic_output(path, "wb") as fh:
         fh.write(buf.getvalue())
     return path
+
+
+def _palette(im):
+    from PIL import Image
+
+    return im.convert("RGB").quantize(colors=256, method=Image.Quantize.MEDIANCUT,
+                                      dither=Image.Dither.NONE)
 
 
 def render_tiles(tiles: TileSet, path, *, size=None) -> Path:
@@ -139,10 +149,13 @@ def render_tiles(tiles: TileSet, path, *, size=None) -> Path:
     kinds = {"planar": "planar", "complete": "complete polycube", "isotropic": "isotropic"}
     legend = ("bars: side colour (one family for all axes)" if tiles.isotropic else
               "bars: side colour (X red, Y blue, Z green)")
-    title = (f"{tiles.name}: {kinds[tiles.kind]} set, {n} tiles, colours "
-             f"{','.join(str(c) for c in tiles.n_colors)}; {legend}")
+    title = (f"{tiles.name}: {kinds[tiles.kind]} set, {n} tile{'s' * (n != 1)}, colours "
+             f"{','.join(str(c) for c in tiles.n_colors)}\n{legend}")
+    if n > 16 and n % 16 == 0:
+        title += "\nblocks of 16 tiles, left to right, top to bottom: groups " + " ".join(
+            f"({a},{b})" for a, b in tiles.groups[::16].tolist())
     return _render(tiles_laid_out(tiles), path, size=size, title=title,
-                   zoom=1.25 if n > 16 else 1.35)
+                   zoom=1.3 if n > 16 else 1.2 if n > 1 else 1.05, view=(0.15, -0.75, 1.6))
 
 
 def render_tiling(tiles: TileSet, path, *, grid: int = 6, seed: int = 0, size=(1400, 1100),
@@ -197,7 +210,7 @@ def render_tileset(tiles: TileSet, path, *, grid: int = 6, seed: int = 0) -> Pat
         left, right = np.asarray(Image.open(a).convert("RGB")), np.asarray(
             Image.open(b).convert("RGB"))
     buf = io.BytesIO()
-    Image.fromarray(np.hstack([left, right])).save(buf, format="PNG")
+    _palette(Image.fromarray(np.hstack([left, right]))).save(buf, format="PNG", optimize=True)
     with atomic_output(path, "wb") as fh:
         fh.write(buf.getvalue())
     return path
