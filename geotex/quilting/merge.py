@@ -27,6 +27,13 @@ Element ``A`` (already in the texture; may carry fixed vertices) and element
    seam inside the band, where the elements are close and the cut is short.
    Each piece keeps only faces clear of the other element, so the two
    pieces cannot cross each other.
+   *Corresponding elements* (the alignment was accepted: two copies of one
+   element, two pieces of one strand) coincide where they overlap, so
+   "covered" is ambiguous there; they are cut by the paper's overlap rule
+   instead (:func:`_corresponding_cut`): the coinciding zone is free, the
+   part without counterpart is SOURCE, the part inside the other element
+   and where the other element goes on is SINK; ``A`` is cut first and
+   ``B`` next to ``A``'s seam, giving up what ``A`` kept.
 3. **Laplacian pull.**  The kept pieces' boundary loops are paired by
    proximity; every loop vertex gets the target "a fraction ``pull / 2`` of
    the way to the closest point of the partner loop" (``pulls`` are tried in
