@@ -259,3 +259,50 @@ def test_max_pastes_stops_early_and_says_incomplete():
     lt = lapped_texture(V, F, texture_patches(_image()), scale=0.5, seed=0, max_pastes=3)
     assert lt.n_pastes == 3 and not lt.complete
     assert math.isclose(lt.coverage.max(), 1.0)
+
+
+def test_placement_priority_marks_singularities_and_bends():
+    from geotex.fields.directions import projected_direction_field
+    from geotex.image import placement_priority
+    from geotex.mesh.primitives import grid_plane
+
+    V, F = grid_plane(6, 6)
+    flat = placement_priority(V, F, up=np.tile([1.0, 0.0, 0.0], (len(F), 1)), scale=0.5)
+    assert np.all(flat == 0.0)
+    V, F = icosphere(3)
+    up, _ = projected_direction_field(V, F, [0.0, 0.0, 1.0])
+    p = placement_priority(V, F, up=up, scale=0.5)
+    assert p.min() >= 0.0 and p.max() <= 1.0
+    top = np.argmax(V[:, 2])
+    assert np.all(p[np.isin(F, top).any(axis=1)] == 1.0)   # the pole is a singularity
+    assert np.median(p) < 0.5
+
+
+def test_on_paste_reports_progress():
+    V, F = icosphere(2)
+    calls = []
+    lt = lapped_texture(V, F, texture_patches(_image()), scale=0.9, seed=0,
+                        on_paste=lambda n, covered, total: calls.append((n, covered, total)))
+    assert [c[0] for c in calls] == list(range(1, lt.n_pastes + 1))
+    assert calls[-1][1] == calls[-1][2] == len(F)
+    assert all(a[1] <= b[1] for a, b in zip(calls, calls[1:]))
+
+
+def test_later_pastes_lie_on_top():
+    from geotex.image import LappedTexture, Paste, composite_at
+
+    V, F = icosphere(1)
+    red = np.zeros((16, 16, 3), np.uint8)
+    red[..., 0] = 255
+    blue = np.zeros((16, 16, 3), np.uint8)
+    blue[..., 2] = 255
+    (pr,) = texture_patches(red, mask="circle", falloff=0)
+    (pb,) = texture_patches(blue, mask="circle", falloff=0)
+    uv = np.tile(pr.center, (1, 3, 1))                       # the face maps to the centre
+    paste = [Paste(patch=k, faces=np.array([0]), corner_uv=uv, directions=np.zeros((1, 3)),
+                   seed_point=np.zeros(3)) for k in (0, 1)]
+    lt = LappedTexture(pastes=tuple(paste), patches=(pr, pb), n_vertices=len(V),
+                       n_faces=len(F), coverage=np.ones(len(F)), metadata={})
+    c = composite_at(lt, [0, 1], [[1 / 3, 1 / 3, 1 / 3]] * 2)
+    assert np.allclose(c[0], [0, 0, 1, 1], atol=1e-6)        # blue, pasted last
+    assert np.allclose(c[1, 3], 0.0)                         # face 1: no paste, background
