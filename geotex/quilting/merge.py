@@ -187,7 +187,7 @@ def _corresponding_cut(VA, FA, VB, FB, NA, NB, fixA, out_b, eps, band_rings):
     (an end cap inside the other strand) and the vertices whose counterpart
     on the other element lies outside the common box go (SINK).  ``A`` is
     cut first; ``B`` then gives up every face whose counterpart on ``A`` was
-    kept and may cut only within ``band_rings + 1`` of its mean edge lengths
+    kept and may cut only within ``band_rings`` of its mean edge lengths
     of ``A``'s seam, so the two seams lie next to each other and the kept
     pieces do not overlap.  Returns ``None`` when the elements do not
     coincide anywhere (the general path then applies).
@@ -215,7 +215,7 @@ def _corresponding_cut(VA, FA, VB, FB, NA, NB, fixA, out_b, eps, band_rings):
     keep_a = _dual_cut(VA, FA, dA, sourceA, sinkA & ~sourceA)
     if keep_a.all() or not keep_a.any():
         return None
-    # B: give up what A kept, cut next to A's seam (within (band_rings + 1)
+    # B: give up what A kept, cut next to A's seam (within band_rings
     # of B's own mean edge lengths of it, whatever A's triangles are like)
     on_kept = np.zeros(VA.shape[0], bool)
     on_kept[FA[keep_a].ravel()] = True
