@@ -144,13 +144,14 @@ def matching_energy(P, N, index: ExemplarIndex, translations, *, lam: float,
     for s in range(0, T.shape[0], per):
         Ts = T[s:s + per]
         inside = covered_by(P, Ts, footprint)
-        Q = (P[None] - Ts[:, None]).reshape(-1, 3)
-        d2, face, _ = index.points.query(Q)
-        dn = np.linalg.norm(np.tile(N, (Ts.shape[0], 1)) - index.normals[face], axis=1)
-        e = ((1.0 + lam * np.sqrt(d2)) * (1.0 + dn)).reshape(-1, k)
+        cand, pt = np.nonzero(inside)            # only the covered points are queried
+        d2, face, _ = index.points.query(P[pt] - Ts[cand])
+        dn = np.linalg.norm(N[pt] - index.normals[face], axis=1)
+        e = (1.0 + lam * np.sqrt(d2)) * (1.0 + dn)
         count = inside.sum(axis=1)
+        total = np.bincount(cand, weights=e, minlength=Ts.shape[0])
         with np.errstate(invalid="ignore", divide="ignore"):
-            out[s:s + per] = np.where(count > 0, (e * inside).sum(axis=1) / count, np.inf)
+            out[s:s + per] = np.where(count > 0, total / count, np.inf)
     return out
 
 

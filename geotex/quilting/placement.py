@@ -16,7 +16,8 @@ import numpy as np
 from geotex.quilting.elements import Element, closed_element_ok, split_elements
 from geotex.quilting.merge import merge_elements
 
-__all__ = ["PlacementStats", "place_element", "touching", "clipped_to", "inside_domain"]
+__all__ = ["PlacementStats", "place_element", "touching", "coincides", "clipped_to",
+           "inside_domain"]
 
 
 def touching(e: Element, p: Element) -> bool:
@@ -55,6 +56,21 @@ def _edges_pierce(a: Element, b: Element, lo, hi) -> bool:
     if not near.any():
         return False
     return bool((b.closest.first_hits(P[near], Q[near] - P[near], max_t=1.0) >= 0).any())
+
+
+def coincides(e: Element, p: Element, *, tol: float = 0.02) -> bool:
+    """True when ``p`` is (nearly) a copy of ``e`` in place.
+
+    Both bounding boxes agree within ``tol`` of ``p``'s footprint (the mean
+    of its x and y extents) and the RMS distance of ``p``'s vertices to
+    ``e``'s surface is below ``tol`` of it: half the tolerance at which
+    :func:`~geotex.quilting.merge.merge_elements` calls aligned copies the
+    same element.
+    """
+    foot = float(np.mean(p.hi[:2] - p.lo[:2])) or 1.0
+    if np.abs(e.lo - p.lo).max() > tol * foot or np.abs(e.hi - p.hi).max() > tol * foot:
+        return False
+    return float(np.sqrt(e.closest.query(p.V)[0].mean())) < tol * foot
 
 
 class PlacementStats:
@@ -98,6 +114,11 @@ def place_element(p: Element, elements: list, domain, stats: PlacementStats, *,
         return False
     k = partners[0]
     e = elements[k]
+    if coincides(e, p):
+        # a copy of an element already there (periodic patterns: most of a copy):
+        # nothing to merge, and no alignment shift that could move the element
+        stats.merges["absorbed"] += 1
+        return True
     r = merge_elements(e.V, e.F, p.V, p.F, fixed_a=e.fixed, domain=domain,
                        corresponding_only=True, cap_a=e.cap)
     if optional and r.status not in ("stitched", "union", "absorbed"):
