@@ -565,3 +565,8 @@ def test_touching_detects_copies_contacts_and_crossings():
     assert not touching(e, thin)           # passes above the stud
     thin2 = Element(R * [0.02, 0.6, 0.02] + [0.0, 0.0, 0.1], RF, np.zeros(len(R), bool))
     assert touching(e, thin2)              # a rod through the dome
+    from geotex.quilting.placement import coincides
+    assert coincides(e, at(0.0)) and coincides(e, at(0.003))     # copies in place
+    assert not coincides(e, at(0.05)) and not coincides(e, at(0.0, 0.05))
+    big = Element(V * [1.2, 1.2, 1.0], F, np.zeros(len(V), bool))
+    assert not coincides(e, big)
