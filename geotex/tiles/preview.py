@@ -124,7 +124,7 @@ def _render(parts: dict, path, *, size, title: str = "", zoom: float = 1.0,
     finally:
         plotter.close()
     buf = io.BytesIO()
-    _palette(Image.fromarray(np.asarray(image))).save(buf, format="PNG", optimize=True)
+    _palette(Image.fromarray(np.asarray(image))).save(buf, format="PNG")
     with atomic_output(path, "wb") as fh:
         fh.write(buf.getvalue())
     return path
@@ -210,7 +210,7 @@ def render_tileset(tiles: TileSet, path, *, grid: int = 6, seed: int = 0) -> Pat
         left, right = np.asarray(Image.open(a).convert("RGB")), np.asarray(
             Image.open(b).convert("RGB"))
     buf = io.BytesIO()
-    _palette(Image.fromarray(np.hstack([left, right]))).save(buf, format="PNG", optimize=True)
+    _palette(Image.fromarray(np.hstack([left, right]))).save(buf, format="PNG")
     with atomic_output(path, "wb") as fh:
         fh.write(buf.getvalue())
     return path
