@@ -11,6 +11,28 @@ __all__ = ["component_nesting_depth"]
 MAX_NESTING_COMPONENTS = 256
 
 
+#: Up to this many (face, probe) pairs winding numbers are summed exactly in numpy;
+#: above it libigl's fast (hierarchical) winding number is used. libigl's exact
+#: ``winding_number`` is far slower than either (7 s for 2 probes on 1.3M faces).
+EXACT_PAIRS = 20_000_000
+
+
+def _winding_numbers(V: np.ndarray, F: np.ndarray, P: np.ndarray) -> np.ndarray:
+    """Generalized winding numbers of points ``P`` (k, 3) w.r.t. triangles ``(V, F)``."""
+    if F.shape[0] * P.shape[0] > EXACT_PAIRS:
+        return np.asarray(igl.fast_winding_number(V, F, P))
+    A, B, C = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
+    out = np.empty(P.shape[0])
+    for i, p in enumerate(P):  # solid angle of every triangle (Van Oosterom-Strackee)
+        a, b, c = A - p, B - p, C - p
+        la, lb, lc = (np.linalg.norm(x, axis=1) for x in (a, b, c))
+        num = np.einsum("ij,ij->i", a, np.cross(b, c))
+        den = (la * lb * lc + np.einsum("ij,ij->i", a, b) * lc
+               + np.einsum("ij,ij->i", b, c) * la + np.einsum("ij,ij->i", c, a) * lb)
+        out[i] = np.arctan2(num, den).sum() / (2.0 * np.pi)
+    return out
+
+
 def component_nesting_depth(V: np.ndarray, F: np.ndarray, face_labels: np.ndarray,
                             count: int, closed: np.ndarray) -> np.ndarray:
     """Return how many other closed components enclose each component.
@@ -51,7 +73,7 @@ def component_nesting_depth(V: np.ndarray, F: np.ndarray, face_labels: np.ndarra
     Pn = (probes - center) / scale
     for c in closed_ids:
         Fc = F[face_labels == c]
-        w = igl.winding_number(Vn, Fc, Pn)
+        w = _winding_numbers(Vn, Fc, Pn)
         inside = np.abs(w) > 0.5
         inside[c] = False
         depth += inside

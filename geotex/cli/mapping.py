@@ -91,9 +91,9 @@ def _finish(args, shell, tiles, out, extra, *, label: str) -> int:
     s = result.stats
     print(f"{label}: {s['quads']} quads ({s['bare_quads']} bare), {s['elements']} elements, "
           f"height {s['height']:.4g}, {s['faces']} faces")
-    if s["elements_dropped"] or s["merged_groups"]:
-        print(f"  {s['elements_dropped']} elements dropped (folded by the shell), "
-              f"{s['merged_groups']} groups of touching elements merged")
+    if s["elements_floating"] or s["elements_folded"]:
+        print(f"  left out: {s['elements_folded']} elements folded by the shell map, "
+              f"{s['elements_floating']} that do not reach the base")
     try:
         export_printable(out, V, F, name=label, report=rep if factor == 1.0 else None)
     except NotPrintableError as exc:

@@ -135,7 +135,8 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
              "height": h, "seed": int(seed), "mapped_vertices": int(mapped.vertices.shape[0]),
              "mapped_faces": int(mapped.faces.shape[0]), "welded": mapped.welded,
              "open_faces_dropped": mapped.dropped_faces, "elements": union.elements,
-             "elements_dropped": union.dropped, "merged_groups": union.merged_groups,
+             "union_operands": union.groups, "elements_floating": union.floating,
+             "elements_folded": union.folded,
              "vertices": int(V.shape[0]), "faces": int(F.shape[0]),
              "seconds": {k: round(v, 3) for k, v in times.items()}}
     return TexturedSolid(V, F, tile_of_quad, rep, stats)
