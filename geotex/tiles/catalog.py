@@ -144,7 +144,8 @@ def main(argv=None) -> int:
         print(f"{name}: {tiles.kind}, {len(tiles)} tiles, {size / 1e6:.2f} MB, "
               f"{elapsed:.1f} s ({elapsed / len(tiles):.2f} s per tile), "
               f"{rep.pairs_checked} side pairs seamless, coverage "
-              f"{tiles.metadata['coverage_mean']:.0%}")
+              f"{tiles.metadata['coverage_mean']:.0%}, "
+              f"{tiles.metadata.get('paste_fallbacks', 0)} tiles pasted after quilting failed")
         if size > MAX_BYTES:
             print(f"{name}: {size} bytes is over the {MAX_BYTES} byte limit", file=sys.stderr)
             status = 1
