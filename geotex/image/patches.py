@@ -271,7 +271,7 @@ def mask_from_image(mask, *, shape=None, falloff: float = 3.0) -> np.ndarray:
 def _mask_alpha(mask, h, w, falloff, crop, image_shape):
     if isinstance(mask, str) and mask in MASKS:
         return (circle_mask if mask == "circle" else splotch_mask)(h, w, falloff=falloff)
-    if isinstance(mask, str) and not Path(mask).suffix:
+    if isinstance(mask, str) and not Path(mask).suffix and not Path(mask).is_file():
         raise InputError(f"mask must be one of {', '.join(MASKS)} or a mask image, got {mask!r}")
     name = str(mask) if isinstance(mask, (str, Path)) else "mask"
     img = _as_image(mask, name)
