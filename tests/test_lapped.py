@@ -306,3 +306,43 @@ def test_later_pastes_lie_on_top():
     c = composite_at(lt, [0, 1], [[1 / 3, 1 / 3, 1 / 3]] * 2)
     assert np.allclose(c[0], [0, 0, 1, 1], atol=1e-6)        # blue, pasted last
     assert np.allclose(c[1, 3], 0.0)                         # face 1: no paste, background
+
+
+def _uncovered_inner_hull(lt):
+    """Per interior paste: fraction of the margin-shrunk hull outside its uv image."""
+    from geotex.image.paste import REGROW_MARGIN
+
+    p0 = lt.patches[0]
+    inner = p0.center + (1 - REGROW_MARGIN) * (p0.hull - p0.center)
+    g = np.stack(np.meshgrid(np.linspace(0, 1, 41), np.linspace(0, 1, 41)), -1).reshape(-1, 2)
+    g = g[points_in_polygon(g, inner)][:, None, :]
+    out = []
+    for p in lt.pastes:
+        if not np.all((p.seed_point[:2] > 1.0) & (p.seed_point[:2] < 3.0)):
+            continue                                         # near the plane's border
+        A, B, C = (p.corner_uv[None, :, k] for k in range(3))
+
+        def cross(o, a, b):
+            return ((a[..., 0] - o[..., 0]) * (b[..., 1] - o[..., 1])
+                    - (a[..., 1] - o[..., 1]) * (b[..., 0] - o[..., 0]))
+
+        d = np.stack([cross(A, B, g), cross(B, C, g), cross(C, A, g)])
+        inside = (d >= 0).all(axis=0) | (d <= 0).all(axis=0)
+        out.append(1.0 - inside.any(axis=1).mean())
+    return np.array(out)
+
+
+def test_regrowing_covers_what_the_optimization_uncovered():
+    from geotex.mesh.primitives import grid_plane
+
+    V, F = grid_plane(40, 40, size=(4, 4))
+    angle = 2.0 * V[F].mean(axis=1)[:, 0]                 # a field turning along x (curl)
+    fld = np.c_[np.cos(angle), np.sin(angle), np.zeros(len(F))]
+    pt = texture_patches(_image())
+    once = lapped_texture(V, F, pt, field=fld, scale=1.0, seed=3, rounds=1)
+    again = lapped_texture(V, F, pt, field=fld, scale=1.0, seed=3, rounds=2)
+    assert once.complete and again.complete
+    assert any(p.rounds == 2 for p in again.pastes)
+    u1, u2 = _uncovered_inner_hull(once), _uncovered_inner_hull(again)
+    assert u1.size > 5 and u2.size > 5
+    assert u1.max() > 0.0 and u2.max() == 0.0
