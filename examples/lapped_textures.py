@@ -18,11 +18,15 @@ composited into it (what ``geotex lapped`` writes as GLB / OBJ).  Without
 the shared data, the bundled low-resolution Spot and a synthetic image are
 used.
 
+Set ``GEOTEX_EXAMPLES_QUICK=1`` (the test suite does) for the bundled
+low-resolution Spot and two images only.
+
 Run:  python examples/lapped_textures.py [OUT_DIR]     (default docs/gallery)
 """
 
 from __future__ import annotations
 
+import os
 import sys
 import tempfile
 import time
@@ -137,6 +141,9 @@ def main(out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
     (spot, bob) = load_bases()
     imgs = dict(images())
+    if os.environ.get("GEOTEX_EXAMPLES_QUICK") == "1":   # the test suite: small and few
+        spot, bob = z_up(read_mesh(sample_path("spot"))), None
+        imgs = dict(list(imgs.items())[:2])
     bricks = next((v for k, v in imgs.items() if "bricks" in k and "embark" not in k),
                   next(iter(imgs.values())))
     weave = next((v for k, v in imgs.items() if "weave" in k), bricks)

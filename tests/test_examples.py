@@ -1,5 +1,6 @@
 """Every example script runs and writes its picture."""
 
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -12,8 +13,9 @@ EXAMPLES = sorted((Path(__file__).parents[1] / "examples").glob("*.py"))
 
 @pytest.mark.parametrize("script", EXAMPLES, ids=[p.stem for p in EXAMPLES])
 def test_example_writes_pictures(script, tmp_path):
+    env = dict(os.environ, GEOTEX_EXAMPLES_QUICK="1")   # heavy examples draw less
     p = subprocess.run([sys.executable, str(script), str(tmp_path)], capture_output=True,
-                       text=True, timeout=600)
+                       text=True, timeout=600, env=env)
     assert p.returncode == 0, p.stderr[-2000:]
     pictures = [f for f in tmp_path.rglob("*.png") if f.stem == script.stem or
                 f.name.startswith(script.stem)]

@@ -1,0 +1,84 @@
+"""Gallery of the main job: every catalog tile set on catalog shells.
+
+For every tile set of the catalog that can cover a closed shape (complete or
+isotropic sets; planar sets only tile the plane) and each of the shells
+Spot, Bob and the torus: lay the tiles over the shell, unite them with the
+base, check the solid, and draw it. One picture per tile set
+(``texture_gallery_<set>.png``, a row of three shells) and one overview
+(``texture_gallery.png``, the first shell of every set). The printable solids
+are written as STL beside the pictures.
+
+Set ``GEOTEX_EXAMPLES_QUICK=1`` (the test suite does) to draw one set on one
+shell only.
+
+Run:  python examples/texture_gallery.py [OUT_DIR]     (default docs/gallery)
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+from pathlib import Path
+
+from PIL import Image
+
+from geotex.io.atomic import atomic_output
+from geotex.mapping import textured_solid
+from geotex.printing import export_printable
+from geotex.render import Panel, render_panels
+from geotex.shells import load_named as load_shell
+from geotex.tiles.catalog import list_tilesets, load_named as load_tiles
+
+SHELLS = {"spot": "y", "bob": "z", "torus": "z"}   # name -> up axis (y-up is turned z-up)
+COLOURS = ("#c9b38f", "#a9bfd1", "#b9c99a", "#d1a9a9", "#c4b0d6", "#d6c7a0")
+
+
+def _sets():
+    rows = [r for r in list_tilesets() if not (r["recipe"].get("planar") and
+                                               not r["recipe"].get("isotropic"))]
+    return [r["name"] for r in rows]
+
+
+def main(out: Path) -> None:
+    out.mkdir(parents=True, exist_ok=True)
+    quick = os.environ.get("GEOTEX_EXAMPLES_QUICK") == "1"
+    sets = _sets()[:1] if quick else _sets()
+    shells = dict(list(SHELLS.items())[:1]) if quick else SHELLS
+    firsts = []
+    for k, name in enumerate(sets):
+        tiles = load_tiles(name)
+        panels = []
+        for shell_name, up in shells.items():
+            shell = load_shell(shell_name)
+            t = time.perf_counter()
+            res = textured_solid(shell, tiles, seed=0)
+            dt = time.perf_counter() - t
+            s = res.stats
+            print(f"{name} on {shell_name}: {s['quads']} tiles, {s['elements']} elements, "
+                  f"{s['faces']} faces, printable {res.report.printable}, {dt:.1f} s")
+            if res.report.printable:
+                export_printable(out / f"texture_gallery_{name}_{shell_name}.stl",
+                                 res.vertices, res.faces, report=res.report)
+            shown = res.vertices[:, [0, 2, 1]] * [-1.0, 1.0, 1.0] if up == "y" else res.vertices
+            panels.append(Panel(shown, res.faces, color=COLOURS[k % len(COLOURS)],
+                                title=f"{name} on {shell_name}: {s['elements']} elements, "
+                                f"printable {'yes' if res.report.printable else 'NO'}"))
+        path = out / f"texture_gallery_{name}.png"
+        render_panels(panels, path, size=(640, 600), up="z")
+        with Image.open(path) as im:
+            firsts.append(im.convert("RGB").crop((0, 0, im.width // len(panels), im.height)))
+        print(f"wrote {path}")
+    cols = min(3, len(firsts))
+    rows = (len(firsts) + cols - 1) // cols
+    w, h = firsts[0].size
+    sheet = Image.new("RGB", (cols * w, rows * h), "white")
+    for i, im in enumerate(firsts):
+        sheet.paste(im, ((i % cols) * w, (i // cols) * h))
+    with atomic_output(out / "texture_gallery.png", "wb") as fh:
+        sheet.save(fh, format="PNG")
+    print(f"wrote {out / 'texture_gallery.png'}")
+
+
+if __name__ == "__main__":
+    main(Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).parents[1] / "docs" / "gallery")
