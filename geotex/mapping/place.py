@@ -128,8 +128,8 @@ class MappedTiles:
     dropped_faces: int
 
 
-def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: float
-                 ) -> MappedTiles:
+def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: float,
+                 anchor: float | None = None) -> MappedTiles:
     """Map the chosen tiles of every quad into the shell and weld them.
 
     Parameters
@@ -140,6 +140,12 @@ def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: floa
         Tile of every quad, ``-1`` for a quad left bare.
     scale : float
         World length of one unit of ``w``.
+    anchor : float, optional
+        World depth the elements reach below the surface: the part below
+        ``w = 0`` is stretched so the deepest point (``-tiles.depth``) lands
+        there (never shrunk). A deep anchor makes the elements' side walls,
+        not their flat bottoms, cross the base, so the union meets steep
+        intersections instead of nearly coincident faces.
 
     Returns
     -------
@@ -181,6 +187,9 @@ def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: floa
     YD = interpolated(np.hstack([pc.Y, shell.D]), pc.F, face, bary)
     d = YD[:, 3:]
     d /= np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-300)
-    X = YD[:, :3] + (uvw[kept, 2] * float(scale))[:, None] * d
+    w = uvw[kept, 2] * float(scale)
+    if anchor is not None and tiles.depth > 0:
+        w = np.where(w < 0, w * max(1.0, float(anchor) / (tiles.depth * float(scale))), w)
+    X = YD[:, :3] + w[:, None] * d
     return MappedTiles(X, new_index[faces], int(on.sum() - start.sum()),
                        int((~keep_face).sum()))

@@ -25,6 +25,13 @@ __all__ = ["TexturedSolid", "textured_solid", "MAP_STAGES", "texture_height"]
 
 MAP_STAGES = ("assign", "map", "union", "check")
 
+#: Depth (in tiles) the elements are anchored below the surface (see
+#: :func:`~geotex.mapping.place.mapped_tiles`).
+ANCHOR = 0.2
+
+#: Unions redone without the elements next to crossings the check found.
+RETRIES = 2
+
 
 @dataclass(frozen=True)
 class TexturedSolid:
@@ -75,6 +82,25 @@ def texture_height(shell, tiles, height=None) -> float:
     return h
 
 
+def _elements_near_crossings(V, F, X, G, exclude=None) -> np.ndarray:
+    """Elements of ``(X, G)`` closest to the crossing faces of the solid ``(V, F)``."""
+    from scipy.spatial import cKDTree
+
+    from geotex.check.intersections import self_intersecting_pairs
+    from geotex.mesh.topology import face_components
+
+    n_el, label = face_components(G, X.shape[0])
+    out = np.zeros(n_el, dtype=bool) if exclude is None else exclude.copy()
+    pairs = self_intersecting_pairs(V, F)
+    centres = V[F[np.unique(pairs.ravel())]].mean(axis=1)
+    vlab = np.full(X.shape[0], -1, dtype=np.int64)
+    vlab[G.ravel()] = np.repeat(label, 3)
+    used = np.flatnonzero(vlab >= 0)
+    _, nearest = cKDTree(X[used]).query(centres, k=4)
+    out[vlab[used[np.asarray(nearest).ravel()]]] = True
+    return out
+
+
 def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = True,
                    progress=None) -> TexturedSolid:
     """Lay ``tiles`` over ``shell`` and unite them with its base.
@@ -118,7 +144,8 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
     times["assign"] = time.perf_counter() - t0
     report(progress, "map")
     t = time.perf_counter()
-    mapped = mapped_tiles(shell, tiles, tile_of_quad, scale=h / tiles.height)
+    mapped = mapped_tiles(shell, tiles, tile_of_quad, scale=h / tiles.height,
+                          anchor=ANCHOR * shell.tile_size)
     times["map"] = time.perf_counter() - t
     report(progress, "union")
     t = time.perf_counter()
@@ -126,17 +153,27 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
                                    mapped.faces)
     times["union"] = time.perf_counter() - t
     rep = None
+    retried = 0
     if check:
         report(progress, "check")
         t = time.perf_counter()
         rep = check_mesh(V, F, self_intersections=True)
+        # the boolean can leave needle faces where an element grazes the base
+        # or a neighbour; leave the elements there out and unite again
+        exclude = None
+        while rep.self_intersecting_pairs and retried < RETRIES:
+            exclude = _elements_near_crossings(V, F, mapped.vertices, mapped.faces, exclude)
+            V, F, union = united_with_base(shell.base_vertices, shell.base_faces,
+                                           mapped.vertices, mapped.faces, exclude=exclude)
+            rep = check_mesh(V, F, self_intersections=True)
+            retried += 1
         times["check"] = time.perf_counter() - t
     stats = {"quads": pc.n_quads, "bare_quads": int((tile_of_quad < 0).sum()),
              "height": h, "seed": int(seed), "mapped_vertices": int(mapped.vertices.shape[0]),
              "mapped_faces": int(mapped.faces.shape[0]), "welded": mapped.welded,
              "open_faces_dropped": mapped.dropped_faces, "elements": union.elements,
              "union_operands": union.groups, "elements_floating": union.floating,
-             "elements_folded": union.folded,
+             "elements_folded": union.folded, "union_retries": retried,
              "vertices": int(V.shape[0]), "faces": int(F.shape[0]),
              "seconds": {k: round(v, 3) for k, v in times.items()}}
     return TexturedSolid(V, F, tile_of_quad, rep, stats)

@@ -100,8 +100,8 @@ def element_groups(X: np.ndarray, G: np.ndarray) -> tuple[np.ndarray, np.ndarray
     return label, np.array([colour[i] for i in range(n_el)], dtype=np.int64)
 
 
-def united_with_base(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray
-                     ) -> tuple[np.ndarray, np.ndarray, UnionStats]:
+def united_with_base(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray, *,
+                     exclude=None) -> tuple[np.ndarray, np.ndarray, UnionStats]:
     """One solid: the base plus every usable closed element.
 
     Parameters
@@ -112,6 +112,9 @@ def united_with_base(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray
     X : numpy.ndarray, (k, 3) float64
     G : numpy.ndarray, (l, 3) int64
         Elements (each connected component closed and outward).
+    exclude : numpy.ndarray, (n_elements,) bool, optional
+        Elements to leave out, numbered as by
+        :func:`geotex.mesh.topology.face_components` of ``G``.
 
     Returns
     -------
@@ -139,6 +142,8 @@ def united_with_base(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray
     pairs = self_intersecting_pairs(X, G)
     folded = np.unique(label[pairs[:, 0]][label[pairs[:, 0]] == label[pairs[:, 1]]])
     group[folded] = -1
+    if exclude is not None:
+        group[np.asarray(exclude, dtype=bool)] = -1
     solids = [base]
     for g in range(int(group.max()) + 1):
         solids.append(manifold_of(*_compact(X, G[group[label] == g])))
