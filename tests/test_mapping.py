@@ -179,3 +179,33 @@ def test_cli_map_texture_and_errors(tmp_path, capsys, torus_shell, iso_studs):
                  str(tmp_path / "y.stl")]) == 2
     assert "geotex repair" in capsys.readouterr().err
     assert not (tmp_path / "y.stl").exists()
+
+
+def _closed_sets():
+    from geotex.tiles.catalog import list_tilesets
+
+    return [r["name"] for r in list_tilesets() if r["kind"] != "planar"]
+
+
+def _catalog_shells():
+    from geotex.shells import list_shells
+
+    return [r["name"] for r in list_shells()]
+
+
+@pytest.mark.parametrize("shell_name", _catalog_shells())
+def test_every_catalog_set_on_every_catalog_shell_is_printable(shell_name):
+    from geotex.shells import load_named as load_shell
+    from geotex.tiles.catalog import load_named as load_tiles
+
+    shell = load_shell(shell_name)
+    for set_name in _closed_sets():
+        res = textured_solid(shell, load_tiles(set_name), seed=0)
+        assert res.report.printable, (set_name, shell_name, res.report.reasons)
+        assert res.report.components == 1            # one body, no loose pieces
+        assert res.stats["elements"] > 0.5 * res.stats["quads"]
+
+
+def test_catalog_has_closed_sets_and_shells():
+    assert {"studs", "knurl", "chainmail", "studs-complete"} <= set(_closed_sets())
+    assert {"spot", "bob", "blub", "torus"} <= set(_catalog_shells())
