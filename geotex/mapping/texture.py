@@ -23,7 +23,7 @@ from geotex.progress import report
 
 __all__ = ["TexturedSolid", "textured_solid", "MAP_STAGES", "texture_height"]
 
-MAP_STAGES = ("assign", "map", "union", "check")
+MAP_STAGES = ("assign", "map", "union", "validate")
 
 #: Depth (in tiles) the elements are anchored below the surface (see
 #: :func:`~geotex.mapping.place.mapped_tiles`).
@@ -155,7 +155,7 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
     rep = None
     retried = 0
     if check:
-        report(progress, "check")
+        report(progress, "validate")
         t = time.perf_counter()
         rep = check_mesh(V, F, self_intersections=True)
         # the boolean can leave needle faces where an element grazes the base
@@ -167,7 +167,7 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
                                            mapped.vertices, mapped.faces, exclude=exclude)
             rep = check_mesh(V, F, self_intersections=True)
             retried += 1
-        times["check"] = time.perf_counter() - t
+        times["validate"] = time.perf_counter() - t
     stats = {"quads": pc.n_quads, "bare_quads": int((tile_of_quad < 0).sum()),
              "height": h, "seed": int(seed), "mapped_vertices": int(mapped.vertices.shape[0]),
              "mapped_faces": int(mapped.faces.shape[0]), "welded": mapped.welded,
