@@ -35,9 +35,7 @@ COLOURS = ("#c9b38f", "#a9bfd1", "#b9c99a", "#d1a9a9", "#c4b0d6", "#d6c7a0")
 
 
 def _sets():
-    rows = [r for r in list_tilesets() if not (r["recipe"].get("planar") and
-                                               not r["recipe"].get("isotropic"))]
-    return [r["name"] for r in rows]
+    return [r["name"] for r in list_tilesets() if r["kind"] != "planar"]
 
 
 def main(out: Path) -> None:
@@ -62,8 +60,8 @@ def main(out: Path) -> None:
                                  res.vertices, res.faces, report=res.report)
             shown = res.vertices[:, [0, 2, 1]] * [-1.0, 1.0, 1.0] if up == "y" else res.vertices
             panels.append(Panel(shown, res.faces, color=COLOURS[k % len(COLOURS)],
-                                title=f"{name} on {shell_name}: {s['elements']} elements, "
-                                f"printable {'yes' if res.report.printable else 'NO'}"))
+                                title=f"{name} on {shell_name}, {s['elements']} elements"
+                                + ("" if res.report.printable else " (NOT printable)")))
         path = out / f"texture_gallery_{name}.png"
         render_panels(panels, path, size=(640, 600), up="z")
         with Image.open(path) as im:
