@@ -171,6 +171,7 @@ def test_cli_map_texture_and_errors(tmp_path, capsys, torus_shell, iso_studs):
         assert main(argv) == 2, argv
         err = capsys.readouterr().err
         assert err.startswith("geotex: error:") and err.count("\n") == 1, err
+        assert "PosixPath" not in err and "Errno" not in err, err
     assert not (tmp_path / "x.stl").exists() and tiles.read_bytes() == before
     # an open base: the one-shot says to repair it
     open_src = tmp_path / "open.obj"

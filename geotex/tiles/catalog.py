@@ -45,7 +45,7 @@ def tileset_path(name_or_path) -> Path:
     if q.is_file() and p.suffix == "":
         return q
     names = ", ".join(sorted(recipes())) or "none"
-    raise MissingFileError(p, f"no such tile set file or catalog name (catalog: {names})")
+    raise MissingFileError(f"{p}: no such tile set file or catalog name (catalog: {names})")
 
 
 def load_named(name_or_path):

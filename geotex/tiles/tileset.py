@@ -167,7 +167,7 @@ def load_tileset(path) -> TileSet:
     """
     path = Path(path)
     if not path.is_file():
-        raise MissingFileError(path, "no such tile set file")
+        raise MissingFileError(f"{path}: no such tile set file")
     try:
         with np.load(path, allow_pickle=False) as z:
             missing = [k for k in _KEYS if k not in z.files]
