@@ -128,29 +128,16 @@ def run_map(args) -> int:
 
 
 def run_texture(args) -> int:
-    import numpy as np
-
-    from geotex.io import read_mesh
-    from geotex.progress import stage_bar
-    from geotex.shells import SHELL_STAGES, build_shell, save_shell
+    from geotex.cli.shell import shell_of_file
+    from geotex.shells import save_shell
     from geotex.tiles.catalog import load_named as load_tiles, tileset_path
 
     tiles_file = tileset_path(args.tiles)
     out, extra = _check_outputs(args, args.base, tiles_file)
     tiles = load_tiles(args.tiles)
-    mesh = read_mesh(args.base)
-    ts = args.tile_size
-    if ts is None:
-        ext = float(np.ptp(mesh.vertices, axis=0).max()) if mesh.n_vertices else 0.0
-        ts = ext / 12 if ext > 0 else 1.0
-    if not ts > 0:
-        raise UsageError(f"--tile-size {args.tile_size}: give a positive number")
     name = Path(args.base).stem
-    with stage_bar(len(SHELL_STAGES), "shell") as bar:
-        shell = build_shell(mesh.vertices, mesh.faces, tile_size=ts, name=name,
-                            source=Path(args.base).name,
-                            recipe={"source": Path(args.base).name, "tile_size": ts},
-                            progress=bar)
+    shell = shell_of_file(args.base, args.tile_size, name=name)
+    ts = shell.tile_size
     d = shell.distortion
     print(f"{args.base}: {shell.n_quads} tiles of {ts:.4g}, safe height "
           f"{shell.max_height:.4g}, distortion area {d['area_mean']:.3f} "

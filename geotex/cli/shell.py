@@ -48,31 +48,38 @@ def _describe(shell) -> str:
             "a quarter tile")
 
 
-def run_build(args) -> int:
+def shell_of_file(base, tile_size, *, name: str):
+    """Build the shell of a mesh file, the tile 1/12 of its extent by default."""
     from pathlib import Path
 
     import numpy as np
 
     from geotex.io import read_mesh
     from geotex.progress import stage_bar
-    from geotex.shells import SHELL_STAGES, build_shell, save_shell
+    from geotex.shells import SHELL_STAGES, build_shell
 
-    out = guard_output(args.output, args.base)
-    if not str(out).lower().endswith(".npz"):
-        raise UsageError(f"{out}: shell files are .npz; use a .npz name for -o")
-    mesh = read_mesh(args.base)
-    ts = args.tile_size
+    mesh = read_mesh(base)
+    ts = tile_size
     if ts is None:
         ext = float(np.ptp(mesh.vertices, axis=0).max()) if mesh.n_vertices else 0.0
         ts = ext / 12 if ext > 0 else 1.0
     if not ts > 0:
-        raise UsageError(f"--tile-size {args.tile_size}: give a positive number")
-    name = args.name or Path(args.base).stem
+        raise UsageError(f"--tile-size {tile_size}: give a positive number")
     with stage_bar(len(SHELL_STAGES), "shell") as bar:
-        shell = build_shell(mesh.vertices, mesh.faces, tile_size=ts, name=name,
-                            source=Path(args.base).name,
-                            recipe={"source": Path(args.base).name, "tile_size": ts},
-                            progress=bar)
+        return build_shell(mesh.vertices, mesh.faces, tile_size=ts, name=name,
+                           source=Path(base).name,
+                           recipe={"source": Path(base).name, "tile_size": ts}, progress=bar)
+
+
+def run_build(args) -> int:
+    from pathlib import Path
+
+    from geotex.shells import save_shell
+
+    out = guard_output(args.output, args.base)
+    if not str(out).lower().endswith(".npz"):
+        raise UsageError(f"{out}: shell files are .npz; use a .npz name for -o")
+    shell = shell_of_file(args.base, args.tile_size, name=args.name or Path(args.base).stem)
     save_shell(out, shell)
     print(f"{args.base}: {_describe(shell)}")
     print(f"wrote {out}")

@@ -20,7 +20,7 @@ import numpy as np
 
 from geotex.check.intersections import self_intersecting_pairs
 from geotex.errors import GeotexError
-from geotex.mesh.topology import face_components
+from geotex.mesh.topology import compacted, face_components
 
 __all__ = ["united_with_base", "element_groups", "UnionStats", "SLIVER_TOLERANCE"]
 
@@ -49,13 +49,6 @@ class UnionStats:
     groups: int
     floating: int = 0
     folded: int = 0
-
-
-def _compact(X: np.ndarray, G: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    used = np.unique(G)
-    remap = np.full(X.shape[0], -1, dtype=np.int64)
-    remap[used] = np.arange(used.size)
-    return X[used], remap[G]
 
 
 def element_groups(X: np.ndarray, G: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -146,7 +139,7 @@ def united_with_base(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray,
         group[np.asarray(exclude, dtype=bool)] = -1
     solids = [base]
     for g in range(int(group.max()) + 1):
-        solids.append(manifold_of(*_compact(X, G[group[label] == g])))
+        solids.append(manifold_of(*compacted(X, G[group[label] == g])))
     bad = [s for s in solids[1:] if s.status() != manifold3d.Error.NoError]
     if bad:
         raise GeotexError("the mapped texture elements are not closed "
@@ -166,6 +159,6 @@ def united_with_base(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray,
     if parts > 1:
         body = np.argmax(np.bincount(label))
         floating = parts - 1
-        V2, F2 = _compact(V2, F2[label == body])
+        V2, F2 = compacted(V2, F2[label == body])
     return V2, F2, UnionStats(int((group >= 0).sum()) - floating, int(group.max()) + 1,
                               floating, int(folded.size))

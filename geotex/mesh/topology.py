@@ -26,6 +26,7 @@ __all__ = [
     "referenced_vertices",
     "position_welded_faces",
     "neighbour_mean",
+    "compacted",
 ]
 
 
@@ -123,6 +124,26 @@ def edge_topology(F: np.ndarray, n_vertices: int | None = None) -> EdgeTopology:
     return EdgeTopology(edges=edges, half_to_edge=inv.astype(np.int64),
                         face_count=counts.astype(np.int64),
                         forward_count=forward.astype(np.int64))
+
+
+def compacted(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Drop unreferenced vertices.
+
+    Parameters
+    ----------
+    V : numpy.ndarray, (n, 3) float64
+    F : numpy.ndarray, (m, 3) int64
+
+    Returns
+    -------
+    V2 : numpy.ndarray, (k, 3) float64
+        The referenced vertices in their original order.
+    F2 : numpy.ndarray, (m, 3) int64
+    """
+    used = np.zeros(len(V), dtype=bool)
+    used[np.asarray(F).ravel()] = True
+    new_index = np.cumsum(used) - 1
+    return V[used], new_index[F].astype(np.int64)
 
 
 def neighbour_mean(F: np.ndarray, n_vertices: int) -> sp.csr_matrix:

@@ -58,7 +58,7 @@ def shell_panels(shell, *, title: str | None = None) -> list:
         Panel(pc.positions, pc.F, scalars=labels, cmap="Set2",
               title=f"{name}: polycube, {pc.n_quads} quads"),
         Panel(pc.Y, pc.F, scalars=labels, cmap="Set2",
-              title=f"mapped onto the base" + (f", {folded} folded" if folded else "")),
+              title="mapped onto the base" + (f", {folded} bare" if folded else "")),
         Panel(Vg, shell.base_faces, color="#d9c7a3", highlight={"quad edge segments": seg + n},
               title=f"tile grid, max height {shell.max_height:.3g}"),
     ]

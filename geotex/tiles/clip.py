@@ -11,29 +11,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from geotex.mesh.topology import compacted
+
 from geotex.mesh.topology import edge_topology
 
 __all__ = ["split_by_plane", "compact"]
 
-
-def compact(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Drop unreferenced vertices.
-
-    Parameters
-    ----------
-    V : numpy.ndarray, (n, 3) float64
-    F : numpy.ndarray, (m, 3) int64
-
-    Returns
-    -------
-    V2 : numpy.ndarray, (k, 3) float64
-        The referenced vertices in their original order.
-    F2 : numpy.ndarray, (m, 3) int64
-    """
-    used = np.zeros(len(V), dtype=bool)
-    used[F.ravel()] = True
-    new_index = np.cumsum(used) - 1
-    return V[used], new_index[F].astype(np.int64)
+compact = compacted   # re-exported: the tile modules drop unreferenced vertices with it
 
 
 def split_by_plane(V: np.ndarray, F: np.ndarray, *, axis: int, value: float,
