@@ -13,6 +13,7 @@ import hashlib
 import json
 from pathlib import Path
 
+from geotex.catalogs import catalog_file, catalog_recipes
 from geotex.errors import InputError, MissingFileError
 
 __all__ = ["CATALOG_DIR", "recipes", "shell_path", "list_shells", "load_named", "rebuild",
@@ -23,10 +24,7 @@ CATALOG_DIR = Path(__file__).resolve().parent / "catalog"
 
 def recipes() -> dict:
     """Return ``{name: recipe}`` of the catalog (empty if it has none)."""
-    f = CATALOG_DIR / "recipes.json"
-    if not f.is_file():
-        return {}
-    return json.loads(f.read_text())
+    return catalog_recipes(CATALOG_DIR)
 
 
 def shell_path(name_or_path) -> Path:
@@ -37,14 +35,7 @@ def shell_path(name_or_path) -> Path:
     MissingFileError
         Neither an existing file nor a catalog name (the message lists the names).
     """
-    p = Path(name_or_path)
-    if p.is_file():
-        return p
-    q = CATALOG_DIR / f"{name_or_path}.npz"
-    if p.suffix == "" and q.is_file():
-        return q
-    names = ", ".join(sorted(recipes())) or "none"
-    raise MissingFileError(f"{p}: no such shell file or catalog name (catalog: {names})")
+    return catalog_file(name_or_path, CATALOG_DIR, what="shell")
 
 
 def load_named(name_or_path):

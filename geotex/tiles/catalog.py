@@ -9,11 +9,11 @@ the files (all of them by default) and checks each one.
 
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 
-from geotex.errors import InputError, MissingFileError
+from geotex.catalogs import catalog_file, catalog_recipes
+from geotex.errors import InputError
 
 __all__ = ["CATALOG_DIR", "MAX_BYTES", "recipes", "tileset_path", "list_tilesets",
            "rebuild", "load_named", "main"]
@@ -24,10 +24,7 @@ MAX_BYTES = 2_000_000          # size limit of one catalog file
 
 def recipes() -> dict:
     """Return ``{name: recipe}`` of the catalog (empty if it has none)."""
-    f = CATALOG_DIR / "recipes.json"
-    if not f.is_file():
-        return {}
-    return json.loads(f.read_text())
+    return catalog_recipes(CATALOG_DIR)
 
 
 def tileset_path(name_or_path) -> Path:
@@ -38,14 +35,7 @@ def tileset_path(name_or_path) -> Path:
     MissingFileError
         Neither an existing file nor a catalog name (the message lists the names).
     """
-    p = Path(name_or_path)
-    if p.is_file():
-        return p
-    q = CATALOG_DIR / f"{name_or_path}.npz"
-    if q.is_file() and p.suffix == "":
-        return q
-    names = ", ".join(sorted(recipes())) or "none"
-    raise MissingFileError(f"{p}: no such tile set file or catalog name (catalog: {names})")
+    return catalog_file(name_or_path, CATALOG_DIR, what="tile set")
 
 
 def load_named(name_or_path):
