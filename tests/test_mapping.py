@@ -142,9 +142,12 @@ def test_cli_map_texture_and_errors(tmp_path, capsys, torus_shell, iso_studs):
     text = capsys.readouterr().out
     assert "printable" in text and out.is_file()
     m = read_mesh(out)
-    assert abs(np.ptp(m.vertices, axis=0).max() - 60.0) < 1e-3
-    assert check_mesh(m.vertices, m.faces).printable
     doc = json.loads(rep.read_text())
+    # --size-mm scales the base to 60 mm before texturing: the relief adds to it
+    ext = float(np.ptp(m.vertices, axis=0).max())
+    assert 60.0 - 1e-3 <= ext <= 60.0 + 2 * doc["stats"]["height"] + 1e-3
+    assert doc["unit"] == "mm" and doc["tile_size"] == pytest.approx(60.0 * 0.4 / 2.8)
+    assert check_mesh(m.vertices, m.faces).printable
     assert doc["stats"]["seed"] == 2 and doc["check"]["printable"]
     # the one-shot from a mesh file
     src = tmp_path / "torus.obj"

@@ -10,7 +10,7 @@ import numpy as np
 
 from geotex.check.intersections import self_intersecting_pairs
 from geotex.check.nesting import component_nesting_depth
-from geotex.mesh.arrays import as_mesh_arrays
+from geotex.mesh.arrays import as_mesh_arrays, mesh_digest
 from geotex.progress import report
 from geotex.mesh.solid import manifold_status
 from geotex.mesh.geometry import bounding_box, component_volumes, degenerate_faces
@@ -44,6 +44,9 @@ class CheckReport:
         Why it is not printable (empty when printable).
     warnings : list of str
         Things worth knowing that do not prevent printing.
+    digest : str or None
+        :func:`geotex.mesh.arrays.mesh_digest` of the arrays judged: a writer
+        reuses the report only for exactly these arrays.
     """
 
     vertices: int
@@ -73,6 +76,7 @@ class CheckReport:
     warnings: list = field(default_factory=list)
     examples: dict = field(default_factory=dict)
     source: str | None = None
+    digest: str | None = None
 
     @property
     def bbox_size(self) -> list:
@@ -321,4 +325,4 @@ def check_mesh(V, F, *, self_intersections: bool = True, max_examples: int = 5,
         euler_characteristic=chi, genus=genus, manifold3d_status=status,
         bbox_min=[float(x) for x in lo], bbox_max=[float(x) for x in hi],
         printable=not reasons, reasons=reasons, warnings=warnings,
-        examples=examples, source=source)
+        examples=examples, source=source, digest=mesh_digest(V, F))

@@ -16,12 +16,15 @@ def _output_options(p):
     p.add_argument("-o", "--output", required=True,
                    help="solid to write (.stl or .3mf; .obj/.ply/.off also accepted)")
     p.add_argument("--height", type=float, default=None,
-                   help="texture height in base units (default: the tiles' own proportions, "
-                   "at most the shell's safe height)")
+                   help="texture height in mm at print size (default: the tiles' own "
+                   "proportions, at most the shell's safe height)")
     p.add_argument("--seed", type=int, default=0, help="seed of the tile layout (default 0)")
     p.add_argument("--size-mm", type=float, default=None,
-                   help="scale the result so its largest extent is this many millimetres "
-                   "(default: keep the base's units)")
+                   help="scale the base so its largest extent is this many millimetres before "
+                   "texturing (default: the base's units are millimetres)")
+    p.add_argument("--keep-failed", action="store_true",
+                   help="if the result is not printable, still write it for inspection as "
+                   "NAME.NOT-PRINTABLE.EXT (exit status 1)")
     p.add_argument("--picture", default=None, help="also write a picture (.png)")
     p.add_argument("--up", choices=("x", "y", "z"), default="z",
                    help="up axis of the picture (default z; the bundled samples are y-up)")
@@ -41,7 +44,7 @@ def register(sub):
     t.add_argument("base", help="closed base mesh file")
     t.add_argument("--tiles", required=True, help="tile set: catalog name or .npz file")
     t.add_argument("--tile-size", type=float, default=None,
-                   help="tile side in base units (default: 1/12 of the largest extent)")
+                   help="tile side in mm at print size (default: 1/12 of the largest extent)")
     t.add_argument("--shell-out", default=None, help="also save the shell (.npz)")
     _output_options(t)
     t.set_defaults(run=run_texture)
@@ -68,7 +71,35 @@ def _check_outputs(args, *inputs):
         raise UsageError(f"--seed {args.seed}: give a non-negative integer")
     if args.size_mm is not None and not (0 < args.size_mm <= 10000):
         raise UsageError(f"--size-mm {args.size_mm}: give a size in (0, 10000] mm")
+    if args.height is not None and not (0 < args.height < float("inf")):
+        raise UsageError(f"--height {args.height}: give a positive height in mm")
+    if getattr(args, "tile_size", None) is not None and not (0 < args.tile_size < float("inf")):
+        raise UsageError(f"--tile-size {args.tile_size}: give a positive size in mm")
     return out, extra
+
+
+#: Print sizes (largest extent, mm) outside which a part is probably in the wrong unit.
+PRINT_SIZE_RANGE = (10.0, 1000.0)
+
+
+def warn_print_size(extent_mm: float) -> None:
+    """Warn (stderr) when a part's largest extent looks like a unit mix-up."""
+    lo, hi = PRINT_SIZE_RANGE
+    if not (lo <= extent_mm <= hi):
+        print(f"geotex: warning: the part is {extent_mm:.4g} mm across (its coordinates are "
+              f"read as millimetres); use --size-mm to give its print size", file=sys.stderr)
+
+
+def _texture_height(args, shell, tiles):
+    """The texture height, with the CLI's wording when --height is out of range."""
+    from geotex.mapping import texture_height
+
+    if args.height is not None and args.height > shell.max_height * (1 + 1e-12):
+        raise UsageError(f"--height {args.height:g} mm is above the shell's safe height "
+                         f"{shell.max_height:.4g} mm (a taller texture would intersect "
+                         "itself); use a smaller --height"
+                         + (" or a larger --tile-size" if hasattr(args, "tile_size") else ""))
+    return texture_height(shell, tiles, args.height)
 
 
 def _finish(args, shell, tiles, out, extra, *, label: str) -> int:
@@ -80,28 +111,32 @@ def _finish(args, shell, tiles, out, extra, *, label: str) -> int:
     from geotex.printing import export_printable
     from geotex.progress import stage_bar
 
+    height = _texture_height(args, shell, tiles)
+    warn_print_size(float(np.ptp(shell.base_vertices, axis=0).max()))
     with stage_bar(len(MAP_STAGES), "map") as bar:
-        result = textured_solid(shell, tiles, height=args.height, seed=args.seed,
-                                progress=bar)
+        result = textured_solid(shell, tiles, height=height, seed=args.seed, progress=bar)
     V, F, rep = result.vertices, result.faces, result.report
-    factor = 1.0
-    if args.size_mm is not None:
-        factor = args.size_mm / float(np.ptp(V, axis=0).max())
-        V = V * factor
     s = result.stats
-    print(f"{label}: {s['quads']} quads ({s['bare_quads']} bare), {s['elements']} elements, "
-          f"height {s['height']:.4g}, {s['faces']} faces")
+    print(f"{label}: {s['quads']} tiles of {shell.tile_size:.3g} mm ({s['bare_quads']} bare), "
+          f"{s['elements']} elements {s['height']:.3g} mm high, {s['faces']} faces")
     if s["elements_floating"] or s["elements_folded"]:
         print(f"  left out: {s['elements_folded']} elements folded by the shell map, "
               f"{s['elements_floating']} that do not reach the base")
+    status = EXIT_OK
     try:
-        export_printable(out, V, F, name=label, report=rep if factor == 1.0 else None)
+        rep = export_printable(out, V, F, name=label, report=rep)
+        print(f"wrote {out} (printable as written: checked on the file's own coordinates)")
     except NotPrintableError as exc:
-        print(f"geotex: error: {exc}", file=sys.stderr)
-        return EXIT_NOT_PRINTABLE
-    print(f"wrote {out} (printable)")
+        print(f"geotex: error: {out}: not written, not printable as stored "
+              f"({'; '.join(exc.report.reasons)})", file=sys.stderr)
+        status = EXIT_NOT_PRINTABLE
+        if not args.keep_failed:
+            return status
+        kept = out.with_name(f"{out.stem}.NOT-PRINTABLE{out.suffix}")
+        rep = export_printable(kept, V, F, name=label, report=exc.report, force=True)
+        print(f"wrote {kept} for inspection (NOT printable)")
     if "report" in extra:
-        doc = {"stats": s, "scale_to_output": factor, "shell": shell.name,
+        doc = {"unit": "mm", "stats": s, "tile_size": shell.tile_size, "shell": shell.name,
                "tiles": tiles.name, "distortion": shell.distortion,
                "coverage": shell.polycube.coverage, "check": rep.to_dict()}
         with atomic_output(extra["report"], "w") as fh:
@@ -110,20 +145,28 @@ def _finish(args, shell, tiles, out, extra, *, label: str) -> int:
     if "picture" in extra:
         from geotex.render import Panel, render_panels
 
+        verdict = "printable" if status == EXIT_OK else "NOT printable"
         render_panels([Panel(V, F, color="#c9b38f",
-                             title=f"{tiles.name} on {shell.name}: {len(F)} faces")],
+                             title=f"{tiles.name} on {shell.name}: {len(F)} faces, {verdict}")],
                       extra["picture"], size=(1000, 900), up=args.up)
         print(f"wrote {extra['picture']}")
-    return EXIT_OK
+    return status
 
 
 def run_map(args) -> int:
+    import numpy as np
+
     from geotex.shells import load_named as load_shell, shell_path
     from geotex.tiles.catalog import load_named as load_tiles, tileset_path
 
     tiles_file, shell_file = tileset_path(args.tiles), shell_path(args.shell)
     out, extra = _check_outputs(args, tiles_file, shell_file)
     tiles, shell = load_tiles(args.tiles), load_shell(args.shell)
+    if args.size_mm is not None:
+        from geotex.shells import scaled_shell
+
+        shell = scaled_shell(shell, args.size_mm / float(np.ptp(shell.base_vertices,
+                                                                 axis=0).max()))
     return _finish(args, shell, tiles, out, extra, label=f"{tiles.name} on {shell.name}")
 
 
@@ -136,11 +179,11 @@ def run_texture(args) -> int:
     out, extra = _check_outputs(args, args.base, tiles_file)
     tiles = load_tiles(args.tiles)
     name = Path(args.base).stem
-    shell = shell_of_file(args.base, args.tile_size, name=name)
+    shell = shell_of_file(args.base, args.tile_size, name=name, size_mm=args.size_mm)
     ts = shell.tile_size
     d = shell.distortion
-    print(f"{args.base}: {shell.n_quads} tiles of {ts:.4g}, safe height "
-          f"{shell.max_height:.4g}, distortion area {d['area_mean']:.3f} "
+    print(f"{args.base}: {shell.n_quads} tiles of {ts:.4g} mm, safe height "
+          f"{shell.max_height:.4g} mm, distortion area {d['area_mean']:.3f} "
           f"angle {d['angle_mean']:.3f}")
     if "shell_out" in extra:
         save_shell(extra["shell_out"], shell)

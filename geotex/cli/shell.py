@@ -48,8 +48,12 @@ def _describe(shell) -> str:
             "a quarter tile")
 
 
-def shell_of_file(base, tile_size, *, name: str):
-    """Build the shell of a mesh file, the tile 1/12 of its extent by default."""
+def shell_of_file(base, tile_size, *, name: str, size_mm=None):
+    """Build the shell of a mesh file, the tile 1/12 of its extent by default.
+
+    With ``size_mm`` the base is first scaled so its largest extent is that
+    many millimetres, and ``tile_size`` is in millimetres at that size.
+    """
     from pathlib import Path
 
     import numpy as np
@@ -59,6 +63,10 @@ def shell_of_file(base, tile_size, *, name: str):
     from geotex.shells import SHELL_STAGES, build_shell
 
     mesh = read_mesh(base)
+    if size_mm is not None and mesh.n_vertices:
+        ext = float(np.ptp(mesh.vertices, axis=0).max())
+        if ext > 0:
+            mesh = mesh.with_geometry(mesh.vertices * (size_mm / ext), mesh.faces)
     ts = tile_size
     if ts is None:
         ext = float(np.ptp(mesh.vertices, axis=0).max()) if mesh.n_vertices else 0.0
@@ -68,7 +76,8 @@ def shell_of_file(base, tile_size, *, name: str):
     with stage_bar(len(SHELL_STAGES), "shell") as bar:
         return build_shell(mesh.vertices, mesh.faces, tile_size=ts, name=name,
                            source=Path(base).name,
-                           recipe={"source": Path(base).name, "tile_size": ts}, progress=bar)
+                           recipe={"source": Path(base).name, "tile_size": ts,
+                                   "size_mm": size_mm}, progress=bar)
 
 
 def run_build(args) -> int:

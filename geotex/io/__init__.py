@@ -36,7 +36,7 @@ from pathlib import Path
 
 from geotex.errors import (GeotexError, InputError, MeshFileError, MissingFileError,
                            UnsupportedFormatError)
-from geotex.io._common import gc_paused
+from geotex.io._common import gc_paused, weld_exact
 from geotex.io.atomic import atomic_group, atomic_output
 from geotex.io.glb import read_glb, write_glb
 from geotex.io.obj import read_obj, write_obj
@@ -47,7 +47,7 @@ from geotex.io.stl import read_stl, write_stl
 from geotex.io.threemf import read_3mf, write_3mf
 from geotex.mesh.record import Mesh
 
-__all__ = ["read_mesh", "write_mesh", "READ_FORMATS", "WRITE_FORMATS",
+__all__ = ["read_mesh", "write_mesh", "weld_exact", "READ_FORMATS", "WRITE_FORMATS",
            "atomic_output", "atomic_group", "sniff_format", "format_of"]
 
 READ_FORMATS = (".stl", ".obj", ".ply", ".off", ".3mf", ".glb")

@@ -14,11 +14,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from geotex.check.report import CheckReport, check_mesh
+from geotex.check.report import CheckReport
 from geotex.errors import InputError
 from geotex.mapping.assign import edge_colors, tiles_for_quads
 from geotex.mapping.place import mapped_tiles
 from geotex.mapping.union import united_with_base
+from geotex.printing.stored import printable_stored_solid
 from geotex.progress import report
 
 __all__ = ["TexturedSolid", "textured_solid", "MAP_STAGES", "texture_height"]
@@ -44,7 +45,9 @@ class TexturedSolid:
     tile_of_quad : numpy.ndarray, (q,) int64
         Tile chosen for every quad (``-1``: left bare, its map folds).
     report : CheckReport or None
-        Validity report of the solid (None when not checked).
+        Validity report of the solid as a file stores it (None when not
+        checked): the vertices are then float32 values, so STL and 3MF store
+        exactly the judged coordinates.
     stats : dict
         Counts and timings of every stage.
     """
@@ -116,7 +119,8 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
     seed : int, optional
         Seed of the random edge colouring: same inputs and seed, same bytes.
     check : bool, optional
-        Run the full validity check (with self-intersections) on the result.
+        Round the result to float32 (what an STL stores), collapse the slivers
+        the rounding breaks and run the full validity check on it.
     progress : callable, optional
         Called with each stage of :data:`MAP_STAGES`.
 
@@ -154,26 +158,33 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
     times["union"] = time.perf_counter() - t
     rep = None
     retried = 0
+    cleanup = {}
     if check:
         report(progress, "validate")
         t = time.perf_counter()
-        rep = check_mesh(V, F, self_intersections=True)
+        # judged as an STL stores it (float32; every other format stores these
+        # values exactly), after collapsing what the rounding broke
+        solid = printable_stored_solid(V, F, precision=np.float32, rebuild=True)
         # the boolean can leave needle faces where an element grazes the base
         # or a neighbour; leave the elements there out and unite again
         exclude = None
-        while rep.self_intersecting_pairs and retried < RETRIES:
-            exclude = _elements_near_crossings(V, F, mapped.vertices, mapped.faces, exclude)
+        while solid.report.self_intersecting_pairs and retried < RETRIES:
+            exclude = _elements_near_crossings(solid.vertices, solid.faces, mapped.vertices,
+                                               mapped.faces, exclude)
             V, F, union = united_with_base(shell.base_vertices, shell.base_faces,
                                            mapped.vertices, mapped.faces, exclude=exclude)
-            rep = check_mesh(V, F, self_intersections=True)
+            solid = printable_stored_solid(V, F, precision=np.float32, rebuild=True)
             retried += 1
+        V, F, rep = solid.vertices, solid.faces, solid.report
+        cleanup = {"float32_cleanup_steps": solid.cleanup_steps,
+                   "float32_collapsed_faces": solid.collapsed_faces}
         times["validate"] = time.perf_counter() - t
     stats = {"quads": pc.n_quads, "bare_quads": int((tile_of_quad < 0).sum()),
              "height": h, "seed": int(seed), "mapped_vertices": int(mapped.vertices.shape[0]),
              "mapped_faces": int(mapped.faces.shape[0]), "welded": mapped.welded,
              "open_faces_dropped": mapped.dropped_faces, "elements": union.elements,
              "union_operands": union.groups, "elements_floating": union.floating,
-             "elements_folded": union.folded, "union_retries": retried,
+             "elements_folded": union.folded, "union_retries": retried, **cleanup,
              "vertices": int(V.shape[0]), "faces": int(F.shape[0]),
              "seconds": {k: round(v, 3) for k, v in times.items()}}
     return TexturedSolid(V, F, tile_of_quad, rep, stats)

@@ -1,0 +1,186 @@
+"""A solid as a print file stores it, cleaned so that it survives the storing.
+
+A validity verdict is only worth something for the coordinates a file really
+holds. Binary STL (and GLB) store float32: rounding a float64 solid can
+collapse the short edges and needle triangles a boolean leaves, or fold them
+onto their neighbours, and a reader that welds equal corners (geotex's own
+STL reader, every slicer) then sees non-manifold edges. The text formats
+(3MF, OBJ, PLY, OFF) store every float64 exactly (shortest ``repr``).
+
+:func:`stored_form` gives the arrays a reader gets back from a file;
+:func:`printable_stored_solid` rounds a solid, removes what the rounding
+broke (manifold3d rebuilds it from the rounded coordinates, collapsing
+zero-length edges and degenerate triangles, then, if needed, simplifies at a
+few float32 steps) and judges the result exactly as stored.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from geotex.check.report import CheckReport, check_mesh
+from geotex.errors import InputError
+from geotex.io import weld_exact
+from geotex.mesh.arrays import as_mesh_arrays
+from geotex.mesh.solid import arrays_of_manifold, manifold_of
+
+__all__ = ["stored_precision", "stored_form", "printable_stored_solid", "StoredSolid",
+           "CLEANUP_STEPS"]
+
+#: Formats whose coordinates are float32 (binary STL, glTF); the others store
+#: float64 exactly.
+FLOAT32_FORMATS = (".stl", ".glb")
+
+#: Simplification tolerances tried after a plain rebuild, in float32 steps
+#: (units in the last place of the largest coordinate): at 100 mm, 64 steps
+#: are 0.5 micrometre, far below any printer's resolution.
+CLEANUP_STEPS = (0, 64)
+
+
+def stored_precision(suffix: str) -> type:
+    """Coordinate type a print format stores: ``numpy.float32`` or ``numpy.float64``.
+
+    Parameters
+    ----------
+    suffix : str
+        File extension with its dot (``".stl"``), any case.
+
+    Returns
+    -------
+    type
+    """
+    return np.float32 if str(suffix).lower() in FLOAT32_FORMATS else np.float64
+
+
+def stored_form(V, F, *, precision=np.float32) -> tuple[np.ndarray, np.ndarray]:
+    """The mesh a reader gets back: rounded coordinates, equal corners welded.
+
+    Coordinates are rounded to ``precision``; corners at exactly equal
+    positions become one vertex, numbered in order of first appearance in
+    ``F`` (as geotex's STL reader does); unreferenced vertices disappear.
+
+    Parameters
+    ----------
+    V : array_like, (n, 3) float64
+    F : array_like, (m, 3) int64
+    precision : type, optional
+        ``numpy.float32`` or ``numpy.float64``.
+
+    Returns
+    -------
+    V2 : numpy.ndarray, (p, 3) float64
+        Values exactly representable in ``precision``.
+    F2 : numpy.ndarray, (m, 3) int64
+
+    Raises
+    ------
+    InputError
+        Malformed arrays, or coordinates outside the float32 range.
+    """
+    V, F = as_mesh_arrays(V, F)
+    precision = np.dtype(precision)
+    if precision not in (np.dtype(np.float32), np.dtype(np.float64)):
+        raise InputError(f"precision must be float32 or float64, got {precision}")
+    if precision == np.float32 and V.size and np.abs(V).max() > np.finfo(np.float32).max:
+        raise InputError("coordinates exceed the float32 range of the file format; "
+                         "scale the model down or write a .3mf")
+    corners = V.astype(precision)[F].reshape(-1, 3)
+    unique, inverse = weld_exact(corners)
+    return unique.astype(np.float64), inverse.reshape(-1, 3)
+
+
+@dataclass(frozen=True)
+class StoredSolid:
+    """A solid rounded to a file's precision and judged as stored.
+
+    Attributes
+    ----------
+    vertices : numpy.ndarray, (n, 3) float64
+        Exactly representable in the format's precision; distinct positions.
+    faces : numpy.ndarray, (m, 3) int64
+    report : CheckReport
+        Validity of exactly these arrays (``report.digest`` matches them).
+    cleanup_steps : int
+        Float32 steps of the simplification that was needed (``0``: a
+        rebuild sufficed or nothing was needed, ``-1``: nothing was changed).
+    collapsed_faces : int
+        Faces removed by the cleanup.
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    report: CheckReport
+    cleanup_steps: int = -1
+    collapsed_faces: int = 0
+
+
+def _rebuilt(V, F, tolerance):
+    """manifold3d's rebuild of ``(V, F)`` (simplified at ``tolerance``), or None."""
+    import manifold3d
+
+    solid = manifold_of(V, F)
+    if solid.status() != manifold3d.Error.NoError:
+        return None
+    if tolerance > 0:
+        solid = solid.simplify(tolerance)
+    return arrays_of_manifold(solid)
+
+
+def printable_stored_solid(V, F, *, precision=np.float32, rebuild: bool = False,
+                           progress=None) -> StoredSolid:
+    """Round a solid to a file's precision, repair what rounding broke, judge it.
+
+    The solid is first judged as stored (:func:`stored_form`). If that fails,
+    manifold3d rebuilds it from the rounded coordinates (collapsing the
+    zero-length edges and zero-area triangles the rounding made), and if
+    that is not enough it is simplified by :data:`CLEANUP_STEPS` float32
+    steps; each candidate is rounded again and judged as stored. Vertices only
+    ever move onto other vertices' rounded positions, so the shape changes by
+    at most the largest step.
+
+    Parameters
+    ----------
+    V : array_like, (n, 3) float64
+    F : array_like, (m, 3) int64
+        A closed solid (for example the result of a boolean union).
+    precision : type, optional
+        ``numpy.float32`` (binary STL, GLB) or ``numpy.float64`` (3MF and
+        text formats).
+    rebuild : bool, optional
+        Rebuild through manifold3d before the first verdict (saves a check
+        when the rounding is known to break slivers, as after a boolean).
+    progress : callable, optional
+        Passed to :func:`~geotex.check.report.check_mesh`.
+
+    Returns
+    -------
+    StoredSolid
+        The best candidate: the first printable one, else the last tried.
+
+    Raises
+    ------
+    InputError
+        Malformed arrays or coordinates outside the float32 range.
+    """
+    Vs, Fs = stored_form(V, F, precision=precision)
+    m0 = Fs.shape[0]
+    best = None
+    if m0 == 0 or not rebuild:
+        best = StoredSolid(Vs, Fs, check_mesh(Vs, Fs, progress=progress))
+        if best.report.printable or m0 == 0:
+            return best
+    ulp = float(np.spacing(np.float32(np.abs(Vs).max())))
+    for steps in CLEANUP_STEPS:
+        rebuilt = _rebuilt(Vs, Fs, steps * ulp)
+        if rebuilt is None:         # not a manifold at all: nothing to clean
+            break
+        Vc, Fc = stored_form(*rebuilt, precision=precision)
+        best = StoredSolid(Vc, Fc, check_mesh(Vc, Fc, progress=progress), steps,
+                           m0 - Fc.shape[0])
+        if best.report.printable:
+            break
+    if best is None:
+        best = StoredSolid(Vs, Fs, check_mesh(Vs, Fs, progress=progress))
+    return best

@@ -1,0 +1,105 @@
+"""Print export: the verdict is computed on what the file stores, read back to verify."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from geotex.check import check_mesh
+from geotex.errors import InputError, NotPrintableError
+from geotex.io import read_mesh
+from geotex.mesh.primitives import box, icosphere
+from geotex.mesh.topology import edge_topology
+from geotex.printing import (export_printable, printable_stored_solid, stored_form,
+                             stored_precision, written_form)
+
+
+def _box_with_short_edge(eps=1e-9, size=50.0):
+    """A closed box whose edge a-b is split at ``a + eps (b - a)``: a sliver in float32."""
+    V, F = box((100, 100, 100), (100 + size, 100 + size, 100 + size))
+    topo = edge_topology(F, V.shape[0])
+    a, b = topo.edges[0]
+    m = V.shape[0]
+    V = np.vstack([V, V[a] + eps * (V[b] - V[a])])
+    out = []
+    for f in F:
+        f = list(f)
+        for k in range(3):
+            i, j = f[k], f[(k + 1) % 3]
+            if {i, j} == {a, b}:
+                c = f[(k + 2) % 3]
+                out += [[i, m, c], [m, j, c]]
+                break
+        else:
+            out.append(f)
+    return V, np.array(out, dtype=np.int64)
+
+
+def test_the_sliver_box_is_printable_in_float64_but_not_as_float32():
+    V, F = _box_with_short_edge()
+    assert check_mesh(V, F).printable
+    Vs, Fs = stored_form(V, F, precision=np.float32)
+    rep = check_mesh(Vs, Fs)
+    assert not rep.printable and rep.degenerate_faces > 0
+    # float64 storage keeps it as it is
+    Vd, Fd = stored_form(V, F, precision=np.float64)
+    assert check_mesh(Vd, Fd).printable
+
+
+def test_stored_form_rounds_and_welds_like_the_stl_reader(tmp_path):
+    V, F = _box_with_short_edge()
+    Vs, Fs = stored_form(V, F, precision=np.float32)
+    assert np.array_equal(Vs.astype(np.float32).astype(np.float64), Vs)
+    assert Vs.shape[0] == V.shape[0] - 1          # the short edge's ends became one point
+    assert stored_precision(".STL") is np.float32 and stored_precision(".3mf") is np.float64
+
+
+def test_printable_stored_solid_collapses_what_rounding_broke():
+    V, F = _box_with_short_edge()
+    solid = printable_stored_solid(V, F, precision=np.float32)
+    assert solid.report.printable, solid.report.reasons
+    assert solid.collapsed_faces == 2 and solid.cleanup_steps == 0
+    assert np.array_equal(solid.vertices.astype(np.float32).astype(np.float64), solid.vertices)
+    assert abs(solid.report.volume - 50.0 ** 3) < 1e-6 * 50.0 ** 3
+
+
+@pytest.mark.parametrize("ext", [".stl", ".3mf", ".obj", ".ply", ".off"])
+def test_export_writes_what_passes_on_re_read(tmp_path, ext):
+    V, F = _box_with_short_edge()
+    path = tmp_path / f"part{ext}"
+    rep = export_printable(path, V, F)
+    assert rep.printable
+    mesh = read_mesh(path)
+    again = check_mesh(mesh.vertices, mesh.faces)
+    assert again.printable, again.reasons
+    Vb, Fb = written_form(path)
+    assert rep.digest == check_mesh(Vb, Fb).digest
+    assert not list(tmp_path.glob(".*"))                 # no temporary files left
+
+
+def test_a_report_of_other_arrays_is_not_trusted(tmp_path):
+    V, F = icosphere(2)
+    good = check_mesh(V, F)
+    assert good.printable
+    # an open mesh with a report that says "printable" but describes other arrays
+    with pytest.raises(NotPrintableError) as err:
+        export_printable(tmp_path / "open.stl", V, F[1:], report=good)
+    assert "boundary" in str(err.value) and "force" not in str(err.value)
+    assert not (tmp_path / "open.stl").exists()
+    # forced: written, and the report returned describes the file
+    rep = export_printable(tmp_path / "open.stl", V, F[1:], force=True)
+    assert not rep.printable and (tmp_path / "open.stl").is_file()
+
+
+def test_a_matching_report_is_reused(tmp_path):
+    V, F = icosphere(2)
+    Vs, Fs = stored_form(V, F, precision=np.float32)
+    rep = check_mesh(Vs, Fs)
+    assert export_printable(tmp_path / "s.stl", Vs, Fs, report=rep) is rep
+
+
+def test_float32_overflow_is_a_clear_error(tmp_path):
+    V, F = icosphere(1)
+    with pytest.raises(InputError, match="float32 range"):
+        export_printable(tmp_path / "huge.stl", V * 1e39, F)
+    assert not (tmp_path / "huge.stl").exists()
