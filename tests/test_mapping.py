@@ -198,7 +198,8 @@ def _catalog_shells():
 
 
 @pytest.mark.parametrize("shell_name", _catalog_shells())
-def test_every_catalog_set_on_every_catalog_shell_is_printable(shell_name):
+def test_every_catalog_set_on_every_catalog_shell_writes_a_printable_file(tmp_path, shell_name):
+    from geotex.printing import export_printable
     from geotex.shells import load_named as load_shell
     from geotex.tiles.catalog import load_named as load_tiles
 
@@ -206,8 +207,15 @@ def test_every_catalog_set_on_every_catalog_shell_is_printable(shell_name):
     for set_name in _closed_sets():
         res = textured_solid(shell, load_tiles(set_name), seed=0)
         assert res.report.printable, (set_name, shell_name, res.report.reasons)
-        assert res.report.components == 1            # one body, no loose pieces
         assert res.stats["elements"] > 0.5 * res.stats["quads"]
+        # judged on the written file: float32 coordinates, corners welded on reading
+        out = tmp_path / f"{set_name}.stl"
+        export_printable(out, res.vertices, res.faces, report=res.report)
+        mesh = read_mesh(out)
+        rep = check_mesh(mesh.vertices, mesh.faces)
+        assert rep.printable, (set_name, shell_name, rep.reasons)
+        assert rep.components == 1                   # one body, no loose pieces
+        out.unlink()
 
 
 def test_catalog_has_closed_sets_and_shells():

@@ -16,7 +16,7 @@ from geotex.mesh.solid import manifold_status
 from geotex.mesh.geometry import bounding_box, component_volumes, degenerate_faces
 from geotex.mesh.topology import (duplicate_face_groups, edge_topology, face_components,
                                   non_manifold_vertices, position_welded_faces,
-                                  referenced_vertices)
+                                  referenced_vertices, repeated_positions)
 
 __all__ = ["CheckReport", "check_mesh", "LARGE_COORDINATE", "CHECK_STAGES"]
 
@@ -223,11 +223,7 @@ def check_mesh(V, F, *, self_intersections: bool = True, max_examples: int = 5,
     count, labels = face_components(F, n)
 
     # exact duplicate positions among referenced vertices (unwelded seams)
-    if m:
-        uniq = np.unique(V[used], axis=0).shape[0]
-        dup_positions = int(used.sum() - uniq)
-    else:
-        dup_positions = 0
+    dup_positions = repeated_positions(V[used]) if m else 0
 
     # closedness per component
     closed_comp = np.ones(count, dtype=bool)

@@ -9,6 +9,7 @@ the printability check on the result.
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass, field
 
@@ -30,8 +31,11 @@ MAP_STAGES = ("assign", "map", "union", "validate")
 #: :func:`~geotex.mapping.place.mapped_tiles`).
 ANCHOR = 0.2
 
-#: Unions redone without the elements next to crossings the check found.
+#: Unions redone without the elements next to defects the check found.
 RETRIES = 2
+
+#: ``max_examples`` that keeps every defect the check finds (to locate them).
+ALL_DEFECTS = 1 << 40
 
 
 @dataclass(frozen=True)
@@ -85,21 +89,36 @@ def texture_height(shell, tiles, height=None) -> float:
     return h
 
 
-def _elements_near_crossings(V, F, X, G, exclude=None) -> np.ndarray:
-    """Elements of ``(X, G)`` closest to the crossing faces of the solid ``(V, F)``."""
+def _defect_points(V, F, rep) -> np.ndarray:
+    """Positions of the defects a report lists: crossing, degenerate and non-manifold."""
+    ex = rep.examples
+    faces = [np.asarray(ex.get("self_intersecting_pairs", []), dtype=np.int64).ravel(),
+             np.asarray(ex.get("degenerate_faces", []), dtype=np.int64)]
+    pts = [V[F[f]].mean(axis=1) for f in faces if f.size]
+    for key in ("non_manifold_edges", "boundary_edges", "inconsistent_edges"):
+        e = np.asarray(ex.get(key, []), dtype=np.int64).reshape(-1, 2)
+        if e.size:
+            pts.append(V[e].mean(axis=1))
+    nmv = np.asarray(ex.get("non_manifold_vertices", []), dtype=np.int64)
+    if nmv.size:
+        pts.append(V[nmv])
+    return np.vstack(pts) if pts else np.zeros((0, 3))
+
+
+def _elements_near(points, X, G, exclude=None) -> np.ndarray:
+    """Elements of ``(X, G)`` with a vertex among the 4 nearest to each point."""
     from scipy.spatial import cKDTree
 
-    from geotex.check.intersections import self_intersecting_pairs
     from geotex.mesh.topology import face_components
 
     n_el, label = face_components(G, X.shape[0])
     out = np.zeros(n_el, dtype=bool) if exclude is None else exclude.copy()
-    pairs = self_intersecting_pairs(V, F)
-    centres = V[F[np.unique(pairs.ravel())]].mean(axis=1)
+    if len(points) == 0:
+        return out
     vlab = np.full(X.shape[0], -1, dtype=np.int64)
     vlab[G.ravel()] = np.repeat(label, 3)
     used = np.flatnonzero(vlab >= 0)
-    _, nearest = cKDTree(X[used]).query(centres, k=4)
+    _, nearest = cKDTree(X[used]).query(points, k=4)
     out[vlab[used[np.asarray(nearest).ravel()]]] = True
     return out
 
@@ -164,20 +183,27 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
         t = time.perf_counter()
         # judged as an STL stores it (float32; every other format stores these
         # values exactly), after collapsing what the rounding broke
-        solid = printable_stored_solid(V, F, precision=np.float32, rebuild=True)
+        solid = printable_stored_solid(V, F, precision=np.float32, rebuild=True,
+                                       max_examples=ALL_DEFECTS)
         # the boolean can leave needle faces where an element grazes the base
         # or a neighbour; leave the elements there out and unite again
         exclude = None
-        while solid.report.self_intersecting_pairs and retried < RETRIES:
-            exclude = _elements_near_crossings(solid.vertices, solid.faces, mapped.vertices,
-                                               mapped.faces, exclude)
+        while not solid.report.printable and retried < RETRIES:
+            points = _defect_points(solid.vertices, solid.faces, solid.report)
+            if len(points) == 0:
+                break
+            exclude = _elements_near(points, mapped.vertices, mapped.faces, exclude)
             V, F, union = united_with_base(shell.base_vertices, shell.base_faces,
                                            mapped.vertices, mapped.faces, exclude=exclude)
-            solid = printable_stored_solid(V, F, precision=np.float32, rebuild=True)
+            solid = printable_stored_solid(V, F, precision=np.float32, rebuild=True,
+                                           max_examples=ALL_DEFECTS)
             retried += 1
-        V, F, rep = solid.vertices, solid.faces, solid.report
-        cleanup = {"float32_cleanup_steps": solid.cleanup_steps,
-                   "float32_collapsed_faces": solid.collapsed_faces}
+        V, F = solid.vertices, solid.faces
+        rep = dataclasses.replace(solid.report, examples={
+            k: v[:5] for k, v in solid.report.examples.items()})
+        cleanup = {"float32_collapsed_faces": solid.collapsed_faces,
+                   "elements_left_out_at_defects": int(exclude.sum()) if exclude is not None
+                   else 0}
         times["validate"] = time.perf_counter() - t
     stats = {"quads": pc.n_quads, "bare_quads": int((tile_of_quad < 0).sum()),
              "height": h, "seed": int(seed), "mapped_vertices": int(mapped.vertices.shape[0]),

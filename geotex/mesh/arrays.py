@@ -130,5 +130,5 @@ def mesh_digest(V: np.ndarray, F: np.ndarray) -> str:
     for a, dtype in ((V, np.float64), (F, np.int64)):
         a = np.ascontiguousarray(a, dtype=dtype)
         h.update(str(a.shape).encode())
-        h.update(memoryview(a).cast("B"))
+        h.update(a.reshape(-1).view(np.uint8))
     return h.hexdigest()

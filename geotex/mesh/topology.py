@@ -23,6 +23,7 @@ __all__ = [
     "face_components",
     "non_manifold_vertices",
     "duplicate_face_groups",
+    "repeated_positions",
     "referenced_vertices",
     "position_welded_faces",
     "neighbour_mean",
@@ -292,9 +293,44 @@ def duplicate_face_groups(F: np.ndarray) -> np.ndarray:
     if F.shape[0] == 0:
         return np.zeros(0, dtype=np.int64)
     s = np.sort(F, axis=1)
-    _, first, inv = np.unique(s, axis=0, return_index=True, return_inverse=True)
+    n = int(s[:, 2].max()) + 1
+    if n < 2 ** 21:             # one int64 key per face: a 1-D sort, not a row sort
+        key = (s[:, 0] * n + s[:, 1]) * n + s[:, 2]
+        _, first, inv = np.unique(key, return_index=True, return_inverse=True)
+    else:
+        _, first, inv = np.unique(s, axis=0, return_index=True, return_inverse=True)
     inv = inv.ravel()
     return np.flatnonzero(first[inv] != np.arange(F.shape[0]))
+
+
+def repeated_positions(V: np.ndarray) -> int:
+    """Number of rows of ``V`` that repeat an earlier row exactly (``-0.0 == 0.0``).
+
+    Rows are grouped by a hash of their bit patterns; only rows whose hash
+    repeats are compared exactly, so the count is exact and the cost is one
+    1-D sort.
+
+    Parameters
+    ----------
+    V : numpy.ndarray, (n, 3) float64
+
+    Returns
+    -------
+    int
+    """
+    V = np.ascontiguousarray(V, dtype=np.float64) + 0.0
+    if V.shape[0] < 2:
+        return 0
+    B = V.view(np.uint64).reshape(-1, 3)
+    with np.errstate(over="ignore"):
+        key = (B[:, 0] * np.uint64(0x9E3779B97F4A7C15)) ^ (B[:, 1] * np.uint64(
+            0xC2B2AE3D27D4EB4F)) ^ (B[:, 2] * np.uint64(0x165667B19E3779F9))
+    _, inv, counts = np.unique(key, return_inverse=True, return_counts=True)
+    shared = counts[inv.ravel()] > 1
+    if not shared.any():
+        return 0
+    rows = V[shared]
+    return int(rows.shape[0] - np.unique(rows, axis=0).shape[0])
 
 
 def position_welded_faces(V: np.ndarray, F: np.ndarray) -> np.ndarray:

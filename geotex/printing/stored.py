@@ -26,17 +26,12 @@ from geotex.io import weld_exact
 from geotex.mesh.arrays import as_mesh_arrays
 from geotex.mesh.solid import arrays_of_manifold, manifold_of
 
-__all__ = ["stored_precision", "stored_form", "printable_stored_solid", "StoredSolid",
-           "CLEANUP_STEPS"]
+__all__ = ["stored_precision", "stored_form", "printable_stored_solid", "StoredSolid"]
 
 #: Formats whose coordinates are float32 (binary STL, glTF); the others store
 #: float64 exactly.
 FLOAT32_FORMATS = (".stl", ".glb")
 
-#: Simplification tolerances tried after a plain rebuild, in float32 steps
-#: (units in the last place of the largest coordinate): at 100 mm, 64 steps
-#: are 0.5 micrometre, far below any printer's resolution.
-CLEANUP_STEPS = (0, 64)
 
 
 def stored_precision(suffix: str) -> type:
@@ -102,43 +97,31 @@ class StoredSolid:
     faces : numpy.ndarray, (m, 3) int64
     report : CheckReport
         Validity of exactly these arrays (``report.digest`` matches them).
-    cleanup_steps : int
-        Float32 steps of the simplification that was needed (``0``: a
-        rebuild sufficed or nothing was needed, ``-1``: nothing was changed).
+    rebuilt : bool
+        Whether manifold3d rebuilt the rounded solid.
     collapsed_faces : int
-        Faces removed by the cleanup.
+        Faces the rebuild removed (zero-area after rounding).
     """
 
     vertices: np.ndarray
     faces: np.ndarray
     report: CheckReport
-    cleanup_steps: int = -1
+    rebuilt: bool = False
     collapsed_faces: int = 0
 
 
-def _rebuilt(V, F, tolerance):
-    """manifold3d's rebuild of ``(V, F)`` (simplified at ``tolerance``), or None."""
-    import manifold3d
-
-    solid = manifold_of(V, F)
-    if solid.status() != manifold3d.Error.NoError:
-        return None
-    if tolerance > 0:
-        solid = solid.simplify(tolerance)
-    return arrays_of_manifold(solid)
-
-
 def printable_stored_solid(V, F, *, precision=np.float32, rebuild: bool = False,
-                           progress=None) -> StoredSolid:
+                           max_examples: int = 5, progress=None) -> StoredSolid:
     """Round a solid to a file's precision, repair what rounding broke, judge it.
 
-    The solid is first judged as stored (:func:`stored_form`). If that fails,
-    manifold3d rebuilds it from the rounded coordinates (collapsing the
-    zero-length edges and zero-area triangles the rounding made), and if
-    that is not enough it is simplified by :data:`CLEANUP_STEPS` float32
-    steps; each candidate is rounded again and judged as stored. Vertices only
-    ever move onto other vertices' rounded positions, so the shape changes by
-    at most the largest step.
+    The solid is judged as stored (:func:`stored_form`); if that fails (or
+    at once with ``rebuild``), manifold3d rebuilds it from the rounded
+    coordinates, which collapses the zero-length edges and zero-area
+    triangles the rounding made, and the rebuilt solid, rounded again, is
+    judged as stored. Vertices only move onto other vertices' rounded
+    positions. Needle triangles that rounding would fold are best removed
+    before rounding (the union simplifies at a small tolerance,
+    :data:`geotex.mapping.union.SLIVER_TOLERANCE`).
 
     Parameters
     ----------
@@ -149,38 +132,34 @@ def printable_stored_solid(V, F, *, precision=np.float32, rebuild: bool = False,
         ``numpy.float32`` (binary STL, GLB) or ``numpy.float64`` (3MF and
         text formats).
     rebuild : bool, optional
-        Rebuild through manifold3d before the first verdict (saves a check
-        when the rounding is known to break slivers, as after a boolean).
+        Rebuild before the first verdict (saves a check when the rounding is
+        known to break slivers, as after a boolean).
+    max_examples : int, optional
+        Offending elements kept in the report's ``examples``.
     progress : callable, optional
         Passed to :func:`~geotex.check.report.check_mesh`.
 
     Returns
     -------
     StoredSolid
-        The best candidate: the first printable one, else the last tried.
+        The rebuilt solid when it was rebuilt, else the solid as stored.
 
     Raises
     ------
     InputError
         Malformed arrays or coordinates outside the float32 range.
     """
+    import manifold3d
+
     Vs, Fs = stored_form(V, F, precision=precision)
-    m0 = Fs.shape[0]
-    best = None
-    if m0 == 0 or not rebuild:
-        best = StoredSolid(Vs, Fs, check_mesh(Vs, Fs, progress=progress))
-        if best.report.printable or m0 == 0:
-            return best
-    ulp = float(np.spacing(np.float32(np.abs(Vs).max())))
-    for steps in CLEANUP_STEPS:
-        rebuilt = _rebuilt(Vs, Fs, steps * ulp)
-        if rebuilt is None:         # not a manifold at all: nothing to clean
-            break
-        Vc, Fc = stored_form(*rebuilt, precision=precision)
-        best = StoredSolid(Vc, Fc, check_mesh(Vc, Fc, progress=progress), steps,
-                           m0 - Fc.shape[0])
-        if best.report.printable:
-            break
-    if best is None:
-        best = StoredSolid(Vs, Fs, check_mesh(Vs, Fs, progress=progress))
-    return best
+    if not rebuild or Fs.shape[0] == 0:
+        rep = check_mesh(Vs, Fs, max_examples=max_examples, progress=progress)
+        if rep.printable or Fs.shape[0] == 0:
+            return StoredSolid(Vs, Fs, rep)
+    solid = manifold_of(Vs, Fs)
+    if solid.status() != manifold3d.Error.NoError:     # not a solid: nothing to rebuild
+        rep = check_mesh(Vs, Fs, max_examples=max_examples, progress=progress)
+        return StoredSolid(Vs, Fs, rep)
+    Vc, Fc = stored_form(*arrays_of_manifold(solid), precision=precision)
+    rep = check_mesh(Vc, Fc, max_examples=max_examples, progress=progress)
+    return StoredSolid(Vc, Fc, rep, True, Fs.shape[0] - Fc.shape[0])
