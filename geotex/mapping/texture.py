@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from geotex.check.report import CheckReport
-from geotex.errors import InputError
+from geotex.errors import GeotexError, InputError
 from geotex.mapping.assign import edge_colors, tiles_for_quads
 from geotex.mapping.place import mapped_tiles
 from geotex.mapping.union import united_with_base
@@ -73,7 +73,13 @@ def texture_height(shell, tiles, height=None) -> float:
     ------
     InputError
         ``height`` not positive or above the shell's ``max_height``.
+    GeotexError
+        The shell's safe height is zero.
     """
+    if not shell.max_height > 0:
+        raise GeotexError(f"shell {shell.name!r} has no room for a texture: its offset surface "
+                          "crosses itself at any height (a fold or a gap narrower than the "
+                          "offset); rebuild the shell with a smaller tile size")
     if height is None:
         return float(min(tiles.height * shell.tile_size, shell.max_height))
     try:
