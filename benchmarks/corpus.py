@@ -380,8 +380,12 @@ def main(argv=None) -> int:
     ap.add_argument("--jobs", type=int, default=1, help="rows run at once (default 1)")
     ap.add_argument("--name", default="corpus",
                     help="results file name in benchmarks/results (default corpus)")
+    ap.add_argument("--data", default=str(DATA),
+                    help=f"folder of the base meshes (default {DATA})")
     ap.add_argument("--workdir", help="keep outputs here (default: a temporary directory)")
     args = ap.parse_args(argv)
+    global DATA
+    DATA = Path(args.data)
 
     names = QUICK if args.quick else BASES + GENERATED
     if args.only:
