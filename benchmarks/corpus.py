@@ -373,6 +373,7 @@ def tool_version(cmd: list[str]) -> str:
 
 
 def main(argv=None) -> int:
+    global DATA
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--only", action="append", default=[],
                     help="run only this base (file name, stem or generated name; repeatable)")
@@ -384,7 +385,6 @@ def main(argv=None) -> int:
                     help=f"folder of the base meshes (default {DATA})")
     ap.add_argument("--workdir", help="keep outputs here (default: a temporary directory)")
     args = ap.parse_args(argv)
-    global DATA
     DATA = Path(args.data)
 
     names = QUICK if args.quick else BASES + GENERATED
