@@ -1,7 +1,9 @@
 """Corpus run of the main job: every printable base through `geotex texture`, three judges.
 
 For each closed base mesh of the shared corpus and for generated closed shapes
-(plates of genus 0..12 and a block with a thin fin), run
+(plates of genus 0..12: geotex.mesh.primitives.plate_with_holes when geotex has
+it, else a voxel plate with square holes built here; a block with a thin fin;
+geotex's sphere_with_rod when it has one), run
 
     geotex texture BASE --tiles SET -o OUT.stl --report R.json --size-mm 80
 
@@ -43,6 +45,7 @@ HERE = Path(__file__).resolve().parent
 REPO = HERE.parent
 DATA = Path("/work/shared/data/base")
 TIMEOUT = 300.0
+sys.path.insert(0, str(REPO))          # judge with this checkout's geotex, as the runs use it
 SIZE_MM = 80.0
 TILE_SETS = ["studs", "knurl", "knurl-1", "chainmail", "studs-complete"]
 
@@ -56,6 +59,12 @@ BASES = [
 NOT_PRINTABLE = ["teapot_ajacobson.obj", "wingnut_odedstein.obj"]
 QUICK = ["cube_odedstein.obj", "bob_small_geometrycentral.ply", "spot_lowres_odedstein.obj"]
 GENERATED = [f"plate_genus{g}" for g in range(13)] + ["block_thin_fin"]
+try:                                   # thin part from geotex's own primitives, when it has one
+    from geotex.mesh import primitives as _primitives
+    if hasattr(_primitives, "sphere_with_rod"):
+        GENERATED.append("sphere_with_rod")
+except ImportError:
+    pass
 
 COLUMNS = ["base", "genus", "faces in", "tile set", "tile size", "tile mm", "quads", "bare quads",
            "coverage", "faces out", "seconds", "peak MB", "geotex", "prusa", "admesh",
@@ -140,6 +149,9 @@ def generated_shape(name: str) -> tuple[np.ndarray, np.ndarray]:
         return plate_with_holes(g)
     if name == "block_thin_fin":
         return block_thin_fin()
+    if name == "sphere_with_rod":
+        from geotex.mesh import primitives
+        return primitives.sphere_with_rod()
     raise KeyError(name)
 
 
@@ -198,7 +210,7 @@ def run_measured(cmd: list[str], *, timeout: float, log: Path, env: dict) -> dic
 def last_error(text: str) -> str:
     lines = [ln.strip() for ln in text.splitlines() if ln.strip()]
     errs = [ln for ln in lines if "error" in ln.lower() or "Traceback" in ln]
-    return (errs[-1] if errs else (lines[-1] if lines else ""))[:200]
+    return (errs[-1] if errs else (lines[-1] if lines else ""))[:400]
 
 
 def geotex_check(path: Path, env: dict) -> tuple[str, str]:
@@ -238,7 +250,7 @@ def verdict_word(v: dict | None) -> str:
         return ""
     if v.get("ok") is None:
         return "not judged"
-    return "ok" if v["ok"] else "FAIL: " + ", ".join(v.get("reasons", []))[:120]
+    return "ok" if v["ok"] else "FAIL: " + ", ".join(v.get("reasons", []))
 
 
 # ---------------------------------------------------------------- one row
@@ -344,8 +356,12 @@ def write_results(rows: list[dict], rejected: list[dict], meta: dict, name: str)
              f"(`--info`) and admesh {meta.get('admesh', '')} (strict criteria: "
              f"`geotex/check/slicers.py`).", "",
              f"geotex commit `{meta['commit']}`; machine: {meta['machine']}; jobs {meta['jobs']}.",
-             f"Seconds and peak MB are those of the `geotex texture` process; the judges' own "
-             f"time is in the .json (`slicers.seconds`).", "",
+             f"Seconds and peak MB (maximum resident set) are those of the `geotex texture` "
+             f"process; the judges' own time is in the .json (`slicers.seconds`). "
+             f"Tile size is in the base's units, tile mm after the {SIZE_MM:g} mm scaling; "
+             f"coverage is the report's share of the base within a quarter tile of the shell "
+             f"(`coverage.within_quarter_tile`); quads, bare quads, faces out come from the "
+             f"report (blank: not reported). geotex `no file`: the job wrote nothing.", "",
              f"**{ok} of {len(rows)} rows accepted by all three judges.**", "",
              "| " + " | ".join(COLUMNS) + " |",
              "|" + "|".join("---" for _ in COLUMNS) + "|"]
