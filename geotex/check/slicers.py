@@ -29,6 +29,12 @@ into strict verdicts:
     tilt the plane get counted although the geometry is fine (slicers ignore
     stored normals and recompute them).  The count is kept as a note.
 
+Neither program looks for self-intersections (a file whose float32 rounding
+made two facets cross passes both; ``geotex check`` catches it), so these
+verdicts complement :func:`geotex.check.check_mesh`, they do not replace it.
+A 3MF stores decimal coordinates: PrusaSlicer may accept the 3MF of a solid
+whose float32 STL has degenerate facets; judge the STL to see those.
+
 Both programs run without a shell, with a timeout, in a temporary ``HOME``
 (PrusaSlicer must not write its configuration into the user's home), with
 ``LC_ALL=C`` so numbers use a decimal point.
