@@ -18,6 +18,8 @@ __all__ = [
     "MissingFileError",
     "UnsupportedFormatError",
     "NotPrintableError",
+    "ExternalToolError",
+    "ToolNotFoundError",
 ]
 
 
@@ -66,3 +68,21 @@ class NotPrintableError(GeotexError):
     def __init__(self, message: str, report=None):
         self.report = report
         super().__init__(message)
+
+
+class ExternalToolError(GeotexError):
+    """An external program (PrusaSlicer, admesh) failed on a file or timed out.
+
+    Attributes
+    ----------
+    tool : str
+        The program's name.
+    """
+
+    def __init__(self, message: str, tool: str = ""):
+        self.tool = tool
+        super().__init__(message)
+
+
+class ToolNotFoundError(ExternalToolError):
+    """An external program geotex needs is not installed (not on ``PATH``)."""

@@ -29,6 +29,7 @@ from geotex.mesh.topology import edge_topology, non_manifold_vertices, position_
 __all__ = [
     "assert_printable", "assert_watertight", "assert_manifold",
     "assert_no_self_intersections", "assert_meshes_close", "hausdorff_distance",
+    "assert_slicer_accepts",
 ]
 
 
@@ -108,6 +109,55 @@ def assert_no_self_intersections(mesh, F=None, *, msg: str = "") -> None:
         raise AssertionError(
             f"{msg}{label} has {pairs.shape[0]} self-intersecting face pairs, first "
             f"{pairs[:5].tolist()} (near {np.array2string(where, precision=4)})")
+
+
+def assert_slicer_accepts(path, *, expected_parts: int | None = 1, msg: str = "") -> dict:
+    """Assert PrusaSlicer and admesh accept a written mesh file as it is.
+
+    Runs ``prusa-slicer --info`` and ``admesh`` on the file (see
+    :mod:`geotex.check.slicers` for the strict criteria: nothing for the
+    programs to repair, one part by default).  A 3MF file is judged by
+    PrusaSlicer only.  A :class:`~geotex.mesh.Mesh` or ``(V, F)`` pair is
+    written to a temporary binary STL first (float32, as a user would).
+
+    Parameters
+    ----------
+    path : str, os.PathLike, Mesh or (V, F) pair
+    expected_parts : int or None, optional
+        Number of separate bodies expected; None accepts any.
+
+    Returns
+    -------
+    dict
+        The verdicts of :func:`geotex.check.slicers.slicer_verdicts`.
+
+    Raises
+    ------
+    AssertionError
+        If either program rejects the file or cannot load it.
+    geotex.errors.ToolNotFoundError
+        If ``prusa-slicer`` or ``admesh`` is not installed.
+    """
+    from geotex.check.slicers import slicer_verdicts
+
+    if isinstance(path, (str, os.PathLike)):
+        verdicts, label = slicer_verdicts(path, expected_parts=expected_parts), str(path)
+    else:
+        import tempfile
+
+        from geotex.io import write_mesh
+
+        V, F, label = _arrays(path)
+        with tempfile.TemporaryDirectory(prefix="geotex-test-") as tmp:
+            stl = os.path.join(tmp, "mesh.stl")
+            write_mesh(stl, Mesh(V, F))
+            verdicts = slicer_verdicts(stl, expected_parts=expected_parts)
+    failed = [(tool, v) for tool, v in verdicts.items() if v["ok"] is False]
+    if failed:
+        lines = [f"{label} is rejected by {', '.join(t for t, _ in failed)}:"]
+        lines += [f"  - {tool}: {r}" for tool, v in failed for r in v["reasons"]]
+        raise AssertionError((msg + "\n" if msg else "") + "\n".join(lines))
+    return verdicts
 
 
 def _samples(V: np.ndarray, F: np.ndarray) -> np.ndarray:
