@@ -188,14 +188,16 @@ def write_stl(fh, mesh, *, path, binary: bool = True) -> None:
         For a binary file, if a coordinate exceeds the float32 range.
     """
     V, F = mesh.vertices, mesh.faces
-    normals = face_normals(V, F)
     if binary:
         if V.size and np.abs(V).max() > np.finfo(np.float32).max:
             raise MeshFileError(path, "coordinates exceed the float32 range of binary "
                                       "STL; write an ASCII STL (binary=False)")
         rec = np.zeros(F.shape[0], dtype=STL_DTYPE)
-        rec["normal"] = normals
-        rec["vertices"] = V.astype(np.float32)[F]
+        V32 = V.astype(np.float32).astype(np.float64)
+        # normals of the facets as stored (float32 corners), so a reader that
+        # recomputes them (admesh) finds nothing to fix
+        rec["normal"] = face_normals(V32, F)
+        rec["vertices"] = V32[F]
         fh.write(_HEADER)
         fh.write(struct.pack("<I", F.shape[0]))
         fh.write(rec.tobytes())
@@ -204,7 +206,7 @@ def write_stl(fh, mesh, *, path, binary: bool = True) -> None:
     # Format each vertex and normal once, then assemble the facets from strings.
     vertex_text = np.array(format_rows("%r %r %r\n", V).split("\n")[:-1], dtype=object)
     cells = np.empty((F.shape[0], 4), dtype=object)
-    cells[:, 0] = format_rows("%r %r %r\n", normals).split("\n")[:-1]
+    cells[:, 0] = format_rows("%r %r %r\n", face_normals(V, F)).split("\n")[:-1]
     cells[:, 1:] = vertex_text[F] if F.shape[0] else cells[:, 1:]
     row = ("facet normal %s\n outer loop\n  vertex %s\n  vertex %s\n  vertex %s\n"
            " endloop\nendfacet\n")
