@@ -8,6 +8,7 @@ starts; the command line passes a tqdm bar from :func:`stage_bar`.
 from __future__ import annotations
 
 import sys
+import threading
 from contextlib import contextmanager
 from typing import Callable, Iterator
 
@@ -26,6 +27,9 @@ def report(progress: ProgressCallback | None, stage: str) -> None:
 def stage_bar(total: int, desc: str, *, enabled: bool | None = None
               ) -> Iterator[ProgressCallback]:
     """Yield a callback that advances a tqdm bar on stderr by one stage per call.
+
+    The bar is redrawn every half second, so its elapsed time moves during a
+    long stage too.
 
     Parameters
     ----------
@@ -50,7 +54,19 @@ def stage_bar(total: int, desc: str, *, enabled: bool | None = None
         started[0] = True
         bar.set_postfix_str(stage, refresh=True)
 
+    stop = threading.Event()
+
+    def tick() -> None:
+        while not stop.wait(0.5):
+            bar.refresh()
+
+    ticker = threading.Thread(target=tick, daemon=True) if enabled else None
+    if ticker is not None:
+        ticker.start()
     try:
         yield advance
     finally:
+        stop.set()
+        if ticker is not None:
+            ticker.join()
         bar.close()

@@ -54,7 +54,7 @@ def run(args) -> int:
     from geotex.errors import NotPrintableError
     from geotex.io import read_mesh
     from geotex.io.atomic import atomic_output
-    from geotex.mapping import MAP_STAGES, textured_solid
+    from geotex.mapping import MAP_PROGRESS, textured_solid
     from geotex.printing import export_printable
     from geotex.progress import stage_bar
     from geotex.render import Panel, render_panels
@@ -74,7 +74,7 @@ def run(args) -> int:
     base = read_mesh(sample_path(DEMO_BASE))
     V = print_ready(base.vertices, size_mm=args.size_mm, y_up=True)
     tile_mm = args.size_mm / DEMO_TILES_ACROSS
-    with stage_bar(len(SHELL_STAGES) + len(MAP_STAGES), "geotex demo") as bar:
+    with stage_bar(len(SHELL_STAGES) + len(MAP_PROGRESS), "geotex demo") as bar:
         shell = build_shell(V, base.faces, tile_size=tile_mm, name=DEMO_BASE,
                             source=f"sample:{DEMO_BASE}", progress=bar)
         result = textured_solid(shell, tiles, seed=args.seed, progress=bar)

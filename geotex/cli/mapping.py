@@ -107,13 +107,13 @@ def _finish(args, shell, tiles, out, extra, *, label: str) -> int:
 
     from geotex.errors import NotPrintableError
     from geotex.io.atomic import atomic_output
-    from geotex.mapping import MAP_STAGES, textured_solid
+    from geotex.mapping import MAP_PROGRESS, textured_solid
     from geotex.printing import export_printable
     from geotex.progress import stage_bar
 
     height = _texture_height(args, shell, tiles)
     warn_print_size(float(np.ptp(shell.base_vertices, axis=0).max()))
-    with stage_bar(len(MAP_STAGES), "map") as bar:
+    with stage_bar(len(MAP_PROGRESS), "map") as bar:
         result = textured_solid(shell, tiles, height=height, seed=args.seed, progress=bar)
     V, F, rep = result.vertices, result.faces, result.report
     s = result.stats

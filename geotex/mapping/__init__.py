@@ -7,8 +7,8 @@ geometry into shell space, welded) and :func:`united_with_base` (one solid).
 
 from geotex.mapping.assign import edge_colors, tiles_for_quads
 from geotex.mapping.place import MappedTiles, mapped_tiles
-from geotex.mapping.texture import MAP_STAGES, TexturedSolid, texture_height, textured_solid
+from geotex.mapping.texture import MAP_PROGRESS, MAP_STAGES, TexturedSolid, texture_height, textured_solid
 from geotex.mapping.union import UnionStats, united_with_base
 
-__all__ = ["textured_solid", "TexturedSolid", "MAP_STAGES", "texture_height", "edge_colors",
+__all__ = ["textured_solid", "TexturedSolid", "MAP_STAGES", "MAP_PROGRESS", "texture_height", "edge_colors",
            "tiles_for_quads", "mapped_tiles", "MappedTiles", "united_with_base", "UnionStats"]

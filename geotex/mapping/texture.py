@@ -15,17 +15,22 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from geotex.check.report import CheckReport
+from geotex.check.report import CHECK_STAGES, CheckReport
 from geotex.errors import GeotexError, InputError
 from geotex.mapping.assign import edge_colors, tiles_for_quads
 from geotex.mapping.place import mapped_tiles
-from geotex.mapping.union import united_with_base
+from geotex.mapping.union import UNION_STAGES, united_with_base
 from geotex.printing.stored import printable_stored_solid
 from geotex.progress import report
 
-__all__ = ["TexturedSolid", "textured_solid", "MAP_STAGES", "texture_height"]
+__all__ = ["TexturedSolid", "textured_solid", "MAP_STAGES", "MAP_PROGRESS", "texture_height"]
 
 MAP_STAGES = ("assign", "map", "union", "validate")
+
+#: Everything the ``progress`` callback of :func:`textured_solid` is called
+#: with, in order (the stages and their steps); a retried union repeats steps.
+MAP_PROGRESS = ("assign", "map", "union") + UNION_STAGES + ("validate", "float32") \
+    + CHECK_STAGES
 
 #: Depth (in tiles) the elements are anchored below the surface (see
 #: :func:`~geotex.mapping.place.mapped_tiles`).
@@ -147,7 +152,8 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
         Round the result to float32 (what an STL stores), collapse the slivers
         the rounding breaks and run the full validity check on it.
     progress : callable, optional
-        Called with each stage of :data:`MAP_STAGES`.
+        Called with each stage and step of :data:`MAP_PROGRESS` (the times in
+        ``stats["seconds"]`` are per stage of :data:`MAP_STAGES`).
 
     Returns
     -------
@@ -179,7 +185,7 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
     report(progress, "union")
     t = time.perf_counter()
     V, F, union = united_with_base(shell.base_vertices, shell.base_faces, mapped.vertices,
-                                   mapped.faces)
+                                   mapped.faces, progress=progress)
     times["union"] = time.perf_counter() - t
     rep = None
     retried = 0
@@ -189,8 +195,9 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
         t = time.perf_counter()
         # judged as an STL stores it (float32; every other format stores these
         # values exactly), after collapsing what the rounding broke
+        report(progress, "float32")
         solid = printable_stored_solid(V, F, precision=np.float32, rebuild=True,
-                                       max_examples=ALL_DEFECTS)
+                                       max_examples=ALL_DEFECTS, progress=progress)
         # the boolean can leave needle faces where an element grazes the base
         # or a neighbour; leave the elements there out and unite again
         exclude = None
@@ -200,9 +207,10 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
                 break
             exclude = _elements_near(points, mapped.vertices, mapped.faces, exclude)
             V, F, union = united_with_base(shell.base_vertices, shell.base_faces,
-                                           mapped.vertices, mapped.faces, exclude=exclude)
+                                           mapped.vertices, mapped.faces, exclude=exclude,
+                                           progress=progress)
             solid = printable_stored_solid(V, F, precision=np.float32, rebuild=True,
-                                           max_examples=ALL_DEFECTS)
+                                           max_examples=ALL_DEFECTS, progress=progress)
             retried += 1
         V, F = solid.vertices, solid.faces
         rep = dataclasses.replace(solid.report, examples={

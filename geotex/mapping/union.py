@@ -21,8 +21,13 @@ import numpy as np
 from geotex.check.intersections import self_intersecting_pairs
 from geotex.errors import GeotexError
 from geotex.mesh.topology import compacted, face_components
+from geotex.progress import report
 
-__all__ = ["united_with_base", "element_groups", "UnionStats", "SLIVER_TOLERANCE"]
+__all__ = ["united_with_base", "element_groups", "UnionStats", "SLIVER_TOLERANCE",
+           "UNION_STAGES"]
+
+#: Stage names passed to the ``progress`` callback of :func:`united_with_base`.
+UNION_STAGES = ("union: folded elements", "union: boolean", "union: slivers")
 
 #: The union's result is simplified at this fraction of the bounding-box
 #: diagonal (manifold3d ``simplify``: short edges and needle triangles
@@ -97,7 +102,7 @@ def element_groups(X: np.ndarray, G: np.ndarray) -> tuple[np.ndarray, np.ndarray
 
 
 def united_with_base(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray, *,
-                     exclude=None) -> tuple[np.ndarray, np.ndarray, UnionStats]:
+                     exclude=None, progress=None) -> tuple[np.ndarray, np.ndarray, UnionStats]:
     """One solid: the base plus every usable closed element.
 
     Parameters
@@ -111,6 +116,8 @@ def united_with_base(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray,
     exclude : numpy.ndarray, (n_elements,) bool, optional
         Elements to leave out, numbered as by
         :func:`geotex.mesh.topology.face_components` of ``G``.
+    progress : callable, optional
+        Called with each stage of :data:`UNION_STAGES`.
 
     Returns
     -------
@@ -135,6 +142,7 @@ def united_with_base(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray,
         return np.array(V, dtype=np.float64), np.array(F, dtype=np.int64), UnionStats(0, 0, 0)
     label, group = element_groups(X, G)
     # an element the map folded onto itself cannot be united: leave it out
+    report(progress, UNION_STAGES[0])
     pairs = self_intersecting_pairs(X, G)
     folded = np.unique(label[pairs[:, 0]][label[pairs[:, 0]] == label[pairs[:, 1]]])
     group[folded] = -1
@@ -148,7 +156,10 @@ def united_with_base(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray,
         raise GeotexError("the mapped texture elements are not closed "
                           f"({bad[0].status().name}); the tile set may be broken "
                           "(check it with 'geotex tiles check')")
+    report(progress, UNION_STAGES[1])
     solid = manifold3d.Manifold.batch_boolean(solids, manifold3d.OpType.Add)
+    solid.num_tri()                      # evaluate here (manifold3d is lazy)
+    report(progress, UNION_STAGES[2])
     # the boolean leaves needle triangles (area ~1e-13 of the solid) where element
     # and base surfaces cross nearly tangentially; they fold onto their neighbours.
     # Collapsing edges below SLIVER_TOLERANCE of the diagonal removes them,
