@@ -102,7 +102,9 @@ def _texture_height(args, shell, tiles):
     return texture_height(shell, tiles, args.height)
 
 
-def _finish(args, shell, tiles, out, extra, *, label: str) -> int:
+def _finish(args, shell, tiles, out, extra, *, label: str, seconds=None) -> int:
+    import time
+
     import numpy as np
 
     from geotex.errors import NotPrintableError
@@ -123,8 +125,11 @@ def _finish(args, shell, tiles, out, extra, *, label: str) -> int:
         print(f"  left out: {s['elements_folded']} elements folded by the shell map, "
               f"{s['elements_floating']} that do not reach the base")
     status = EXIT_OK
+    seconds = dict(seconds or {}, **s["seconds"])
+    t = time.perf_counter()
     try:
         rep = export_printable(out, V, F, name=label, report=rep)
+        seconds["write"] = round(time.perf_counter() - t, 3)
         print(f"wrote {out} (printable as written: checked on the file's own coordinates)")
     except NotPrintableError as exc:
         print(f"geotex: error: {out}: not written, not printable as stored "
@@ -136,7 +141,8 @@ def _finish(args, shell, tiles, out, extra, *, label: str) -> int:
         rep = export_printable(kept, V, F, name=label, report=exc.report, force=True)
         print(f"wrote {kept} for inspection (NOT printable)")
     if "report" in extra:
-        doc = {"unit": "mm", "stats": s, "tile_size": shell.tile_size, "shell": shell.name,
+        doc = {"unit": "mm", "stats": s, "seconds": seconds, "tile_size": shell.tile_size,
+               "shell": shell.name,
                "tiles": tiles.name, "distortion": shell.distortion,
                "coverage": shell.polycube.coverage, "check": rep.to_dict()}
         with atomic_output(extra["report"], "w") as fh:
@@ -171,6 +177,8 @@ def run_map(args) -> int:
 
 
 def run_texture(args) -> int:
+    import time
+
     from geotex.cli.shell import shell_of_file
     from geotex.shells import save_shell
     from geotex.tiles.catalog import load_named as load_tiles, tileset_path
@@ -179,7 +187,9 @@ def run_texture(args) -> int:
     out, extra = _check_outputs(args, args.base, tiles_file)
     tiles = load_tiles(args.tiles)
     name = Path(args.base).stem
+    t = time.perf_counter()
     shell = shell_of_file(args.base, args.tile_size, name=name, size_mm=args.size_mm)
+    seconds = {"read+shell": round(time.perf_counter() - t, 3)}
     ts = shell.tile_size
     d = shell.distortion
     print(f"{args.base}: {shell.n_quads} tiles of {ts:.4g} mm, safe height "
@@ -188,4 +198,5 @@ def run_texture(args) -> int:
     if "shell_out" in extra:
         save_shell(extra["shell_out"], shell)
         print(f"wrote {extra['shell_out']}")
-    return _finish(args, shell, tiles, out, extra, label=f"{tiles.name} on {name}")
+    return _finish(args, shell, tiles, out, extra, label=f"{tiles.name} on {name}",
+                   seconds=seconds)
