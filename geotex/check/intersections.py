@@ -62,14 +62,17 @@ _DEGENERATE_REL_TOL = 1e-12
 # Widening of the float32 boxes: more than two float32 ulps at magnitude 1.
 _BOX32_PAD = 2.0 ** -21
 # Finest grid cell: this ratio times the given quantile of the box sizes.
-_BASE_QUANTILE = 0.95
+_BASE_QUANTILE = 0.5
 _CELL_RATIO = 1.5
+_LEVEL_RATIO = 2.0
 # Candidate pairs enumerated per task, and faces per preparation block: both
 # keep every temporary array to a few tens of MB.
 _PAIR_CHUNK = 200_000
 _FACE_BLOCK = 65_536
 _NARROW_CHUNK = 32_768
 _MAX_WORKERS = 4
+# Safety factor of the fan separation bound (see _separated_fans).
+_FAN_SAFETY = 8.0
 # Bits of the packed sort key (cell, level flag, face, corner flags).
 _KEY_BITS = 62
 
@@ -163,12 +166,27 @@ def self_intersecting_pairs(V, F, *, max_pairs=None) -> np.ndarray:
     empty = np.zeros((0, 2), dtype=np.int64)
     if m < 2 or max_pairs == 0:
         return empty
+    classes = _duplicate_classes(F)
+    if classes is not None:                  # duplicate faces: solve on one per class
+        first, cls = classes
+        pairs = _distinct_pairs(V, F[first], max_pairs)
+        pairs = _expanded(first[pairs], cls, max_pairs)
+    else:
+        pairs = _distinct_pairs(V, F, max_pairs)
+    return pairs
+
+
+def _distinct_pairs(V, F, max_pairs):
+    """:func:`self_intersecting_pairs` for faces with distinct vertex sets."""
+    m = F.shape[0]
+    empty = np.zeros((0, 2), dtype=np.int64)
     workers = _workers()
     pool = ThreadPoolExecutor(max_workers=workers)
     try:
         faces = _FaceData(_normalized(V, F), F, mapper=pool.map)
         if faces.active.size < 2:
             return empty
+        faces.separated = _separated_fans(faces, mapper=pool.map)
         found = []
         count = 0
         for hits in _in_order(pool, _pair_tasks(faces), window=2 * workers):
@@ -208,6 +226,85 @@ def _in_order(pool, tasks, *, window: int):
     finally:
         for future in pending:
             future.cancel()
+
+
+# ---------------------------------------------------------------------------
+# duplicate faces
+
+
+def _duplicate_classes(F: np.ndarray):
+    """Group the faces by vertex set; ``None`` when all sets differ.
+
+    Returns
+    -------
+    first : (K,) int64
+        Ascending index of the first face of each class.
+    cls : (m,) int64
+        Class of every face (a row of ``first``).
+    """
+    lo = F.min(axis=1)
+    hi = F.max(axis=1)
+    mid = F.sum(axis=1) - lo - hi
+    bits = max(1, int(hi.max()).bit_length())
+    if 3 * bits <= 63:
+        key = (lo << (2 * bits)) | (mid << bits) | hi
+        s = np.sort(key)
+        if not np.any(s[1:] == s[:-1]):
+            return None
+        del s
+        _, first, cls = np.unique(key, return_index=True, return_inverse=True)
+    else:
+        _, first, cls = np.unique(np.stack([lo, mid, hi], axis=1), axis=0,
+                                  return_index=True, return_inverse=True)
+        if first.size == F.shape[0]:
+            return None
+    order = np.argsort(first)                   # number classes by first face
+    rank = np.empty_like(order)
+    rank[order] = np.arange(order.size)
+    return first[order], rank[cls.ravel()]
+
+
+def _expanded(pairs: np.ndarray, cls: np.ndarray, max_pairs) -> np.ndarray:
+    """Pairs of class representatives -> pairs of all their members, sorted.
+
+    ``pairs`` holds face indices of the first face of classes (``i < j``);
+    every member of one class of a pair meets every member of the other.  The
+    rows are produced in sorted order (no sort over the output): for each
+    face ``a``, the sorted members of all classes meeting ``a``'s class,
+    after ``a``.  Work and memory are linear in the output size.
+    """
+    m = cls.size
+    if pairs.shape[0] == 0:
+        return pairs
+    K = int(cls.max()) + 1
+    members = np.argsort(cls, kind="stable")   # by class, then face
+    size = np.bincount(cls, minlength=K)
+    start = np.cumsum(size) - size
+    c = cls[pairs[:, 0]]
+    d = cls[pairs[:, 1]]
+    src = np.concatenate([c, d])
+    dst = np.concatenate([d, c])
+    n = size[dst]
+    off = np.cumsum(n) - n
+    # partner lists: key = class * m + member of a class meeting it, sorted
+    key = members[np.repeat(start[dst] - off, n) + np.arange(int(n.sum()))]
+    key += np.repeat(src, n) * m
+    key.sort()
+    bounds = np.searchsorted(key, np.arange(K + 1, dtype=np.int64) * m)
+    own = cls * m
+    pos = np.searchsorted(key, own + np.arange(m), side="right")
+    count = bounds[cls + 1] - pos
+    cum = np.cumsum(count)
+    if max_pairs is not None and cum[-1] > max_pairs:
+        r = int(np.searchsorted(cum, max_pairs))
+        count[r] -= cum[r] - max_pairs
+        count[r + 1:] = 0
+        cum = np.cumsum(count)
+    total = int(cum[-1])
+    i = np.repeat(np.arange(m), count)
+    j = key[np.repeat(pos - (cum - count), count) + np.arange(total)]
+    j -= np.repeat(own, count)
+    return np.stack([i, j], axis=1)
 
 
 # ---------------------------------------------------------------------------
@@ -264,6 +361,7 @@ class _FaceData:
         for _ in mapper(lambda s: self._fill(bad, s, min(s + _FACE_BLOCK, m)), blocks):
             pass
         self.active = np.flatnonzero(~bad)
+        self.separated = None
 
     def _fill(self, bad, s, e):
         F = self.F[s:e]
@@ -310,6 +408,138 @@ class _FaceData:
 
 
 # ---------------------------------------------------------------------------
+# vertex fans that cannot intersect
+
+
+def _separated_fans(faces: _FaceData, *, mapper=map) -> np.ndarray:
+    """Vertices whose faces provably meet only along their shared edges.
+
+    Returns a boolean array over the vertices.  A vertex ``p`` qualifies
+    when its faces form one closed, consistently oriented disc (every edge at
+    ``p`` is used once in each direction by faces of the mesh, no degenerate
+    face at ``p``) that is a height field over the plane normal to the mean
+    face normal ``n`` (``n . n_f >= c > 0`` for every face ``f``), winding
+    once around ``p``, with a margin far above the tolerance.  The narrow
+    phase then reports no pair of faces sharing ``p``: see
+    ``docs/architecture.md`` ("Self-intersections") for the bound.
+
+    With sector angles ``D_f`` of the projected faces at ``p``, ``mu =
+    min_f min(D_f, pi - D_f) / 2``, ``l`` the shortest edge at ``p``, ``q``
+    the smallest ratio height-from-``p`` / longest edge and ``s`` the
+    smallest ``sin(alpha_f / 2)`` (``alpha_f`` the face angle at ``p``),
+    any two faces sharing only ``p`` are separated by a plane through ``p``
+    with their free corners at least ``c l sin(mu)`` away; the narrow phase
+    cannot find a common point when ``c l sin(mu) q >= 8 t (1 + 1/s + 2/q) /
+    1`` (``t`` the largest tolerance of the faces).  Consecutive faces are
+    on opposite sides of the plane through their shared edge and ``n`` by at
+    least the same distance, so they are not folded either.
+    """
+    V, F = faces.V, faces.F
+    n, m = V.shape[0], F.shape[0]
+    bits = max(1, int(n - 1).bit_length())
+    out = np.zeros(n, dtype=bool)
+    if 2 * bits + 1 > 63 or 3 * m >= 2 ** 31 or bits + 31 > 63:
+        return out
+    good = np.ones(n, dtype=bool)
+    inactive = np.ones(m, dtype=bool)
+    inactive[faces.active] = False
+    good[F[inactive].ravel()] = False
+    # every edge used exactly once in each direction
+    u = F.ravel()
+    v = F[:, [1, 2, 0]].ravel()
+    key = (np.minimum(u, v) << (bits + 1)) | (np.maximum(u, v) << 1) | (u > v)
+    key.sort()
+    edge = key >> 1
+    starts = np.flatnonzero(np.r_[True, edge[1:] != edge[:-1]])
+    length = np.diff(np.r_[starts, key.size])
+    ok_edge = length == 2
+    ok_edge[ok_edge] = ((key[starts[ok_edge]] & 1) == 0) & ((key[starts[ok_edge] + 1] & 1) == 1)
+    bad = edge[starts[~ok_edge]]
+    good[bad >> bits] = False
+    good[bad & ((1 << bits) - 1)] = False
+    del key, edge, starts, length, ok_edge, bad
+    # corners sorted by vertex: corner c = 3 f + k at p = F[f, k], then a, b
+    key = (u << 31) | np.arange(3 * m, dtype=np.int64)
+    key.sort()
+    corner = key & ((1 << 31) - 1)
+    p = key >> 31
+    del key
+    keep = good[p]
+    corner, p = corner[keep], p[keep]
+    if p.size == 0:
+        return out
+    starts = np.flatnonzero(np.r_[True, p[1:] != p[:-1]])
+    # blocks of whole fans, on the thread pool
+    at = np.searchsorted(starts, np.arange(0, p.size, _FACE_BLOCK))
+    cut = np.unique(np.r_[starts[np.minimum(at, starts.size - 1)], p.size])
+    cols = [np.ascontiguousarray(V[:, i]) for i in range(3)]
+    ok = np.concatenate(list(mapper(
+        lambda k: _fans_ok(faces, cols, corner[cut[k]:cut[k + 1]], p[cut[k]:cut[k + 1]]),
+        range(cut.size - 1))))
+    out[p[starts[ok]]] = True
+    return out
+
+
+def _fans_ok(faces: _FaceData, cols, corner: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """The bound of :func:`_separated_fans` for whole fans of corners sorted by vertex.
+
+    ``cols`` are the vertex coordinates, one array per axis.
+    """
+    Ff = faces.F.ravel()
+    f3 = corner - corner % 3                     # 3 * face
+    a = np.take(Ff, f3 + (corner + 1) % 3)
+    b = np.take(Ff, f3 + (corner + 2) % 3)
+    f = f3 // 3
+    del corner, f3
+    starts = np.flatnonzero(np.r_[True, p[1:] != p[:-1]])
+    counts = np.diff(np.r_[starts, p.size])
+    A, B = [], []
+    for x in cols:
+        xp = np.take(x, p)
+        A.append(np.take(x, a) - xp)
+        B.append(np.take(x, b) - xp)
+    del a, b, xp
+    nf = [np.take(faces.plane[:, i], f) for i in range(3)]
+    N = [np.add.reduceat(x, starts) for x in nf]
+    norm = np.sqrt(N[0] * N[0] + N[1] * N[1] + N[2] * N[2])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        N = [np.repeat(x / norm, counts) for x in N]
+        cos_n = N[0] * nf[0] + N[1] * nf[1] + N[2] * nf[2]
+        del nf
+        AxB = [A[1] * B[2] - A[2] * B[1], A[2] * B[0] - A[0] * B[2],
+               A[0] * B[1] - A[1] * B[0]]
+        AB = A[0] * B[0] + A[1] * B[1] + A[2] * B[2]
+        NA = N[0] * A[0] + N[1] * A[1] + N[2] * A[2]
+        NB = N[0] * B[0] + N[1] * B[1] + N[2] * B[2]
+        # sector angle of the face projected along n: in (0, pi) when cos_n > 0
+        sector = np.arctan2(N[0] * AxB[0] + N[1] * AxB[1] + N[2] * AxB[2], AB - NA * NB)
+        del N, NA, NB
+        la = np.sqrt(A[0] * A[0] + A[1] * A[1] + A[2] * A[2])
+        lb = np.sqrt(B[0] * B[0] + B[1] * B[1] + B[2] * B[2])
+        C = [x - y for x, y in zip(A, B)]
+        lc = np.sqrt(C[0] * C[0] + C[1] * C[1] + C[2] * C[2])
+        del A, B, C
+        longest = np.maximum(np.maximum(la, lb), lc)
+        # height from p over the longest edge
+        q = np.sqrt(AxB[0] * AxB[0] + AxB[1] * AxB[1] + AxB[2] * AxB[2]) / (lc * longest)
+        del AxB
+        half_sin = np.sqrt(np.maximum(0.5 - 0.5 * AB / (la * lb), 0.0))
+        G = (1.0 + 1.0 / half_sin + 2.0 / q) / q
+        G[~np.isfinite(G)] = np.inf
+        c = np.minimum.reduceat(cos_n, starts)
+        total = np.add.reduceat(sector, starts)
+        spread = np.minimum.reduceat(np.minimum(sector, np.pi - sector), starts)
+        shortest = np.minimum.reduceat(la, starts)
+        t = np.maximum.reduceat(np.take(faces.tol, f), starts)
+        G = np.maximum.reduceat(G, starts)
+        margin = c * shortest * np.sin(0.5 * spread)
+        ok = ((norm > 0) & (counts >= 3) & (c > 0) & (spread > 0)
+              & (np.abs(total - 2.0 * np.pi) < 1e-6)
+              & (margin >= _FAN_SAFETY * t * G))
+    return ok
+
+
+# ---------------------------------------------------------------------------
 # broad phase
 
 
@@ -325,16 +555,16 @@ def _pair_tasks(faces: _FaceData):
     # level L: cells of cell0 * 4**L, faces up to twice that size (<= 3 cells
     # per axis); an even mesh has all its faces on level 0
     with np.errstate(divide="ignore"):
-        level = np.ceil(np.log(extent / (2.0 * cell0)) / np.log(4.0))
+        level = np.ceil(np.log(extent / (2.0 * cell0)) / np.log(_LEVEL_RATIO))
     level = np.maximum(level, 0).astype(np.int64)
     while True:                                  # fix rounding of the logarithm
-        short = extent > 2.0 * cell0 * 4.0 ** level
+        short = extent > 2.0 * cell0 * _LEVEL_RATIO ** level
         if not short.any():
             break
         level[short] += 1
     del extent
     for lev in np.unique(level):
-        cell = cell0 * 4.0 ** lev
+        cell = cell0 * _LEVEL_RATIO ** lev
         cur = np.flatnonzero(level == lev)
         low = np.flatnonzero(level < lev)
         if low.size:
@@ -546,6 +776,17 @@ def _pair_task(faces, level, s, e):
     overlap &= b2[:, 2] <= b1[:, 5]
     fa = fa[overlap].astype(np.int64)
     fb = fb[overlap].astype(np.int64)
+    if faces.separated is not None:
+        # faces sharing a vertex whose fan is separated cannot intersect
+        FA = np.take(faces.F, fa, axis=0)
+        FB = np.take(faces.F, fb, axis=0)
+        skip = np.zeros(fa.size, dtype=bool)
+        for k in range(3):
+            x = FA[:, k]
+            skip |= ((x == FB[:, 0]) | (x == FB[:, 1]) | (x == FB[:, 2])) & faces.separated[x]
+        fa = fa[~skip]
+        fb = fb[~skip]
+        del FA, FB, skip
     i = np.minimum(fa, fb)
     j = np.maximum(fa, fb)
     hit = np.empty(i.size, dtype=bool)
@@ -686,15 +927,26 @@ def _coplanar_overlap(faces, i, j, PA, PB, tol) -> np.ndarray:
     of their edges has the other polygon strictly outside.
     """
     ntol = -tol
-    separated = np.zeros(tol.size, dtype=bool)
+    out = np.ones(tol.size, dtype=bool)
+    rows = np.arange(tol.size)
     for f, Y in ((i, PB), (j, PA)):
-        E = np.take(faces.E, f, axis=0)
+        # the other triangle's corners and these edge planes, one contiguous
+        # array per coordinate; pairs already separated drop out
+        E = np.take(faces.E, f[rows], axis=0).T.copy()
+        Yc = Y[rows].reshape(-1, 9).T.copy()
+        t = ntol[rows]
+        separated = np.zeros(rows.size, dtype=bool)
         for k in range(3):
-            e = E[:, 4 * k:4 * k + 4]
-            separated |= ((_edge_distance(e, Y[:, 0]) < ntol)
-                          & (_edge_distance(e, Y[:, 1]) < ntol)
-                          & (_edge_distance(e, Y[:, 2]) < ntol))
-    return ~separated
+            wx, wy, wz, w0 = E[4 * k:4 * k + 4]
+            out_k = np.ones(rows.size, dtype=bool)
+            for c in range(3):
+                out_k &= wx * Yc[3 * c] + wy * Yc[3 * c + 1] + wz * Yc[3 * c + 2] - w0 < t
+            separated |= out_k
+        out[rows[separated]] = False
+        rows = rows[~separated]
+        if rows.size == 0:
+            break
+    return out
 
 
 def _endpoints_inside(PX, dX, shX, EY, tol):
