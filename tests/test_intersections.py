@@ -675,14 +675,24 @@ def test_separated_fans_certify_smooth_meshes_only():
     V, F = torus(40, 20)
     faces = gi._FaceData(gi._normalized(V, F), F)
     assert gi._separated_fans(faces).all()
-    # a vertex pushed through the surface: its neighbours' fans fold
+    # a vertex pulled through the sphere: its spikes pierce the far side
     V, F = icosphere(2)
     V = V.copy()
-    V[0] *= -0.2
-    faces = gi._FaceData(gi._normalized(V, F), F)
-    sep = gi._separated_fans(faces)
-    ring = np.unique(F[(F == 0).any(axis=1)])
-    assert not sep[ring[ring != 0]].all() and sep.sum() > 0.9 * len(V)
+    V[0] *= -1.5
+    out = self_intersecting_pairs(V, F)
+    assert out.shape[0] > 0
+    assert np.array_equal(out, brute_force(V, F))
+    # a flat grid with an interior vertex moved past its neighbours: the
+    # fans there do not wind once around their vertex
+    g, F = igl.triangulated_grid(6, 6)
+    V = np.column_stack([g, np.zeros(len(g))])
+    F = F.astype(np.int64)
+    sep = gi._separated_fans(gi._FaceData(gi._normalized(V, F), F))
+    inner = (g > 0.01).all(axis=1) & (g < 0.99).all(axis=1)
+    assert sep[inner].all() and not sep[~inner].any()      # boundary: open fans
+    V[14, :2] += [0.5, 0.1]
+    sep = gi._separated_fans(gi._FaceData(gi._normalized(V, F), F))
+    assert not sep[14]
     out = self_intersecting_pairs(V, F)
     assert out.shape[0] > 0
     assert np.array_equal(out, brute_force(V, F))
