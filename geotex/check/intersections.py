@@ -362,6 +362,8 @@ class _FaceData:
             pass
         self.active = np.flatnonzero(~bad)
         self.separated = None
+        dtype = np.int32 if Vn.shape[0] < 2 ** 31 else np.int64
+        self.corner_columns = [F[:, k].astype(dtype) for k in range(3)]
 
     def _fill(self, bad, s, e):
         F = self.F[s:e]
@@ -741,17 +743,20 @@ def _level_tasks(faces, box, cell, cur, low):
     counts -= np.arange(1, rows.size + 1, dtype=index)
     counts[is_low] = 0                              # lower-level entries start no pair
     face = act.astype(index)[rows]
+    # the entries' boxes in entry order (one array per bound): the pairs of
+    # a cell read nearby memory
+    ebox = [np.take(box[:, k], rows) for k in range(6)]
     del rows, is_low
     cum = np.cumsum(counts, dtype=np.int64)
     total = int(cum[-1])
     for s in range(0, total, _PAIR_CHUNK):
-        yield partial(_pair_task, faces, (cum, counts, first, face),
+        yield partial(_pair_task, faces, (cum, counts, first, face, ebox),
                       s, min(s + _PAIR_CHUNK, total))
 
 
 def _pair_task(faces, level, s, e):
     """Generate candidate pairs ``s .. e - 1`` of a level, filter, test them."""
-    cum, counts, first, face = level
+    cum, counts, first, face, ebox = level
     p0 = int(np.searchsorted(cum, s, side="right"))
     p1 = int(np.searchsorted(cum, e - 1, side="right")) + 1
     b = cum[p0:p1] - counts[p0:p1]                  # first pair index of each entry
@@ -764,29 +769,27 @@ def _pair_task(faces, level, s, e):
     # intersection: there, on every axis, one of the two entries is its box's
     # lowest cell
     own = (np.take(first, e1) | np.take(first, e2)) == 7
-    fa = np.take(face, e1[own])
-    fb = np.take(face, e2[own])
-    b1 = np.take(faces.box32, fa, axis=0)
-    b2 = np.take(faces.box32, fb, axis=0)
-    overlap = b1[:, 0] <= b2[:, 3]
-    overlap &= b2[:, 0] <= b1[:, 3]
-    overlap &= b1[:, 1] <= b2[:, 4]
-    overlap &= b2[:, 1] <= b1[:, 4]
-    overlap &= b1[:, 2] <= b2[:, 5]
-    overlap &= b2[:, 2] <= b1[:, 5]
-    fa = fa[overlap].astype(np.int64)
-    fb = fb[overlap].astype(np.int64)
+    e1 = e1[own]
+    e2 = e2[own]
+    overlap = np.ones(e1.size, dtype=bool)
+    for k in range(3):
+        lo, hi = ebox[k], ebox[k + 3]
+        overlap &= np.take(lo, e1) <= np.take(hi, e2)
+        overlap &= np.take(lo, e2) <= np.take(hi, e1)
+    fa = np.take(face, e1[overlap]).astype(np.int64)
+    fb = np.take(face, e2[overlap]).astype(np.int64)
+    del e1, e2, own, overlap
     if faces.separated is not None:
         # faces sharing a vertex whose fan is separated cannot intersect
-        FA = np.take(faces.F, fa, axis=0)
-        FB = np.take(faces.F, fb, axis=0)
+        cols = faces.corner_columns
+        FB = [np.take(c, fb) for c in cols]
         skip = np.zeros(fa.size, dtype=bool)
-        for k in range(3):
-            x = FA[:, k]
-            skip |= ((x == FB[:, 0]) | (x == FB[:, 1]) | (x == FB[:, 2])) & faces.separated[x]
+        for c in cols:
+            x = np.take(c, fa)
+            skip |= ((x == FB[0]) | (x == FB[1]) | (x == FB[2])) & np.take(faces.separated, x)
         fa = fa[~skip]
         fb = fb[~skip]
-        del FA, FB, skip
+        del FB, skip
     i = np.minimum(fa, fb)
     j = np.maximum(fa, fb)
     hit = np.empty(i.size, dtype=bool)
