@@ -439,9 +439,8 @@ def _separated_fans(faces: _FaceData, *, mapper=map) -> np.ndarray:
     V, F = faces.V, faces.F
     n, m = V.shape[0], F.shape[0]
     bits = max(1, int(n - 1).bit_length())
-    out = np.zeros(n, dtype=bool)
-    if 2 * bits + 1 > 63 or 3 * m >= 2 ** 31 or bits + 31 > 63:
-        return out
+    if 2 * bits + 1 > 63:
+        return np.zeros(n, dtype=bool)
     good = np.ones(n, dtype=bool)
     inactive = np.ones(m, dtype=bool)
     inactive[faces.active] = False
@@ -460,85 +459,86 @@ def _separated_fans(faces: _FaceData, *, mapper=map) -> np.ndarray:
     good[bad >> bits] = False
     good[bad & ((1 << bits) - 1)] = False
     del key, edge, starts, length, ok_edge, bad
-    # corners sorted by vertex: corner c = 3 f + k at p = F[f, k], then a, b
-    key = (u << 31) | np.arange(3 * m, dtype=np.int64)
-    key.sort()
-    corner = key & ((1 << 31) - 1)
-    p = key >> 31
-    del key
-    keep = good[p]
-    corner, p = corner[keep], p[keep]
-    if p.size == 0:
-        return out
-    starts = np.flatnonzero(np.r_[True, p[1:] != p[:-1]])
-    # blocks of whole fans, on the thread pool
-    at = np.searchsorted(starts, np.arange(0, p.size, _FACE_BLOCK))
-    cut = np.unique(np.r_[starts[np.minimum(at, starts.size - 1)], p.size])
-    cols = [np.ascontiguousarray(V[:, i]) for i in range(3)]
-    ok = np.concatenate(list(mapper(
-        lambda k: _fans_ok(faces, cols, corner[cut[k]:cut[k + 1]], p[cut[k]:cut[k + 1]]),
-        range(cut.size - 1))))
-    out[p[starts[ok]]] = True
+    # per corner, in face order (corner k of a face is at vertex F[:, k]);
+    # per-vertex minima, maxima and sums by scattering
+    cols = faces.corner_columns
+    unit = [np.ascontiguousarray(faces.plane[:, i]) for i in range(3)]
+    N = [sum(np.bincount(c, weights=x, minlength=n) for c in cols) for x in unit]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        norm = np.sqrt(N[0] * N[0] + N[1] * N[1] + N[2] * N[2])
+        N = [x / norm for x in N]
+    vcols = [np.ascontiguousarray(V[:, i]) for i in range(3)]
+    blocks = range(0, m, _FACE_BLOCK)
+    parts = list(mapper(
+        lambda s: _corner_terms(faces, vcols, N, unit, s, min(s + _FACE_BLOCK, m)), blocks))
+    terms = [[np.concatenate([part[k][t] for part in parts]) for t in range(5)]
+             for k in range(3)]
+    del parts
+    cos_min = np.full(n, np.inf)
+    total = np.zeros(n)
+    spread = np.full(n, np.inf)
+    shortest = np.full(n, np.inf)
+    G = np.zeros(n)
+    t = np.zeros(n)
+    with np.errstate(invalid="ignore", over="ignore"):       # NaN: degenerate faces
+        for c, (cos_n, sector, length, rim, g) in zip(cols, terms):
+            np.minimum.at(cos_min, c, cos_n)
+            total += np.bincount(c, weights=sector, minlength=n)
+            np.minimum.at(spread, c, rim)
+            np.minimum.at(shortest, c, length)
+            np.maximum.at(G, c, g)
+            np.maximum.at(t, c, faces.tol)
+        count = sum(np.bincount(c, minlength=n) for c in cols)
+        margin = cos_min * shortest * np.sin(0.5 * spread)
+        out = (good & (norm > 0) & (count >= 3) & (cos_min > 0) & (spread > 0)
+               & (np.abs(total - 2.0 * np.pi) < 1e-6)
+               & (margin >= _FAN_SAFETY * t * G))
     return out
 
 
-def _fans_ok(faces: _FaceData, cols, corner: np.ndarray, p: np.ndarray) -> np.ndarray:
-    """The bound of :func:`_separated_fans` for whole fans of corners sorted by vertex.
+def _corner_terms(faces: _FaceData, vcols, N, unit, s: int, e: int):
+    """Per corner ``k`` of faces ``s .. e - 1``: the terms of :func:`_separated_fans`.
 
-    ``cols`` are the vertex coordinates, one array per axis.
+    ``vcols``, ``N`` and ``unit`` are the vertex positions, the vertex
+    normals and the face normals, one array per axis.
+
+    Returns, per corner, ``(cos_n, sector, length, rim, G)``: ``n . n_f``,
+    the angle of the face at the corner projected along the vertex's ``n``,
+    the length of the edge leaving the corner, ``min(sector, pi - sector)``
+    and ``(1 + 1/sin(alpha / 2) + 2/q) / q``.
     """
-    Ff = faces.F.ravel()
-    f3 = corner - corner % 3                     # 3 * face
-    a = np.take(Ff, f3 + (corner + 1) % 3)
-    b = np.take(Ff, f3 + (corner + 2) % 3)
-    f = f3 // 3
-    del corner, f3
-    starts = np.flatnonzero(np.r_[True, p[1:] != p[:-1]])
-    counts = np.diff(np.r_[starts, p.size])
-    A, B = [], []
-    for x in cols:
-        xp = np.take(x, p)
-        A.append(np.take(x, a) - xp)
-        B.append(np.take(x, b) - xp)
-    del a, b, xp
-    nf = [np.take(faces.plane[:, i], f) for i in range(3)]
-    N = [np.add.reduceat(x, starts) for x in nf]
-    norm = np.sqrt(N[0] * N[0] + N[1] * N[1] + N[2] * N[2])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        N = [np.repeat(x / norm, counts) for x in N]
-        cos_n = N[0] * nf[0] + N[1] * nf[1] + N[2] * nf[2]
-        del nf
-        AxB = [A[1] * B[2] - A[2] * B[1], A[2] * B[0] - A[0] * B[2],
-               A[0] * B[1] - A[1] * B[0]]
-        AB = A[0] * B[0] + A[1] * B[1] + A[2] * B[2]
-        NA = N[0] * A[0] + N[1] * A[1] + N[2] * A[2]
-        NB = N[0] * B[0] + N[1] * B[1] + N[2] * B[2]
-        # sector angle of the face projected along n: in (0, pi) when cos_n > 0
-        sector = np.arctan2(N[0] * AxB[0] + N[1] * AxB[1] + N[2] * AxB[2], AB - NA * NB)
-        del N, NA, NB
-        la = np.sqrt(A[0] * A[0] + A[1] * A[1] + A[2] * A[2])
-        lb = np.sqrt(B[0] * B[0] + B[1] * B[1] + B[2] * B[2])
-        C = [x - y for x, y in zip(A, B)]
-        lc = np.sqrt(C[0] * C[0] + C[1] * C[1] + C[2] * C[2])
-        del A, B, C
-        longest = np.maximum(np.maximum(la, lb), lc)
-        # height from p over the longest edge
-        q = np.sqrt(AxB[0] * AxB[0] + AxB[1] * AxB[1] + AxB[2] * AxB[2]) / (lc * longest)
-        del AxB
-        half_sin = np.sqrt(np.maximum(0.5 - 0.5 * AB / (la * lb), 0.0))
-        G = (1.0 + 1.0 / half_sin + 2.0 / q) / q
-        G[~np.isfinite(G)] = np.inf
-        c = np.minimum.reduceat(cos_n, starts)
-        total = np.add.reduceat(sector, starts)
-        spread = np.minimum.reduceat(np.minimum(sector, np.pi - sector), starts)
-        shortest = np.minimum.reduceat(la, starts)
-        t = np.maximum.reduceat(np.take(faces.tol, f), starts)
-        G = np.maximum.reduceat(G, starts)
-        margin = c * shortest * np.sin(0.5 * spread)
-        ok = ((norm > 0) & (counts >= 3) & (c > 0) & (spread > 0)
-              & (np.abs(total - 2.0 * np.pi) < 1e-6)
-              & (margin >= _FAN_SAFETY * t * G))
-    return ok
+    F = faces.F[s:e]
+    X = [[np.take(vcols[i], F[:, k]) for i in range(3)] for k in range(3)]
+    # edge k from corner k to corner k + 1
+    E = [[X[(k + 1) % 3][i] - X[k][i] for i in range(3)] for k in range(3)]
+    del X
+    length = [np.sqrt(x * x + y * y + z * z) for x, y, z in E]
+    longest = np.maximum(np.maximum(length[0], length[1]), length[2])
+    nf = [x[s:e] for x in unit]
+    ax, ay, az = E[0]
+    bx, by, bz = E[2]
+    cx, cy, cz = ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
+    double_area = np.abs(cx * nf[0] + cy * nf[1] + cz * nf[2])   # |e0 x e2|
+    out = []
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        for k in range(3):
+            p = faces.F[s:e, k]
+            Np = [np.take(x, p) for x in N]
+            cos_n = Np[0] * nf[0] + Np[1] * nf[1] + Np[2] * nf[2]
+            A, B = E[k], E[(k + 2) % 3]                  # corner's edges: A and -B
+            AB = -(A[0] * B[0] + A[1] * B[1] + A[2] * B[2])
+            NA = Np[0] * A[0] + Np[1] * A[1] + Np[2] * A[2]
+            NB = -(Np[0] * B[0] + Np[1] * B[1] + Np[2] * B[2])
+            # the angle at the corner of the face projected along n: in
+            # (0, pi) when cos_n > 0 (n . (A x -B) = double_area * cos_n)
+            sector = np.arctan2(double_area * cos_n, AB - NA * NB)
+            q = double_area / (length[(k + 1) % 3] * longest)   # height / longest
+            half_sin = np.sqrt(np.maximum(0.5 - 0.5 * AB / (length[k] * length[(k + 2) % 3]),
+                                          0.0))
+            G = (1.0 + 1.0 / half_sin + 2.0 / q) / q
+            G[~(G >= 0)] = np.inf                       # NaN: degenerate
+            out.append((cos_n, sector, length[k], np.minimum(sector, np.pi - sector), G))
+    return out
 
 
 # ---------------------------------------------------------------------------
