@@ -6,6 +6,11 @@ then a tolerance-aware narrow phase, both on chunks of a bounded size.
 
 Pipeline
 --------
+0. Faces with the same vertex set (duplicates, in any order or orientation)
+   form one class; the pipeline runs on the first face of each class and
+   the pairs are expanded to all members at the end, directly in sorted
+   order (work linear in the output).  Many faces on few vertices therefore
+   cost what their distinct triangles cost plus the size of the answer.
 1. Coordinates are normalised in a copy: scaled by a power of two (exact) so
    that the bounding box of the referenced vertices has its largest extent in
    ``[1, 2)``, and centred on the origin.  Results therefore do not depend on
@@ -16,17 +21,25 @@ Pipeline
    the tolerance.  Degenerate faces (repeated index, or
    ``|e0 x e1| <= 1e-12 * longest_edge**2``, the criterion of
    :func:`geotex.mesh.geometry.degenerate_faces`) take no part.
-3. Broad phase, a hierarchical uniform grid: the finest cell is 1.5 times
-   the 95th percentile of the box sizes; level ``L`` has cells ``4**L``
-   times larger and holds the faces at most twice its cell size (so an even
-   mesh lives on level 0 alone).  Per level, its faces and the smaller faces
-   sharing its cells are sorted by one packed int64 key (cell, level flag,
-   face, corner flags), and in every cell each face of the level is paired
-   with the entries after it.  A pair met in several cells is kept only in
-   the cell holding the lower corner of the intersection of the two boxes
-   (no pair is generated twice, no ``unique`` over pairs); the boxes must
-   overlap.  Pairs are enumerated in chunks of 200,000.
-4. Narrow phase, on batches of 32,768 candidates: shared vertex indices
+3. Separated fans: a vertex whose faces form a closed, consistently oriented
+   disc that is a height field over its mean normal, winding once around it,
+   with a margin far above the tolerance (:func:`_separated_fans`), cannot
+   hold an intersecting pair of its faces; pairs sharing such a vertex are
+   dropped before the narrow phase.  On a clean manifold mesh that is almost
+   every pair of neighbours, so the narrow phase sees only faces that share
+   no vertex (and the fans that fail the bound).
+4. Broad phase, a hierarchical uniform grid: the finest cell is the median
+   box size; level ``L`` has cells ``2**L`` times larger and holds the faces
+   at most twice its cell size (so an even mesh lives on level 0 alone).
+   Per level, its faces and the smaller faces sharing its cells are sorted
+   by one packed int64 key (cell, level flag, face, corner flags), and in
+   every cell each face of the level is paired with the entries after it.  A
+   pair met in several cells is kept only in the cell holding the lower
+   corner of the intersection of the two boxes (no pair is generated twice,
+   no ``unique`` over pairs); the boxes (stored in entry order, so a cell's
+   pairs read nearby memory) must overlap.  Pairs are enumerated in chunks
+   of 200,000.
+5. Narrow phase, on batches of 32,768 candidates: shared vertex indices
    decide the case, plane side tests reject most pairs, and the survivors
    get the case analysis described in :func:`self_intersecting_pairs`.
 
@@ -63,7 +76,7 @@ _DEGENERATE_REL_TOL = 1e-12
 _BOX32_PAD = 2.0 ** -21
 # Finest grid cell: this ratio times the given quantile of the box sizes.
 _BASE_QUANTILE = 0.5
-_CELL_RATIO = 1.5
+_CELL_RATIO = 1.0
 _LEVEL_RATIO = 2.0
 # Candidate pairs enumerated per task, and faces per preparation block: both
 # keep every temporary array to a few tens of MB.
@@ -142,9 +155,11 @@ def self_intersecting_pairs(V, F, *, max_pairs=None) -> np.ndarray:
     outside; coplanar faces sharing a vertex compare their wedges at it.
 
     The work is vectorized numpy on chunks of bounded size (memory grows
-    linearly with the mesh, not with the number of candidate pairs) and runs
-    on up to four threads; about 2 s for a clean million-face mesh on two
-    cores (see ``benchmarks/bench_self_intersections.py``).
+    linearly with the mesh and the answer, not with the number of candidate
+    pairs) and runs on up to four threads.  Faces with the same vertex set
+    are tested once; pairs of faces around a vertex whose fan is provably
+    embedded are not tested at all (see the module docstring).  Timings
+    against libigl and pymeshlab: ``benchmarks/intersections.py``.
 
     Examples
     --------
@@ -417,24 +432,33 @@ def _separated_fans(faces: _FaceData, *, mapper=map) -> np.ndarray:
     """Vertices whose faces provably meet only along their shared edges.
 
     Returns a boolean array over the vertices.  A vertex ``p`` qualifies
-    when its faces form one closed, consistently oriented disc (every edge at
-    ``p`` is used once in each direction by faces of the mesh, no degenerate
+    when its faces form one closed, consistently oriented disc (every edge of
+    the mesh at ``p`` is used exactly once in each direction, no degenerate
     face at ``p``) that is a height field over the plane normal to the mean
-    face normal ``n`` (``n . n_f >= c > 0`` for every face ``f``), winding
-    once around ``p``, with a margin far above the tolerance.  The narrow
-    phase then reports no pair of faces sharing ``p``: see
-    ``docs/architecture.md`` ("Self-intersections") for the bound.
+    face normal ``n`` (``n . n_f >= c > 0`` for every face ``f`` at ``p``),
+    winding once around ``p`` (the projected face angles sum to ``2 pi``),
+    with a margin far above the tolerance.  The narrow phase then reports no
+    pair of faces sharing ``p`` (for the proof see ``docs/architecture.md``,
+    "Self-intersections"):
 
-    With sector angles ``D_f`` of the projected faces at ``p``, ``mu =
-    min_f min(D_f, pi - D_f) / 2``, ``l`` the shortest edge at ``p``, ``q``
-    the smallest ratio height-from-``p`` / longest edge and ``s`` the
-    smallest ``sin(alpha_f / 2)`` (``alpha_f`` the face angle at ``p``),
-    any two faces sharing only ``p`` are separated by a plane through ``p``
-    with their free corners at least ``c l sin(mu)`` away; the narrow phase
-    cannot find a common point when ``c l sin(mu) q >= 8 t (1 + 1/s + 2/q) /
-    1`` (``t`` the largest tolerance of the faces).  Consecutive faces are
-    on opposite sides of the plane through their shared edge and ``n`` by at
-    least the same distance, so they are not folded either.
+    * with ``D_f`` the projected angle of face ``f`` at ``p``,
+      ``mu = min_f min(D_f, pi - D_f) / 2`` and ``l`` the shortest edge at
+      ``p``, two faces sharing only ``p`` are split by a plane through ``p``
+      (containing ``n``) with their free corners at least ``c l sin(mu)``
+      from it, and two faces sharing an edge lie on either side of the plane
+      through that edge and ``n`` by at least as much;
+    * the narrow phase's tolerant predicates accept a point of one face only
+      within ``t (1 + 1/s)`` of the other face's cone at ``p`` (``t`` the
+      largest tolerance, ``s`` the smallest ``sin(alpha_f / 2)``,
+      ``alpha_f`` the face angle at ``p``), and every candidate point of a
+      face is at least ``q c l sin(mu)`` from the splitting plane (``q`` the
+      smallest height-from-``p`` / longest edge); the coplanar wedge test
+      accepts a corner within ``t (1 + 1/s + 2 L rho)`` of the other cone
+      (``L`` the longest edge, ``rho`` the largest ``(|a - p| + |b - p|) /
+      |(a - p) x (b - p)|``: how far a face within ``t`` of the other's
+      plane can tilt out of it);
+    * so ``c l sin(mu) >= 8 t max((1 + 1/s) / q, 1 + 1/s + 2 L rho)`` (a
+      factor 8 over the bound, for rounding) excludes every pair.
     """
     V, F = faces.V, faces.F
     n, m = V.shape[0], F.shape[0]
@@ -471,28 +495,37 @@ def _separated_fans(faces: _FaceData, *, mapper=map) -> np.ndarray:
     blocks = range(0, m, _FACE_BLOCK)
     parts = list(mapper(
         lambda s: _corner_terms(faces, vcols, N, unit, s, min(s + _FACE_BLOCK, m)), blocks))
-    terms = [[np.concatenate([part[k][t] for part in parts]) for t in range(5)]
+    terms = [[np.concatenate([part[k][t] for part in parts]) for t in range(8)]
              for k in range(3)]
     del parts
     cos_min = np.full(n, np.inf)
     total = np.zeros(n)
     spread = np.full(n, np.inf)
     shortest = np.full(n, np.inf)
-    G = np.zeros(n)
+    sin_min = np.full(n, np.inf)
+    q_min = np.full(n, np.inf)
+    rho = np.zeros(n)
+    longest = np.zeros(n)
     t = np.zeros(n)
     with np.errstate(invalid="ignore", over="ignore"):       # NaN: degenerate faces
-        for c, (cos_n, sector, length, rim, g) in zip(cols, terms):
+        for c, (cos_n, sector, length, rim, half_sin, q, r, big) in zip(cols, terms):
             np.minimum.at(cos_min, c, cos_n)
             total += np.bincount(c, weights=sector, minlength=n)
             np.minimum.at(spread, c, rim)
             np.minimum.at(shortest, c, length)
-            np.maximum.at(G, c, g)
+            np.minimum.at(sin_min, c, half_sin)
+            np.minimum.at(q_min, c, q)
+            np.maximum.at(rho, c, r)
+            np.maximum.at(longest, c, big)
             np.maximum.at(t, c, faces.tol)
         count = sum(np.bincount(c, minlength=n) for c in cols)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         margin = cos_min * shortest * np.sin(0.5 * spread)
+        reach = np.maximum((1.0 + 1.0 / sin_min) / q_min,
+                           1.0 + 1.0 / sin_min + 2.0 * longest * rho)
         out = (good & (norm > 0) & (count >= 3) & (cos_min > 0) & (spread > 0)
                & (np.abs(total - 2.0 * np.pi) < 1e-6)
-               & (margin >= _FAN_SAFETY * t * G))
+               & (margin >= _FAN_SAFETY * t * reach))
     return out
 
 
@@ -502,10 +535,12 @@ def _corner_terms(faces: _FaceData, vcols, N, unit, s: int, e: int):
     ``vcols``, ``N`` and ``unit`` are the vertex positions, the vertex
     normals and the face normals, one array per axis.
 
-    Returns, per corner, ``(cos_n, sector, length, rim, G)``: ``n . n_f``,
-    the angle of the face at the corner projected along the vertex's ``n``,
-    the length of the edge leaving the corner, ``min(sector, pi - sector)``
-    and ``(1 + 1/sin(alpha / 2) + 2/q) / q``.
+    Returns, per corner, ``(cos_n, sector, length, rim, half_sin, q, rho,
+    longest)``: ``n . n_f``, the angle of the face at the corner projected
+    along the vertex's ``n``, the length of the edge leaving the corner,
+    ``min(sector, pi - sector)``, ``sin(alpha / 2)`` (``alpha`` the face
+    angle there), height from the corner / longest edge, ``(|a - p| + |b -
+    p|) / |(a - p) x (b - p)|`` and the longest edge.
     """
     F = faces.F[s:e]
     X = [[np.take(vcols[i], F[:, k]) for i in range(3)] for k in range(3)]
@@ -533,11 +568,10 @@ def _corner_terms(faces: _FaceData, vcols, N, unit, s: int, e: int):
             # (0, pi) when cos_n > 0 (n . (A x -B) = double_area * cos_n)
             sector = np.arctan2(double_area * cos_n, AB - NA * NB)
             q = double_area / (length[(k + 1) % 3] * longest)   # height / longest
-            half_sin = np.sqrt(np.maximum(0.5 - 0.5 * AB / (length[k] * length[(k + 2) % 3]),
-                                          0.0))
-            G = (1.0 + 1.0 / half_sin + 2.0 / q) / q
-            G[~(G >= 0)] = np.inf                       # NaN: degenerate
-            out.append((cos_n, sector, length[k], np.minimum(sector, np.pi - sector), G))
+            la, lb = length[k], length[(k + 2) % 3]
+            half_sin = np.sqrt(np.maximum(0.5 - 0.5 * AB / (la * lb), 0.0))
+            out.append((cos_n, sector, la, np.minimum(sector, np.pi - sector), half_sin,
+                        q, (la + lb) / double_area, longest))
     return out
 
 
