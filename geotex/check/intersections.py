@@ -492,12 +492,6 @@ def _separated_fans(faces: _FaceData, *, mapper=map) -> np.ndarray:
         norm = np.sqrt(N[0] * N[0] + N[1] * N[1] + N[2] * N[2])
         N = [x / norm for x in N]
     vcols = [np.ascontiguousarray(V[:, i]) for i in range(3)]
-    blocks = range(0, m, _FACE_BLOCK)
-    parts = list(mapper(
-        lambda s: _corner_terms(faces, vcols, N, unit, s, min(s + _FACE_BLOCK, m)), blocks))
-    terms = [[np.concatenate([part[k][t] for part in parts]) for t in range(8)]
-             for k in range(3)]
-    del parts
     cos_min = np.full(n, np.inf)
     total = np.zeros(n)
     spread = np.full(n, np.inf)
@@ -507,17 +501,23 @@ def _separated_fans(faces: _FaceData, *, mapper=map) -> np.ndarray:
     rho = np.zeros(n)
     longest = np.zeros(n)
     t = np.zeros(n)
+    starts = range(0, m, _FACE_BLOCK)
+    parts = mapper(
+        lambda s: _corner_terms(faces, vcols, N, unit, s, min(s + _FACE_BLOCK, m)), starts)
     with np.errstate(invalid="ignore", over="ignore"):       # NaN: degenerate faces
-        for c, (cos_n, sector, length, rim, half_sin, q, r, big) in zip(cols, terms):
-            np.minimum.at(cos_min, c, cos_n)
-            total += np.bincount(c, weights=sector, minlength=n)
-            np.minimum.at(spread, c, rim)
-            np.minimum.at(shortest, c, length)
-            np.minimum.at(sin_min, c, half_sin)
-            np.minimum.at(q_min, c, q)
-            np.maximum.at(rho, c, r)
-            np.maximum.at(longest, c, big)
-            np.maximum.at(t, c, faces.tol)
+        for s, part in zip(starts, parts):                   # scatter in block order
+            tol = faces.tol[s:s + _FACE_BLOCK]
+            for col, (cos_n, sector, length, rim, half_sin, q, r, big) in zip(cols, part):
+                c = col[s:s + _FACE_BLOCK]
+                np.minimum.at(cos_min, c, cos_n)
+                np.add.at(total, c, sector)
+                np.minimum.at(spread, c, rim)
+                np.minimum.at(shortest, c, length)
+                np.minimum.at(sin_min, c, half_sin)
+                np.minimum.at(q_min, c, q)
+                np.maximum.at(rho, c, r)
+                np.maximum.at(longest, c, big)
+                np.maximum.at(t, c, tol)
         count = sum(np.bincount(c, minlength=n) for c in cols)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         margin = cos_min * shortest * np.sin(0.5 * spread)
