@@ -202,6 +202,7 @@ def _distinct_pairs(V, F, max_pairs):
         if faces.active.size < 2:
             return empty
         faces.separated = _separated_fans(faces, mapper=pool.map)
+        faces.mask_unseparated()
         found = []
         count = 0
         for hits in _in_order(pool, _pair_tasks(faces), window=2 * workers):
@@ -379,6 +380,22 @@ class _FaceData:
         self.separated = None
         dtype = np.int32 if Vn.shape[0] < 2 ** 31 else np.int64
         self.corner_columns = [F[:, k].astype(dtype) for k in range(3)]
+        self.masked_columns = None
+
+    def mask_unseparated(self):
+        """Set ``masked_columns``: vertex ids, those of unseparated fans negative.
+
+        Every corner at a vertex outside ``separated`` gets its own negative
+        id, so two faces have an equal masked id exactly when they share a
+        vertex whose fan is separated.
+        """
+        m = self.F.shape[0]
+        dtype = np.int32 if 3 * m < 2 ** 31 else np.int64
+        self.masked_columns = []
+        for k, col in enumerate(self.corner_columns):
+            own = -(3 * np.arange(m, dtype=np.int64) + k) - 1
+            self.masked_columns.append(
+                np.where(self.separated[col], col, own).astype(dtype))
 
     def _fill(self, bad, s, e):
         F = self.F[s:e]
@@ -588,7 +605,7 @@ def _pair_tasks(faces: _FaceData):
     box = faces.box32[faces.active]
     extent = (box[:, 3:] - box[:, :3]).max(axis=1).astype(np.float64)
     cell0 = _CELL_RATIO * float(np.quantile(extent, _BASE_QUANTILE))
-    # level L: cells of cell0 * 4**L, faces up to twice that size (<= 3 cells
+    # level L: cells of cell0 * 2**L, faces up to twice that size (<= 3 cells
     # per axis); an even mesh has all its faces on level 0
     with np.errstate(divide="ignore"):
         level = np.ceil(np.log(extent / (2.0 * cell0)) / np.log(_LEVEL_RATIO))
@@ -780,6 +797,8 @@ def _level_tasks(faces, box, cell, cur, low):
     # the entries' boxes in entry order (one array per bound): the pairs of
     # a cell read nearby memory
     ebox = [np.take(box[:, k], rows) for k in range(6)]
+    if faces.masked_columns is not None:
+        ebox += [np.take(col, face) for col in faces.masked_columns]
     del rows, is_low
     cum = np.cumsum(counts, dtype=np.int64)
     total = int(cum[-1])
@@ -810,20 +829,22 @@ def _pair_task(faces, level, s, e):
         lo, hi = ebox[k], ebox[k + 3]
         overlap &= np.take(lo, e1) <= np.take(hi, e2)
         overlap &= np.take(lo, e2) <= np.take(hi, e1)
-    fa = np.take(face, e1[overlap]).astype(np.int64)
-    fb = np.take(face, e2[overlap]).astype(np.int64)
-    del e1, e2, own, overlap
-    if faces.separated is not None:
+    e1 = e1[overlap]
+    e2 = e2[overlap]
+    del own, overlap
+    if len(ebox) > 6:
         # faces sharing a vertex whose fan is separated cannot intersect
-        cols = faces.corner_columns
-        FB = [np.take(c, fb) for c in cols]
-        skip = np.zeros(fa.size, dtype=bool)
-        for c in cols:
-            x = np.take(c, fa)
-            skip |= ((x == FB[0]) | (x == FB[1]) | (x == FB[2])) & np.take(faces.separated, x)
-        fa = fa[~skip]
-        fb = fb[~skip]
-        del FB, skip
+        B = [np.take(col, e2) for col in ebox[6:]]
+        skip = np.zeros(e1.size, dtype=bool)
+        for col in ebox[6:]:
+            x = np.take(col, e1)
+            skip |= (x == B[0]) | (x == B[1]) | (x == B[2])
+        e1 = e1[~skip]
+        e2 = e2[~skip]
+        del B, skip
+    fa = np.take(face, e1).astype(np.int64)
+    fb = np.take(face, e2).astype(np.int64)
+    del e1, e2
     i = np.minimum(fa, fb)
     j = np.maximum(fa, fb)
     hit = np.empty(i.size, dtype=bool)
