@@ -309,6 +309,7 @@ def _expanded(pairs: np.ndarray, cls: np.ndarray, max_pairs) -> np.ndarray:
     bounds = np.searchsorted(key, np.arange(K + 1, dtype=np.int64) * m)
     own = cls * m
     pos = np.searchsorted(key, own + np.arange(m), side="right")
+    key -= np.repeat(np.arange(K, dtype=np.int64) * m, np.diff(bounds))   # -> face
     count = bounds[cls + 1] - pos
     cum = np.cumsum(count)
     if max_pairs is not None and cum[-1] > max_pairs:
@@ -317,10 +318,12 @@ def _expanded(pairs: np.ndarray, cls: np.ndarray, max_pairs) -> np.ndarray:
         count[r + 1:] = 0
         cum = np.cumsum(count)
     total = int(cum[-1])
-    i = np.repeat(np.arange(m), count)
-    j = key[np.repeat(pos - (cum - count), count) + np.arange(total)]
-    j -= np.repeat(own, count)
-    return np.stack([i, j], axis=1)
+    out = np.empty((total, 2), dtype=np.int64)
+    out[:, 0] = np.repeat(np.arange(m), count)
+    at = np.arange(total)
+    at += np.repeat(pos - (cum - count), count)
+    np.take(key, at, out=out[:, 1])
+    return out
 
 
 # ---------------------------------------------------------------------------
