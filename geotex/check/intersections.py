@@ -28,9 +28,10 @@ Pipeline
    dropped before the narrow phase.  On a clean manifold mesh that is almost
    every pair of neighbours, so the narrow phase sees only faces that share
    no vertex (and the fans that fail the bound).
-4. Broad phase, a hierarchical uniform grid: the finest cell is the median
-   box size; level ``L`` has cells ``2**L`` times larger and holds the faces
-   at most twice its cell size (so an even mesh lives on level 0 alone).
+4. Broad phase, a hierarchical uniform grid: the finest cell is 1.5 times
+   the median box size; level ``L`` has cells ``2**L`` times larger and
+   holds the faces at most twice its cell size (so an even mesh lives on
+   level 0 alone).
    Per level, its faces and the smaller faces sharing its cells are sorted
    by one packed int64 key (cell, level flag, face, corner flags), and in
    every cell each face of the level is paired with the entries after it.  A
@@ -76,7 +77,7 @@ _DEGENERATE_REL_TOL = 1e-12
 _BOX32_PAD = 2.0 ** -21
 # Finest grid cell: this ratio times the given quantile of the box sizes.
 _BASE_QUANTILE = 0.5
-_CELL_RATIO = 1.0
+_CELL_RATIO = 1.5
 _LEVEL_RATIO = 2.0
 # Candidate pairs enumerated per task, and faces per preparation block: both
 # keep every temporary array to a few tens of MB.
