@@ -575,3 +575,149 @@ def test_max_pairs_stops_early(monkeypatch):
     calls.clear()
     self_intersecting_pairs(V, F, max_pairs=1)
     assert len(calls) < everything / 2
+
+
+# ---------------------------------------------------------------------------
+# many faces on few vertices, vertex fans
+
+
+def cube_corner_faces(m, seed=0):
+    """``m`` random faces on the 8 corners of a cube (many duplicates)."""
+    rng = np.random.default_rng(seed)
+    V = np.array([[x, y, z] for x in (0.0, 1.0) for y in (0.0, 1.0) for z in (0.0, 1.0)])
+    F = np.argsort(rng.random((m, 8)), axis=1)[:, :3].astype(np.int64)
+    return V, F
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_faces_on_cube_corners_match_brute_force(seed):
+    V, F = cube_corner_faces(150, seed)
+    out = self_intersecting_pairs(V, F)
+    check_output(out, len(F))
+    expected = brute_force(V, F)
+    assert expected.shape[0] > 1000
+    assert np.array_equal(out, expected)
+
+
+def test_faces_on_cube_corners_max_pairs():
+    V, F = cube_corner_faces(400, 5)
+    full = self_intersecting_pairs(V, F)
+    full_set = as_set(full)
+    for k in (1, 10, 1000, len(full) - 1):
+        part = self_intersecting_pairs(V, F, max_pairs=k)
+        check_output(part, len(F))
+        assert part.shape[0] == k
+        assert as_set(part) <= full_set
+        assert np.array_equal(self_intersecting_pairs(V, F, max_pairs=k), part)
+    assert np.array_equal(self_intersecting_pairs(V, F, max_pairs=len(full)), full)
+
+
+def test_many_faces_on_cube_corners_are_grouped(monkeypatch):
+    # the narrow phase sees the distinct vertex sets only, not all pairs
+    calls = []
+    narrow = gi._intersecting
+
+    def counting(faces, i, j):
+        calls.append(i.size)
+        return narrow(faces, i, j)
+
+    monkeypatch.setattr(gi, "_intersecting", counting)
+    V, F = cube_corner_faces(4000, 1)
+    out = self_intersecting_pairs(V, F)
+    assert sum(calls) <= 56 * 55 // 2
+    check_output(out, len(F))
+    reps = np.unique(np.sort(F, axis=1), axis=0, return_index=True)[1]
+    small = brute_force(V, F[np.sort(reps)])
+    assert out.shape[0] > 100 * small.shape[0]
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_lattice_soup_matches_brute_force(seed):
+    # few vertices on a small integer lattice: shared vertices and edges,
+    # duplicates, coplanar overlaps, touching and degenerate faces
+    rng = np.random.default_rng(seed)
+    V = rng.integers(0, 3, size=(14, 3)).astype(float)
+    V[:, 2] *= seed % 2                     # every other seed: all in a plane
+    F = rng.integers(0, len(V), size=(220, 3))
+    out = self_intersecting_pairs(V, F)
+    check_output(out, len(F))
+    assert out.shape[0] > 0
+    assert np.array_equal(out, brute_force(V, F))
+
+
+def cone(k, *, height=1.0, seed=None):
+    """A closed cone: apex fan of ``k`` faces over a polygon, and its base fan."""
+    t = np.linspace(0, 2 * np.pi, k, endpoint=False)
+    ring = np.column_stack([np.cos(t), np.sin(t), np.zeros(k)])
+    if seed is not None:
+        ring[:, :2] += np.random.default_rng(seed).normal(scale=0.3 / k, size=(k, 2))
+    V = np.concatenate([ring, [[0, 0, height], [0, 0, 0]]])
+    i = np.arange(k)
+    F = np.concatenate([np.column_stack([i, (i + 1) % k, np.full(k, k)]),
+                        np.column_stack([(i + 1) % k, i, np.full(k, k + 1)])])
+    return V, F.astype(np.int64)
+
+
+@pytest.mark.parametrize("height", [1.0, 1e-3, 0.0])
+def test_high_valence_fans(height):
+    # a flat double fan (height 0) folds onto itself everywhere; low cones
+    # are nearly flat fans that must stay clean
+    V, F = cone(300, height=height, seed=1)
+    out = self_intersecting_pairs(V, F)
+    assert np.array_equal(out, brute_force(V, F))
+    assert (out.shape[0] > 0) == (height == 0.0)
+
+
+def test_separated_fans_certify_smooth_meshes_only():
+    V, F = icosphere(3)
+    faces = gi._FaceData(gi._normalized(V, F), F)
+    assert gi._separated_fans(faces).all()
+    V, F = torus(40, 20)
+    faces = gi._FaceData(gi._normalized(V, F), F)
+    assert gi._separated_fans(faces).all()
+    # a vertex pulled through the sphere: its spikes pierce the far side
+    V, F = icosphere(2)
+    V = V.copy()
+    V[0] *= -1.5
+    out = self_intersecting_pairs(V, F)
+    assert out.shape[0] > 0
+    assert np.array_equal(out, brute_force(V, F))
+    # a flat grid with an interior vertex moved past its neighbours: the
+    # fans there do not wind once around their vertex
+    g, F = igl.triangulated_grid(6, 6)
+    V = np.column_stack([g, np.zeros(len(g))])
+    F = F.astype(np.int64)
+    sep = gi._separated_fans(gi._FaceData(gi._normalized(V, F), F))
+    inner = (g > 0.01).all(axis=1) & (g < 0.99).all(axis=1)
+    assert sep[inner].all() and not sep[~inner].any()      # boundary: open fans
+    V[14, :2] += [0.5, 0.1]
+    sep = gi._separated_fans(gi._FaceData(gi._normalized(V, F), F))
+    assert not sep[14]
+    out = self_intersecting_pairs(V, F)
+    assert out.shape[0] > 0
+    assert np.array_equal(out, brute_force(V, F))
+    # flipped face (inconsistent orientation) and an open boundary: not certified
+    V, F = icosphere(2)
+    F2 = F.copy()
+    F2[0] = F2[0][::-1]
+    sep = gi._separated_fans(gi._FaceData(gi._normalized(V, F2), F2))
+    assert not sep[F2[0]].any()
+    sep = gi._separated_fans(gi._FaceData(gi._normalized(V, F[1:]), F[1:]))
+    assert not sep[F[0]].any()
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_folded_and_thin_fans_match_brute_force(seed):
+    # a jittered flat grid with some vertices pushed across neighbours, and
+    # some nearly degenerate slivers: fans fail the bound or fold
+    rng = np.random.default_rng(seed)
+    g, F = igl.triangulated_grid(14, 14)
+    g = g + rng.normal(scale=0.01, size=g.shape)
+    z = rng.normal(scale=0.02, size=len(g)) * (seed % 2)
+    V = np.column_stack([g, z])
+    k = rng.choice(len(V), 6, replace=False)
+    V[k[:3], :2] += rng.normal(scale=0.08, size=(3, 2))          # folds
+    V[k[3:], :2] = V[k[3:] + 1, :2] + 1e-9                       # slivers
+    F = F.astype(np.int64)
+    out = self_intersecting_pairs(V, F)
+    assert np.array_equal(out, brute_force(V, F))

@@ -6,6 +6,11 @@ then a tolerance-aware narrow phase, both on chunks of a bounded size.
 
 Pipeline
 --------
+0. Faces with the same vertex set (duplicates, in any order or orientation)
+   form one class; the pipeline runs on the first face of each class and
+   the pairs are expanded to all members at the end, directly in sorted
+   order (work linear in the output).  Many faces on few vertices therefore
+   cost what their distinct triangles cost plus the size of the answer.
 1. Coordinates are normalised in a copy: scaled by a power of two (exact) so
    that the bounding box of the referenced vertices has its largest extent in
    ``[1, 2)``, and centred on the origin.  Results therefore do not depend on
@@ -16,17 +21,26 @@ Pipeline
    the tolerance.  Degenerate faces (repeated index, or
    ``|e0 x e1| <= 1e-12 * longest_edge**2``, the criterion of
    :func:`geotex.mesh.geometry.degenerate_faces`) take no part.
-3. Broad phase, a hierarchical uniform grid: the finest cell is 1.5 times
-   the 95th percentile of the box sizes; level ``L`` has cells ``4**L``
-   times larger and holds the faces at most twice its cell size (so an even
-   mesh lives on level 0 alone).  Per level, its faces and the smaller faces
-   sharing its cells are sorted by one packed int64 key (cell, level flag,
-   face, corner flags), and in every cell each face of the level is paired
-   with the entries after it.  A pair met in several cells is kept only in
-   the cell holding the lower corner of the intersection of the two boxes
-   (no pair is generated twice, no ``unique`` over pairs); the boxes must
-   overlap.  Pairs are enumerated in chunks of 200,000.
-4. Narrow phase, on batches of 32,768 candidates: shared vertex indices
+3. Separated fans: a vertex whose faces form a closed, consistently oriented
+   disc that is a height field over its mean normal, winding once around it,
+   with a margin far above the tolerance (:func:`_separated_fans`), cannot
+   hold an intersecting pair of its faces; pairs sharing such a vertex are
+   dropped before the narrow phase.  On a clean manifold mesh that is almost
+   every pair of neighbours, so the narrow phase sees only faces that share
+   no vertex (and the fans that fail the bound).
+4. Broad phase, a hierarchical uniform grid: the finest cell is 1.5 times
+   the median box size; level ``L`` has cells ``2**L`` times larger and
+   holds the faces at most twice its cell size (so an even mesh lives on
+   level 0 alone).
+   Per level, its faces and the smaller faces sharing its cells are sorted
+   by one packed int64 key (cell, level flag, face, corner flags), and in
+   every cell each face of the level is paired with the entries after it.  A
+   pair met in several cells is kept only in the cell holding the lower
+   corner of the intersection of the two boxes (no pair is generated twice,
+   no ``unique`` over pairs); the boxes (stored in entry order, so a cell's
+   pairs read nearby memory) must overlap.  Pairs are enumerated in chunks
+   of 200,000.
+5. Narrow phase, on batches of 32,768 candidates: shared vertex indices
    decide the case, plane side tests reject most pairs, and the survivors
    get the case analysis described in :func:`self_intersecting_pairs`.
 
@@ -62,14 +76,17 @@ _DEGENERATE_REL_TOL = 1e-12
 # Widening of the float32 boxes: more than two float32 ulps at magnitude 1.
 _BOX32_PAD = 2.0 ** -21
 # Finest grid cell: this ratio times the given quantile of the box sizes.
-_BASE_QUANTILE = 0.95
+_BASE_QUANTILE = 0.5
 _CELL_RATIO = 1.5
+_LEVEL_RATIO = 2.0
 # Candidate pairs enumerated per task, and faces per preparation block: both
 # keep every temporary array to a few tens of MB.
 _PAIR_CHUNK = 200_000
 _FACE_BLOCK = 65_536
 _NARROW_CHUNK = 32_768
 _MAX_WORKERS = 4
+# Safety factor of the fan separation bound (see _separated_fans).
+_FAN_SAFETY = 8.0
 # Bits of the packed sort key (cell, level flag, face, corner flags).
 _KEY_BITS = 62
 
@@ -139,9 +156,11 @@ def self_intersecting_pairs(V, F, *, max_pairs=None) -> np.ndarray:
     outside; coplanar faces sharing a vertex compare their wedges at it.
 
     The work is vectorized numpy on chunks of bounded size (memory grows
-    linearly with the mesh, not with the number of candidate pairs) and runs
-    on up to four threads; about 2 s for a clean million-face mesh on two
-    cores (see ``benchmarks/bench_self_intersections.py``).
+    linearly with the mesh and the answer, not with the number of candidate
+    pairs) and runs on up to four threads.  Faces with the same vertex set
+    are tested once; pairs of faces around a vertex whose fan is provably
+    embedded are not tested at all (see the module docstring).  Timings
+    against libigl and pymeshlab: ``benchmarks/intersections.py``.
 
     Examples
     --------
@@ -163,12 +182,28 @@ def self_intersecting_pairs(V, F, *, max_pairs=None) -> np.ndarray:
     empty = np.zeros((0, 2), dtype=np.int64)
     if m < 2 or max_pairs == 0:
         return empty
+    classes = _duplicate_classes(F)
+    if classes is not None:                  # duplicate faces: solve on one per class
+        first, cls = classes
+        pairs = _distinct_pairs(V, F[first], max_pairs)
+        pairs = _expanded(first[pairs], cls, max_pairs)
+    else:
+        pairs = _distinct_pairs(V, F, max_pairs)
+    return pairs
+
+
+def _distinct_pairs(V, F, max_pairs):
+    """:func:`self_intersecting_pairs` for faces with distinct vertex sets."""
+    m = F.shape[0]
+    empty = np.zeros((0, 2), dtype=np.int64)
     workers = _workers()
     pool = ThreadPoolExecutor(max_workers=workers)
     try:
         faces = _FaceData(_normalized(V, F), F, mapper=pool.map)
         if faces.active.size < 2:
             return empty
+        faces.separated = _separated_fans(faces, mapper=pool.map)
+        faces.mask_unseparated()
         found = []
         count = 0
         for hits in _in_order(pool, _pair_tasks(faces), window=2 * workers):
@@ -208,6 +243,88 @@ def _in_order(pool, tasks, *, window: int):
     finally:
         for future in pending:
             future.cancel()
+
+
+# ---------------------------------------------------------------------------
+# duplicate faces
+
+
+def _duplicate_classes(F: np.ndarray):
+    """Group the faces by vertex set; ``None`` when all sets differ.
+
+    Returns
+    -------
+    first : (K,) int64
+        Ascending index of the first face of each class.
+    cls : (m,) int64
+        Class of every face (a row of ``first``).
+    """
+    lo = F.min(axis=1)
+    hi = F.max(axis=1)
+    mid = F.sum(axis=1) - lo - hi
+    bits = max(1, int(hi.max()).bit_length())
+    if 3 * bits <= 63:
+        key = (lo << (2 * bits)) | (mid << bits) | hi
+        s = np.sort(key)
+        if not np.any(s[1:] == s[:-1]):
+            return None
+        del s
+        _, first, cls = np.unique(key, return_index=True, return_inverse=True)
+    else:
+        _, first, cls = np.unique(np.stack([lo, mid, hi], axis=1), axis=0,
+                                  return_index=True, return_inverse=True)
+        if first.size == F.shape[0]:
+            return None
+    order = np.argsort(first)                   # number classes by first face
+    rank = np.empty_like(order)
+    rank[order] = np.arange(order.size)
+    return first[order], rank[cls.ravel()]
+
+
+def _expanded(pairs: np.ndarray, cls: np.ndarray, max_pairs) -> np.ndarray:
+    """Pairs of class representatives -> pairs of all their members, sorted.
+
+    ``pairs`` holds face indices of the first face of classes (``i < j``);
+    every member of one class of a pair meets every member of the other.  The
+    rows are produced in sorted order (no sort over the output): for each
+    face ``a``, the sorted members of all classes meeting ``a``'s class,
+    after ``a``.  Work and memory are linear in the output size.
+    """
+    m = cls.size
+    if pairs.shape[0] == 0:
+        return pairs
+    K = int(cls.max()) + 1
+    members = np.argsort(cls, kind="stable")   # by class, then face
+    size = np.bincount(cls, minlength=K)
+    start = np.cumsum(size) - size
+    c = cls[pairs[:, 0]]
+    d = cls[pairs[:, 1]]
+    src = np.concatenate([c, d])
+    dst = np.concatenate([d, c])
+    n = size[dst]
+    off = np.cumsum(n) - n
+    # partner lists: key = class * m + member of a class meeting it, sorted
+    key = members[np.repeat(start[dst] - off, n) + np.arange(int(n.sum()))]
+    key += np.repeat(src, n) * m
+    key.sort()
+    bounds = np.searchsorted(key, np.arange(K + 1, dtype=np.int64) * m)
+    own = cls * m
+    pos = np.searchsorted(key, own + np.arange(m), side="right")
+    key -= np.repeat(np.arange(K, dtype=np.int64) * m, np.diff(bounds))   # -> face
+    count = bounds[cls + 1] - pos
+    cum = np.cumsum(count)
+    if max_pairs is not None and cum[-1] > max_pairs:
+        r = int(np.searchsorted(cum, max_pairs))
+        count[r] -= cum[r] - max_pairs
+        count[r + 1:] = 0
+        cum = np.cumsum(count)
+    total = int(cum[-1])
+    out = np.empty((total, 2), dtype=np.int64)
+    out[:, 0] = np.repeat(np.arange(m), count)
+    at = np.arange(total)
+    at += np.repeat(pos - (cum - count), count)
+    np.take(key, at, out=out[:, 1])
+    return out
 
 
 # ---------------------------------------------------------------------------
@@ -264,6 +381,25 @@ class _FaceData:
         for _ in mapper(lambda s: self._fill(bad, s, min(s + _FACE_BLOCK, m)), blocks):
             pass
         self.active = np.flatnonzero(~bad)
+        self.separated = None
+        dtype = np.int32 if Vn.shape[0] < 2 ** 31 else np.int64
+        self.corner_columns = [F[:, k].astype(dtype) for k in range(3)]
+        self.masked_columns = None
+
+    def mask_unseparated(self):
+        """Set ``masked_columns``: vertex ids, those of unseparated fans negative.
+
+        Every corner at a vertex outside ``separated`` gets its own negative
+        id, so two faces have an equal masked id exactly when they share a
+        vertex whose fan is separated.
+        """
+        m = self.F.shape[0]
+        dtype = np.int32 if 3 * m < 2 ** 31 else np.int64
+        self.masked_columns = []
+        for k, col in enumerate(self.corner_columns):
+            own = -(3 * np.arange(m, dtype=np.int64) + k) - 1
+            self.masked_columns.append(
+                np.where(self.separated[col], col, own).astype(dtype))
 
     def _fill(self, bad, s, e):
         F = self.F[s:e]
@@ -310,6 +446,157 @@ class _FaceData:
 
 
 # ---------------------------------------------------------------------------
+# vertex fans that cannot intersect
+
+
+def _separated_fans(faces: _FaceData, *, mapper=map) -> np.ndarray:
+    """Vertices whose faces provably meet only along their shared edges.
+
+    Returns a boolean array over the vertices.  A vertex ``p`` qualifies
+    when its faces form one closed, consistently oriented disc (every edge of
+    the mesh at ``p`` is used exactly once in each direction, no degenerate
+    face at ``p``) that is a height field over the plane normal to the mean
+    face normal ``n`` (``n . n_f >= c > 0`` for every face ``f`` at ``p``),
+    winding once around ``p`` (the projected face angles sum to ``2 pi``),
+    with a margin far above the tolerance.  The narrow phase then reports no
+    pair of faces sharing ``p`` (for the proof see ``docs/architecture.md``,
+    "Self-intersections"):
+
+    * with ``D_f`` the projected angle of face ``f`` at ``p``,
+      ``mu = min_f min(D_f, pi - D_f) / 2`` and ``l`` the shortest edge at
+      ``p``, two faces sharing only ``p`` are split by a plane through ``p``
+      (containing ``n``) with their free corners at least ``c l sin(mu)``
+      from it, and two faces sharing an edge lie on either side of the plane
+      through that edge and ``n`` by at least as much;
+    * the narrow phase's tolerant predicates accept a point of one face only
+      within ``t (1 + 1/s)`` of the other face's cone at ``p`` (``t`` the
+      largest tolerance, ``s`` the smallest ``sin(alpha_f / 2)``,
+      ``alpha_f`` the face angle at ``p``), and every candidate point of a
+      face is at least ``q c l sin(mu)`` from the splitting plane (``q`` the
+      smallest height-from-``p`` / longest edge); the coplanar wedge test
+      accepts a corner within ``t (1 + 1/s + 2 L rho)`` of the other cone
+      (``L`` the longest edge, ``rho`` the largest ``(|a - p| + |b - p|) /
+      |(a - p) x (b - p)|``: how far a face within ``t`` of the other's
+      plane can tilt out of it);
+    * so ``c l sin(mu) >= 8 t max((1 + 1/s) / q, 1 + 1/s + 2 L rho)`` (a
+      factor 8 over the bound, for rounding) excludes every pair.
+    """
+    V, F = faces.V, faces.F
+    n, m = V.shape[0], F.shape[0]
+    bits = max(1, int(n - 1).bit_length())
+    if 2 * bits + 1 > 63:
+        return np.zeros(n, dtype=bool)
+    good = np.ones(n, dtype=bool)
+    inactive = np.ones(m, dtype=bool)
+    inactive[faces.active] = False
+    good[F[inactive].ravel()] = False
+    # every edge used exactly once in each direction
+    u = F.ravel()
+    v = F[:, [1, 2, 0]].ravel()
+    key = (np.minimum(u, v) << (bits + 1)) | (np.maximum(u, v) << 1) | (u > v)
+    key.sort()
+    edge = key >> 1
+    starts = np.flatnonzero(np.r_[True, edge[1:] != edge[:-1]])
+    length = np.diff(np.r_[starts, key.size])
+    ok_edge = length == 2
+    ok_edge[ok_edge] = ((key[starts[ok_edge]] & 1) == 0) & ((key[starts[ok_edge] + 1] & 1) == 1)
+    bad = edge[starts[~ok_edge]]
+    good[bad >> bits] = False
+    good[bad & ((1 << bits) - 1)] = False
+    del key, edge, starts, length, ok_edge, bad
+    # per corner, in face order (corner k of a face is at vertex F[:, k]);
+    # per-vertex minima, maxima and sums by scattering
+    cols = faces.corner_columns
+    unit = [np.ascontiguousarray(faces.plane[:, i]) for i in range(3)]
+    N = [sum(np.bincount(c, weights=x, minlength=n) for c in cols) for x in unit]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        norm = np.sqrt(N[0] * N[0] + N[1] * N[1] + N[2] * N[2])
+        N = [x / norm for x in N]
+    vcols = [np.ascontiguousarray(V[:, i]) for i in range(3)]
+    cos_min = np.full(n, np.inf)
+    total = np.zeros(n)
+    spread = np.full(n, np.inf)
+    shortest = np.full(n, np.inf)
+    sin_min = np.full(n, np.inf)
+    q_min = np.full(n, np.inf)
+    rho = np.zeros(n)
+    longest = np.zeros(n)
+    t = np.zeros(n)
+    starts = range(0, m, _FACE_BLOCK)
+    parts = mapper(
+        lambda s: _corner_terms(faces, vcols, N, unit, s, min(s + _FACE_BLOCK, m)), starts)
+    with np.errstate(invalid="ignore", over="ignore"):       # NaN: degenerate faces
+        for s, part in zip(starts, parts):                   # scatter in block order
+            tol = faces.tol[s:s + _FACE_BLOCK]
+            for col, (cos_n, sector, length, rim, half_sin, q, r, big) in zip(cols, part):
+                c = col[s:s + _FACE_BLOCK]
+                np.minimum.at(cos_min, c, cos_n)
+                np.add.at(total, c, sector)
+                np.minimum.at(spread, c, rim)
+                np.minimum.at(shortest, c, length)
+                np.minimum.at(sin_min, c, half_sin)
+                np.minimum.at(q_min, c, q)
+                np.maximum.at(rho, c, r)
+                np.maximum.at(longest, c, big)
+                np.maximum.at(t, c, tol)
+        count = sum(np.bincount(c, minlength=n) for c in cols)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        margin = cos_min * shortest * np.sin(0.5 * spread)
+        reach = np.maximum((1.0 + 1.0 / sin_min) / q_min,
+                           1.0 + 1.0 / sin_min + 2.0 * longest * rho)
+        out = (good & (norm > 0) & (count >= 3) & (cos_min > 0) & (spread > 0)
+               & (np.abs(total - 2.0 * np.pi) < 1e-6)
+               & (margin >= _FAN_SAFETY * t * reach))
+    return out
+
+
+def _corner_terms(faces: _FaceData, vcols, N, unit, s: int, e: int):
+    """Per corner ``k`` of faces ``s .. e - 1``: the terms of :func:`_separated_fans`.
+
+    ``vcols``, ``N`` and ``unit`` are the vertex positions, the vertex
+    normals and the face normals, one array per axis.
+
+    Returns, per corner, ``(cos_n, sector, length, rim, half_sin, q, rho,
+    longest)``: ``n . n_f``, the angle of the face at the corner projected
+    along the vertex's ``n``, the length of the edge leaving the corner,
+    ``min(sector, pi - sector)``, ``sin(alpha / 2)`` (``alpha`` the face
+    angle there), height from the corner / longest edge, ``(|a - p| + |b -
+    p|) / |(a - p) x (b - p)|`` and the longest edge.
+    """
+    F = faces.F[s:e]
+    X = [[np.take(vcols[i], F[:, k]) for i in range(3)] for k in range(3)]
+    # edge k from corner k to corner k + 1
+    E = [[X[(k + 1) % 3][i] - X[k][i] for i in range(3)] for k in range(3)]
+    del X
+    length = [np.sqrt(x * x + y * y + z * z) for x, y, z in E]
+    longest = np.maximum(np.maximum(length[0], length[1]), length[2])
+    nf = [x[s:e] for x in unit]
+    ax, ay, az = E[0]
+    bx, by, bz = E[2]
+    cx, cy, cz = ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
+    double_area = np.abs(cx * nf[0] + cy * nf[1] + cz * nf[2])   # |e0 x e2|
+    out = []
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        for k in range(3):
+            p = faces.F[s:e, k]
+            Np = [np.take(x, p) for x in N]
+            cos_n = Np[0] * nf[0] + Np[1] * nf[1] + Np[2] * nf[2]
+            A, B = E[k], E[(k + 2) % 3]                  # corner's edges: A and -B
+            AB = -(A[0] * B[0] + A[1] * B[1] + A[2] * B[2])
+            NA = Np[0] * A[0] + Np[1] * A[1] + Np[2] * A[2]
+            NB = -(Np[0] * B[0] + Np[1] * B[1] + Np[2] * B[2])
+            # the angle at the corner of the face projected along n: in
+            # (0, pi) when cos_n > 0 (n . (A x -B) = double_area * cos_n)
+            sector = np.arctan2(double_area * cos_n, AB - NA * NB)
+            q = double_area / (length[(k + 1) % 3] * longest)   # height / longest
+            la, lb = length[k], length[(k + 2) % 3]
+            half_sin = np.sqrt(np.maximum(0.5 - 0.5 * AB / (la * lb), 0.0))
+            out.append((cos_n, sector, la, np.minimum(sector, np.pi - sector), half_sin,
+                        q, (la + lb) / double_area, longest))
+    return out
+
+
+# ---------------------------------------------------------------------------
 # broad phase
 
 
@@ -322,19 +609,19 @@ def _pair_tasks(faces: _FaceData):
     box = faces.box32[faces.active]
     extent = (box[:, 3:] - box[:, :3]).max(axis=1).astype(np.float64)
     cell0 = _CELL_RATIO * float(np.quantile(extent, _BASE_QUANTILE))
-    # level L: cells of cell0 * 4**L, faces up to twice that size (<= 3 cells
+    # level L: cells of cell0 * 2**L, faces up to twice that size (<= 3 cells
     # per axis); an even mesh has all its faces on level 0
     with np.errstate(divide="ignore"):
-        level = np.ceil(np.log(extent / (2.0 * cell0)) / np.log(4.0))
+        level = np.ceil(np.log(extent / (2.0 * cell0)) / np.log(_LEVEL_RATIO))
     level = np.maximum(level, 0).astype(np.int64)
     while True:                                  # fix rounding of the logarithm
-        short = extent > 2.0 * cell0 * 4.0 ** level
+        short = extent > 2.0 * cell0 * _LEVEL_RATIO ** level
         if not short.any():
             break
         level[short] += 1
     del extent
     for lev in np.unique(level):
-        cell = cell0 * 4.0 ** lev
+        cell = cell0 * _LEVEL_RATIO ** lev
         cur = np.flatnonzero(level == lev)
         low = np.flatnonzero(level < lev)
         if low.size:
@@ -511,17 +798,22 @@ def _level_tasks(faces, box, cell, cur, low):
     counts -= np.arange(1, rows.size + 1, dtype=index)
     counts[is_low] = 0                              # lower-level entries start no pair
     face = act.astype(index)[rows]
+    # the entries' boxes in entry order (one array per bound): the pairs of
+    # a cell read nearby memory
+    ebox = [np.take(box[:, k], rows) for k in range(6)]
+    if faces.masked_columns is not None:
+        ebox += [np.take(col, face) for col in faces.masked_columns]
     del rows, is_low
     cum = np.cumsum(counts, dtype=np.int64)
     total = int(cum[-1])
     for s in range(0, total, _PAIR_CHUNK):
-        yield partial(_pair_task, faces, (cum, counts, first, face),
+        yield partial(_pair_task, faces, (cum, counts, first, face, ebox),
                       s, min(s + _PAIR_CHUNK, total))
 
 
 def _pair_task(faces, level, s, e):
     """Generate candidate pairs ``s .. e - 1`` of a level, filter, test them."""
-    cum, counts, first, face = level
+    cum, counts, first, face, ebox = level
     p0 = int(np.searchsorted(cum, s, side="right"))
     p1 = int(np.searchsorted(cum, e - 1, side="right")) + 1
     b = cum[p0:p1] - counts[p0:p1]                  # first pair index of each entry
@@ -534,18 +826,29 @@ def _pair_task(faces, level, s, e):
     # intersection: there, on every axis, one of the two entries is its box's
     # lowest cell
     own = (np.take(first, e1) | np.take(first, e2)) == 7
-    fa = np.take(face, e1[own])
-    fb = np.take(face, e2[own])
-    b1 = np.take(faces.box32, fa, axis=0)
-    b2 = np.take(faces.box32, fb, axis=0)
-    overlap = b1[:, 0] <= b2[:, 3]
-    overlap &= b2[:, 0] <= b1[:, 3]
-    overlap &= b1[:, 1] <= b2[:, 4]
-    overlap &= b2[:, 1] <= b1[:, 4]
-    overlap &= b1[:, 2] <= b2[:, 5]
-    overlap &= b2[:, 2] <= b1[:, 5]
-    fa = fa[overlap].astype(np.int64)
-    fb = fb[overlap].astype(np.int64)
+    e1 = e1[own]
+    e2 = e2[own]
+    overlap = np.ones(e1.size, dtype=bool)
+    for k in range(3):
+        lo, hi = ebox[k], ebox[k + 3]
+        overlap &= np.take(lo, e1) <= np.take(hi, e2)
+        overlap &= np.take(lo, e2) <= np.take(hi, e1)
+    e1 = e1[overlap]
+    e2 = e2[overlap]
+    del own, overlap
+    if len(ebox) > 6:
+        # faces sharing a vertex whose fan is separated cannot intersect
+        B = [np.take(col, e2) for col in ebox[6:]]
+        skip = np.zeros(e1.size, dtype=bool)
+        for col in ebox[6:]:
+            x = np.take(col, e1)
+            skip |= (x == B[0]) | (x == B[1]) | (x == B[2])
+        e1 = e1[~skip]
+        e2 = e2[~skip]
+        del B, skip
+    fa = np.take(face, e1).astype(np.int64)
+    fb = np.take(face, e2).astype(np.int64)
+    del e1, e2
     i = np.minimum(fa, fb)
     j = np.maximum(fa, fb)
     hit = np.empty(i.size, dtype=bool)
@@ -686,15 +989,26 @@ def _coplanar_overlap(faces, i, j, PA, PB, tol) -> np.ndarray:
     of their edges has the other polygon strictly outside.
     """
     ntol = -tol
-    separated = np.zeros(tol.size, dtype=bool)
+    out = np.ones(tol.size, dtype=bool)
+    rows = np.arange(tol.size)
     for f, Y in ((i, PB), (j, PA)):
-        E = np.take(faces.E, f, axis=0)
+        # the other triangle's corners and these edge planes, one contiguous
+        # array per coordinate; pairs already separated drop out
+        E = np.take(faces.E, f[rows], axis=0).T.copy()
+        Yc = Y[rows].reshape(-1, 9).T.copy()
+        t = ntol[rows]
+        separated = np.zeros(rows.size, dtype=bool)
         for k in range(3):
-            e = E[:, 4 * k:4 * k + 4]
-            separated |= ((_edge_distance(e, Y[:, 0]) < ntol)
-                          & (_edge_distance(e, Y[:, 1]) < ntol)
-                          & (_edge_distance(e, Y[:, 2]) < ntol))
-    return ~separated
+            wx, wy, wz, w0 = E[4 * k:4 * k + 4]
+            out_k = np.ones(rows.size, dtype=bool)
+            for c in range(3):
+                out_k &= wx * Yc[3 * c] + wy * Yc[3 * c + 1] + wz * Yc[3 * c + 2] - w0 < t
+            separated |= out_k
+        out[rows[separated]] = False
+        rows = rows[~separated]
+        if rows.size == 0:
+            break
+    return out
 
 
 def _endpoints_inside(PX, dX, shX, EY, tol):
