@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -145,8 +147,8 @@ def test_rigid_translation_and_scaling():
     assert np.array_equal(c.Y * 4, a.Y)
     # otherwise the closest-point map from inside a faceted surface is discontinuous
     # across the bisector of two faces, so round-off moves a few points: by far less
-    # than a hundredth of a tile once the fit has relaxed
-    assert np.abs((b.Y - [7.0, -3.0, 2.0]) / 1e3 - a.Y).max() < 0.01 * 0.5
+    # than a fiftieth of a tile once the fit has relaxed (or converged)
+    assert np.abs((b.Y - [7.0, -3.0, 2.0]) / 1e3 - a.Y).max() < 0.02 * 0.5
 
 
 def test_deterministic():
@@ -196,5 +198,9 @@ def test_tile_size_errors():
 def test_tile_too_large_for_the_hole_says_why():
     V, F = torus(1.0, 0.45, n_major=48, n_minor=24)        # hole of radius 0.55
     with pytest.raises(GeotexError, match="genus 1 but its voxel polycube has genus 0.*"
-                                          "smaller tile size"):
+                                          "narrowest gap 1\\.1.* near.*resolves it") as err:
         polycube(V, F, tile_size=1.2)
+    # the size it names does resolve the hole
+    works = float(re.search(r"tile size ([0-9.]+) resolves it", str(err.value)).group(1))
+    assert works < 1.2
+    assert polycube(V, F, tile_size=works).n_quads > 0         # raises if it did not

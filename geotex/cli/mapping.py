@@ -41,7 +41,8 @@ def register(sub):
     t.add_argument("base", help="closed base mesh file")
     t.add_argument("--tiles", required=True, help="tile set: catalog name or .npz file")
     t.add_argument("--tile-size", type=float, default=None,
-                   help="tile side in base units (default: 1/12 of the largest extent)")
+                   help="tile side in base units (default: automatic, the largest size from "
+                   "1/12 of the largest extent down that resolves and covers the shape)")
     t.add_argument("--shell-out", default=None, help="also save the shell (.npz)")
     _output_options(t)
     t.set_defaults(run=run_texture)

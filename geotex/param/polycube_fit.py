@@ -86,7 +86,13 @@ class SurfaceProjector:
         self.normals = face_normals(self.V, self.F)
         self._tree = igl.AABB()
         self._tree.init(self.V, self.F)
-        self._centroids = cKDTree(self.V[self.F].mean(axis=1))
+        self._kd = None
+
+    @property
+    def _centroids(self) -> cKDTree:
+        if self._kd is None:                     # only the restricted projection needs it
+            self._kd = cKDTree(self.V[self.F].mean(axis=1))
+        return self._kd
 
     def closest(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Closest points ``(k, 3)`` and their faces ``(k,)``."""
@@ -163,7 +169,7 @@ def folded_faces(Y: np.ndarray, F: np.ndarray, projector: SurfaceProjector) -> n
 
 def fitted_surface(P: np.ndarray, F: np.ndarray, projector: SurfaceProjector, *,
                    iterations: int = 40, step: float = 0.8, reference_smoothing: int = 16,
-                   repair_rounds: int = 8) -> SurfaceFit:
+                   repair_rounds: int = 8, tolerance: float = 0.1) -> SurfaceFit:
     """Move the closed surface ``(P, F)`` onto the base of ``projector``.
 
     Parameters
@@ -174,7 +180,11 @@ def fitted_surface(P: np.ndarray, F: np.ndarray, projector: SurfaceProjector, *,
     projector : SurfaceProjector
         The base mesh.
     iterations : int
-        Projection + relaxation rounds.
+        Most projection + relaxation rounds.
+    tolerance : float
+        Converged (no more rounds) once 99 % of the vertices move less than
+        ``tolerance`` times the sub-grid spacing in a round (tested every
+        fourth round from the 16th on, so round-off rarely changes the count).
     step : float
         Fraction of the tangential move toward the neighbour mean per round.
     reference_smoothing : int
@@ -209,12 +219,15 @@ def fitted_surface(P: np.ndarray, F: np.ndarray, projector: SurfaceProjector, *,
     weight = np.clip(np.linalg.norm(Y - P, axis=1) / (0.1 * spacing), 0.0, 1.0)
     for _ in range(4):
         weight = np.maximum(weight, M @ weight)
-    for _ in range(iterations):
+    for it in range(iterations):
         C, face = projector.project(Y, side(Y))
         Nb = projector.normals[face]
         d = M @ Y - Y
         d -= np.einsum("ij,ij->i", d, Nb)[:, None] * Nb
-        Y = C + (step * weight)[:, None] * d
+        Y, Y0 = C + (step * weight)[:, None] * d, Y
+        if it >= 15 and it % 4 == 3 and np.percentile(
+                np.linalg.norm(Y - Y0, axis=1), 99) < tolerance * spacing:
+            break
     Y, face = projector.project(Y, side(Y))
     bad = folded_faces(Y, F, projector)
     before = int(bad.sum())
