@@ -39,8 +39,9 @@ from geotex.mesh.topology import edge_topology, vertex_components
 from geotex.param.distortion import distortion_summary
 from geotex.param.polycube_fit import SurfaceProjector, fitted_surface
 from geotex.param.polycube_quads import chart_axes, quad_edges
-from geotex.param.polycube_size import (AUTO_FLOOR, AUTO_START, AUTO_STEP, MAX_QUADS,
-                                        MIN_COVERAGE, size_schedule, thin_spot)
+from geotex.param.polycube_size import (AUTO_FLOOR, AUTO_START, AUTO_STEP, EXTRA_FITTED,
+                                        MAX_FITTED, MAX_QUADS, MIN_COVERAGE, size_schedule,
+                                        thin_spot)
 from geotex.param.polycube_surface import boundary_quads, subdivided_quads
 from geotex.param.voxels import (largest_component, manifold_solid, occupancy,
                                  voxel_grid)
@@ -280,11 +281,11 @@ def _attempt(V, F, *, lo, ts, chi, k, r, iterations, max_quads=None, progress=No
     projector = None
     for c in _candidates(Vt, F, cell=float(k), k=k, res=r, chi=chi, max_quads=max_quads):
         out["seen"].append((c["chi"], c["parts"]))
-        if not c["ok"]:
-            continue
         if c["too_large"]:
             out["too_large"] = True
             break
+        if not c["ok"]:
+            continue
         if projector is None:
             report(progress, "fit")
             projector = SurfaceProjector(Vt, F)
@@ -338,8 +339,9 @@ def polycube(V, F, *, tile_size: float | None = None, tiles_per_cell: int = 1, r
         largest extent down to 1/200, steps of ``2**-1/4``) whose voxel
         polycube has the mesh's genus, leaves no quad bare and has 99 % of the
         base area within one tile of the fitted surface; when no size
-        qualifies, the resolving size with the fewest bare quads (then the
-        best coverage). The attempts are in :attr:`PolyCube.tile_search`.
+        qualifies (at most 6 sizes are fitted, 2 after the first that covers
+        the base), the fitted size that covers the base with the fewest bare
+        quads. The attempts are in :attr:`PolyCube.tile_search`.
     tiles_per_cell : int, optional
         Tiles along the side of a voxel: larger gives larger, flatter charts
         but resolves less of the shape.
@@ -429,10 +431,21 @@ def polycube(V, F, *, tile_size: float | None = None, tiles_per_cell: int = 1, r
 
 
 def _search(V, F, *, extent, genus, opts):
-    """The automatic tile size: the first good attempt of the schedule, or the best."""
+    """The automatic tile size: the first good attempt of the schedule, or the best.
+
+    After a fit that leaves part of the base uncovered the next size of the
+    schedule is skipped. At most :data:`MAX_FITTED` sizes are fitted, and at most
+    :data:`EXTRA_FITTED` more once one covers the base (only bare quads are
+    left to remove then, which smaller tiles rarely do on very thin parts).
+    The best attempt covers the base, then has the fewest bare quads, then the
+    largest tiles.
+    """
     start, floor = extent / AUTO_START, extent / AUTO_FLOOR
-    attempts, best, best_key = [], None, None
+    attempts, best, best_key, fitted, covered, skip = [], None, None, 0, None, False
     for ts in size_schedule(start, floor):
+        if skip:                    # the last fit left a part uncovered: larger steps
+            skip = False
+            continue
         a = _attempt(V, F, ts=ts, max_quads=MAX_QUADS, **opts)
         rec = _record(a)
         attempts.append(rec)
@@ -440,10 +453,15 @@ def _search(V, F, *, extent, genus, opts):
             break
         if a["best"] is None:
             continue
-        key = (rec["bare"], -rec["within_tile"])
+        fitted += 1
+        key = (rec["within_tile"] < MIN_COVERAGE, rec["bare"], -rec["within_tile"])
         if best is None or key < best_key:
             best, best_key = a, key
-        if rec["result"] == "ok":
+        if rec["within_tile"] >= MIN_COVERAGE and covered is None:
+            covered = fitted
+        skip = rec["within_tile"] < MIN_COVERAGE
+        if (rec["result"] == "ok" or fitted >= MAX_FITTED
+                or (covered is not None and fitted - covered >= EXTRA_FITTED)):
             break
     search = {"automatic": True, "start": start, "floor": floor, "attempts": attempts}
     if best is None:
@@ -461,14 +479,17 @@ def _bad_quads(fit, F, n_quads, res, *, clearance: float = 0.05) -> np.ndarray:
 
     The second happens where the voxels bridge a gap narrower than a tile: the
     two sides of the bridge land on (nearly) the same surface. It is found as
-    the faces where the fitted surface meets its own offset by ``clearance``
-    tiles along the vertex normals. Such quads are left bare.
+    the faces where the fitted surface crosses itself or its own offset by
+    ``clearance`` tiles along the vertex normals. Such quads are left bare.
     """
     Y = fit.Y
-    n = Y.shape[0]
+    n, m = Y.shape[0], F.shape[0]
     lifted = Y + clearance * vertex_normals(Y, F)
     pairs = self_intersecting_pairs(np.vstack([Y, lifted]), np.vstack([F, F[:, ::-1] + n]))
-    faces = np.concatenate([np.flatnonzero(fit.folded), pairs.ravel() % F.shape[0]])
+    # the offset crossing only itself is a concave crease tighter than the
+    # clearance (it limits the shell's height, not the map): not a bridge
+    pairs = pairs[(pairs < m).any(axis=1)]
+    faces = np.concatenate([np.flatnonzero(fit.folded), pairs.ravel() % m])
     bad = np.zeros(n_quads, dtype=bool)
     bad[faces // (2 * res * res)] = True
     return bad

@@ -5,7 +5,9 @@ of :func:`size_schedule`, from 1/12 of the largest extent down in steps of
 ``2**-1/4`` (about 16 %), and keeps the first (largest) whose voxel polycube
 has the mesh's genus and whose fitted surface leaves no quad bare and covers
 the base (:data:`MIN_COVERAGE` of its area within one tile). The floor is 1/200
-of the extent, or fewer tiles when the polycube would exceed :data:`MAX_QUADS`.
+of the extent, or fewer tiles when the polycube would exceed :data:`MAX_QUADS`;
+at most :data:`MAX_FITTED` sizes are fitted (:data:`EXTRA_FITTED` after the
+first that covers the base), then the best attempt is kept.
 
 :func:`thin_spot` finds where a shape is thinnest (the narrowest solid part or
 gap), from the distance along the inward and outward normal of every face to
@@ -19,7 +21,8 @@ import numpy as np
 
 from geotex.mesh.geometry import face_normals
 
-__all__ = ["AUTO_START", "AUTO_FLOOR", "AUTO_STEP", "MAX_QUADS", "MIN_COVERAGE",
+__all__ = ["AUTO_START", "AUTO_FLOOR", "AUTO_STEP", "MAX_QUADS", "MAX_FITTED", "EXTRA_FITTED",
+           "MIN_COVERAGE",
            "size_schedule", "thin_spot", "face_thickness"]
 
 #: The automatic search starts at ``extent / AUTO_START`` ...
@@ -30,6 +33,10 @@ AUTO_FLOOR = 200
 AUTO_STEP = 2.0 ** -0.25
 #: Largest polycube (tile quads) the search builds.
 MAX_QUADS = 40000
+#: Most sizes fitted by one search ...
+MAX_FITTED = 6
+#: ... and after the first that covers the base.
+EXTRA_FITTED = 2
 #: Fraction of the base area that must lie within one tile of the fitted surface.
 MIN_COVERAGE = 0.99
 
