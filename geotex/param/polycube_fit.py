@@ -167,6 +167,14 @@ def folded_faces(Y: np.ndarray, F: np.ndarray, projector: SurfaceProjector) -> n
     return np.einsum("ij,ij->i", face_normals(Y, F), projector.normals[below]) <= 0
 
 
+def _refolded(bad, Y, F, moved, projector) -> np.ndarray:
+    """``bad`` with the faces touching the ``moved`` vertices tested again."""
+    touch = np.flatnonzero(moved[F].any(axis=1))
+    out = bad.copy()
+    out[touch] = folded_faces(Y, F[touch], projector)
+    return out
+
+
 def fitted_surface(P: np.ndarray, F: np.ndarray, projector: SurfaceProjector, *,
                    iterations: int = 40, step: float = 0.8, reference_smoothing: int = 16,
                    repair_rounds: int = 8, tolerance: float = 0.1) -> SurfaceFit:
@@ -242,5 +250,5 @@ def fitted_surface(P: np.ndarray, F: np.ndarray, projector: SurfaceProjector, *,
         idx = np.flatnonzero(sel)
         for _ in range(10):
             Y[idx], face[idx] = projector.project((M @ Y)[idx], side(Y)[idx])
-        bad = folded_faces(Y, F, projector)
+        bad = _refolded(bad, Y, F, sel, projector)
     return SurfaceFit(Y=Y, base_face=face, folded=bad, repaired=before)

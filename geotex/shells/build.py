@@ -177,13 +177,17 @@ def build_shell(V, F, *, tile_size: float | None = None, name: str = "shell", so
     # tried as well when the first one does not reach half a tile.
     h, D = -1.0, None
     used = pc.F[~pc.quad_folded[pc.face_quad]]
+    upper = 2.0 * pc.tile_size
+    base_normals = face_cross(pc.Y, used)
     for steps in (8 * pc.res, 2 * pc.res):
         Dk = offset_directions(pc.Y, pc.F, smoothing=steps)
         if D is None:
             report(progress, "height")
+        elif not _offset_ok(pc.Y, used, Dk, h + upper / 64, base_normals):
+            break          # the lighter smoothing cannot beat the first by a step: done
         # a texture taller than two tiles is never wanted: that bounds the search;
         # quads left bare carry no texture and do not limit it
-        hk = max_offset_height(pc.Y, used, Dk, upper=2.0 * pc.tile_size, steps=6)
+        hk = max_offset_height(pc.Y, used, Dk, upper=upper, steps=6)
         if hk > h:
             h, D = hk, Dk
         if h >= 0.5 * pc.tile_size:
