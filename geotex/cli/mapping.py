@@ -140,7 +140,10 @@ def run_texture(args) -> int:
     shell = shell_of_file(args.base, args.tile_size, name=name)
     ts = shell.tile_size
     d = shell.distortion
-    print(f"{args.base}: {shell.n_quads} tiles of {ts:.4g}, safe height "
+    search = shell.polycube.tile_search
+    auto = (f" (chosen after {len(search.get('attempts', []))} attempts)"
+            if search.get("automatic") else "")
+    print(f"{args.base}: {shell.n_quads} tiles of {ts:.4g}{auto}, safe height "
           f"{shell.max_height:.4g}, distortion area {d['area_mean']:.3f} "
           f"angle {d['angle_mean']:.3f}")
     if "shell_out" in extra:

@@ -292,13 +292,13 @@ def _attempt(V, F, *, lo, ts, chi, k, r, iterations, max_quads=None, progress=No
         out["fitted"] += 1
         fit = fitted_surface(c["origin"] + c["P"], c["F"], projector, iterations=iterations)
         bad = _bad_quads(fit, c["F"], c["labels"].size, r)
-        if out["best"] is None or bad.sum() < out["best"][2].sum():
-            out["best"] = (c, fit, bad)
-        if not bad.any() or out["fitted"] == 3:
+        cov = _coverage(Vt, F, fit.Y, c["F"])
+        # a candidate that covers the base beats one that does not, then fewer bare quads
+        key = (cov["within_tile"] < MIN_COVERAGE, int(bad.sum()), -cov["within_tile"])
+        if out["best"] is None or key < out["key"]:
+            out["best"], out["key"], out["coverage"] = (c, fit, bad), key, cov
+        if key[:2] == (False, 0) or out["fitted"] == 3:
             break
-    if out["best"] is not None:
-        c, fit, _ = out["best"]
-        out["coverage"] = _coverage(Vt, F, fit.Y, c["F"])
     return out
 
 

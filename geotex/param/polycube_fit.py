@@ -240,12 +240,12 @@ def fitted_surface(P: np.ndarray, F: np.ndarray, projector: SurfaceProjector, *,
     bad = folded_faces(Y, F, projector)
     before = int(bad.sum())
     ring = (M != 0).astype(np.float64)
-    for _ in range(repair_rounds):
+    for rnd in range(repair_rounds):
         if not bad.any():
             break
         sel = np.zeros(n, dtype=bool)
         sel[F[bad].ravel()] = True
-        for _ in range(2):
+        for _ in range(2 + rnd // 2):        # a wider neighbourhood for stubborn folds
             sel = (ring @ sel.astype(np.float64)) > 0
         idx = np.flatnonzero(sel)
         for _ in range(10):
