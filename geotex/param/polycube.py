@@ -18,6 +18,11 @@ module per step:
    fitted positions ``Y`` are the inverse map polycube -> base;
 5. distortion of the map and how well the fitted surface covers the base.
 
+With ``tile_size=None`` steps 2-5 run for a schedule of sizes, largest first,
+until one resolves the genus, leaves no quad bare and covers the base
+(:mod:`~geotex.param.polycube_size`); the attempts are recorded in
+:attr:`PolyCube.tile_search`.
+
 Unlike a deformation of the input, the map is defined on the polycube's own
 triangulation: the tile point ``(u, v)`` of quad ``q`` lies in sub-cell
 ``(floor(u res), floor(v res))`` of ``quad_grid[q]`` and its base point is
