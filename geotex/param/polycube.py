@@ -45,8 +45,8 @@ from geotex.param.distortion import distortion_summary
 from geotex.param.polycube_fit import SurfaceProjector, fitted_surface
 from geotex.param.polycube_quads import chart_axes, quad_edges
 from geotex.param.polycube_size import (AUTO_FLOOR, AUTO_START, AUTO_STEP, EXTRA_FITTED,
-                                        MAX_FITTED, MAX_QUADS, MIN_COVERAGE, size_schedule,
-                                        thin_spot)
+                                        MAX_FITTED, MAX_QUADS, MIN_COVERAGE, SKIP_BELOW,
+                                        size_schedule, thin_spot)
 from geotex.param.polycube_surface import boundary_quads, subdivided_quads
 from geotex.param.voxels import (largest_component, manifold_solid, occupancy,
                                  voxel_grid)
@@ -438,8 +438,8 @@ def polycube(V, F, *, tile_size: float | None = None, tiles_per_cell: int = 1, r
 def _search(V, F, *, extent, genus, opts):
     """The automatic tile size: the first good attempt of the schedule, or the best.
 
-    After a fit that leaves part of the base uncovered the next size of the
-    schedule is skipped. At most :data:`MAX_FITTED` sizes are fitted, and at most
+    After a fit that leaves more than :data:`SKIP_BELOW` of the base uncovered
+    the next size of the schedule is skipped. At most :data:`MAX_FITTED` sizes are fitted, and at most
     :data:`EXTRA_FITTED` more once one covers the base (only bare quads are
     left to remove then, which smaller tiles rarely do on very thin parts).
     The best attempt covers the base, then has the fewest bare quads, then the
@@ -464,7 +464,7 @@ def _search(V, F, *, extent, genus, opts):
             best, best_key = a, key
         if rec["within_tile"] >= MIN_COVERAGE and covered is None:
             covered = fitted
-        skip = rec["within_tile"] < MIN_COVERAGE
+        skip = rec["within_tile"] < SKIP_BELOW
         if (rec["result"] == "ok" or fitted >= MAX_FITTED
                 or (covered is not None and fitted - covered >= EXTRA_FITTED)):
             break

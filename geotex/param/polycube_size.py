@@ -22,7 +22,7 @@ import numpy as np
 from geotex.mesh.geometry import face_normals
 
 __all__ = ["AUTO_START", "AUTO_FLOOR", "AUTO_STEP", "MAX_QUADS", "MAX_FITTED", "EXTRA_FITTED",
-           "MIN_COVERAGE",
+           "MIN_COVERAGE", "SKIP_BELOW",
            "size_schedule", "thin_spot", "face_thickness"]
 
 #: The automatic search starts at ``extent / AUTO_START`` ...
@@ -39,6 +39,8 @@ MAX_FITTED = 6
 EXTRA_FITTED = 2
 #: Fraction of the base area that must lie within one tile of the fitted surface.
 MIN_COVERAGE = 0.99
+#: A fit covering less than this skips the next size (the thin parts are far smaller).
+SKIP_BELOW = 0.95
 
 
 def size_schedule(start: float, floor: float) -> list[float]:
