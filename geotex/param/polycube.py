@@ -307,10 +307,29 @@ def _attempt(V, F, *, lo, ts, chi, k, r, iterations, max_quads=None, progress=No
     return out
 
 
-def _resolves(V, F, *, lo, ts, chi, k) -> bool:
-    """Whether some voxel candidate at tile size ``ts`` has the mesh's topology."""
-    return any(c["ok"] for c in _candidates((V - lo) / ts, F, cell=float(k), k=k, res=1,
-                                            chi=chi))
+def _resolves(V, F, *, lo, ts, chi, k):
+    """Whether some voxel candidate at tile size ``ts`` has the mesh's topology.
+
+    None when the polycube would have more than :data:`MAX_QUADS` quads.
+    """
+    for c in _candidates((V - lo) / ts, F, cell=float(k), k=k, res=1, chi=chi,
+                         max_quads=MAX_QUADS):
+        if c["too_large"]:
+            return None
+        if c["ok"]:
+            return True
+    return False
+
+
+def _first_resolving(V, F, *, lo, ts, chi, k, floor):
+    """The first size of the schedule below ``ts`` that resolves the topology, or None."""
+    for s in size_schedule(ts * AUTO_STEP, floor):
+        ok = _resolves(V, F, lo=lo, ts=s, chi=chi, k=k)
+        if ok is None:
+            return None
+        if ok:
+            return s
+    return None
 
 
 def _record(a) -> dict:
@@ -407,10 +426,10 @@ def polycube(V, F, *, tile_size: float | None = None, tiles_per_cell: int = 1, r
         a = _attempt(V, F, ts=ts, **opts)
         search = {"automatic": False, "attempts": [_record(a)]}
         if a["best"] is None:
-            works = next((s for s in size_schedule(ts * AUTO_STEP, extent / 400)
-                          if _resolves(V, F, lo=lo, ts=s, chi=chi, k=k)), None)
+            works = _first_resolving(V, F, lo=lo, ts=ts, chi=chi, k=k, floor=extent / 400)
             hint = (f"tile size {works:.4g} resolves it" if works is not None
-                    else "no tile size down to 1/400 of the extent resolves it")
+                    else f"no tile size down to 1/400 of the extent or {MAX_QUADS} quads "
+                         "resolves it")
             raise GeotexError(
                 f"tile size {ts:g} is too large to resolve the shape: the mesh has genus "
                 f"{genus} but its voxel polycube has {_genus_found(a['seen'])} (thin parts or "
