@@ -248,7 +248,11 @@ def fitted_surface(P: np.ndarray, F: np.ndarray, projector: SurfaceProjector, *,
         for _ in range(2 + rnd // 2):        # a wider neighbourhood for stubborn folds
             sel = (ring @ sel.astype(np.float64)) > 0
         idx = np.flatnonzero(sel)
+        # only the selected rows: the same sums as side(Y)[idx] and (M @ Y)[idx]
+        near = np.flatnonzero(sel[F].any(axis=1))
+        M_idx, inc_idx, F_near = M[idx], incidence[idx][:, near], F[near]
         for _ in range(10):
-            Y[idx], face[idx] = projector.project((M @ Y)[idx], side(Y)[idx])
+            side_idx = _unit(ref[idx] + _unit(inc_idx @ face_cross(Y, F_near)))
+            Y[idx], face[idx] = projector.project(M_idx @ Y, side_idx)
         bad = _refolded(bad, Y, F, sel, projector)
     return SurfaceFit(Y=Y, base_face=face, folded=bad, repaired=before)

@@ -76,6 +76,11 @@ class Shell:
     def distortion(self) -> dict:
         return self.polycube.distortion
 
+    @property
+    def tile_search(self) -> dict:
+        """How the tile size was chosen (see :attr:`PolyCube.tile_search`)."""
+        return self.polycube.tile_search
+
 
 def offset_directions(V: np.ndarray, F: np.ndarray, *, smoothing: int = 3) -> np.ndarray:
     """Smoothed area-weighted vertex normals, unit, ``(n, 3)``.
