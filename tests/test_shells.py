@@ -206,3 +206,33 @@ def test_side_coordinate_runs_the_same_way_in_both_quads(torus_shell):
     xa, _ = quad_points_to_base(s, np.repeat(qa, t.size), uva)
     xb, _ = quad_points_to_base(s, np.repeat(qb, t.size), uvb)
     assert np.abs(xa - xb).max() < 1e-12
+
+
+def test_cli_automatic_tile_size_and_too_large_error(tmp_path, capsys):
+    from scipy.spatial.transform import Rotation
+
+    from geotex.io import write_mesh
+    from geotex.mesh.primitives import plate_with_holes
+    from geotex.mesh.record import Mesh
+
+    V, F = box((0, 0, 0), (1, 0.25, 0.25), divisions=2)      # a bar: few quads
+    src = tmp_path / "bar.obj"
+    write_mesh(src, Mesh(V, F))
+    out = tmp_path / "bar.npz"
+    assert main(["shell", "build", str(src), "-o", str(out)]) == 0
+    assert "162 quads of 0.08333 (chosen after 1 attempts)" in capsys.readouterr().out
+    shell = load_shell(out)
+    assert shell.tile_size == pytest.approx(1 / 12)
+    assert shell.recipe["tile_size"] == shell.tile_size and shell.recipe["tile_size_automatic"]
+    assert shell.polycube.tile_search["attempts"][0]["result"] == "ok"
+    # an explicit size too large for the holes: one line naming a size that works
+    V, F = plate_with_holes(3, hole=0.2, bar=0.6, thickness=0.4, cell=0.06)
+    V = V @ Rotation.from_euler("zx", [30, 20], degrees=True).as_matrix().T
+    plate = tmp_path / "plate.obj"
+    write_mesh(plate, Mesh(V, F))
+    ts = float(np.ptp(V, axis=0).max()) / 12
+    out2 = tmp_path / "plate.npz"
+    assert main(["shell", "build", str(plate), "-o", str(out2), "--tile-size", f"{ts:.6f}"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and not out2.exists()
+    assert "--tile-size" in err and "genus 3" in err and "resolves it" in err

@@ -44,7 +44,8 @@ def register(sub):
     t.add_argument("base", help="closed base mesh file")
     t.add_argument("--tiles", required=True, help="tile set: catalog name or .npz file")
     t.add_argument("--tile-size", type=float, default=None,
-                   help="tile side in mm at print size (default: 1/12 of the largest extent)")
+                   help="tile side in mm at print size (default: automatic, the largest size "
+                   "from 1/12 of the largest extent down that resolves and covers the shape)")
     t.add_argument("--shell-out", default=None, help="also save the shell (.npz)")
     _output_options(t)
     t.set_defaults(run=run_texture)
@@ -192,7 +193,10 @@ def run_texture(args) -> int:
     seconds = {"read+shell": round(time.perf_counter() - t, 3)}
     ts = shell.tile_size
     d = shell.distortion
-    print(f"{args.base}: {shell.n_quads} tiles of {ts:.4g} mm, safe height "
+    search = shell.polycube.tile_search
+    auto = (f" (chosen after {len(search.get('attempts', []))} attempts)"
+            if search.get("automatic") else "")
+    print(f"{args.base}: {shell.n_quads} tiles of {ts:.4g} mm{auto}, safe height "
           f"{shell.max_height:.4g} mm, distortion area {d['area_mean']:.3f} "
           f"angle {d['angle_mean']:.3f}")
     if "shell_out" in extra:

@@ -19,7 +19,8 @@ def register(sub):
     b.add_argument("base", help="closed base mesh file (run 'geotex repair' first if needed)")
     b.add_argument("-o", "--output", required=True, help="shell file to write (.npz)")
     b.add_argument("--tile-size", type=float, default=None,
-                   help="tile side in mesh units (default: 1/12 of the largest extent)")
+                   help="tile side in mesh units (default: automatic, the largest size from 1/12 "
+                   "of the largest extent down that resolves and covers the shape)")
     b.add_argument("--name", default=None, help="shell name (default: the file stem)")
     b.set_defaults(run=run_build)
 
@@ -39,17 +40,20 @@ def _describe(shell) -> str:
     d = shell.distortion
     pc = shell.polycube
     folded = int(pc.quad_folded.sum())
-    return (f"{shell.n_quads} quads of {shell.tile_size:.4g}"
+    search = pc.tile_search
+    chosen = (f" (chosen after {len(search.get('attempts', []))} attempts)"
+              if search.get("automatic") else "")
+    return (f"{shell.n_quads} quads of {shell.tile_size:.4g}{chosen}"
             + (f" ({folded} folded, left bare)" if folded else "")
             + f", max height {shell.max_height:.4g}; "
             f"distortion area {d['area_mean']:.3f} (p95 {d['area_p95']:.3f}), "
             f"angle {d['angle_mean']:.3f} (p95 {d['angle_p95']:.3f}); "
-            f"{100 * pc.coverage.get('within_quarter_tile', 1.0):.1f}% of the base within "
-            "a quarter tile")
+            f"{100 * pc.coverage.get('within_tile', 1.0):.1f}% of the base within a tile, "
+            f"{100 * pc.coverage.get('within_quarter_tile', 1.0):.1f}% within a quarter tile")
 
 
 def shell_of_file(base, tile_size, *, name: str, size_mm=None):
-    """Build the shell of a mesh file, the tile 1/12 of its extent by default.
+    """Build the shell of a mesh file; the tile size is chosen when it is None.
 
     With ``size_mm`` the base is first scaled so its largest extent is that
     many millimetres, and ``tile_size`` is in millimetres at that size.
@@ -58,6 +62,7 @@ def shell_of_file(base, tile_size, *, name: str, size_mm=None):
 
     import numpy as np
 
+    from geotex.errors import GeotexError
     from geotex.io import read_mesh
     from geotex.progress import stage_bar
     from geotex.shells import SHELL_STAGES, build_shell
@@ -67,17 +72,24 @@ def shell_of_file(base, tile_size, *, name: str, size_mm=None):
         ext = float(np.ptp(mesh.vertices, axis=0).max())
         if ext > 0:
             mesh = mesh.with_geometry(mesh.vertices * (size_mm / ext), mesh.faces)
-    ts = tile_size
-    if ts is None:
-        ext = float(np.ptp(mesh.vertices, axis=0).max()) if mesh.n_vertices else 0.0
-        ts = ext / 12 if ext > 0 else 1.0
-    if not ts > 0:
+    if tile_size is not None and not tile_size > 0:
         raise UsageError(f"--tile-size {tile_size}: give a positive number")
     with stage_bar(len(SHELL_STAGES), "shell") as bar:
-        return build_shell(mesh.vertices, mesh.faces, tile_size=ts, name=name,
-                           source=Path(base).name,
-                           recipe={"source": Path(base).name, "tile_size": ts,
-                                   "size_mm": size_mm}, progress=bar)
+        try:
+            shell = build_shell(mesh.vertices, mesh.faces, tile_size=tile_size, name=name,
+                                source=Path(base).name, recipe={"source": Path(base).name},
+                                progress=bar)
+        except GeotexError as exc:
+            if tile_size is None or type(exc) is not GeotexError:
+                raise
+            raise GeotexError(f"--tile-size {tile_size:g}: {exc} (or leave --tile-size out "
+                              "to choose it automatically)") from None
+    shell.recipe["tile_size"] = shell.tile_size
+    if size_mm is not None:
+        shell.recipe["size_mm"] = size_mm
+    if tile_size is None:
+        shell.recipe["tile_size_automatic"] = True
+    return shell
 
 
 def run_build(args) -> int:

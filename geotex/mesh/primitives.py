@@ -7,7 +7,7 @@ import numpy as np
 
 from geotex.errors import InputError
 
-__all__ = ["icosphere", "torus", "box", "grid_plane"]
+__all__ = ["icosphere", "torus", "box", "grid_plane", "plate_with_holes", "sphere_with_rod"]
 
 
 def icosphere(subdivisions: int = 2, *, radius: float = 1.0, center=(0.0, 0.0, 0.0)
@@ -124,3 +124,120 @@ def box(lo=(0.0, 0.0, 0.0), hi=(1.0, 1.0, 1.0), *, divisions: int = 1
     Vw = V[first[order]]
     Fw = rank[inv][F]
     return lo + Vw * (hi - lo), Fw.astype(np.int64)
+
+
+def _implicit_mesh(f, lo, hi, *, cell: float) -> tuple[np.ndarray, np.ndarray]:
+    """Marching cubes of ``f < 0`` (vectorized ``f((k, 3)) -> (k,)``) over a box.
+
+    The grid is nudged by an irrational fraction of a cell so no grid value is
+    exactly zero (no degenerate triangles); faces are returned outward.
+    """
+    lo = np.asarray(lo, np.float64) - 2 * cell + cell * 0.1234567
+    n = np.ceil((np.asarray(hi, np.float64) + 2 * cell - lo) / cell).astype(int) + 1
+    axes = [lo[a] + cell * np.arange(n[a]) for a in range(3)]
+    gz, gy, gx = np.meshgrid(axes[2], axes[1], axes[0], indexing="ij")   # x fastest
+    GV = np.stack([gx.ravel(), gy.ravel(), gz.ravel()], axis=1)
+    S = np.asarray(f(GV), dtype=np.float64)
+    V, F, _ = igl.marching_cubes(S, GV, int(n[0]), int(n[1]), int(n[2]), 0.0)
+    V = np.asarray(V, np.float64)
+    F = np.asarray(F, np.int64)
+    # orient outward: the signed volume must be positive
+    vol = np.einsum("ij,ij->i", V[F[:, 0]], np.cross(V[F[:, 1]], V[F[:, 2]])).sum()
+    if vol < 0:
+        F = F[:, ::-1].copy()
+    return V, F
+
+
+def _hole_layout(genus: int) -> np.ndarray:
+    cols = int(np.ceil(np.sqrt(genus)))
+    rows = int(np.ceil(genus / cols))
+    ij = np.array([(i, j) for j in range(rows) for i in range(cols)][:genus], dtype=np.float64)
+    return ij, cols, rows
+
+
+def plate_with_holes(genus: int, *, hole: float = 1.0, bar: float = 0.6,
+                     thickness: float = 0.6, cell: float = 0.1
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """A rounded plate pierced by ``genus`` round holes on a grid: a closed surface of genus ``genus``.
+
+    Parameters
+    ----------
+    genus : int
+        Number of holes, 0 to 64 (0 gives a rounded slab).
+    hole : float, optional
+        Hole diameter.
+    bar : float, optional
+        Width of the material between two holes and around the border.
+    thickness : float, optional
+        Plate thickness.
+    cell : float, optional
+        Marching-cubes grid step (the mesh resolution).
+
+    Returns
+    -------
+    V : numpy.ndarray, (n, 3) float64
+    F : numpy.ndarray, (m, 3) int64
+        Closed, manifold, outward oriented, one component.
+
+    Raises
+    ------
+    InputError
+        Genus out of range or a non-positive size.
+    """
+    g = int(genus)
+    if g < 0 or g > 64:
+        raise InputError(f"genus must be in [0, 64], got {genus}")
+    if min(hole, bar, thickness, cell) <= 0 or cell > min(bar, thickness) / 3:
+        raise InputError("hole, bar, thickness must be positive and cell at most a third "
+                         "of bar and thickness")
+    ij, cols, rows = _hole_layout(max(g, 1))
+    pitch = hole + bar
+    half = np.array([cols * pitch + bar, rows * pitch + bar, thickness]) / 2
+    centres = (ij + 0.5) * pitch + bar / 2 - half[:2]
+    if g == 0:
+        centres = centres[:0]
+    rounding = 0.45 * min(bar, thickness)
+
+    def f(X):
+        q = np.abs(X) - (half - rounding)
+        d = (np.linalg.norm(np.maximum(q, 0.0), axis=1)
+             + np.minimum(q.max(axis=1), 0.0) - rounding)        # rounded box
+        for c in centres:
+            r = np.linalg.norm(X[:, :2] - c, axis=1) - hole / 2
+            d = np.maximum(d, -r)
+        return d
+
+    return _implicit_mesh(f, -half, half, cell=cell)
+
+
+def sphere_with_rod(*, radius: float = 1.0, rod_radius: float = 0.08, rod_length: float = 1.0,
+                    cell: float = 0.04) -> tuple[np.ndarray, np.ndarray]:
+    """A sphere with a thin rod (capped cylinder) sticking out along +X: a thin part.
+
+    Parameters
+    ----------
+    radius : float, optional
+    rod_radius : float, optional
+    rod_length : float, optional
+        Length of the rod outside the sphere.
+    cell : float, optional
+        Marching-cubes grid step; at most ``rod_radius / 1.5``.
+
+    Returns
+    -------
+    V : numpy.ndarray, (n, 3) float64
+    F : numpy.ndarray, (m, 3) int64
+        Closed, manifold, outward oriented, genus 0.
+    """
+    if min(radius, rod_radius, rod_length, cell) <= 0 or cell > rod_radius / 1.5:
+        raise InputError("sizes must be positive and cell at most rod_radius / 1.5")
+    tip = radius + rod_length - rod_radius
+
+    def f(X):
+        s = np.linalg.norm(X, axis=1) - radius
+        x = np.clip(X[:, 0], 0.0, tip)
+        rod = np.sqrt((X[:, 0] - x) ** 2 + X[:, 1] ** 2 + X[:, 2] ** 2) - rod_radius
+        return np.minimum(s, rod)
+
+    hi = np.array([radius + rod_length, radius, radius])
+    return _implicit_mesh(f, -np.full(3, radius), hi, cell=cell)

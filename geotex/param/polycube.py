@@ -18,6 +18,11 @@ module per step:
    fitted positions ``Y`` are the inverse map polycube -> base;
 5. distortion of the map and how well the fitted surface covers the base.
 
+With ``tile_size=None`` steps 2-5 run for a schedule of sizes, largest first,
+until one resolves the genus, leaves no quad bare and covers the base
+(:mod:`~geotex.param.polycube_size`); the attempts are recorded in
+:attr:`PolyCube.tile_search`.
+
 Unlike a deformation of the input, the map is defined on the polycube's own
 triangulation: the tile point ``(u, v)`` of quad ``q`` lies in sub-cell
 ``(floor(u res), floor(v res))`` of ``quad_grid[q]`` and its base point is
@@ -39,6 +44,9 @@ from geotex.mesh.topology import edge_topology, vertex_components
 from geotex.param.distortion import distortion_summary
 from geotex.param.polycube_fit import SurfaceProjector, fitted_surface
 from geotex.param.polycube_quads import chart_axes, quad_edges
+from geotex.param.polycube_size import (AUTO_FLOOR, AUTO_START, AUTO_STEP, EXTRA_FITTED,
+                                        MAX_FITTED, MAX_QUADS, MIN_COVERAGE, SKIP_BELOW,
+                                        size_schedule, thin_spot)
 from geotex.param.polycube_surface import boundary_quads, subdivided_quads
 from geotex.param.voxels import (largest_component, manifold_solid, occupancy,
                                  voxel_grid)
@@ -94,6 +102,11 @@ class PolyCube:
         How close the base is to the fitted surface (in tiles).
     voxels : dict
         The voxel candidate that was used (cell, shift, repair strategy, ...).
+    tile_search : dict
+        How the tile size was found: ``automatic``, and every ``attempts``
+        entry (``tile_size``, ``result``; ``quads``, ``bare`` and
+        ``within_tile`` when fitted); automatic searches add ``start``,
+        ``floor`` and ``chosen``.
     """
 
     tile_size: float
@@ -114,6 +127,7 @@ class PolyCube:
     distortion: dict = field(default_factory=dict)
     coverage: dict = field(default_factory=dict)
     voxels: dict = field(default_factory=dict)
+    tile_search: dict = field(default_factory=dict)
 
     @property
     def n_quads(self) -> int:
@@ -222,8 +236,13 @@ def _surface_topology(F: np.ndarray, n: int) -> tuple[int, int]:
     return int(chi), int(vertex_components(F, n)[0])
 
 
-def _candidates(V, F, *, cell, k, res, chi):
-    """Voxel polycubes in trial order (grid shifts x repair strategies), lazily."""
+def _candidates(V, F, *, cell, k, res, chi, max_quads=None):
+    """Voxel polycubes in trial order (grid shifts x repair strategies), lazily.
+
+    The topology is read from the quads alone; the triangle sub-grid is built
+    only for candidates with the mesh's topology (and at most ``max_quads``
+    quads: larger ones are yielded with ``"too_large"`` set).
+    """
     for shift in GRID_SHIFTS:
         origin, shape = voxel_grid(V, cell=cell, shift=shift)
         inside, winding = occupancy(V, F, cell=cell, origin=origin, shape=shape)
@@ -237,17 +256,98 @@ def _candidates(V, F, *, cell, k, res, chi):
             if not solid.any():
                 continue
             corners, labels = boundary_quads(solid, tiles_per_cell=k)
-            P, Fq, grid = subdivided_quads(corners, labels, res=res)
-            topo = _surface_topology(Fq, P.shape[0])
-            yield {"origin": origin, "corners": corners, "labels": labels, "P": P,
-                   "F": Fq, "grid": grid, "chi": topo[0], "parts": topo[1],
-                   "ok": topo == (chi, 1),
-                   "info": {"cell": cell, "tiles_per_cell": k, "shift": list(shift),
-                            "strategy": strategy, "cells": int(solid.sum()),
-                            "changed": int(np.count_nonzero(solid != inside))}}
+            P1, F1, _ = subdivided_quads(corners, labels, res=1)
+            topo = _surface_topology(F1, P1.shape[0])
+            c = {"origin": origin, "corners": corners, "labels": labels,
+                 "chi": topo[0], "parts": topo[1], "ok": topo == (chi, 1),
+                 "too_large": max_quads is not None and labels.size > max_quads,
+                 "info": {"cell": cell, "tiles_per_cell": k, "shift": list(shift),
+                          "strategy": strategy, "cells": int(solid.sum()),
+                          "changed": int(np.count_nonzero(solid != inside))}}
+            if c["ok"] and not c["too_large"]:
+                c["P"], c["F"], c["grid"] = subdivided_quads(corners, labels, res=res)
+            yield c
 
 
-def polycube(V, F, *, tile_size: float, tiles_per_cell: int = 1, res: int = 4,
+def _genus_found(seen) -> str:
+    return ", ".join(f"genus {(2 - x) // 2}" + (f" in {p} parts" if p > 1 else "")
+                     for x, p in sorted(set(seen))) or "nothing"
+
+
+def _attempt(V, F, *, lo, ts, chi, k, r, iterations, max_quads=None, progress=None):
+    """Voxel candidates and fits at one tile size; the best candidate or why none.
+
+    Returns a dict: ``ts``, ``Vt`` (the base in tile units), ``seen`` (topology of
+    every candidate), ``best`` (``(candidate, fit, bare quads)`` or None),
+    ``fitted`` and ``too_large``.
+    """
+    Vt = (V - lo) / ts
+    out = {"ts": ts, "Vt": Vt, "seen": [], "best": None, "fitted": 0, "too_large": False}
+    projector = None
+    for c in _candidates(Vt, F, cell=float(k), k=k, res=r, chi=chi, max_quads=max_quads):
+        out["seen"].append((c["chi"], c["parts"]))
+        if c["too_large"]:
+            out["too_large"] = True
+            break
+        if not c["ok"]:
+            continue
+        if projector is None:
+            report(progress, "fit")
+            projector = SurfaceProjector(Vt, F)
+        out["fitted"] += 1
+        fit = fitted_surface(c["origin"] + c["P"], c["F"], projector, iterations=iterations)
+        bad = _bad_quads(fit, c["F"], c["labels"].size, r)
+        cov = _coverage(Vt, F, fit.Y, c["F"])
+        # a candidate that covers the base beats one that does not, then fewer bare quads
+        key = (cov["within_tile"] < MIN_COVERAGE, int(bad.sum()), -cov["within_tile"])
+        if out["best"] is None or key < out["key"]:
+            out["best"], out["key"], out["coverage"] = (c, fit, bad), key, cov
+        if key[:2] == (False, 0) or out["fitted"] == 3:
+            break
+    return out
+
+
+def _resolves(V, F, *, lo, ts, chi, k):
+    """Whether some voxel candidate at tile size ``ts`` has the mesh's topology.
+
+    None when the polycube would have more than :data:`MAX_QUADS` quads.
+    """
+    for c in _candidates((V - lo) / ts, F, cell=float(k), k=k, res=1, chi=chi,
+                         max_quads=MAX_QUADS):
+        if c["too_large"]:
+            return None
+        if c["ok"]:
+            return True
+    return False
+
+
+def _first_resolving(V, F, *, lo, ts, chi, k, floor):
+    """The first size of the schedule below ``ts`` that resolves the topology, or None."""
+    for s in size_schedule(ts * AUTO_STEP, floor):
+        ok = _resolves(V, F, lo=lo, ts=s, chi=chi, k=k)
+        if ok is None:
+            return None
+        if ok:
+            return s
+    return None
+
+
+def _record(a) -> dict:
+    """One attempt of the tile-size search, for the record."""
+    rec = {"tile_size": float(a["ts"])}
+    if a["best"] is None:
+        rec["result"] = ("too many quads" if a["too_large"]
+                         else "voxel polycube has " + _genus_found(a["seen"]))
+        return rec
+    c, _, bad = a["best"]
+    rec.update(quads=int(c["labels"].size), bare=int(bad.sum()),
+               within_tile=float(a["coverage"]["within_tile"]))
+    rec["result"] = "ok" if (rec["bare"] == 0
+                             and rec["within_tile"] >= MIN_COVERAGE) else "not covered"
+    return rec
+
+
+def polycube(V, F, *, tile_size: float | None = None, tiles_per_cell: int = 1, res: int = 4,
              iterations: int = 40, check_input: bool = True, progress=None) -> PolyCube:
     """PolyCube parameterization of a closed mesh with tile-sized grid quads.
 
@@ -256,15 +356,23 @@ def polycube(V, F, *, tile_size: float, tiles_per_cell: int = 1, res: int = 4,
     V : array_like, (n, 3) float64
     F : array_like, (m, 3) int64
         Closed, manifold, outward oriented, one component, no self-intersections.
-    tile_size : float
-        Side of a tile (one polycube quad) in the units of ``V``.
+    tile_size : float or None, optional
+        Side of a tile (one polycube quad) in the units of ``V``. None (the
+        default) chooses it: the largest size of
+        :func:`~geotex.param.polycube_size.size_schedule` (from 1/12 of the
+        largest extent down to 1/200, steps of ``2**-1/4``) whose voxel
+        polycube has the mesh's genus, leaves no quad bare and has 99 % of the
+        base area within one tile of the fitted surface; when no size
+        qualifies (at most 6 sizes are fitted, 2 after the first that covers
+        the base), the fitted size that covers the base with the fewest bare
+        quads. The attempts are in :attr:`PolyCube.tile_search`.
     tiles_per_cell : int, optional
         Tiles along the side of a voxel: larger gives larger, flatter charts
         but resolves less of the shape.
     res : int, optional
         Sub-grid cells per tile side (accuracy of the map).
     iterations : int, optional
-        Fitting rounds.
+        Most fitting rounds (fewer when the fit has converged).
     check_input : bool, optional
         Run the full input check (closed, manifold, no self-intersections).
     progress : callable, optional
@@ -279,8 +387,10 @@ def polycube(V, F, *, tile_size: float, tiles_per_cell: int = 1, res: int = 4,
     InputError
         Bad mesh (with a hint to run ``geotex repair``) or tile size.
     GeotexError
-        The voxels cannot resolve the shape's topology at this tile size (the
-        message gives the genus found and suggests a smaller tile).
+        The voxels cannot resolve the shape's topology: at the given tile size
+        (the message names the genus found, where the shape is thinnest and
+        the largest smaller size that resolves it), or, when the size is
+        automatic, at any size down to 1/200 of the extent.
 
     Examples
     --------
@@ -297,7 +407,8 @@ def polycube(V, F, *, tile_size: float, tiles_per_cell: int = 1, res: int = 4,
     else:
         V, F = as_mesh_arrays(V, F, allow_empty=False)
         chi = _surface_topology(F, V.shape[0])[0]
-    ts = _tile_size(tile_size, V)
+    auto = tile_size is None
+    ts = None if auto else _tile_size(tile_size, V)
     k = int(tiles_per_cell)
     r = int(res)
     if k < 1 or k > 8:
@@ -307,34 +418,26 @@ def polycube(V, F, *, tile_size: float, tiles_per_cell: int = 1, res: int = 4,
     # work in tile units relative to the lowest corner: the result does not
     # depend on where the mesh sits or on its unit
     lo = V.min(axis=0)
-    V = (V - lo) / ts
+    extent = float((V.max(axis=0) - lo).max())
+    genus = (2 - chi) // 2
     report(progress, "voxels")
-    projector = None
-    best, seen, tried = None, [], 0
-    for c in _candidates(V, F, cell=float(k), k=k, res=r, chi=chi):
-        seen.append((c["chi"], c["parts"]))
-        if not c["ok"]:
-            continue
-        if projector is None:
-            report(progress, "fit")
-            projector = SurfaceProjector(V, F)
-        tried += 1
-        fit = fitted_surface(c["origin"] + c["P"], c["F"], projector,
-                             iterations=iterations)
-        bad = _bad_quads(fit, c["F"], c["labels"].size, r)
-        if best is None or bad.sum() < best[2].sum():
-            best = (c, fit, bad)
-        if not bad.any() or tried == 3:
-            break
-    if best is None:
-        genus = (2 - chi) // 2
-        what = ", ".join(f"genus {(2 - x) // 2}" + (f" in {p} parts" if p > 1 else "")
-                         for x, p in sorted(set(seen))) or "nothing"
-        raise GeotexError(
-            f"tile size {ts:g} is too large to resolve the shape: the mesh has genus {genus} "
-            f"but its voxel polycube has {what} (thin parts or narrow gaps are smaller than "
-            f"a tile); use a smaller tile size (e.g. {ts / 2:.4g})")
-    c, fit, folded_quads = best
+    opts = dict(lo=lo, chi=chi, k=k, r=r, iterations=iterations, progress=progress)
+    if not auto:
+        a = _attempt(V, F, ts=ts, **opts)
+        search = {"automatic": False, "attempts": [_record(a)]}
+        if a["best"] is None:
+            works = _first_resolving(V, F, lo=lo, ts=ts, chi=chi, k=k, floor=extent / 400)
+            hint = (f"tile size {works:.4g} resolves it" if works is not None
+                    else f"no tile size down to 1/400 of the extent or {MAX_QUADS} quads "
+                         "resolves it")
+            raise GeotexError(
+                f"tile size {ts:g} is too large to resolve the shape: the mesh has genus "
+                f"{genus} but its voxel polycube has {_genus_found(a['seen'])} (thin parts or "
+                f"narrow gaps are smaller than a tile; {thin_spot(V, F)}); {hint}")
+    else:
+        a, search = _search(V, F, extent=extent, genus=genus, opts=opts)
+    c, fit, folded_quads = a["best"]
+    ts, Vt = a["ts"], a["Vt"]
     report(progress, "distortion")
     corners, labels, Fq = c["corners"], c["labels"], c["F"]
     qe, qf, eax, eq, es = quad_edges(corners)
@@ -345,8 +448,54 @@ def polycube(V, F, *, tile_size: float, tiles_per_cell: int = 1, res: int = 4,
                     quad_edge=qe, quad_edge_forward=qf, edge_axis=eax, edge_quads=eq,
                     edge_sides=es, quad_folded=folded_quads,
                     distortion=_distortion(c["P"], fit.Y, Fq, labels, face_quad, fit),
-                    coverage=_coverage(V, F, fit.Y, Fq),
-                    voxels=dict(c["info"], cell=k * ts, candidates=len(seen), fitted=tried))
+                    coverage=a["coverage"],
+                    voxels=dict(c["info"], cell=k * ts, candidates=len(a["seen"]),
+                                fitted=a["fitted"]),
+                    tile_search=search)
+
+
+def _search(V, F, *, extent, genus, opts):
+    """The automatic tile size: the first good attempt of the schedule, or the best.
+
+    After a fit that leaves more than :data:`SKIP_BELOW` of the base uncovered
+    the next size of the schedule is skipped. At most :data:`MAX_FITTED` sizes are fitted, and at most
+    :data:`EXTRA_FITTED` more once one covers the base (only bare quads are
+    left to remove then, which smaller tiles rarely do on very thin parts).
+    The best attempt covers the base, then has the fewest bare quads, then the
+    largest tiles.
+    """
+    start, floor = extent / AUTO_START, extent / AUTO_FLOOR
+    attempts, best, best_key, fitted, covered, skip = [], None, None, 0, None, False
+    for ts in size_schedule(start, floor):
+        if skip:                    # the last fit left a part uncovered: larger steps
+            skip = False
+            continue
+        a = _attempt(V, F, ts=ts, max_quads=MAX_QUADS, **opts)
+        rec = _record(a)
+        attempts.append(rec)
+        if a["too_large"]:
+            break
+        if a["best"] is None:
+            continue
+        fitted += 1
+        key = (rec["within_tile"] < MIN_COVERAGE, rec["bare"], -rec["within_tile"])
+        if best is None or key < best_key:
+            best, best_key = a, key
+        if rec["within_tile"] >= MIN_COVERAGE and covered is None:
+            covered = fitted
+        skip = rec["within_tile"] < SKIP_BELOW
+        if (rec["result"] == "ok" or fitted >= MAX_FITTED
+                or (covered is not None and fitted - covered >= EXTRA_FITTED)):
+            break
+    search = {"automatic": True, "start": start, "floor": floor, "attempts": attempts}
+    if best is None:
+        raise GeotexError(
+            f"the shape is too thin for a polycube: the mesh has genus {genus} but no voxel "
+            f"polycube down to tile size {attempts[-1]['tile_size']:.4g} "
+            f"(1/{AUTO_FLOOR} of the largest extent or {MAX_QUADS} quads) has it "
+            f"({thin_spot(V, F)}); thicken the shape there or widen the gap")
+    search["chosen"] = float(best["ts"])
+    return best, search
 
 
 def _bad_quads(fit, F, n_quads, res, *, clearance: float = 0.05) -> np.ndarray:
@@ -354,14 +503,17 @@ def _bad_quads(fit, F, n_quads, res, *, clearance: float = 0.05) -> np.ndarray:
 
     The second happens where the voxels bridge a gap narrower than a tile: the
     two sides of the bridge land on (nearly) the same surface. It is found as
-    the faces where the fitted surface meets its own offset by ``clearance``
-    tiles along the vertex normals. Such quads are left bare.
+    the faces where the fitted surface crosses itself or its own offset by
+    ``clearance`` tiles along the vertex normals. Such quads are left bare.
     """
     Y = fit.Y
-    n = Y.shape[0]
+    n, m = Y.shape[0], F.shape[0]
     lifted = Y + clearance * vertex_normals(Y, F)
     pairs = self_intersecting_pairs(np.vstack([Y, lifted]), np.vstack([F, F[:, ::-1] + n]))
-    faces = np.concatenate([np.flatnonzero(fit.folded), pairs.ravel() % F.shape[0]])
+    # the offset crossing only itself is a concave crease tighter than the
+    # clearance (it limits the shell's height, not the map): not a bridge
+    pairs = pairs[(pairs < m).any(axis=1)]
+    faces = np.concatenate([np.flatnonzero(fit.folded), pairs.ravel() % m])
     bad = np.zeros(n_quads, dtype=bool)
     bad[faces // (2 * res * res)] = True
     return bad
@@ -382,9 +534,15 @@ def _distortion(P, Y, F, labels, face_quad, fit) -> dict:
 
 
 def _coverage(V, F, Y, Fq) -> dict:
-    """Distance from the base to the fitted surface, in tiles (area-weighted)."""
-    d = np.linalg.norm(SurfaceProjector(Y, Fq).closest(V[F].mean(axis=1))[0]
-                       - V[F].mean(axis=1), axis=1)
+    """Distance from the base to the fitted surface, in tiles (area-weighted).
+
+    Measured from every base face centroid to its closest point on the fitted
+    surface: mean and max distance, and the fractions of the base area within
+    a quarter tile and within one tile.
+    """
+    C = V[F].mean(axis=1)
+    d = np.linalg.norm(SurfaceProjector(Y, Fq).closest(C)[0] - C, axis=1)
     a = face_areas(V, F)
     return {"mean": float(np.average(d, weights=a)), "max": float(d.max()),
-            "within_quarter_tile": float(a[d <= 0.25].sum() / a.sum())}
+            "within_quarter_tile": float(a[d <= 0.25].sum() / a.sum()),
+            "within_tile": float(a[d <= 1.0].sum() / a.sum())}

@@ -86,7 +86,13 @@ class SurfaceProjector:
         self.normals = face_normals(self.V, self.F)
         self._tree = igl.AABB()
         self._tree.init(self.V, self.F)
-        self._centroids = cKDTree(self.V[self.F].mean(axis=1))
+        self._kd = None
+
+    @property
+    def _centroids(self) -> cKDTree:
+        if self._kd is None:                     # only the restricted projection needs it
+            self._kd = cKDTree(self.V[self.F].mean(axis=1))
+        return self._kd
 
     def closest(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Closest points ``(k, 3)`` and their faces ``(k,)``."""
@@ -161,9 +167,17 @@ def folded_faces(Y: np.ndarray, F: np.ndarray, projector: SurfaceProjector) -> n
     return np.einsum("ij,ij->i", face_normals(Y, F), projector.normals[below]) <= 0
 
 
+def _refolded(bad, Y, F, moved, projector) -> np.ndarray:
+    """``bad`` with the faces touching the ``moved`` vertices tested again."""
+    touch = np.flatnonzero(moved[F].any(axis=1))
+    out = bad.copy()
+    out[touch] = folded_faces(Y, F[touch], projector)
+    return out
+
+
 def fitted_surface(P: np.ndarray, F: np.ndarray, projector: SurfaceProjector, *,
                    iterations: int = 40, step: float = 0.8, reference_smoothing: int = 16,
-                   repair_rounds: int = 8) -> SurfaceFit:
+                   repair_rounds: int = 8, tolerance: float = 0.1) -> SurfaceFit:
     """Move the closed surface ``(P, F)`` onto the base of ``projector``.
 
     Parameters
@@ -174,7 +188,11 @@ def fitted_surface(P: np.ndarray, F: np.ndarray, projector: SurfaceProjector, *,
     projector : SurfaceProjector
         The base mesh.
     iterations : int
-        Projection + relaxation rounds.
+        Most projection + relaxation rounds.
+    tolerance : float
+        Converged (no more rounds) once 99 % of the vertices move less than
+        ``tolerance`` times the sub-grid spacing in a round (tested every
+        fourth round from the 16th on, so round-off rarely changes the count).
     step : float
         Fraction of the tangential move toward the neighbour mean per round.
     reference_smoothing : int
@@ -209,25 +227,32 @@ def fitted_surface(P: np.ndarray, F: np.ndarray, projector: SurfaceProjector, *,
     weight = np.clip(np.linalg.norm(Y - P, axis=1) / (0.1 * spacing), 0.0, 1.0)
     for _ in range(4):
         weight = np.maximum(weight, M @ weight)
-    for _ in range(iterations):
+    for it in range(iterations):
         C, face = projector.project(Y, side(Y))
         Nb = projector.normals[face]
         d = M @ Y - Y
         d -= np.einsum("ij,ij->i", d, Nb)[:, None] * Nb
-        Y = C + (step * weight)[:, None] * d
+        Y, Y0 = C + (step * weight)[:, None] * d, Y
+        if it >= 15 and it % 4 == 3 and np.percentile(
+                np.linalg.norm(Y - Y0, axis=1), 99) < tolerance * spacing:
+            break
     Y, face = projector.project(Y, side(Y))
     bad = folded_faces(Y, F, projector)
     before = int(bad.sum())
     ring = (M != 0).astype(np.float64)
-    for _ in range(repair_rounds):
+    for rnd in range(repair_rounds):
         if not bad.any():
             break
         sel = np.zeros(n, dtype=bool)
         sel[F[bad].ravel()] = True
-        for _ in range(2):
+        for _ in range(2 + rnd // 2):        # a wider neighbourhood for stubborn folds
             sel = (ring @ sel.astype(np.float64)) > 0
         idx = np.flatnonzero(sel)
+        # only the selected rows: the same sums as side(Y)[idx] and (M @ Y)[idx]
+        near = np.flatnonzero(sel[F].any(axis=1))
+        M_idx, inc_idx, F_near = M[idx], incidence[idx][:, near], F[near]
         for _ in range(10):
-            Y[idx], face[idx] = projector.project((M @ Y)[idx], side(Y)[idx])
-        bad = folded_faces(Y, F, projector)
+            side_idx = _unit(ref[idx] + _unit(inc_idx @ face_cross(Y, F_near)))
+            Y[idx], face[idx] = projector.project(M_idx @ Y, side_idx)
+        bad = _refolded(bad, Y, F, sel, projector)
     return SurfaceFit(Y=Y, base_face=face, folded=bad, repaired=before)

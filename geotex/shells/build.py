@@ -76,6 +76,11 @@ class Shell:
     def distortion(self) -> dict:
         return self.polycube.distortion
 
+    @property
+    def tile_search(self) -> dict:
+        """How the tile size was chosen (see :attr:`PolyCube.tile_search`)."""
+        return self.polycube.tile_search
+
 
 def offset_directions(V: np.ndarray, F: np.ndarray, *, smoothing: int = 3) -> np.ndarray:
     """Smoothed area-weighted vertex normals, unit, ``(n, 3)``.
@@ -110,7 +115,7 @@ def max_offset_height(V: np.ndarray, F: np.ndarray, D: np.ndarray, *, steps: int
     V, F, D : numpy.ndarray
         Surface and unit offset directions.
     steps : int
-        Bisection steps.
+        Bisection steps (``build_shell`` uses 6: within 1/32 tile of the limit).
     upper : float, optional
         Largest height of interest (default: a quarter of the largest extent);
         returned as is when it passes.
@@ -134,7 +139,7 @@ def max_offset_height(V: np.ndarray, F: np.ndarray, D: np.ndarray, *, steps: int
     return lo
 
 
-def build_shell(V, F, *, tile_size: float, name: str = "shell", source: str = "",
+def build_shell(V, F, *, tile_size: float | None = None, name: str = "shell", source: str = "",
                 recipe: dict | None = None, progress=None, **polycube_options) -> Shell:
     """Build the shell of a closed base mesh.
 
@@ -142,8 +147,11 @@ def build_shell(V, F, *, tile_size: float, name: str = "shell", source: str = ""
     ----------
     V : array_like, (n, 3) float64
     F : array_like, (m, 3) int64
-    tile_size : float
-        Tile (quad) side length in the units of ``V``.
+    tile_size : float or None, optional
+        Tile (quad) side length in the units of ``V``; None (the default)
+        chooses the largest size that resolves the shape and covers it (see
+        :func:`~geotex.param.polycube.polycube`; the attempts are in
+        ``shell.polycube.tile_search``).
     name, source : str, optional
         Recorded in the shell file.
     recipe : dict, optional
@@ -174,13 +182,17 @@ def build_shell(V, F, *, tile_size: float, name: str = "shell", source: str = ""
     # tried as well when the first one does not reach half a tile.
     h, D = -1.0, None
     used = pc.F[~pc.quad_folded[pc.face_quad]]
+    upper = 2.0 * pc.tile_size
+    base_normals = face_cross(pc.Y, used)
     for steps in (8 * pc.res, 2 * pc.res):
         Dk = offset_directions(pc.Y, pc.F, smoothing=steps)
         if D is None:
             report(progress, "height")
+        elif not _offset_ok(pc.Y, used, Dk, h + upper / 64, base_normals):
+            break          # the lighter smoothing cannot beat the first by a step: done
         # a texture taller than two tiles is never wanted: that bounds the search;
         # quads left bare carry no texture and do not limit it
-        hk = max_offset_height(pc.Y, used, Dk, upper=2.0 * pc.tile_size)
+        hk = max_offset_height(pc.Y, used, Dk, upper=upper, steps=6)
         if hk > h:
             h, D = hk, Dk
         if h >= 0.5 * pc.tile_size:

@@ -43,7 +43,11 @@ def scaled_shell(shell, factor: float):
     voxels = dict(pc.voxels)
     if "cell" in voxels:
         voxels["cell"] = voxels["cell"] * f
+    search = dict(pc.tile_search)
+    if "attempts" in search:
+        search["attempts"] = [dict(a, tile_size=a["tile_size"] * f) if "tile_size" in a else a
+                              for a in search["attempts"]]
     pc = dataclasses.replace(pc, tile_size=pc.tile_size * f, origin=pc.origin * f, Y=pc.Y * f,
-                             voxels=voxels)
+                             voxels=voxels, tile_search=search)
     return dataclasses.replace(shell, polycube=pc, max_height=shell.max_height * f,
                                base_vertices=shell.base_vertices * f)

@@ -57,7 +57,7 @@ def shell_metadata(shell: Shell) -> dict:
         "max_height": shell.max_height,
         "distortion": {k: float(v) for k, v in pc.distortion.items()},
         "coverage": {k: float(v) for k, v in pc.coverage.items()},
-        "voxels": pc.voxels, "source": shell.source, "geotex_version": __version__,
+        "voxels": pc.voxels, "tile_search": pc.tile_search, "source": shell.source, "geotex_version": __version__,
         "recipe": shell.recipe,
     }
 
@@ -158,7 +158,8 @@ def _shell_of(a: dict, meta: dict, path) -> Shell:
                   quad_edge_forward=qf, edge_axis=eax, edge_quads=eq, edge_sides=es,
                   quad_folded=a["quad_folded"].astype(bool),
                   distortion=dict(meta.get("distortion", {})),
-                  coverage=dict(meta.get("coverage", {})), voxels=dict(meta.get("voxels", {})))
+                  coverage=dict(meta.get("coverage", {})), voxels=dict(meta.get("voxels", {})),
+                  tile_search=dict(meta.get("tile_search", {})))
     return Shell(name=str(meta.get("name", Path(path).stem)), polycube=pc,
                  D=a["D"].astype(np.float64), max_height=float(meta["max_height"]),
                  base_vertices=bv.astype(np.float64), base_faces=bf,
