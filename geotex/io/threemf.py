@@ -17,7 +17,9 @@ Reading
     inch, foot, meter) is converted to millimetres; ``metadata["unit"]`` is
     ``"millimeter"`` and ``metadata["source_unit"]`` the file's unit.  A
     package without build items gives an empty mesh.  Materials, colours and
-    textures of extensions are ignored.
+    textures of extensions are ignored.  Parts are inflated in a streaming
+    way with limits (declared size, an absolute cap and a compression ratio
+    cap, see :mod:`geotex.io.limits`): a zip bomb is refused at once.
 
     Speed: ``<vertex>`` and ``<triangle>`` tags are extracted with regular
     expressions over the raw XML (any namespace prefix, single or double
@@ -48,6 +50,7 @@ import numpy as np
 
 from geotex.errors import MeshFileError
 from geotex.io._common import build_mesh, first_bad_number, format_rows
+from geotex.io.limits import RefusedInput, inflate_member
 
 __all__ = ["read_3mf", "write_3mf", "UNITS_TO_MM", "CORE_NAMESPACE"]
 
@@ -163,7 +166,9 @@ class _Reader:
 
     def read_part_bytes(self, name: str) -> bytes:
         try:
-            return self.archive.read(name)
+            return inflate_member(self.archive, name)
+        except RefusedInput as exc:
+            self.fail(f"3MF archive refused: {exc}")
         except KeyError:
             if name == _DEFAULT_PART:
                 self.fail(f"3MF archive has no model part ({name}); it is not a 3MF "
