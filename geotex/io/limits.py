@@ -151,7 +151,7 @@ def read_bounded(path: Path, limit: int, *, what: str, exact: bool = False) -> b
         elif st.st_size > limit:
             raise RefusedInput(f"{what} is {human_bytes(st.st_size)}, more than the "
                                f"{human_bytes(limit)} allowed")
-        data = fh.read(limit)
+        data = fh.read(limit if exact else st.st_size)   # never a buffer beyond the file
     if exact and len(data) < limit:
         raise RefusedInput(f"{what} has {len(data)} bytes, fewer than the {limit} declared")
     return data

@@ -492,6 +492,9 @@ def _as_index(path, values: np.ndarray) -> np.ndarray:
     flat = values.reshape(-1)
     if flat.size and not (np.isfinite(flat).all() and (flat == np.round(flat)).all()):
         raise MeshFileError(path, "ASCII PLY face list holds a non-integer vertex index")
+    if flat.size and np.abs(flat).max() >= 2.0 ** 62:
+        raise MeshFileError(path, f"ASCII PLY face list holds the vertex index "
+                                  f"{float(flat[np.abs(flat).argmax()]):g}, far out of range")
     return flat.astype(np.int64)
 
 

@@ -348,8 +348,10 @@ class _Reader:
         M = parse_transform(transform)
         if M is None:
             self.fail(f"{where}: bad transform {transform[:80]!r} (expected 12 numbers)")
-        V = V @ M[:3] + M[3]
-        if np.linalg.det(M[:3]) < 0:
+        with np.errstate(over="ignore", invalid="ignore"):  # huge values: caught as non-finite
+            V = V @ M[:3] + M[3]
+            mirrored = np.linalg.det(M[:3]) < 0
+        if mirrored:
             F = F[:, ::-1]
         return V, F
 
