@@ -6,7 +6,8 @@ import json
 import sys
 from pathlib import Path
 
-from geotex.cli._common import EXIT_NOT_PRINTABLE, EXIT_OK, UsageError, guard_output
+from geotex.cli._common import (EXIT_NOT_PRINTABLE, EXIT_OK, UsageError, flag_error,
+                                guard_output)
 
 HELP_MAP = "lay a tile set over a shell and write the printable textured solid"
 HELP_TEXTURE = "one shot: build the shell of a base mesh and lay a tile set over it"
@@ -80,9 +81,15 @@ def _finish(args, shell, tiles, out, extra, *, label: str) -> int:
     from geotex.printing import export_printable
     from geotex.progress import stage_bar
 
-    with stage_bar(len(MAP_STAGES), "map") as bar:
-        result = textured_solid(shell, tiles, height=args.height, seed=args.seed,
-                                progress=bar)
+    from geotex.errors import InputError
+
+    try:
+        with stage_bar(len(MAP_STAGES), "map") as bar:
+            result = textured_solid(shell, tiles, height=args.height, seed=args.seed,
+                                    progress=bar)
+    except InputError as exc:
+        raise flag_error(exc, {"height": "--height", "seed": "--seed",
+                               "tile size": "--tile-size"}) from None
     V, F, rep = result.vertices, result.faces, result.report
     factor = 1.0
     if args.size_mm is not None:

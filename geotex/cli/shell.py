@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from geotex.cli._common import EXIT_OK, UsageError, guard_output
+from geotex.cli._common import EXIT_OK, UsageError, flag_error, guard_output
 
 HELP = "build, list and show shells (base mesh + polycube parameterization)"
 
@@ -65,10 +65,18 @@ def shell_of_file(base, tile_size, *, name: str):
         ts = ext / 12 if ext > 0 else 1.0
     if not ts > 0:
         raise UsageError(f"--tile-size {tile_size}: give a positive number")
-    with stage_bar(len(SHELL_STAGES), "shell") as bar:
-        return build_shell(mesh.vertices, mesh.faces, tile_size=ts, name=name,
-                           source=Path(base).name,
-                           recipe={"source": Path(base).name, "tile_size": ts}, progress=bar)
+    from geotex.errors import InputError
+
+    flags = {"tile size": "--tile-size" if tile_size is not None
+             else "the automatic tile size (1/12 of the extent; set --tile-size)"}
+    try:
+        with stage_bar(len(SHELL_STAGES), "shell") as bar:
+            return build_shell(mesh.vertices, mesh.faces, tile_size=ts, name=name,
+                               source=Path(base).name,
+                               recipe={"source": Path(base).name, "tile_size": ts},
+                               progress=bar)
+    except InputError as exc:
+        raise flag_error(exc, flags) from None
 
 
 def run_build(args) -> int:

@@ -89,8 +89,7 @@ def format_of(path, format: str | None = None, *, writing: bool = False) -> str:
     suffix = Path(str(path)).suffix.lower()
     if not suffix:
         raise UnsupportedFormatError(
-            path, f"no file extension to tell the mesh format; use one of {listing} "
-                  "or pass format=")
+            path, f"no file extension to tell the mesh format; use one of {listing}")
     if suffix not in supported:
         raise UnsupportedFormatError(
             path, f"unsupported extension {suffix!r}; supported: {listing}")

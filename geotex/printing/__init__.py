@@ -56,6 +56,6 @@ def export_printable(path, V, F, *, force: bool = False, name: str = "geotex",
     if not report.printable and not force:
         raise NotPrintableError(
             f"refusing to write {path}: not printable ({'; '.join(report.reasons)}); "
-            "repair it or pass force=True", report)
+            "repair the mesh first", report)
     write_mesh(path, Mesh(V, F, name=name, metadata={"unit": "millimeter"}))
     return report
