@@ -241,7 +241,8 @@ def test_huge_tangled_obj_polygon_is_one_line_error(tmp_path, capsys):
     k = 12000
     a = np.linspace(0, 2 * np.pi, k, endpoint=False)
     r = 1 + 0.5 * (np.arange(k) % 2)
-    lines = [f"v {x!r} {y!r} 0" for x, y in zip((r * np.cos(a)).tolist(), (r * np.sin(a)).tolist())]
+    xy = zip((r * np.cos(a)).tolist(), (r * np.sin(a)).tolist())
+    lines = [f"v {x!r} {y!r} 0" for x, y in xy]
     lines.append("f " + " ".join(str(i + 1) for i in range(k)))
     path = tmp_path / "star.obj"
     path.write_text("\n".join(lines) + "\n")
