@@ -374,3 +374,17 @@ def test_repair_cli_refuses_a_repair_that_changed_the_solid(tmp_path, capsys):
     assert len(lines) == 1 and "changed the solid" in lines[0] and "--force" in lines[0]
     code, _, _ = run(capsys, "repair", path, "-o", out, "--force")
     assert code == 0 and out.exists()
+
+
+@pytest.mark.parametrize("loader", [
+    "geotex.shells.store:load_shell", "geotex.fields.store:load_direction_field",
+    "geotex.heighttilt.texture:load_texture", "geotex.exemplars.store:load_exemplar",
+    "geotex.image.records:load_lapped"])
+def test_npz_bombs_are_refused_before_inflating(tmp_path, loader):
+    import importlib
+    module, name = loader.split(":")
+    load = getattr(importlib.import_module(module), name)
+    path = tmp_path / "bomb.npz"
+    path.write_bytes(zip_of({"metadata.npy": b"\0" * (64 << 20)}))
+    with pytest.raises(InputError, match="zip bomb"):
+        load(path)

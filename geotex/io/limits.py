@@ -33,7 +33,7 @@ from urllib.parse import unquote
 
 __all__ = ["MAX_SIDECAR_BYTES", "MAX_INFLATED_BYTES", "MAX_INFLATE_RATIO",
            "MAX_TEXTURE_PIXELS", "RefusedInput", "sidecar_file", "read_bounded",
-           "inflate_member", "human_bytes"]
+           "inflate_member", "check_archive", "human_bytes"]
 
 #: Largest file a mesh may refer to (MTL, texture image, GLB buffer), in bytes.
 MAX_SIDECAR_BYTES = 1 << 30
@@ -202,3 +202,39 @@ def inflate_member(archive, name: str, *, cap: int = MAX_INFLATED_BYTES,
                 raise RefusedInput(f"part {name!r} inflates to more than the "
                                    f"{declared} bytes it declares (damaged or hostile)")
     return bytes(out)
+
+
+def check_archive(source, *, cap: int = MAX_INFLATED_BYTES,
+                  ratio: int = MAX_INFLATE_RATIO) -> None:
+    """Refuse a zip archive (``.npz``, ``.3mf``) whose members would inflate too far.
+
+    Reads only the central directory: call it before :func:`numpy.load`,
+    which inflates members itself.  A file that is not a zip archive passes
+    (the loader reports it).
+
+    Raises
+    ------
+    RefusedInput
+        If a member declares more than ``cap`` bytes, more than ``ratio``
+        times its compressed size (above 1 MiB), or the members together
+        more than ``cap``.
+    """
+    import zipfile
+
+    try:
+        with zipfile.ZipFile(source) as archive:
+            infos = archive.infolist()
+    except (zipfile.BadZipFile, OSError, ValueError, EOFError):
+        return
+    total = 0
+    for info in infos:
+        declared, packed = int(info.file_size), max(int(info.compress_size), 1)
+        total += declared
+        if declared > cap or total > cap:
+            raise RefusedInput(f"archive member {info.filename!r} inflates to "
+                               f"{human_bytes(declared)}, beyond the {human_bytes(cap)} "
+                               "allowed (zip bomb?)")
+        if declared > (1 << 20) and declared > ratio * packed:
+            raise RefusedInput(f"archive member {info.filename!r} inflates "
+                               f"{declared // packed} times, more than the {ratio} times "
+                               "allowed (zip bomb?)")
