@@ -220,6 +220,13 @@ def _threemf(rng, data, what):
         if at >= 0:
             struct.pack_into("<I", blob, at + 24, rng.choice([0, 1, 2 ** 32 - 1, 2 ** 31]))
         return bytes(blob)
+    elif what == "entities":                       # "billion laughs"
+        dtd = (b'<?xml version="1.0"?>\n<!DOCTYPE model [\n<!ENTITY a0 "lollollol">\n'
+               + b"".join(b"<!ENTITY a%d \"" % i + b"&a%d;" % (i - 1) * 10 + b"\">\n"
+                          for i in range(1, 10)) + b"]>\n")
+        items = [(n, dtd + re.sub(rb"^<\?xml[^>]*>\s*", b"", p).replace(
+            b"<resources>", b"<metadata name=\"x\">&a9;</metadata><resources>", 1))
+            if n == model else (n, p) for n, p in items]
     elif what == "recursion":
         extra = b'<components><component objectid="1"/></components>'
         items = [(n, p.replace(b"<mesh>", extra + b"<mesh>", 1) if n == model else p)
@@ -326,6 +333,7 @@ _MUTATIONS = [
     ("3mf-unit", ("3mf",), False, lambda r, k, d: _threemf(r, d, "unit")),
     ("3mf-transform", ("3mf",), False, lambda r, k, d: _threemf(r, d, "transform")),
     ("3mf-recursion", ("3mf",), True, lambda r, k, d: _threemf(r, d, "recursion")),
+    ("3mf-entities", ("3mf",), True, lambda r, k, d: _threemf(r, d, "entities")),
     ("3mf-declared-size", ("3mf",), True, lambda r, k, d: _threemf(r, d, "declared-size")),
     ("3mf-bomb", ("3mf",), True, lambda r, k, d: _threemf(r, d, "bomb")),
     ("glb-json-values", ("glb",), False, lambda r, k, d: _glb(r, d, "json-values")),

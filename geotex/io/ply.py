@@ -415,7 +415,7 @@ def _ascii_list_element(path, tokens, pos, el, names, numbers, short):
                 p_at += 1 + c
             else:
                 p_at += 1
-    except (IndexError, ValueError):
+    except (IndexError, ValueError, OverflowError):     # the general path reports it
         counts = None
     if counts is not None and min(counts, default=0) >= 0:
         width = p_at - pos
@@ -469,7 +469,7 @@ def _ascii_list_element(path, tokens, pos, el, names, numbers, short):
                     at += 1
     except IndexError:
         short(el, at - pos + 1)
-    except ValueError:
+    except (ValueError, OverflowError):         # "nan", "inf", "x"
         raise MeshFileError(path, f"ASCII PLY element {el.name!r} has a bad list "
                                   f"length {tokens[at][:40]!r}") from None
     if at > n_tokens:

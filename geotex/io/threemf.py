@@ -155,7 +155,7 @@ class _Reader:
         rels = self.read_part_bytes("_rels/.rels")
         try:
             root = ET.fromstring(rels)
-        except ET.ParseError as exc:
+        except (ET.ParseError, LookupError) as exc:   # LookupError: unknown encoding
             self.fail(f"malformed XML in _rels/.rels: {exc}")
         for rel in root.iter():
             if _local(rel.tag) == "Relationship" and rel.get("Type") == _MODEL_REL:
@@ -190,7 +190,7 @@ class _Reader:
         skeleton = self.cut_mesh_blocks(raw, name)
         try:
             root = ET.fromstring(skeleton)
-        except ET.ParseError as exc:
+        except (ET.ParseError, LookupError) as exc:   # LookupError: unknown encoding
             self.fail(f"malformed XML in {name}: {exc}")
         if _local(root.tag) != "model":
             self.fail(f"{name} is not a 3MF model (root element is "
@@ -396,6 +396,8 @@ def read_3mf(path, data: bytes):
         archive = zipfile.ZipFile(io.BytesIO(data))
     except (zipfile.BadZipFile, zlib.error, EOFError, ValueError, OSError):
         raise MeshFileError(path, "not a 3MF file: it is not a zip archive") from None
+    except NotImplementedError as exc:              # e.g. "zip file version 21.2"
+        raise MeshFileError(path, f"damaged 3MF archive: {exc}") from None
     with archive:
         reader = _Reader(path, archive)
         root_name = reader.start_part()
