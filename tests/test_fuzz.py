@@ -31,8 +31,8 @@ def test_fuzz_covers_every_format_and_hostile_kind(outcomes):
     assert set(seeds) == set(FORMATS)
     mutations = {o.case.mutation.split("+")[0] for o in outcomes}
     for kind in ("flip", "truncate", "numbers", "indices", "binary-numbers", "header-count",
-                 "3mf-bomb", "3mf-declared-size", "3mf-entities", "glb-deep", "glb-uri", "glb-json-values",
-                 "glb-counts", "obj-polygon"):
+                 "3mf-bomb", "3mf-declared-size", "3mf-entities", "glb-deep", "glb-uri",
+                 "glb-json-values", "glb-counts", "obj-polygon"):
         assert kind in mutations
     assert any("+ext:" in o.case.mutation for o in outcomes)       # wrong extensions
     codes = collections.Counter(o.code for o in outcomes)
