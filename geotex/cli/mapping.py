@@ -88,8 +88,10 @@ def _finish(args, shell, tiles, out, extra, *, label: str) -> int:
             result = textured_solid(shell, tiles, height=args.height, seed=args.seed,
                                     progress=bar)
     except InputError as exc:
-        raise flag_error(exc, {"height": "--height", "seed": "--seed",
-                               "tile size": "--tile-size"}) from None
+        flags = {"height": "--height", "seed": "--seed"}
+        if hasattr(args, "tile_size"):                  # 'geotex texture' builds the shell
+            flags["tile size"] = "--tile-size"
+        raise flag_error(exc, flags) from None
     V, F, rep = result.vertices, result.faces, result.report
     factor = 1.0
     if args.size_mm is not None:
