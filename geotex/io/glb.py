@@ -239,6 +239,8 @@ class _GLBReader:
             self.fail(str(exc))
 
     def buffer(self, index) -> bytes:
+        if not _is_int(index):
+            self.fail(f"buffers[{index!r}] does not exist")
         if index not in self.buffers:
             spec = self.item("buffers", index)
             length = spec.get("byteLength")
