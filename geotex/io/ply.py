@@ -105,7 +105,8 @@ def _parse_header(path, data: bytes):
                     "binary_little_endian or binary_big_endian)")
             fmt = tokens[1]
         elif key == "element":
-            if len(tokens) != 3 or not tokens[2].isdigit():
+            if len(tokens) != 3 or not (tokens[2].isascii() and tokens[2].isdigit()) \
+                    or len(tokens[2]) > 19:
                 bad("expected 'element NAME COUNT' with a non-negative integer count")
             elements.append(_Element(tokens[1], int(tokens[2]), lineno))
         elif key == "property":
