@@ -68,7 +68,7 @@ def shell_of_file(base, tile_size, *, name: str):
     from geotex.errors import InputError
 
     flags = {"tile size": "--tile-size" if tile_size is not None
-             else "the automatic tile size (1/12 of the extent; set --tile-size)"}
+             else "the automatic tile size"}
     try:
         with stage_bar(len(SHELL_STAGES), "shell") as bar:
             return build_shell(mesh.vertices, mesh.faces, tile_size=ts, name=name,
@@ -76,7 +76,10 @@ def shell_of_file(base, tile_size, *, name: str):
                                recipe={"source": Path(base).name, "tile_size": ts},
                                progress=bar)
     except InputError as exc:
-        raise flag_error(exc, flags) from None
+        error = flag_error(exc, flags)
+        if tile_size is None and error is not exc:
+            error = UsageError(f"{error} (1/12 of the extent; choose one with --tile-size)")
+        raise error from None
 
 
 def run_build(args) -> int:
