@@ -100,6 +100,8 @@ def _category(o) -> str:
     if o.code in (0, 1, 2):
         return {0: "exit 0 (printable)", 1: "exit 1 (not printable)",
                 2: "exit 2 (refused: one-line error)"}[o.code]
+    if o.code is None or o.code == -9:
+        return "killed at the time limit"
     return f"exit {o.code}"
 
 
@@ -107,7 +109,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cases", type=int, default=10_000)
     ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--hostile-share", type=float, default=0.1)
+    ap.add_argument("--hostile-share", type=float, default=0.06)
     ap.add_argument("--peer-cases", type=int, default=2000)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--out", default=str(RESULTS))
@@ -217,8 +219,7 @@ def report(args, cases, outcomes, peer, peer_error, t_make, t_run, t_peer) -> st
         lines.append("Slowest trimesh loads: " + "; ".join(
             f"{p[0].case.path.name if hasattr(p[0], 'case') else p[0].path.name} "
             f"{p[2]:.2f} s ({p[1]})" for p in slow) + ".")
-        lines.append("")
-    return "\n".join(lines)
+    return "\n".join(lines) + "\n"
 
 
 if __name__ == "__main__":

@@ -388,3 +388,20 @@ def test_npz_bombs_are_refused_before_inflating(tmp_path, loader):
     path.write_bytes(zip_of({"metadata.npy": b"\0" * (64 << 20)}))
     with pytest.raises(InputError, match="zip bomb"):
         load(path)
+
+
+def test_error_messages_stay_one_bounded_line(capsys):
+    from geotex.cli._common import MAX_MESSAGE, fail
+    assert fail("bytes b'\\x00'\nnext line " + "x" * 5000) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and len(err) <= len("geotex: error: ") + MAX_MESSAGE + 1
+
+
+def test_damaged_zip_member_name_is_not_dumped_into_the_message(tmp_path, capsys):
+    data = bytearray(write_mesh(tmp_path / "ok.3mf", Mesh(*box())).read_bytes())
+    at = data.find(b"_rels/.rels")                  # the local header's copy of the name
+    data[at + 8:at + 11] = b"XYZ"
+    path = tmp_path / "bad.3mf"
+    path.write_bytes(bytes(data))
+    code, _, err = run(capsys, "check", path)
+    assert code == 2 and len(one_error_line(err)) < 400

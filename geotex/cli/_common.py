@@ -52,8 +52,18 @@ def flag_error(exc: Exception, flags: dict[str, str]) -> Exception:
     return new
 
 
+MAX_MESSAGE = 600
+
+
 def fail(message: str, code: int = EXIT_USAGE) -> int:
-    """Print ``geotex: error: message`` to stderr and return ``code``."""
+    """Print ``geotex: error: message`` to stderr and return ``code``.
+
+    The message is kept to one line of at most :data:`MAX_MESSAGE` characters
+    (a damaged file can put its own bytes into a parser's message).
+    """
+    message = " ".join(str(message).split())
+    if len(message) > MAX_MESSAGE:
+        message = message[:MAX_MESSAGE - 3] + "..."
     print(f"geotex: error: {message}", file=sys.stderr)
     return code
 

@@ -176,7 +176,9 @@ class _Reader:
             self.fail(f"3MF archive has no model part {name!r}")
         except (zipfile.BadZipFile, zlib.error, EOFError, NotImplementedError,
                 RuntimeError, OSError, ValueError) as exc:
-            self.fail(f"damaged 3MF archive: cannot read {name!r} ({exc})")
+            detail = " ".join(str(exc).split())
+            detail = detail if len(detail) <= 120 else detail[:117] + "..."
+            self.fail(f"damaged 3MF archive: cannot read {name!r} ({detail})")
 
     def part(self, name: str) -> _Part:
         name = name.lstrip("/")
