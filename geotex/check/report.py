@@ -233,8 +233,9 @@ def check_mesh(V, F, *, self_intersections: bool = True, max_examples: int = 5,
         closed_comp[labels[ef[bad_edges, 0]]] = False
 
     norm_vol = component_volumes(Vn, F, labels, count) if m else np.zeros(0)
-    with np.errstate(over="ignore"):
-        total_volume = float(norm_vol.sum() * np.float64(scale) ** 3) if m else 0.0
+    with np.errstate(over="ignore", invalid="ignore"):   # huge coordinates: inf, not NaN
+        unit_volume = float(norm_vol.sum()) if m else 0.0
+        total_volume = float(unit_volume * np.float64(scale) ** 3) if unit_volume else 0.0
 
     outward: bool | None = None
     if m and inconsistent.size == 0 and closed_comp.all():

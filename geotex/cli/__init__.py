@@ -1,8 +1,18 @@
 """The ``geotex`` command: one subcommand per job, one-line errors, exit codes.
 
-Exit status: 0 success (printable), 1 a readable mesh that is not printable,
-2 bad usage or unreadable input, 3 an internal error (a bug: please report it;
-set ``GEOTEX_DEBUG=1`` for the traceback).
+Exit status:
+
+* 0 success (the mesh or the result is printable);
+* 1 a readable mesh that is not printable, or a result refused as not
+  printable (``geotex repair`` also when the repair changed the number of
+  shells or lost volume, unless ``--force``);
+* 2 bad usage, or an input that cannot be used: missing, unreadable,
+  malformed, truncated, hostile (references outside its folder, zip bombs,
+  absurd counts, see :mod:`geotex.io.limits`) or too large for the memory
+  available.  stderr holds exactly one line ``geotex: error: ...`` naming the
+  file or the flag and what is wrong;
+* 3 an internal error only: a bug in geotex, whatever the input (please
+  report it; set ``GEOTEX_DEBUG=1`` for the traceback).
 """
 
 from __future__ import annotations
@@ -43,8 +53,11 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         print("geotex: interrupted", file=sys.stderr)
         return 130
-    except MemoryError:
-        return fail("out of memory; try a smaller mesh", EXIT_INTERNAL)
+    except MemoryError:   # inputs are bounded (geotex.io.limits): this one is just large
+        if os.environ.get("GEOTEX_DEBUG"):
+            raise
+        return fail("out of memory: the input is too large for the memory available; "
+                    "try a smaller mesh", EXIT_USAGE)
     except Exception as exc:  # an unexpected failure is a bug: one line unless debugging
         if os.environ.get("GEOTEX_DEBUG"):
             raise

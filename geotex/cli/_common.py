@@ -26,8 +26,44 @@ class Parser(argparse.ArgumentParser):
         raise UsageError(f"{message} (see '{self.prog} --help')")
 
 
+def flag_error(exc: Exception, flags: dict[str, str]) -> Exception:
+    """Rephrase a library error about an option in terms of its CLI flag.
+
+    ``flags`` maps the neutral words the library uses ("tile size") to the
+    flag ("--tile-size").  A message starting with one of them ("tile size
+    100 is too large...") becomes a :class:`UsageError` naming the flag, and
+    "a smaller / larger WORDS" advice names the flag too; other errors are
+    returned unchanged.
+    """
+    message = str(exc)
+    hit = False
+    for words, flag in flags.items():
+        if message.startswith(words + " "):
+            message = flag + message[len(words):]
+            hit = True
+        for size in ("smaller", "larger"):
+            if f"a {size} {words}" in message:
+                message = message.replace(f"a {size} {words}", f"a {size} {flag}")
+                hit = True
+    if not hit:
+        return exc
+    new = UsageError(message)
+    new.__cause__ = exc
+    return new
+
+
+MAX_MESSAGE = 600
+
+
 def fail(message: str, code: int = EXIT_USAGE) -> int:
-    """Print ``geotex: error: message`` to stderr and return ``code``."""
+    """Print ``geotex: error: message`` to stderr and return ``code``.
+
+    The message is kept to one line of at most :data:`MAX_MESSAGE` characters
+    (a damaged file can put its own bytes into a parser's message).
+    """
+    message = " ".join(str(message).split())
+    if len(message) > MAX_MESSAGE:
+        message = message[:MAX_MESSAGE - 3] + "..."
     print(f"geotex: error: {message}", file=sys.stderr)
     return code
 

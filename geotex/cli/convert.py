@@ -19,7 +19,14 @@ def run(args) -> int:
     from geotex.io import read_mesh, write_mesh
 
     out = guard_output(args.output, args.input)
+    from geotex.errors import MeshFileError
+
     mesh = read_mesh(args.input)
-    write_mesh(out, mesh, binary=not args.ascii)
+    try:
+        write_mesh(out, mesh, binary=not args.ascii)
+    except MeshFileError as exc:
+        if exc.reason.endswith("write an ASCII STL instead"):
+            raise MeshFileError(exc.path, exc.reason + " (--ascii)") from None
+        raise
     print(f"wrote {out}: {mesh.n_vertices} vertices, {mesh.n_faces} faces")
     return EXIT_OK

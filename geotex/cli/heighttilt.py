@@ -289,10 +289,17 @@ def _run_planar(args) -> int:
     if field not in ("up", "smooth"):
         from geotex.fields import load_direction_field
         field = load_direction_field(field).field
-    with stage_bar(6, "planar transfer") as bar:
-        res = transfer_planar(src.vertices, src.faces, tex, dst.vertices, dst.faces,
-                              scale=args.scale, field=field, up=up, refine=args.refine,
-                              samples=args.samples, seed=args.seed, progress=bar)
+    from geotex.errors import InputError
+
+    try:
+        with stage_bar(6, "planar transfer") as bar:
+            res = transfer_planar(src.vertices, src.faces, tex, dst.vertices, dst.faces,
+                                  scale=args.scale, field=field, up=up, refine=args.refine,
+                                  samples=args.samples, seed=args.seed, progress=bar)
+    except InputError as exc:
+        if str(exc).endswith("try refining by subdivision instead"):
+            raise UsageError(f"{exc} (--refine subdivide)") from None
+        raise
     with _all_or_none() as done:
         existed = base_out.exists()
         write_mesh(base_out, dst.with_geometry(res.vertices, res.faces))

@@ -6,7 +6,8 @@ import json
 import sys
 from pathlib import Path
 
-from geotex.cli._common import EXIT_NOT_PRINTABLE, EXIT_OK, UsageError, guard_output
+from geotex.cli._common import (EXIT_NOT_PRINTABLE, EXIT_OK, UsageError, flag_error,
+                                guard_output)
 
 HELP_MAP = "lay a tile set over a shell and write the printable textured solid"
 HELP_TEXTURE = "one shot: build the shell of a base mesh and lay a tile set over it"
@@ -114,10 +115,19 @@ def _finish(args, shell, tiles, out, extra, *, label: str, seconds=None) -> int:
     from geotex.printing import export_printable
     from geotex.progress import stage_bar
 
+    from geotex.errors import InputError
+
     height = _texture_height(args, shell, tiles)
     warn_print_size(float(np.ptp(shell.base_vertices, axis=0).max()))
-    with stage_bar(len(MAP_PROGRESS), "map") as bar:
-        result = textured_solid(shell, tiles, height=height, seed=args.seed, progress=bar)
+    try:
+        with stage_bar(len(MAP_PROGRESS), "map") as bar:
+            result = textured_solid(shell, tiles, height=height, seed=args.seed,
+                                    progress=bar)
+    except InputError as exc:
+        flags = {"height": "--height", "seed": "--seed"}
+        if hasattr(args, "tile_size"):                  # 'geotex texture' builds the shell
+            flags["tile size"] = "--tile-size"
+        raise flag_error(exc, flags) from None
     V, F, rep = result.vertices, result.faces, result.report
     s = result.stats
     print(f"{label}: {s['quads']} tiles of {shell.tile_size:.3g} mm ({s['bare_quads']} bare), "

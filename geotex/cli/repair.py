@@ -12,8 +12,10 @@ HELP = "weld, clean, orient, fill holes and resolve self-intersections"
 
 def register(sub):
     p = sub.add_parser("repair", help=HELP, description=HELP + ". Exit status: 0 when the "
-                       "result is printable, 1 when it is not (nothing is written unless "
-                       "--force), 2 on unreadable input or bad usage.")
+                       "result is printable, 1 when it is not, or when cutting "
+                       "self-intersections changed the number of shells or lost more than "
+                       "1%% of the volume (nothing is written unless --force), 2 on "
+                       "unreadable input or bad usage.")
     p.add_argument("input", help="mesh file to repair (never overwritten)")
     p.add_argument("-o", "--output", required=True, help="repaired mesh file")
     p.add_argument("--weld-tolerance", type=float, default=None,
@@ -24,7 +26,8 @@ def register(sub):
     p.add_argument("--keep-intersections", action="store_true",
                    help="do not try to resolve self-intersections")
     p.add_argument("--force", action="store_true",
-                   help="write the result even if it is still not printable")
+                   help="write the result even if it is still not printable or the repair "
+                        "changed the solid")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(run=run)
 
@@ -46,14 +49,16 @@ def run(args) -> int:
                              resolve_intersections=not args.keep_intersections,
                              progress=progress)
     report = result.report
+    accepted = report.printable and result.faithful
     written = False
-    if report.printable or args.force:
+    if accepted or args.force:
         write_mesh(out, mesh.with_geometry(result.vertices, result.faces))
         written = True
     if args.json:
         print(json.dumps({"input": str(args.input), "output": str(out) if written else None,
                           "changes": result.changes, "printable_before": before.printable,
                           "printable": report.printable, "reasons": report.reasons,
+                          "warnings": result.warnings,
                           "report": report.to_dict()}))
     else:
         print(f"{args.input}: {before.vertices} vertices, {before.faces} faces, "
@@ -64,9 +69,14 @@ def run(args) -> int:
         print(f"printable: {'yes' if report.printable else 'no'}")
         for r in report.reasons:
             print(f"  - {r}")
+        for w in result.warnings:
+            print(f"warning: {w}")
         if written:
             print(f"wrote {out}")
-        else:
-            print(f"geotex: not written: {out} (still not printable; use --force to write it)",
-                  file=sys.stderr)
-    return EXIT_OK if report.printable else EXIT_NOT_PRINTABLE
+    if not written:
+        why = ("still not printable" if not report.printable
+               else f"the repair changed the solid: {'; '.join(result.warnings)}")
+        print(f"geotex: not written: {out} ({why}; use --force to write it)", file=sys.stderr)
+    if not report.printable:
+        return EXIT_NOT_PRINTABLE
+    return EXIT_OK if accepted or args.force else EXIT_NOT_PRINTABLE

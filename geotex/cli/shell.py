@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from geotex.cli._common import EXIT_OK, UsageError, guard_output
+from geotex.cli._common import EXIT_OK, UsageError, flag_error, guard_output
 
 HELP = "build, list and show shells (base mesh + polycube parameterization)"
 
@@ -74,11 +74,15 @@ def shell_of_file(base, tile_size, *, name: str, size_mm=None):
             mesh = mesh.with_geometry(mesh.vertices * (size_mm / ext), mesh.faces)
     if tile_size is not None and not tile_size > 0:
         raise UsageError(f"--tile-size {tile_size}: give a positive number")
+    from geotex.errors import InputError
+
     with stage_bar(len(SHELL_STAGES), "shell") as bar:
         try:
             shell = build_shell(mesh.vertices, mesh.faces, tile_size=tile_size, name=name,
                                 source=Path(base).name, recipe={"source": Path(base).name},
                                 progress=bar)
+        except InputError as exc:
+            raise flag_error(exc, {"tile size": "--tile-size"}) from None
         except GeotexError as exc:
             if tile_size is None or type(exc) is not GeotexError:
                 raise

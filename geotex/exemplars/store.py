@@ -12,6 +12,7 @@ import numpy as np
 from geotex.errors import InputError, MeshFileError, MissingFileError
 from geotex.exemplars.record import Exemplar
 from geotex.io.atomic import atomic_output
+from geotex.io.limits import check_archive
 from geotex.mesh.topology import edge_topology
 
 __all__ = ["save_exemplar", "load_exemplar", "FORMAT_TAG"]
@@ -66,6 +67,7 @@ def save_exemplar(path, ex: Exemplar) -> Path:
 
 def _load_npz(path: Path) -> Exemplar:
     try:
+        check_archive(path)
         with np.load(path, allow_pickle=False) as z:
             V, F, meta = z["vertices"], z["faces"], str(z["metadata"])
     except KeyError as exc:

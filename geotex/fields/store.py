@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from geotex.errors import InputError, MeshFileError, MissingFileError
+from geotex.io.limits import RefusedInput, check_archive
 
 __all__ = ["save_direction_field", "load_direction_field", "FieldFile", "FIELD_FORMAT"]
 
@@ -86,6 +87,10 @@ def load_direction_field(path) -> FieldFile:
     path = Path(path)
     if not path.is_file():
         raise MissingFileError(f"{path}: no such file")
+    try:
+        check_archive(path)
+    except RefusedInput as exc:
+        raise MeshFileError(path, str(exc)) from None
     try:
         with np.load(path, allow_pickle=False) as data:
             meta = json.loads(str(data["metadata"]))

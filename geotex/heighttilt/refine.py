@@ -101,7 +101,8 @@ def refine_base(V, F, edge_length, *, method: str = "remesh") -> tuple[np.ndarra
         ms.meshing_isotropic_explicit_remeshing(iterations=REMESH_ITERATIONS,
                                                 targetlen=pymeshlab.PureValue(L))
     except pymeshlab.PyMeshLabException as exc:
-        raise InputError(f"isotropic remeshing failed: {exc}; try refine='subdivide'") from None
+        raise InputError(f"isotropic remeshing failed: {exc}; try refining by "
+                         "subdivision instead") from None
     Vr, Fr = arrays_of(ms)
     try:
         Vr, Fr = check_base_mesh(Vr, Fr, name="remeshed target")

@@ -12,6 +12,7 @@ import numpy as np
 
 from geotex.errors import InputError, MeshFileError
 from geotex.io.atomic import atomic_output
+from geotex.io.limits import check_archive
 from geotex.mesh.arrays import as_faces
 from geotex.heighttilt._kernels import edge_topology_fast
 
@@ -175,6 +176,7 @@ def load_texture(path) -> HeightTiltTexture:
                             "(truncated, or another kind of file; textures are written "
                             "by 'geotex heighttilt extract')")
     try:
+        check_archive(path)
         with np.load(path, allow_pickle=False) as z:
             arrays = {k: z[k] for k in ("height", "tilt", "faces", "residual", "header")}
     except FileNotFoundError:

@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from geotex.errors import InputError, MeshFileError, MissingFileError
+from geotex.io.limits import RefusedInput, check_archive
 
 __all__ = ["Paste", "LappedTexture", "save_lapped", "load_lapped", "LAPPED_FORMAT"]
 
@@ -175,6 +176,10 @@ def load_lapped(path) -> LappedTexture:
     path = Path(path)
     if not path.is_file():
         raise MissingFileError(f"{path}: no such file")
+    try:
+        check_archive(path)
+    except RefusedInput as exc:
+        raise MeshFileError(path, str(exc)) from None
     try:
         with np.load(path, allow_pickle=False) as d:
             meta = json.loads(str(d["metadata"]))

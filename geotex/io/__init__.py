@@ -27,7 +27,9 @@ Every failure caused by the file is a :class:`~geotex.errors.GeotexError`:
 :class:`~geotex.errors.UnsupportedFormatError` or
 :class:`~geotex.errors.MeshFileError` (truncated, malformed, non-finite
 coordinates, out-of-range indices...), each with a one-line message naming
-the file.  Writing is atomic (see :mod:`geotex.io.atomic`).
+the file.  Files are untrusted input: what they may make geotex read, inflate
+or allocate is bounded (:mod:`geotex.io.limits`).  Writing is atomic (see
+:mod:`geotex.io.atomic`).
 """
 
 from __future__ import annotations
@@ -89,8 +91,7 @@ def format_of(path, format: str | None = None, *, writing: bool = False) -> str:
     suffix = Path(str(path)).suffix.lower()
     if not suffix:
         raise UnsupportedFormatError(
-            path, f"no file extension to tell the mesh format; use one of {listing} "
-                  "or pass format=")
+            path, f"no file extension to tell the mesh format; use one of {listing}")
     if suffix not in supported:
         raise UnsupportedFormatError(
             path, f"unsupported extension {suffix!r}; supported: {listing}")
@@ -124,7 +125,9 @@ def read_mesh(path, *, format: str | None = None) -> Mesh:
         If the extension or ``format`` is not supported.
     MeshFileError
         If the file is empty, unreadable, truncated or malformed, holds
-        non-finite coordinates or out-of-range indices.
+        non-finite coordinates or out-of-range indices, or breaks an input
+        limit (:mod:`geotex.io.limits`: references outside its folder, zip
+        bombs, absurd counts, polygons too tangled to triangulate).
 
     Examples
     --------

@@ -365,11 +365,19 @@ def per_vertex_uv(mesh: Mesh) -> np.ndarray | None:
 def load_texture_image(source) -> np.ndarray:
     """Read an image file or file object as an ``(h, w, 3 or 4)`` uint8 array.
 
-    Raises any pillow / OS error; callers decide whether that is fatal.
+    Raises any pillow / OS error, or :class:`geotex.io.limits.RefusedInput`
+    for an image above :data:`~geotex.io.limits.MAX_TEXTURE_PIXELS`; callers
+    decide whether that is fatal.
     """
     from PIL import Image
 
+    from geotex.io.limits import MAX_TEXTURE_PIXELS, RefusedInput
+
     with Image.open(source) as img:
+        width, height = img.size
+        if width * height > MAX_TEXTURE_PIXELS:
+            raise RefusedInput(f"texture image of {width} x {height} pixels is larger "
+                               f"than the {MAX_TEXTURE_PIXELS} pixels allowed")
         img.load()
         has_alpha = img.mode in ("RGBA", "LA", "PA") or (
             img.mode == "P" and "transparency" in img.info)

@@ -26,7 +26,11 @@ Reading
     Primitives may be triangles, triangle strips or fans (converted to
     triangles) or points and lines (vertices only); indices may be uint8,
     uint16 or uint32; positions float32 (or any accessor type).  Buffers come
-    from the GLB binary chunk, ``data:`` URIs or files next to the GLB.  uv is
+    from the GLB binary chunk, ``data:`` URIs or files next to the GLB: an
+    external ``uri`` must be a relative reference to a regular file inside
+    the GLB's folder, read up to the declared ``byteLength`` (absolute
+    paths, ``..``, other schemes and links leading out are refused, see
+    :mod:`geotex.io.limits`).  uv is
     kept (``uv_faces == faces``, ``v`` flipped back) when every primitive has
     ``TEXCOORD_0``; the base colour texture is loaded when all primitives
     share one image.  Sparse accessors and Draco / meshopt compression are not
@@ -45,6 +49,8 @@ import numpy as np
 import geotex
 from geotex.errors import MeshFileError
 from geotex.io._common import build_mesh, load_texture_image, texture_to_png_bytes
+from geotex.io.limits import (MAX_SIDECAR_BYTES, RefusedInput, human_bytes, read_bounded,
+                              sidecar_file)
 
 __all__ = ["read_glb", "write_glb", "glb_document"]
 
@@ -54,6 +60,8 @@ _BIN = 0x004E4942
 _COMPONENTS = {5120: "i1", 5121: "u1", 5122: "<i2", 5123: "<u2", 5125: "<u4", 5126: "<f4"}
 _WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
 _GEOMETRY_EXTENSIONS = ("KHR_draco_mesh_compression", "EXT_meshopt_compression")
+_MAX_ZERO_ACCESSOR = 1 << 24     # elements of an accessor without a bufferView
+_MAX_STRIDE = 1 << 16
 _ARRAY_BUFFER = 34962
 _ELEMENT_ARRAY_BUFFER = 34963
 
@@ -186,6 +194,10 @@ def write_glb(fh, mesh, *, path="GLB output", binary: bool = True) -> None:
 # --------------------------------------------------------------------------- reading
 
 
+def _is_int(value) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
 class _GLBReader:
     def __init__(self, path, doc: dict, bin_chunk: bytes | None):
         self.path = path
@@ -198,38 +210,54 @@ class _GLBReader:
 
     def item(self, kind: str, index):
         items = self.doc.get(kind)
-        if not isinstance(index, int) or not isinstance(items, list) \
+        if not _is_int(index) or not isinstance(items, list) \
                 or not 0 <= index < len(items) or not isinstance(items[index], dict):
             self.fail(f"{kind}[{index}] does not exist")
         return items[index]
 
-    def _uri_bytes(self, uri: str) -> bytes:
+    def _uri_bytes(self, uri, what: str, declared: int | None = None) -> bytes:
+        """Bytes behind a buffer or image ``uri`` (see :mod:`geotex.io.limits`)."""
+        if not isinstance(uri, str):
+            self.fail(f"{what} uri must be a string, got {type(uri).__name__}")
         if uri.startswith("data:"):
             head, _, payload = uri.partition(",")
             if not head.endswith(";base64"):
-                self.fail("only base64 data URIs are supported")
+                self.fail(f"{what}: only base64 data URIs are supported")
+            if declared is not None and len(payload) > 4 * (declared // 3 + 1) + 4:
+                self.fail(f"{what} data URI holds more than the {declared} bytes declared")
             try:
                 return base64.b64decode(payload, validate=True)
             except ValueError:
-                self.fail("malformed base64 data URI")
-        target = Path(str(self.path)).parent / uri
+                self.fail(f"{what}: malformed base64 data URI")
         try:
-            return target.read_bytes()
-        except OSError:
-            self.fail(f"external file {uri!r} not found next to the GLB")
+            target = sidecar_file(self.path, uri, what=what, uri=True)
+            if declared is not None:
+                return read_bounded(target, declared, what=f"{what} {uri[:60]!r}",
+                                    exact=True)
+            return read_bounded(target, MAX_SIDECAR_BYTES, what=f"{what} {uri[:60]!r}")
+        except RefusedInput as exc:
+            self.fail(str(exc))
 
     def buffer(self, index) -> bytes:
+        if not _is_int(index):
+            self.fail(f"buffers[{index!r}] does not exist")
         if index not in self.buffers:
             spec = self.item("buffers", index)
+            length = spec.get("byteLength")
+            if not _is_int(length) or length < 0:
+                self.fail(f"buffers[{index}] byteLength {length!r} is not a non-negative "
+                          "integer")
             if "uri" in spec:
-                data = self._uri_bytes(str(spec["uri"]))
+                if length > MAX_SIDECAR_BYTES:
+                    self.fail(f"buffers[{index}] byteLength {length} is more than the "
+                              f"{human_bytes(MAX_SIDECAR_BYTES)} allowed")
+                data = self._uri_bytes(spec["uri"], f"buffers[{index}]", length)
             else:
                 if self.bin_chunk is None:
                     self.fail(f"buffers[{index}] refers to the binary chunk, which is "
                               "missing")
                 data = self.bin_chunk
-            length = spec.get("byteLength")
-            if not isinstance(length, int) or length < 0 or length > len(data):
+            if length > len(data):
                 self.fail(f"buffers[{index}] byteLength {length!r} exceeds the "
                           f"{len(data)} bytes available")
             self.buffers[index] = data[:length]
@@ -240,29 +268,38 @@ class _GLBReader:
         data = self.buffer(view.get("buffer"))
         offset = view.get("byteOffset", 0)
         length = view.get("byteLength")
-        if not isinstance(offset, int) or not isinstance(length, int) or offset < 0 \
+        if not _is_int(offset) or not _is_int(length) or offset < 0 \
                 or length < 0 or offset + length > len(data):
             self.fail(f"bufferViews[{index}] (offset {offset!r}, length {length!r}) lies "
                       f"outside its {len(data)}-byte buffer")
-        return data, offset, length, view.get("byteStride")
+        stride = view.get("byteStride")
+        if stride is not None and (not _is_int(stride) or not 0 < stride <= _MAX_STRIDE):
+            self.fail(f"bufferViews[{index}] byteStride {stride!r} is not a positive "
+                      f"integer up to {_MAX_STRIDE}")
+        return data, offset, length, stride
 
     def accessor(self, index) -> np.ndarray:
         acc = self.item("accessors", index)
         if "sparse" in acc:
             self.fail(f"accessors[{index}] is sparse, which is not supported")
-        ctype = _COMPONENTS.get(acc.get("componentType"))
-        width = _WIDTH.get(acc.get("type"))
+        ctype = acc.get("componentType")
+        ctype = _COMPONENTS.get(ctype) if _is_int(ctype) else None
+        kind = acc.get("type")
+        width = _WIDTH.get(kind) if isinstance(kind, str) else None
         count = acc.get("count")
-        if ctype is None or width is None or not isinstance(count, int) or count < 0:
+        if ctype is None or width is None or not _is_int(count) or count < 0:
             self.fail(f"accessors[{index}] has a bad componentType, type or count")
         dt = np.dtype(ctype)
         if "bufferView" not in acc:
+            if count > _MAX_ZERO_ACCESSOR:
+                self.fail(f"accessors[{index}] has no bufferView and a count of {count}, "
+                          f"more than the {_MAX_ZERO_ACCESSOR} allowed")
             return np.zeros((count, width), dtype=dt)
         data, start, length, stride = self.view_bytes(acc["bufferView"])
         offset = acc.get("byteOffset", 0)
         element = dt.itemsize * width
         stride = stride or element
-        if not isinstance(offset, int) or not isinstance(stride, int) or offset < 0 \
+        if not _is_int(offset) or not _is_int(stride) or offset < 0 \
                 or stride < element:
             self.fail(f"accessors[{index}] has a bad byteOffset or byteStride")
         need = offset + (stride * (count - 1) + element if count else 0)
@@ -288,7 +325,7 @@ class _GLBReader:
             data, start, length, _ = self.view_bytes(spec["bufferView"])
             payload = data[start:start + length]
         elif "uri" in spec:
-            payload = self._uri_bytes(str(spec["uri"]))
+            payload = self._uri_bytes(spec["uri"], f"images[{source}]")
         else:
             return source, None
         import io
@@ -299,11 +336,13 @@ def _primitive_faces(reader, prim, n_vertices, where):
     mode = prim.get("mode", 4)
     if "indices" in prim:
         idx = reader.accessor(prim["indices"])
-        if idx.shape[1] != 1 or idx.dtype.kind not in "iu":
+        if idx.shape[1] != 1 or idx.dtype.kind != "u":
             reader.fail(f"{where}: indices must be an unsigned integer SCALAR accessor")
         idx = idx.ravel().astype(np.int64)
     else:
         idx = np.arange(n_vertices, dtype=np.int64)
+    if not _is_int(mode):
+        reader.fail(f"{where}: primitive mode {mode!r} is not an integer")
     if mode == 4:
         if idx.shape[0] % 3:
             reader.fail(f"{where}: {idx.shape[0]} triangle indices is not a multiple of 3")
@@ -360,6 +399,9 @@ def read_glb(path, data: bytes):
         doc = json.loads(chunks[0][1].decode("utf-8"))
     except (UnicodeDecodeError, ValueError) as exc:
         raise MeshFileError(path, f"GLB has malformed JSON: {exc}") from None
+    except RecursionError:
+        raise MeshFileError(path, "GLB JSON is nested too deeply to be a glTF "
+                                  "document") from None
     if not isinstance(doc, dict):
         raise MeshFileError(path, "GLB JSON is not an object")
     version_str = str(doc.get("asset", {}).get("version", "")) if isinstance(
@@ -367,7 +409,10 @@ def read_glb(path, data: bytes):
     if not version_str.startswith("2"):
         raise MeshFileError(path, f"glTF asset version {version_str!r} is not supported "
                                   "(only 2.x)")
-    for ext in doc.get("extensionsRequired", []) or []:
+    required = doc.get("extensionsRequired", []) or []
+    if not isinstance(required, list):
+        raise MeshFileError(path, "GLB 'extensionsRequired' is not a list")
+    for ext in required:
         if ext in _GEOMETRY_EXTENSIONS:
             raise MeshFileError(path, f"GLB requires the unsupported extension {ext!r} "
                                       "(compressed geometry)")
@@ -401,7 +446,10 @@ def read_glb(path, data: bytes):
                 if uv.shape != (P.shape[0], 2):
                     reader.fail(f"{where}: TEXCOORD_0 must be VEC2 with one row per vertex")
                 uv[:, 1] = 1.0 - uv[:, 1]
-            materials.add(prim.get("material"))
+            material = prim.get("material")
+            if material is not None and not _is_int(material):
+                reader.fail(f"{where}: material {material!r} is not an index")
+            materials.add(material)
             Vs.append(P.astype(np.float64))
             Fs.append(F + offset)
             UVs.append(uv)
@@ -413,7 +461,8 @@ def read_glb(path, data: bytes):
     meta = {}
     if uv is not None and len(materials) == 1 and None not in materials:
         material = reader.item("materials", next(iter(materials)))
-        base = (material.get("pbrMetallicRoughness") or {}).get("baseColorTexture")
+        pbr = material.get("pbrMetallicRoughness")
+        base = pbr.get("baseColorTexture") if isinstance(pbr, dict) else None
         if isinstance(base, dict) and "index" in base:
             try:
                 _, texture = reader.image(base["index"])

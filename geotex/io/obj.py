@@ -21,6 +21,9 @@ Reading
     that has a ``map_Kd``, else the first ``map_Kd``) names an image pillow
     can read, the image becomes ``mesh.texture``; a missing MTL or image is
     not an error (``metadata["texture_warning"]`` says what was missing).
+    The MTL and image must be relative paths to regular files inside the
+    OBJ's folder (no absolute paths, ``..`` or links leading out; bounded
+    sizes, see :mod:`geotex.io.limits`); a refused one is a warning too.
 
 Writing
     Coordinates and texture coordinates use ``repr`` (shortest exact text),
@@ -32,6 +35,8 @@ Writing
 
 from __future__ import annotations
 
+import io
+import os
 import re
 from pathlib import Path
 
@@ -41,6 +46,7 @@ from geotex.errors import MeshFileError
 from geotex.io._common import (build_mesh, decode_text, first_bad_number, format_rows,
                                line_starts, load_texture_image, texture_to_png_bytes,
                                token_table, tokens_per_line, triangulate_polygons)
+from geotex.io.limits import MAX_SIDECAR_BYTES, RefusedInput, read_bounded, sidecar_file
 
 __all__ = ["read_obj", "write_obj"]
 
@@ -287,13 +293,17 @@ def _parse_faces(src: _Source, rows: list[str], V: np.ndarray, vt_rows: list[str
     return tri, None, None, skipped
 
 
-def _mtl_candidates(obj_path: Path, mtllibs: list[str]) -> list[Path]:
-    out = []
+def _mtl_candidates(obj_path: Path, mtllibs: list[str]) -> tuple[list[Path], str | None]:
+    """MTL files to look at, and the first refusal (see :mod:`geotex.io.limits`)."""
+    out, refused = [], None
     for lib in mtllibs:
         names = [lib] + (lib.split() if len(lib.split()) > 1 else [])
         for name in names:
-            out.append(obj_path.parent / name.replace("\\", "/"))
-    return out
+            try:
+                out.append(sidecar_file(obj_path, name, what="material library"))
+            except RefusedInput as exc:
+                refused = refused or str(exc)
+    return out, refused
 
 
 def _map_file(rest: str) -> str:
@@ -336,16 +346,17 @@ def _parse_mtl(text: str) -> list[tuple[str, str]]:
 
 def _texture_source(obj_path: Path, mtllibs: list[str], used: list[str]):
     """Return ``(image path or None, warning or None)``."""
-    mtl_files = [p for p in _mtl_candidates(obj_path, mtllibs) if p.is_file()]
+    mtl_files, refused = _mtl_candidates(obj_path, mtllibs)
     if not mtl_files:
-        return None, f"material library {mtllibs[0]!r} not found"
+        return None, refused or f"material library {mtllibs[0]!r} not found"
     maps = []
     for mtl in mtl_files:
         try:
-            text = mtl.read_bytes().decode("utf-8", errors="replace")
-        except OSError:
+            raw = read_bounded(mtl, MAX_SIDECAR_BYTES, what=f"material library {mtl.name!r}")
+        except RefusedInput:
             continue
-        maps.extend((name, mtl.parent, image) for name, image in _parse_mtl(text))
+        text = raw.decode("utf-8", errors="replace")
+        maps.extend((name, mtl, image) for name, image in _parse_mtl(text))
     if not maps:
         return None, None
     chosen = None
@@ -354,9 +365,12 @@ def _texture_source(obj_path: Path, mtllibs: list[str], used: list[str]):
         if chosen is not None:
             break
     chosen = chosen or maps[0]
-    image = chosen[1] / chosen[2].replace("\\", "/")
-    if not image.is_file():
-        return None, f"texture image {chosen[2]!r} not found"
+    mtl_dir = chosen[1].parent.relative_to(Path(os.path.realpath(obj_path.parent)))
+    reference = "/".join(list(mtl_dir.parts) + [chosen[2].replace("\\", "/")])
+    try:
+        image = sidecar_file(obj_path, reference, what="texture image")
+    except RefusedInput as exc:
+        return None, str(exc)
     return image, None
 
 
@@ -369,7 +383,10 @@ def _find_texture(obj_path: Path, mtllibs: list[str], used: list[str]):
     if image is None:
         return None, None, note
     try:
-        return load_texture_image(image), image, None
+        raw = read_bounded(image, MAX_SIDECAR_BYTES, what=f"texture image {image.name!r}")
+        return load_texture_image(io.BytesIO(raw)), image, None
+    except RefusedInput as exc:
+        return None, None, str(exc)
     except Exception as exc:  # pillow raises many types for unreadable images
         return None, None, f"texture image {image.name!r} unreadable: {type(exc).__name__}"
 

@@ -135,7 +135,7 @@ def _faces(path, lines, V, line_no):
             except ValueError:
                 pass
     sizes = values[starts]
-    bad_size = ~np.isfinite(sizes) | (sizes != np.round(sizes)) | (sizes < 0)
+    bad_size = ~np.isfinite(sizes) | (sizes != np.round(sizes)) | (sizes < 0) | (sizes > 2**40)
     if bad_size.any():
         i = int(np.flatnonzero(bad_size)[0])
         raise MeshFileError(path, f"OFF line {line_no(i)}: bad face size "

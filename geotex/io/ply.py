@@ -105,7 +105,8 @@ def _parse_header(path, data: bytes):
                     "binary_little_endian or binary_big_endian)")
             fmt = tokens[1]
         elif key == "element":
-            if len(tokens) != 3 or not tokens[2].isdigit():
+            if len(tokens) != 3 or not (tokens[2].isascii() and tokens[2].isdigit()) \
+                    or len(tokens[2]) > 19:
                 bad("expected 'element NAME COUNT' with a non-negative integer count")
             elements.append(_Element(tokens[1], int(tokens[2]), lineno))
         elif key == "property":
@@ -415,7 +416,7 @@ def _ascii_list_element(path, tokens, pos, el, names, numbers, short):
                 p_at += 1 + c
             else:
                 p_at += 1
-    except (IndexError, ValueError):
+    except (IndexError, ValueError, OverflowError):     # the general path reports it
         counts = None
     if counts is not None and min(counts, default=0) >= 0:
         width = p_at - pos
@@ -469,7 +470,7 @@ def _ascii_list_element(path, tokens, pos, el, names, numbers, short):
                     at += 1
     except IndexError:
         short(el, at - pos + 1)
-    except ValueError:
+    except (ValueError, OverflowError):         # "nan", "inf", "x"
         raise MeshFileError(path, f"ASCII PLY element {el.name!r} has a bad list "
                                   f"length {tokens[at][:40]!r}") from None
     if at > n_tokens:
@@ -492,6 +493,9 @@ def _as_index(path, values: np.ndarray) -> np.ndarray:
     flat = values.reshape(-1)
     if flat.size and not (np.isfinite(flat).all() and (flat == np.round(flat)).all()):
         raise MeshFileError(path, "ASCII PLY face list holds a non-integer vertex index")
+    if flat.size and np.abs(flat).max() >= 2.0 ** 62:
+        raise MeshFileError(path, f"ASCII PLY face list holds the vertex index "
+                                  f"{float(flat[np.abs(flat).argmax()]):g}, far out of range")
     return flat.astype(np.int64)
 
 

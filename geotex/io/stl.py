@@ -191,7 +191,7 @@ def write_stl(fh, mesh, *, path, binary: bool = True) -> None:
     if binary:
         if V.size and np.abs(V).max() > np.finfo(np.float32).max:
             raise MeshFileError(path, "coordinates exceed the float32 range of binary "
-                                      "STL; write an ASCII STL (binary=False)")
+                                      "STL; write an ASCII STL instead")
         rec = np.zeros(F.shape[0], dtype=STL_DTYPE)
         V32 = V.astype(np.float32).astype(np.float64)
         # normals of the facets as stored (float32 corners), so a reader that

@@ -17,7 +17,9 @@ Reading
     inch, foot, meter) is converted to millimetres; ``metadata["unit"]`` is
     ``"millimeter"`` and ``metadata["source_unit"]`` the file's unit.  A
     package without build items gives an empty mesh.  Materials, colours and
-    textures of extensions are ignored.
+    textures of extensions are ignored.  Parts are inflated in a streaming
+    way with limits (declared size, an absolute cap and a compression ratio
+    cap, see :mod:`geotex.io.limits`): a zip bomb is refused at once.
 
     Speed: ``<vertex>`` and ``<triangle>`` tags are extracted with regular
     expressions over the raw XML (any namespace prefix, single or double
@@ -48,6 +50,7 @@ import numpy as np
 
 from geotex.errors import MeshFileError
 from geotex.io._common import build_mesh, first_bad_number, format_rows
+from geotex.io.limits import RefusedInput, inflate_member
 
 __all__ = ["read_3mf", "write_3mf", "UNITS_TO_MM", "CORE_NAMESPACE"]
 
@@ -152,7 +155,7 @@ class _Reader:
         rels = self.read_part_bytes("_rels/.rels")
         try:
             root = ET.fromstring(rels)
-        except ET.ParseError as exc:
+        except (ET.ParseError, LookupError) as exc:   # LookupError: unknown encoding
             self.fail(f"malformed XML in _rels/.rels: {exc}")
         for rel in root.iter():
             if _local(rel.tag) == "Relationship" and rel.get("Type") == _MODEL_REL:
@@ -163,7 +166,9 @@ class _Reader:
 
     def read_part_bytes(self, name: str) -> bytes:
         try:
-            return self.archive.read(name)
+            return inflate_member(self.archive, name)
+        except RefusedInput as exc:
+            self.fail(f"3MF archive refused: {exc}")
         except KeyError:
             if name == _DEFAULT_PART:
                 self.fail(f"3MF archive has no model part ({name}); it is not a 3MF "
@@ -171,7 +176,9 @@ class _Reader:
             self.fail(f"3MF archive has no model part {name!r}")
         except (zipfile.BadZipFile, zlib.error, EOFError, NotImplementedError,
                 RuntimeError, OSError, ValueError) as exc:
-            self.fail(f"damaged 3MF archive: cannot read {name!r} ({exc})")
+            detail = " ".join(str(exc).split())
+            detail = detail if len(detail) <= 120 else detail[:117] + "..."
+            self.fail(f"damaged 3MF archive: cannot read {name!r} ({detail})")
 
     def part(self, name: str) -> _Part:
         name = name.lstrip("/")
@@ -185,7 +192,7 @@ class _Reader:
         skeleton = self.cut_mesh_blocks(raw, name)
         try:
             root = ET.fromstring(skeleton)
-        except ET.ParseError as exc:
+        except (ET.ParseError, LookupError) as exc:   # LookupError: unknown encoding
             self.fail(f"malformed XML in {name}: {exc}")
         if _local(root.tag) != "model":
             self.fail(f"{name} is not a 3MF model (root element is "
@@ -343,8 +350,10 @@ class _Reader:
         M = parse_transform(transform)
         if M is None:
             self.fail(f"{where}: bad transform {transform[:80]!r} (expected 12 numbers)")
-        V = V @ M[:3] + M[3]
-        if np.linalg.det(M[:3]) < 0:
+        with np.errstate(over="ignore", invalid="ignore"):  # huge values: caught as non-finite
+            V = V @ M[:3] + M[3]
+            mirrored = np.linalg.det(M[:3]) < 0
+        if mirrored:
             F = F[:, ::-1]
         return V, F
 
@@ -389,6 +398,8 @@ def read_3mf(path, data: bytes):
         archive = zipfile.ZipFile(io.BytesIO(data))
     except (zipfile.BadZipFile, zlib.error, EOFError, ValueError, OSError):
         raise MeshFileError(path, "not a 3MF file: it is not a zip archive") from None
+    except NotImplementedError as exc:              # e.g. "zip file version 21.2"
+        raise MeshFileError(path, f"damaged 3MF archive: {exc}") from None
     with archive:
         reader = _Reader(path, archive)
         root_name = reader.start_part()

@@ -90,5 +90,5 @@ def tiles_for_quads(tiles: TileSet, quad_axes: np.ndarray, quad_edge: np.ndarray
         what = (f"group {tuple(k[:2])} with colours {tuple(k[2:])}" if k.size == 6
                 else f"colours {tuple(k)}")
         raise InputError(f"tile set {tiles.name!r} has no tile for {what}; a closed shape "
-                         "needs a complete or isotropic set (not --planar)")
+                         "needs a complete or isotropic set, not a planar one")
     return out

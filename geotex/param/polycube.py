@@ -215,16 +215,16 @@ def _tile_size(tile_size, V) -> float:
     try:
         ts = float(tile_size)
     except (TypeError, ValueError):
-        raise InputError(f"tile_size must be a positive number, got {tile_size!r}") from None
+        raise InputError(f"tile size must be a positive number, got {tile_size!r}") from None
     if not np.isfinite(ts) or ts <= 0:
-        raise InputError(f"tile_size must be a positive number, got {tile_size!r}")
+        raise InputError(f"tile size must be a positive number, got {tile_size!r}")
     extent = float((V.max(axis=0) - V.min(axis=0)).max())
     if ts > extent / 2:
-        raise InputError(f"tile_size {ts:g} is too large for the mesh (largest extent "
+        raise InputError(f"tile size {ts:g} is too large for the mesh (largest extent "
                          f"{extent:.4g}): use at most {extent / 2:.4g}, so the polycube "
                          "is at least two tiles long")
     if ts < extent / 400:
-        raise InputError(f"tile_size {ts:g} is too small for the mesh (largest extent "
+        raise InputError(f"tile size {ts:g} is too small for the mesh (largest extent "
                          f"{extent:.4g}): use at least {extent / 400:.4g} (at most 400 "
                          "tiles across)")
     return ts

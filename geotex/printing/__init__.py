@@ -111,6 +111,6 @@ def export_printable(path, V, F, *, force: bool = False, name: str = "geotex",
     if not report.printable and not force:
         raise NotPrintableError(
             f"refusing to write {path}: not printable as stored "
-            f"({'; '.join(report.reasons)})", report)
+            f"({'; '.join(report.reasons)}); repair the mesh first", report)
     _verified_write(path, Vs, Fs, name)
     return report

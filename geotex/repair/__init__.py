@@ -26,7 +26,11 @@ __all__ = [
     "without_degenerate_faces", "without_duplicate_faces", "split_non_manifold",
     "filled_holes", "consistently_oriented", "outward_oriented", "union_of_shells",
     "without_intersecting_faces", "default_weld_tolerance", "REPAIR_STAGES",
+    "MAX_VOLUME_LOSS",
 ]
+
+#: Largest fraction of the volume a repair may lose before it is flagged.
+MAX_VOLUME_LOSS = 0.01
 
 #: Stage names passed to the ``progress`` callback of :func:`repair_mesh`.
 REPAIR_STAGES = ("weld", "faces", "orientation", "holes", "self-intersections",
@@ -45,17 +49,36 @@ class RepairResult:
         One line per step that changed something, in order.
     report : CheckReport
         Validity report of the repaired mesh.
+    warnings : list of str
+        One line per way the repair changed the solid itself rather than
+        fixing it: cutting self-intersections changed the number of shells,
+        or lost more than :data:`MAX_VOLUME_LOSS` of the volume.  Such a
+        result may be printable yet not be the object the input described.
     """
 
     vertices: np.ndarray
     faces: np.ndarray
     changes: list = field(default_factory=list)
     report: CheckReport | None = None
+    warnings: list = field(default_factory=list)
 
     @property
     def printable(self) -> bool:
         """Whether the repaired mesh passes the printability check."""
         return bool(self.report is not None and self.report.printable)
+
+    @property
+    def faithful(self) -> bool:
+        """Whether the repair kept the solid (no :attr:`warnings`)."""
+        return not self.warnings
+
+
+def _signed_volume(V: np.ndarray, F: np.ndarray) -> float:
+    if not F.shape[0]:
+        return 0.0
+    c = V[F].mean(axis=(0, 1))          # about the centroid: less cancellation
+    A, B, C = V[F[:, 0]] - c, V[F[:, 1]] - c, V[F[:, 2]] - c
+    return float(np.einsum("ij,ij->i", A, np.cross(B, C)).sum() / 6.0)
 
 
 def repair_mesh(V, F, *, weld_tolerance: float | None = None, fill_holes: bool = True,
@@ -89,8 +112,10 @@ def repair_mesh(V, F, *, weld_tolerance: float | None = None, fill_holes: bool =
     Returns
     -------
     RepairResult
-        The repaired arrays, the list of changes and the final report.
-        The input arrays are not modified.
+        The repaired arrays, the list of changes, the final report and the
+        warnings (a repair that changed the number of shells or lost more
+        than :data:`MAX_VOLUME_LOSS` of the volume while cutting
+        self-intersections away).  The input arrays are not modified.
 
     Raises
     ------
@@ -99,6 +124,7 @@ def repair_mesh(V, F, *, weld_tolerance: float | None = None, fill_holes: bool =
     """
     V, F = as_mesh_arrays(V, F)
     changes: list[str] = []
+    warnings: list[str] = []
 
     def note(count: int, text: str):
         if count:
@@ -140,6 +166,7 @@ def repair_mesh(V, F, *, weld_tolerance: float | None = None, fill_holes: bool =
                 V2, F2, left = without_intersecting_faces(V, F)
                 if left < before:
                     shells_before, _ = face_components(F, V.shape[0])
+                    volume_before = abs(_signed_volume(V, F))
                     V, F = V2, F2
                     shells, _ = face_components(F, V.shape[0])
                     split = (f"; the solid now has {shells} shells (was {shells_before})"
@@ -147,7 +174,17 @@ def repair_mesh(V, F, *, weld_tolerance: float | None = None, fill_holes: bool =
                     changes.append(f"cut away {before - left} of {before} self-intersecting "
                                    f"face pairs and closed the holes{split}")
                     F, _ = outward_oriented(V, F)
+                    if shells != shells_before:
+                        warnings.append(f"cutting self-intersections split the solid into "
+                                        f"{shells} shells (was {shells_before})")
+                    volume = abs(_signed_volume(V, F))
+                    if volume_before > 0 and \
+                            volume < (1 - MAX_VOLUME_LOSS) * volume_before:
+                        lost = 100 * (1 - volume / volume_before)
+                        warnings.append(f"cutting self-intersections lost {lost:.1f}% of "
+                                        "the volume")
     V, F, k = without_unreferenced_vertices(V, F)
     note(k, "removed {} unreferenced vertices")
     report(progress, "final check")
-    return RepairResult(vertices=V, faces=F, changes=changes, report=check_mesh(V, F))
+    return RepairResult(vertices=V, faces=F, changes=changes, report=check_mesh(V, F),
+                        warnings=warnings)

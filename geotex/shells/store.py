@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from geotex.errors import GeotexError, InputError, MeshFileError, MissingFileError
+from geotex.io.limits import check_archive
 from geotex.param.polycube import PolyCube
 from geotex.param.polycube_quads import quad_edges
 from geotex.param.polycube_surface import subdivided_quads
@@ -111,6 +112,7 @@ def load_shell(path) -> Shell:
     if not path.is_file():
         raise MissingFileError(f"{path}: shell file not found")
     try:
+        check_archive(path)
         with np.load(path, allow_pickle=False) as z:
             if "metadata" in z.files:
                 meta = json.loads(bytes(z["metadata"]).decode("utf-8"))

@@ -1,0 +1,62 @@
+"""Fuzz: seeded hostile files in every format through ``geotex check``.
+
+Each case must end as exit 0/1 with a report, or exit 2 with exactly one
+stderr line ``geotex: error: ...``, within 10 s and 1 GiB, with no traceback
+(see :mod:`geotex.fuzzing`; ``benchmarks/fuzz.py`` runs 10,000 cases).
+"""
+
+import collections
+
+import pytest
+
+from geotex.fuzzing import FORMATS, FuzzCase, Outcome, make_cases, run_cases, verdict
+
+N_CASES = 300
+
+
+@pytest.fixture(scope="module")
+def outcomes(tmp_path_factory):
+    cases = make_cases(tmp_path_factory.mktemp("fuzz"), N_CASES, seed=15)
+    return run_cases(cases, workers=2)
+
+
+def test_every_fuzz_case_ends_cleanly(outcomes):
+    bad = [f"{o.case.path.name} ({o.case.mutation}): {verdict(o)}"
+           for o in outcomes if verdict(o)]
+    assert not bad, f"{len(bad)} of {len(outcomes)} cases misbehaved:\n" + "\n".join(bad)
+
+
+def test_fuzz_covers_every_format_and_hostile_kind(outcomes):
+    seeds = collections.Counter(o.case.seed for o in outcomes)
+    assert set(seeds) == set(FORMATS)
+    mutations = {o.case.mutation.split("+")[0] for o in outcomes}
+    for kind in ("flip", "truncate", "numbers", "indices", "binary-numbers", "header-count",
+                 "3mf-bomb", "3mf-declared-size", "3mf-entities", "glb-deep", "glb-uri",
+                 "glb-json-values", "glb-counts", "obj-polygon"):
+        assert kind in mutations
+    assert any("+ext:" in o.case.mutation for o in outcomes)       # wrong extensions
+    codes = collections.Counter(o.code for o in outcomes)
+    assert codes[2] and codes[1] + codes[0]                       # both kinds happen
+
+
+def test_cases_are_deterministic(tmp_path):
+    a = make_cases(tmp_path / "a", 40, seed=3)
+    b = make_cases(tmp_path / "b", 40, seed=3)
+    assert [c.path.read_bytes() for c in a] == [c.path.read_bytes() for c in b]
+
+
+def test_verdict_rejects_bad_outcomes(tmp_path):
+    case = FuzzCase(tmp_path / "x.stl", "stl", "flip")
+
+    def outcome(code, out="", err="", seconds=0.1, rss=1 << 20):
+        return Outcome(case, code, out, err, seconds, rss)
+
+    assert verdict(outcome(0, "printable: yes\n")) is None
+    assert verdict(outcome(2, err="geotex: error: x.stl: bad\n")) is None
+    assert verdict(outcome(3, err="geotex: error: internal error: ...\n"))
+    assert verdict(outcome(2, err="Traceback (most recent call last):\n  ...\n"))
+    assert verdict(outcome(2, err="warning\ngeotex: error: x\n"))
+    assert verdict(outcome(1, "no report\n"))
+    assert verdict(outcome(None, seconds=10.0))
+    assert verdict(outcome(0, "printable: yes\n", seconds=11.0))
+    assert verdict(outcome(0, "printable: yes\n", rss=2 << 30))
