@@ -176,7 +176,7 @@ def test_cli_map_texture_and_errors(tmp_path, capsys, torus_shell, iso_studs):
         assert err.startswith("geotex: error:") and err.count("\n") == 1, err
         assert "PosixPath" not in err and "Errno" not in err, err
         if "--height" in argv:                  # the CLI names its flag, not the argument
-            assert "--height 100 is above" in err and "a smaller --height" in err, err
+            assert "--height 100 mm is above" in err and "a smaller --height" in err, err
             assert "--tile-size" not in err, err        # 'geotex map' has no such flag
     assert not (tmp_path / "x.stl").exists() and tiles.read_bytes() == before
     # an open base: the one-shot says to repair it

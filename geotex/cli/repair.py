@@ -34,7 +34,9 @@ def register(sub):
 
 def run(args) -> int:
     from geotex.check import check_mesh
+    from geotex.errors import NotPrintableError
     from geotex.io import read_mesh, write_mesh
+    from geotex.printing import PRINT_FORMATS, export_printable
     from geotex.progress import stage_bar
     from geotex.repair import REPAIR_STAGES, repair_mesh
 
@@ -51,7 +53,15 @@ def run(args) -> int:
     report = result.report
     accepted = report.printable and result.faithful
     written = False
-    if accepted or args.force:
+    if (accepted or args.force) and out.suffix.lower() in PRINT_FORMATS:
+        # judged again as the file stores it (float32 for STL), read back
+        try:
+            report = export_printable(out, result.vertices, result.faces, force=args.force,
+                                      name=mesh.name or out.stem)
+            written = True
+        except NotPrintableError as exc:
+            report = exc.report
+    elif accepted or args.force:
         write_mesh(out, mesh.with_geometry(result.vertices, result.faces))
         written = True
     if args.json:
@@ -74,7 +84,8 @@ def run(args) -> int:
         if written:
             print(f"wrote {out}")
     if not written:
-        why = ("still not printable" if not report.printable
+        why = ("not printable as stored" if not report.printable and result.report.printable
+               else "still not printable" if not report.printable
                else f"the repair changed the solid: {'; '.join(result.warnings)}")
         print(f"geotex: not written: {out} ({why}; use --force to write it)", file=sys.stderr)
     if not report.printable:
