@@ -9,7 +9,7 @@ Half-edge ``3 * f + k`` runs from ``F[f, k]`` to ``F[f, (k + 1) % 3]``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
@@ -60,12 +60,29 @@ class EdgeTopology:
         Number of faces that use each edge (1 boundary, 2 manifold, >2 not).
     forward_count : numpy.ndarray, (e,) int64
         Number of half-edges running from ``edges[:, 0]`` to ``edges[:, 1]``.
+    half_order : numpy.ndarray or None, (3m,) int64
+        Half-edges grouped by edge (in edge order), ascending within an edge:
+        the half-edges of edge ``i`` are
+        ``half_order[start[i]:start[i] + face_count[i]]`` with
+        ``start = cumsum(face_count) - face_count``.  ``None`` when the
+        topology was built elsewhere; :meth:`grouped_half_edges` computes it.
     """
 
     edges: np.ndarray
     half_to_edge: np.ndarray
     face_count: np.ndarray
     forward_count: np.ndarray
+    half_order: np.ndarray | None = field(default=None, repr=False, compare=False)
+
+    def grouped_half_edges(self) -> np.ndarray:
+        """Return :attr:`half_order` (computed when it was not stored), ``(3m,)`` int64."""
+        if self.half_order is not None:
+            return self.half_order
+        return np.argsort(self.half_to_edge, kind="stable")
+
+    def edge_starts(self) -> np.ndarray:
+        """Return where each edge's half-edges start in :attr:`half_order`, ``(e,)`` int64."""
+        return np.cumsum(self.face_count) - self.face_count
 
     @property
     def boundary(self) -> np.ndarray:
@@ -90,9 +107,8 @@ class EdgeTopology:
         numpy.ndarray, (e, 2) int64
             For edges with more than two faces, the first two (in face order).
         """
-        order = np.argsort(self.half_to_edge, kind="stable")
-        he_sorted = self.half_to_edge[order]
-        start = np.searchsorted(he_sorted, np.arange(self.edges.shape[0]))
+        order = self.grouped_half_edges()
+        start = self.edge_starts()
         out = np.full((self.edges.shape[0], 2), -1, dtype=np.int64)
         out[:, 0] = order[start] // 3
         two = self.face_count >= 2
@@ -115,16 +131,41 @@ def edge_topology(F: np.ndarray, n_vertices: int | None = None) -> EdgeTopology:
     """
     F = np.asarray(F, dtype=np.int64)
     n = int(n_vertices if n_vertices is not None else (F.max() + 1 if F.size else 0))
-    he = half_edges(F)
-    lo = np.minimum(he[:, 0], he[:, 1])
-    hi = np.maximum(he[:, 0], he[:, 1])
-    key = lo * max(n, 1) + hi
-    uniq, inv, counts = np.unique(key, return_inverse=True, return_counts=True)
-    edges = np.stack([uniq // max(n, 1), uniq % max(n, 1)], axis=1)
-    forward = np.bincount(inv, weights=(he[:, 0] < he[:, 1]), minlength=uniq.size)
-    return EdgeTopology(edges=edges, half_to_edge=inv.astype(np.int64),
-                        face_count=counts.astype(np.int64),
-                        forward_count=forward.astype(np.int64))
+    N = max(n, 1)
+    a = F.ravel()                       # half-edge 3f + k runs a -> b
+    b = F[:, [1, 2, 0]].ravel()
+    fwd = a < b
+    key = np.minimum(a, b)
+    key *= N
+    key += np.maximum(a, b)
+    order = np.argsort(key)             # one 1-D sort of int64 keys
+    ks = key[order]
+    del key
+    new = np.empty(ks.shape[0], dtype=bool)
+    if ks.shape[0]:
+        new[0] = True
+        np.not_equal(ks[1:], ks[:-1], out=new[1:])
+    first = np.flatnonzero(new)
+    run = np.cumsum(new, dtype=np.int64)
+    run -= 1
+    counts = np.diff(np.append(first, ks.shape[0])).astype(np.int64)
+    # make the order ascending within every edge (the sort is not stable)
+    two = first[counts == 2]
+    swap = two[order[two] > order[two + 1]]
+    order[swap], order[swap + 1] = order[swap + 1], order[swap].copy()
+    if np.any(counts > 2):
+        sel = np.flatnonzero(np.repeat(counts > 2, counts))
+        sub = order[sel]
+        order[sel] = sub[np.lexsort((sub, run[sel]))]
+    inv = np.empty(ks.shape[0], dtype=np.int64)
+    inv[order] = run
+    del run
+    uniq = ks[first]
+    lo = uniq // N
+    edges = np.stack([lo, uniq - lo * N], axis=1)
+    forward = np.bincount(inv[fwd], minlength=first.shape[0]).astype(np.int64)
+    return EdgeTopology(edges=edges, half_to_edge=inv, face_count=counts,
+                        forward_count=forward, half_order=order)
 
 
 def compacted(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
