@@ -257,6 +257,11 @@ def face_components(F: np.ndarray, n_vertices: int) -> tuple[int, np.ndarray]:
     return count, vlab[np.asarray(F)[:, 0]] if len(F) else np.zeros(0, np.int64)
 
 
+#: Vertices with more corners than this skip the fan walk of
+#: :func:`non_manifold_vertices` and go to the general test.
+_MAX_FAN_WALK = 64
+
+
 def non_manifold_vertices(F: np.ndarray, n_vertices: int,
                           topo: EdgeTopology | None = None) -> np.ndarray:
     """Return vertices whose incident faces do not form one edge-connected fan.
@@ -277,48 +282,88 @@ def non_manifold_vertices(F: np.ndarray, n_vertices: int,
     -------
     numpy.ndarray, (k,) int64
         Sorted vertex indices.
+
+    Notes
+    -----
+    At a vertex whose edges all have two faces running opposite ways (and no
+    face repeats it), "the next corner across the outgoing edge" is a
+    permutation of its corners whose cycles are the fans: one vectorized walk
+    from the first corner decides whether there is exactly one.  The other
+    vertices (boundary, non-manifold or inconsistent edges, repeated indices,
+    more than ``_MAX_FAN_WALK`` corners) get the general test, connected
+    components of the corner graph restricted to their corners.
     """
     F = np.asarray(F, dtype=np.int64)
     m = F.shape[0]
     if m == 0:
         return np.zeros(0, dtype=np.int64)
     topo = topo if topo is not None else edge_topology(F, n_vertices)
-    he = half_edges(F)
-    manifold_he = topo.face_count[topo.half_to_edge] == 2
-    # pair the two half-edges of every manifold edge
-    hid = np.flatnonzero(manifold_he)
-    order = hid[np.argsort(topo.half_to_edge[hid], kind="stable")]
-    a, b = order[0::2], order[1::2]
-    # corner index of (face, vertex): 3 * f + k. Half-edge h = 3f + k starts at
-    # corner 3f + k and ends at corner 3f + (k + 1) % 3.
-    def start_corner(h):
-        return h
-
-    def end_corner(h):
-        return (h // 3) * 3 + (h % 3 + 1) % 3
-
-    # match corners at equal vertices across the two faces of the edge
-    same_dir = he[a, 0] == he[b, 0]
-    a_s, a_e = start_corner(a), end_corner(a)
-    b_s, b_e = start_corner(b), end_corner(b)
-    r1 = a_s
-    c1 = np.where(same_dir, b_s, b_e)
-    r2 = a_e
-    c2 = np.where(same_dir, b_e, b_s)
-    rows = np.concatenate([r1, r2])
-    cols = np.concatenate([c1, c2])
-    g = sp.coo_matrix((np.ones(rows.size, dtype=np.int8), (rows, cols)),
-                      shape=(3 * m, 3 * m)).tocsr()
-    _, lab = connected_components(g, directed=False)
+    order = topo.grouped_half_edges()
+    start = topo.edge_starts()
+    two = topo.face_count == 2
+    e2 = np.flatnonzero(two)
+    a, b = order[start[e2]], order[start[e2] + 1]     # the two half-edges of each
     corner_vertex = F.ravel()
-    pairs = np.unique(corner_vertex * (3 * m) + lab)
-    fans = np.bincount(pairs // (3 * m), minlength=n_vertices)
-    bad = np.flatnonzero(fans > 1)
-    if bad.size and topo.non_manifold.size:
-        on_nm_edge = np.zeros(n_vertices, dtype=bool)
-        on_nm_edge[topo.edges[topo.non_manifold].ravel()] = True
-        bad = bad[~on_nm_edge[bad]]
-    return bad
+    valence = np.bincount(corner_vertex, minlength=n_vertices)
+    # vertices the walk cannot decide
+    general = valence > _MAX_FAN_WALK
+    general[topo.edges[~(two & (topo.forward_count == 1))].ravel()] = True
+    repeated = (F[:, 0] == F[:, 1]) | (F[:, 1] == F[:, 2]) | (F[:, 2] == F[:, 0])
+    general[F[repeated].ravel()] = True
+
+    bad_parts = []
+    walk = np.flatnonzero(~general & (valence > 0))
+    if walk.size:
+        # corner 3f + k starts half-edge 3f + k; across it (twin t) the next
+        # corner at the same vertex is the one ending t: 3 (t // 3) + (t + 1) % 3
+        twin = np.full(3 * m, -1, dtype=np.int64)
+        twin[a] = b
+        twin[b] = a
+        nxt = twin // 3 * 3 + (twin % 3 + 1) % 3
+        first = np.empty(n_vertices, dtype=np.int64)
+        first[corner_vertex[::-1]] = np.arange(3 * m - 1, -1, -1)
+        s = first[walk]
+        cur = nxt[s]
+        need = valence[walk]
+        steps = 1
+        while walk.size:
+            back = cur == s
+            short = back & (steps < need)     # cycle closed before all corners
+            if short.any():
+                bad_parts.append(walk[short])
+            keep = ~back
+            walk, s, cur, need = walk[keep], s[keep], nxt[cur[keep]], need[keep]
+            steps += 1
+
+    gv = np.flatnonzero(general)
+    if gv.size:
+        # general test on the corners of the remaining vertices
+        he_start = corner_vertex                   # vertex where each half-edge starts
+        same_dir = he_start[a] == he_start[b]
+        a_e = a // 3 * 3 + (a % 3 + 1) % 3
+        b_e = b // 3 * 3 + (b % 3 + 1) % 3
+        rows = np.concatenate([a, a_e])
+        cols = np.concatenate([np.where(same_dir, b, b_e), np.where(same_dir, b_e, b)])
+        keep = general[corner_vertex[rows]]
+        rows, cols = rows[keep], cols[keep]
+        nodes = np.flatnonzero(general[corner_vertex])
+        index = np.full(3 * m, -1, dtype=np.int64)
+        index[nodes] = np.arange(nodes.size)
+        k = nodes.size
+        g = sp.coo_matrix((np.ones(rows.size, dtype=np.int8), (index[rows], index[cols])),
+                          shape=(k, k)).tocsr()
+        _, lab = connected_components(g, directed=False)
+        pairs = np.unique(corner_vertex[nodes] * k + lab)
+        fans = np.bincount(pairs // k, minlength=n_vertices)
+        bad = np.flatnonzero(fans > 1)
+        if bad.size and topo.non_manifold.size:
+            on_nm_edge = np.zeros(n_vertices, dtype=bool)
+            on_nm_edge[topo.edges[topo.non_manifold].ravel()] = True
+            bad = bad[~on_nm_edge[bad]]
+        bad_parts.append(bad)
+    if not bad_parts:
+        return np.zeros(0, dtype=np.int64)
+    return np.sort(np.concatenate(bad_parts)).astype(np.int64)
 
 
 def duplicate_face_groups(F: np.ndarray) -> np.ndarray:
