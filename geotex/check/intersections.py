@@ -33,13 +33,11 @@ Pipeline
    holds the faces at most twice its cell size (so an even mesh lives on
    level 0 alone).
    Per level, its faces and the smaller faces sharing its cells are sorted
-   by one packed int64 key (cell, corner flags, level flag, face).  A pair
-   met in several cells belongs to the cell holding the lower corner of the
-   intersection of the two boxes: there, on every axis, one of the two is
-   in its box's lowest cell (corner flags ``b | g == 7``).  Grouping a
-   cell's entries by corner flags turns this into runs of entries
-   (:func:`_segments`), so only those pairs are generated, each once (no
-   ``unique`` over pairs); the boxes (stored in entry order, so a cell's
+   by one packed int64 key (cell, level flag, face, corner flags), and in
+   every cell each face of the level is paired with the entries after it.  A
+   pair met in several cells is kept only in the cell holding the lower
+   corner of the intersection of the two boxes (no pair is generated twice,
+   no ``unique`` over pairs); the boxes (stored in entry order, so a cell's
    pairs read nearby memory) must overlap.  Pairs are enumerated in chunks
    of 200,000.
 5. Narrow phase, on batches of 32,768 candidates: shared vertex indices
