@@ -672,7 +672,7 @@ def _corner_mask(dx, dy, dz):
 
 
 def _packed_entries(lo, hi, lowbits, rows, flag, cmin, size, row_bits):
-    """Grid entries as packed keys ``(cell, corner bits, flag, row)``.
+    """Grid entries as packed keys ``(cell, flag, row, corner bits)``.
 
     The corner bits of an entry tell on which axes its cell is the box's
     lowest cell (``lowbits`` clears the axes where the true lowest cell was
@@ -680,14 +680,12 @@ def _packed_entries(lo, hi, lowbits, rows, flag, cmin, size, row_bits):
     """
     shift = row_bits + 3
     key = ((lo[0] - cmin[0]) * size[1] + (lo[1] - cmin[1])) * size[2] + (lo[2] - cmin[2])
-    base = (key << (shift + 1)) | (np.int64(flag) << row_bits) | rows.astype(np.int64)
+    base = ((key * 2 + flag) << shift) | (rows.astype(np.int64) << 3)
     del key
-    bits = lowbits.astype(np.int64)
     out = []
     for dx, dy, dz, idx in _offsets(lo, hi):
         step = ((dx * size[1] + dy) * size[2] + dz) << (shift + 1)
-        corner = (bits[idx] & int(_corner_mask(dx, dy, dz))) << (row_bits + 1)
-        out.append((base[idx] + step) | corner)
+        out.append((base[idx] + step) | (lowbits[idx] & _corner_mask(dx, dy, dz)))
     return np.concatenate(out)
 
 
@@ -768,10 +766,10 @@ def _level_tasks(faces, box, cell, cur, low):
             pos = np.minimum(np.searchsorted(cells, key), cells.size - 1)
             packed = np.concatenate([packed, lpacked[cells[pos] == key]])
             del lpacked, key, pos, cells
-        packed.sort()                     # cell, corner bits, current level first
-        first = ((packed >> (row_bits + 1)) & 7).astype(np.uint8)
-        rows = (packed & ((1 << row_bits) - 1)).astype(index)
-        is_low = ((packed >> row_bits) & 1).astype(bool)
+        packed.sort()                               # cell, then current level first
+        first = (packed & 7).astype(np.uint8)
+        rows = ((packed >> 3) & ((1 << row_bits) - 1)).astype(index)
+        is_low = ((packed >> shift) & 1).astype(bool)
         packed >>= shift + 1
         cellkey = packed
     else:                                           # huge grid: dense cell ids
@@ -783,104 +781,53 @@ def _level_tasks(faces, box, cell, cur, low):
         _, cellkey = np.unique(np.concatenate([c1, c2]), axis=0, return_inverse=True)
         cellkey = cellkey.ravel()
         is_low = np.concatenate([np.zeros(r1.size, bool), np.ones(r2.size, bool)])
-        first = np.concatenate([f1, f2])
-        order = np.lexsort((is_low, first, cellkey))
+        order = np.lexsort((is_low, cellkey))
         cellkey, is_low = cellkey[order], is_low[order]
         rows = np.concatenate([r1, r2])[order].astype(index)
-        first = first[order]
+        first = np.concatenate([f1, f2])[order]
         del r1, r2, f1, f2, c1, c2, order
-    seg_entry, seg_start, seg_len = _segments(cellkey, first, is_low, index)
+    new_cell = np.empty(cellkey.size, dtype=bool)
+    new_cell[0] = True
+    np.not_equal(cellkey[1:], cellkey[:-1], out=new_cell[1:])
     del cellkey
+    starts = np.flatnonzero(new_cell).astype(index)
+    del new_cell
+    ends = np.append(starts[1:], index(rows.size))
+    counts = np.repeat(ends, ends - starts)
+    del starts, ends
+    counts -= np.arange(1, rows.size + 1, dtype=index)
+    counts[is_low] = 0                              # lower-level entries start no pair
     face = act.astype(index)[rows]
     # the entries' boxes in entry order (one array per bound): the pairs of
     # a cell read nearby memory
     ebox = [np.take(box[:, k], rows) for k in range(6)]
     if faces.masked_columns is not None:
         ebox += [np.take(col, face) for col in faces.masked_columns]
-    del rows, is_low, first
-    if seg_len.size == 0:
-        return
-    cum = np.cumsum(seg_len, dtype=np.int64)
+    del rows, is_low
+    cum = np.cumsum(counts, dtype=np.int64)
     total = int(cum[-1])
     for s in range(0, total, _PAIR_CHUNK):
-        yield partial(_pair_task, faces, (cum, seg_len, seg_entry, seg_start, face, ebox),
+        yield partial(_pair_task, faces, (cum, counts, first, face, ebox),
                       s, min(s + _PAIR_CHUNK, total))
-
-
-def _segments(cellkey, first, is_low, index):
-    """The candidate pairs of one level as runs of entries: ``(entry, start, length)``.
-
-    Entries are sorted by cell, then corner bits, then current level before
-    lower levels.  A pair met in several cells is kept only in the cell
-    holding the low corner of the intersection of the two boxes: there, on
-    every axis, one of the two entries is its box's lowest cell, i.e. their
-    corner bits ``b``, ``g`` satisfy ``b | g == 7``.  So an entry of the
-    current level with bits ``b`` pairs with the whole group of bits ``g >
-    b``, with the lower-level entries of the group ``g < b`` (the current
-    ones of that group generate those pairs themselves) and, for ``b == 7``,
-    with the entries after it in its own group: every kept pair exactly once,
-    and no other.
-    """
-    n = cellkey.size
-    new_cell = np.empty(n, dtype=bool)
-    new_cell[0] = True
-    np.not_equal(cellkey[1:], cellkey[:-1], out=new_cell[1:])
-    rank = np.cumsum(new_cell, dtype=np.int64)
-    rank -= 1
-    del new_cell
-    group = rank * 16 + first.astype(np.int64) * 2 + is_low     # non-decreasing
-    cells = int(rank[-1]) + 1
-    # bound[c, k]: first entry of cell c at or after sub-group k (k = 2 g + low)
-    bound = np.searchsorted(group, (np.arange(cells, dtype=np.int64)[:, None] * 16
-                                    + np.arange(17, dtype=np.int64)[None, :]).ravel())
-    bound = bound.reshape(cells, 17).astype(index)
-    del group
-    cur = np.flatnonzero(~is_low)
-    b_cur = first[cur]
-    r_cur = rank[cur]
-    del rank
-    ent, start, length = [], [], []
-    for b in range(8):
-        sel = b_cur == b
-        if not sel.any():
-            continue
-        e = cur[sel]
-        r = r_cur[sel]
-        for g in range(8):
-            if (g | b) != 7:
-                continue
-            if g == b:                      # b == 7: the entries after it in the group
-                lo = e + 1
-                hi = bound[r, 16]
-            elif g > b:
-                lo = bound[r, 2 * g]
-                hi = bound[r, 2 * g + 2]
-            else:
-                lo = bound[r, 2 * g + 1]
-                hi = bound[r, 2 * g + 2]
-            ln = hi.astype(np.int64) - lo
-            keep = ln > 0
-            if keep.any():
-                ent.append(e[keep].astype(index))
-                start.append(lo[keep].astype(index))
-                length.append(ln[keep])
-    if not ent:
-        z = np.zeros(0, dtype=index)
-        return z, z, np.zeros(0, dtype=np.int64)
-    return np.concatenate(ent), np.concatenate(start), np.concatenate(length)
 
 
 def _pair_task(faces, level, s, e):
     """Generate candidate pairs ``s .. e - 1`` of a level, filter, test them."""
-    cum, seg_len, seg_entry, seg_start, face, ebox = level
+    cum, counts, first, face, ebox = level
     p0 = int(np.searchsorted(cum, s, side="right"))
     p1 = int(np.searchsorted(cum, e - 1, side="right")) + 1
-    b = cum[p0:p1] - seg_len[p0:p1]                 # first pair index of each run
+    b = cum[p0:p1] - counts[p0:p1]                  # first pair index of each entry
     a = np.maximum(b, s)
     n = np.minimum(cum[p0:p1], e) - a
-    e1 = np.repeat(seg_entry[p0:p1], n)
-    e2 = np.repeat(seg_start[p0:p1] + (a - b) - (np.cumsum(n) - n), n)
-    e2 += np.arange(e2.size, dtype=e2.dtype)
+    e1 = np.repeat(np.arange(p0, p1), n)
+    e2 = np.repeat(a - b - (np.cumsum(n) - n) + 1 + np.arange(p0, p1), n)
+    e2 += np.arange(e2.size)
+    # keep a pair only in the cell holding the low corner of the boxes'
+    # intersection: there, on every axis, one of the two entries is its box's
+    # lowest cell
+    own = (np.take(first, e1) | np.take(first, e2)) == 7
+    e1 = e1[own]
+    e2 = e2[own]
     overlap = np.ones(e1.size, dtype=bool)
     for k in range(3):
         lo, hi = ebox[k], ebox[k + 3]
@@ -888,7 +835,7 @@ def _pair_task(faces, level, s, e):
         overlap &= np.take(lo, e2) <= np.take(hi, e1)
     e1 = e1[overlap]
     e2 = e2[overlap]
-    del overlap
+    del own, overlap
     if len(ebox) > 6:
         # faces sharing a vertex whose fan is separated cannot intersect
         B = [np.take(col, e2) for col in ebox[6:]]
