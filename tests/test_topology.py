@@ -110,3 +110,82 @@ def test_primitives_are_closed_and_outward():
         t = edge_topology(F, len(V))
         assert t.boundary.size == 0 and t.inconsistent.size == 0
         assert signed_volume(V, F) > 0
+
+
+def _fans_reference(F, n):
+    """Per-vertex fan count by union-find over corners (slow, obviously right)."""
+    from collections import defaultdict
+    edge_faces = defaultdict(list)
+    for f, tri in enumerate(F.tolist()):
+        for k in range(3):
+            edge_faces[frozenset((tri[k], tri[(k + 1) % 3]))].append(f)
+    parent = {}
+
+    def find(x):
+        while parent.setdefault(x, x) != x:
+            x = parent[x]
+        return x
+    for e, fs in edge_faces.items():
+        if len(fs) != 2 or len(e) != 2:
+            continue
+        for v in e:
+            ca = (fs[0], F[fs[0]].tolist().index(v))
+            cb = (fs[1], F[fs[1]].tolist().index(v))
+            parent[find(ca)] = find(cb)
+    fans = np.zeros(n, dtype=np.int64)
+    roots = {(v, find((f, k))) for f, tri in enumerate(F.tolist()) for k, v in enumerate(tri)}
+    for v, _ in roots:
+        fans[v] += 1
+    on_nm = {v for e, fs in edge_faces.items() if len(fs) > 2 for v in e}
+    return np.array([v for v in range(n) if fans[v] > 1 and v not in on_nm], dtype=np.int64)
+
+
+def _cone(k, apex, base0, up):
+    """Closed double cone: ``apex``, ring ``base0 .. base0 + k - 1``, tip ``base0 + k``."""
+    i = np.arange(k)
+    ring = base0 + i
+    nxt = base0 + (i + 1) % k
+    top = np.stack([np.full(k, apex), ring, nxt], axis=1)
+    bottom = np.stack([np.full(k, base0 + k), nxt, ring], axis=1)
+    return np.concatenate([top, bottom]) if up else np.concatenate([top, bottom])[:, ::-1]
+
+
+@pytest.mark.parametrize("k", [5, 100])
+def test_non_manifold_vertices_walk_and_general_paths_agree(k):
+    # two closed cones pinched at a shared apex: a bow tie found by the fan walk
+    # (k = 5) or, beyond the walk's corner limit, by the general test (k = 100)
+    F = np.concatenate([_cone(k, 0, 1, True), _cone(k, 0, k + 2, True)])
+    n = 2 * k + 3
+    assert non_manifold_vertices(F, n).tolist() == [0]
+    assert _fans_reference(F, n).tolist() == [0]
+    # one cone alone is manifold everywhere
+    assert non_manifold_vertices(_cone(k, 0, 1, True), k + 2).size == 0
+    # flip one cone: its edges stay consistent, the pinch is still a bow tie
+    F2 = np.concatenate([_cone(k, 0, 1, True), _cone(k, 0, k + 2, False)])
+    assert non_manifold_vertices(F2, n).tolist() == [0]
+
+
+def test_non_manifold_vertices_match_reference_on_random_damage(sphere):
+    V, F0 = sphere
+    rng = np.random.default_rng(7)
+    n = V.shape[0]
+    for trial in range(40):
+        F = F0.copy()
+        idx = rng.choice(len(F), size=5, replace=False)
+        if trial % 4 == 0:
+            F[idx] = F[idx][:, ::-1]
+        elif trial % 4 == 1:
+            F = np.delete(F, idx, axis=0)
+        elif trial % 4 == 2:
+            M = np.arange(n)
+            M[rng.choice(n, 4)] = rng.choice(n, 4)
+            F = M[F]
+        else:
+            F = np.concatenate([F, F[idx]])
+        assert non_manifold_vertices(F, n).tolist() == _fans_reference(F, n).tolist()
+
+
+def test_grouped_half_edges_are_stable(ring):
+    _, F = ring
+    topo = edge_topology(F)
+    assert np.array_equal(topo.half_order, np.argsort(topo.half_to_edge, kind="stable"))

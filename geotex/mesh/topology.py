@@ -9,7 +9,7 @@ Half-edge ``3 * f + k`` runs from ``F[f, k]`` to ``F[f, (k + 1) % 3]``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
@@ -60,12 +60,29 @@ class EdgeTopology:
         Number of faces that use each edge (1 boundary, 2 manifold, >2 not).
     forward_count : numpy.ndarray, (e,) int64
         Number of half-edges running from ``edges[:, 0]`` to ``edges[:, 1]``.
+    half_order : numpy.ndarray or None, (3m,) int64
+        Half-edges grouped by edge (in edge order), ascending within an edge:
+        the half-edges of edge ``i`` are
+        ``half_order[start[i]:start[i] + face_count[i]]`` with
+        ``start = cumsum(face_count) - face_count``.  ``None`` when the
+        topology was built elsewhere; :meth:`grouped_half_edges` computes it.
     """
 
     edges: np.ndarray
     half_to_edge: np.ndarray
     face_count: np.ndarray
     forward_count: np.ndarray
+    half_order: np.ndarray | None = field(default=None, repr=False, compare=False)
+
+    def grouped_half_edges(self) -> np.ndarray:
+        """Return :attr:`half_order` (computed when it was not stored), ``(3m,)`` int64."""
+        if self.half_order is not None:
+            return self.half_order
+        return np.argsort(self.half_to_edge, kind="stable")
+
+    def edge_starts(self) -> np.ndarray:
+        """Return where each edge's half-edges start in :attr:`half_order`, ``(e,)`` int64."""
+        return np.cumsum(self.face_count) - self.face_count
 
     @property
     def boundary(self) -> np.ndarray:
@@ -90,9 +107,8 @@ class EdgeTopology:
         numpy.ndarray, (e, 2) int64
             For edges with more than two faces, the first two (in face order).
         """
-        order = np.argsort(self.half_to_edge, kind="stable")
-        he_sorted = self.half_to_edge[order]
-        start = np.searchsorted(he_sorted, np.arange(self.edges.shape[0]))
+        order = self.grouped_half_edges()
+        start = self.edge_starts()
         out = np.full((self.edges.shape[0], 2), -1, dtype=np.int64)
         out[:, 0] = order[start] // 3
         two = self.face_count >= 2
@@ -115,16 +131,41 @@ def edge_topology(F: np.ndarray, n_vertices: int | None = None) -> EdgeTopology:
     """
     F = np.asarray(F, dtype=np.int64)
     n = int(n_vertices if n_vertices is not None else (F.max() + 1 if F.size else 0))
-    he = half_edges(F)
-    lo = np.minimum(he[:, 0], he[:, 1])
-    hi = np.maximum(he[:, 0], he[:, 1])
-    key = lo * max(n, 1) + hi
-    uniq, inv, counts = np.unique(key, return_inverse=True, return_counts=True)
-    edges = np.stack([uniq // max(n, 1), uniq % max(n, 1)], axis=1)
-    forward = np.bincount(inv, weights=(he[:, 0] < he[:, 1]), minlength=uniq.size)
-    return EdgeTopology(edges=edges, half_to_edge=inv.astype(np.int64),
-                        face_count=counts.astype(np.int64),
-                        forward_count=forward.astype(np.int64))
+    N = max(n, 1)
+    a = F.ravel()                       # half-edge 3f + k runs a -> b
+    b = F[:, [1, 2, 0]].ravel()
+    fwd = a < b
+    key = np.minimum(a, b)
+    key *= N
+    key += np.maximum(a, b)
+    order = np.argsort(key)             # one 1-D sort of int64 keys
+    ks = key[order]
+    del key
+    new = np.empty(ks.shape[0], dtype=bool)
+    if ks.shape[0]:
+        new[0] = True
+        np.not_equal(ks[1:], ks[:-1], out=new[1:])
+    first = np.flatnonzero(new)
+    run = np.cumsum(new, dtype=np.int64)
+    run -= 1
+    counts = np.diff(np.append(first, ks.shape[0])).astype(np.int64)
+    # make the order ascending within every edge (the sort is not stable)
+    two = first[counts == 2]
+    swap = two[order[two] > order[two + 1]]
+    order[swap], order[swap + 1] = order[swap + 1], order[swap].copy()
+    if np.any(counts > 2):
+        sel = np.flatnonzero(np.repeat(counts > 2, counts))
+        sub = order[sel]
+        order[sel] = sub[np.lexsort((sub, run[sel]))]
+    inv = np.empty(ks.shape[0], dtype=np.int64)
+    inv[order] = run
+    del run
+    uniq = ks[first]
+    lo = uniq // N
+    edges = np.stack([lo, uniq - lo * N], axis=1)
+    forward = np.bincount(inv[fwd], minlength=first.shape[0]).astype(np.int64)
+    return EdgeTopology(edges=edges, half_to_edge=inv, face_count=counts,
+                        forward_count=forward, half_order=order)
 
 
 def compacted(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -216,6 +257,11 @@ def face_components(F: np.ndarray, n_vertices: int) -> tuple[int, np.ndarray]:
     return count, vlab[np.asarray(F)[:, 0]] if len(F) else np.zeros(0, np.int64)
 
 
+#: Vertices with more corners than this skip the fan walk of
+#: :func:`non_manifold_vertices` and go to the general test.
+_MAX_FAN_WALK = 64
+
+
 def non_manifold_vertices(F: np.ndarray, n_vertices: int,
                           topo: EdgeTopology | None = None) -> np.ndarray:
     """Return vertices whose incident faces do not form one edge-connected fan.
@@ -236,48 +282,88 @@ def non_manifold_vertices(F: np.ndarray, n_vertices: int,
     -------
     numpy.ndarray, (k,) int64
         Sorted vertex indices.
+
+    Notes
+    -----
+    At a vertex whose edges all have two faces running opposite ways (and no
+    face repeats it), "the next corner across the outgoing edge" is a
+    permutation of its corners whose cycles are the fans: one vectorized walk
+    from the first corner decides whether there is exactly one.  The other
+    vertices (boundary, non-manifold or inconsistent edges, repeated indices,
+    more than ``_MAX_FAN_WALK`` corners) get the general test, connected
+    components of the corner graph restricted to their corners.
     """
     F = np.asarray(F, dtype=np.int64)
     m = F.shape[0]
     if m == 0:
         return np.zeros(0, dtype=np.int64)
     topo = topo if topo is not None else edge_topology(F, n_vertices)
-    he = half_edges(F)
-    manifold_he = topo.face_count[topo.half_to_edge] == 2
-    # pair the two half-edges of every manifold edge
-    hid = np.flatnonzero(manifold_he)
-    order = hid[np.argsort(topo.half_to_edge[hid], kind="stable")]
-    a, b = order[0::2], order[1::2]
-    # corner index of (face, vertex): 3 * f + k. Half-edge h = 3f + k starts at
-    # corner 3f + k and ends at corner 3f + (k + 1) % 3.
-    def start_corner(h):
-        return h
-
-    def end_corner(h):
-        return (h // 3) * 3 + (h % 3 + 1) % 3
-
-    # match corners at equal vertices across the two faces of the edge
-    same_dir = he[a, 0] == he[b, 0]
-    a_s, a_e = start_corner(a), end_corner(a)
-    b_s, b_e = start_corner(b), end_corner(b)
-    r1 = a_s
-    c1 = np.where(same_dir, b_s, b_e)
-    r2 = a_e
-    c2 = np.where(same_dir, b_e, b_s)
-    rows = np.concatenate([r1, r2])
-    cols = np.concatenate([c1, c2])
-    g = sp.coo_matrix((np.ones(rows.size, dtype=np.int8), (rows, cols)),
-                      shape=(3 * m, 3 * m)).tocsr()
-    _, lab = connected_components(g, directed=False)
+    order = topo.grouped_half_edges()
+    start = topo.edge_starts()
+    two = topo.face_count == 2
+    e2 = np.flatnonzero(two)
+    a, b = order[start[e2]], order[start[e2] + 1]     # the two half-edges of each
     corner_vertex = F.ravel()
-    pairs = np.unique(corner_vertex * (3 * m) + lab)
-    fans = np.bincount(pairs // (3 * m), minlength=n_vertices)
-    bad = np.flatnonzero(fans > 1)
-    if bad.size and topo.non_manifold.size:
-        on_nm_edge = np.zeros(n_vertices, dtype=bool)
-        on_nm_edge[topo.edges[topo.non_manifold].ravel()] = True
-        bad = bad[~on_nm_edge[bad]]
-    return bad
+    valence = np.bincount(corner_vertex, minlength=n_vertices)
+    # vertices the walk cannot decide
+    general = valence > _MAX_FAN_WALK
+    general[topo.edges[~(two & (topo.forward_count == 1))].ravel()] = True
+    repeated = (F[:, 0] == F[:, 1]) | (F[:, 1] == F[:, 2]) | (F[:, 2] == F[:, 0])
+    general[F[repeated].ravel()] = True
+
+    bad_parts = []
+    walk = np.flatnonzero(~general & (valence > 0))
+    if walk.size:
+        # corner 3f + k starts half-edge 3f + k; across it (twin t) the next
+        # corner at the same vertex is the one ending t: 3 (t // 3) + (t + 1) % 3
+        twin = np.full(3 * m, -1, dtype=np.int64)
+        twin[a] = b
+        twin[b] = a
+        nxt = twin // 3 * 3 + (twin % 3 + 1) % 3
+        first = np.empty(n_vertices, dtype=np.int64)
+        first[corner_vertex[::-1]] = np.arange(3 * m - 1, -1, -1)
+        s = first[walk]
+        cur = nxt[s]
+        need = valence[walk]
+        steps = 1
+        while walk.size:
+            back = cur == s
+            short = back & (steps < need)     # cycle closed before all corners
+            if short.any():
+                bad_parts.append(walk[short])
+            keep = ~back
+            walk, s, cur, need = walk[keep], s[keep], nxt[cur[keep]], need[keep]
+            steps += 1
+
+    gv = np.flatnonzero(general)
+    if gv.size:
+        # general test on the corners of the remaining vertices
+        he_start = corner_vertex                   # vertex where each half-edge starts
+        same_dir = he_start[a] == he_start[b]
+        a_e = a // 3 * 3 + (a % 3 + 1) % 3
+        b_e = b // 3 * 3 + (b % 3 + 1) % 3
+        rows = np.concatenate([a, a_e])
+        cols = np.concatenate([np.where(same_dir, b, b_e), np.where(same_dir, b_e, b)])
+        keep = general[corner_vertex[rows]]
+        rows, cols = rows[keep], cols[keep]
+        nodes = np.flatnonzero(general[corner_vertex])
+        index = np.full(3 * m, -1, dtype=np.int64)
+        index[nodes] = np.arange(nodes.size)
+        k = nodes.size
+        g = sp.coo_matrix((np.ones(rows.size, dtype=np.int8), (index[rows], index[cols])),
+                          shape=(k, k)).tocsr()
+        _, lab = connected_components(g, directed=False)
+        pairs = np.unique(corner_vertex[nodes] * k + lab)
+        fans = np.bincount(pairs // k, minlength=n_vertices)
+        bad = np.flatnonzero(fans > 1)
+        if bad.size and topo.non_manifold.size:
+            on_nm_edge = np.zeros(n_vertices, dtype=bool)
+            on_nm_edge[topo.edges[topo.non_manifold].ravel()] = True
+            bad = bad[~on_nm_edge[bad]]
+        bad_parts.append(bad)
+    if not bad_parts:
+        return np.zeros(0, dtype=np.int64)
+    return np.sort(np.concatenate(bad_parts)).astype(np.int64)
 
 
 def duplicate_face_groups(F: np.ndarray) -> np.ndarray:
