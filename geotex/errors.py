@@ -20,6 +20,7 @@ __all__ = [
     "NotPrintableError",
     "ExternalToolError",
     "ToolNotFoundError",
+    "SolverError",
 ]
 
 
@@ -54,6 +55,15 @@ class UnsupportedFormatError(MeshFileError):
 
 class MissingFileError(InputError, FileNotFoundError):
     """An input file does not exist or is not a regular file."""
+
+
+class SolverError(GeotexError):
+    """A numerical method failed on valid input: no convergence, a failed factorization.
+
+    Not a ``ValueError``: the arguments passed validation, the algorithm did not
+    reach a result.  The message says which method failed and what to change
+    (a smaller step, fewer iterations, a finer mesh).
+    """
 
 
 class NotPrintableError(GeotexError):

@@ -16,14 +16,21 @@ import numpy as np
 from geotex.errors import InputError
 from geotex.mesh.arrays import as_mesh_arrays
 
-__all__ = ["render_mesh", "render_panels", "Panel", "UP_AXES"]
+__all__ = ["render_mesh", "render_panels", "Panel", "UP_AXES", "offscreen_pyvista"]
 
 UP_AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
 DEFAULT_COLOR = "#d9c7a3"
 HIGHLIGHT_COLORS = ("#e4202a", "#ff8c00", "#1f6fd6", "#2ca02c")
 
 
-def _pyvista():
+def offscreen_pyvista():
+    """Import pyvista set up for off-screen rendering (EGL without a display, VTK logs off).
+
+    Returns
+    -------
+    module
+        The ``pyvista`` module with ``OFF_SCREEN`` set.
+    """
     if not os.environ.get("DISPLAY"):
         os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
     import pyvista as pv
@@ -213,7 +220,7 @@ def render_panels(panels: list[Panel], path, *, size=(1200, 900), up="z") -> Pat
     if not panels:
         raise InputError("nothing to render: no panels given")
     upv = _up_vector(up)
-    pv = _pyvista()
+    pv = offscreen_pyvista()
     w, h = int(size[0]), int(size[1])
     plotter = pv.Plotter(off_screen=True, shape=(1, len(panels)),
                          window_size=(w * len(panels), h), border=False)

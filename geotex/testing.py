@@ -22,6 +22,7 @@ import numpy as np
 
 from geotex.check.intersections import self_intersecting_pairs
 from geotex.check.report import CheckReport, check_mesh
+from geotex.errors import InputError
 from geotex.mesh.arrays import as_mesh_arrays
 from geotex.mesh.record import Mesh
 from geotex.mesh.topology import edge_topology, non_manifold_vertices, position_welded_faces
@@ -46,7 +47,7 @@ def _arrays(mesh, F=None) -> tuple[np.ndarray, np.ndarray, str]:
     if isinstance(mesh, tuple) and len(mesh) == 2:
         V, F = as_mesh_arrays(*mesh)
         return V, F, "mesh"
-    raise TypeError("expected a Mesh, a (V, F) pair, V and F, or a file path")
+    raise InputError("mesh: expected a Mesh, a (V, F) pair, V and F, or a file path")
 
 
 def assert_printable(mesh, F=None, *, msg: str = "") -> CheckReport:

@@ -77,7 +77,7 @@ def _load_npz(path: Path) -> Exemplar:
     try:
         m = json.loads(meta)
         if m.get("format") != FORMAT_TAG:
-            raise ValueError(f"format tag {m.get('format')!r}, expected {FORMAT_TAG!r}")
+            raise InputError(f"format tag {m.get('format')!r}, expected {FORMAT_TAG!r}")
         return Exemplar(V, F, size=tuple(m["size"]), height=m["height"], depth=m["depth"],
                         name=m["name"], params=m["params"], period=m.get("period"))
     except (ValueError, KeyError, TypeError, InputError) as exc:

@@ -26,7 +26,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from geotex.errors import InputError
-from geotex.fields._sparse import single_threaded_blas
+from geotex.fields.sparse import single_threaded_blas
 from geotex.fields.oneforms import encode_one_form, projected_decoder
 from geotex.heighttilt._kernels import BaseGeometry, dot, edge_encode, lowest_neighbours
 from geotex.heighttilt.smoothing import smoothed_base

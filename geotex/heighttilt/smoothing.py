@@ -7,7 +7,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from geotex.errors import InputError
+from geotex.errors import InputError, SolverError
 from geotex.mesh.topology import edge_topology
 
 __all__ = ["smoothed_base"]
@@ -49,6 +49,8 @@ def smoothed_base(V, F, *, steps: int = 3, time_step: float | None = None) -> np
         Empty mesh, zero-area faces, non-manifold edges, unreferenced
         vertices (see :func:`check_base_mesh`), a negative ``steps`` or a
         non-positive ``time_step``.
+    SolverError
+        If the implicit flow diverges (non-finite positions).
 
     Examples
     --------
@@ -82,6 +84,6 @@ def smoothed_base(V, F, *, steps: int = 3, time_step: float | None = None) -> np
         rhs = M @ Vk
         Vk = np.column_stack([solve(np.ascontiguousarray(rhs[:, d])) for d in range(3)])
         if not np.isfinite(Vk).all():
-            raise InputError("smoothed_base diverged (non-finite positions); "
-                             "use a smaller time_step or fewer steps")
+            raise SolverError("smoothed_base diverged (non-finite positions); "
+                              "use a smaller time_step or fewer steps")
     return np.ascontiguousarray(Vk)

@@ -83,7 +83,7 @@ def load_image(path) -> np.ndarray:
     InputError
         If it is not an image pillow can read.
     """
-    from geotex.io._common import load_texture_image
+    from geotex.io.images import load_texture_image
 
     p = Path(path)
     if not p.is_file():

@@ -17,7 +17,7 @@ import os
 import tempfile
 from pathlib import Path
 
-from geotex.errors import MeshFileError
+from geotex.errors import InputError, MeshFileError
 
 __all__ = ["atomic_output", "atomic_group", "AtomicGroup"]
 
@@ -127,7 +127,7 @@ def atomic_output(path, mode: str = "wb", *, encoding: str | None = None,
     MeshFileError
         If the directory does not exist, the path is a directory, or the file
         cannot be created or renamed.
-    ValueError
+    InputError
         If ``mode`` is not a write mode.
 
     Examples
@@ -136,7 +136,7 @@ def atomic_output(path, mode: str = "wb", *, encoding: str | None = None,
     ...     fh.write("{}")
     """
     if mode not in ("w", "wb", "wt"):
-        raise ValueError(f"atomic_output mode must be 'w' or 'wb', got {mode!r}")
+        raise InputError(f"atomic_output mode must be 'w' or 'wb', got {mode!r}")
     path = Path(path)
     fh, tmp = _open_temp(path, mode, encoding, newline)
     try:
@@ -159,10 +159,10 @@ class AtomicGroup:
              newline: str | None = None):
         """Return an open temporary file that will become ``path``."""
         if mode not in ("w", "wb", "wt"):
-            raise ValueError(f"atomic_group mode must be 'w' or 'wb', got {mode!r}")
+            raise InputError(f"atomic_group mode must be 'w' or 'wb', got {mode!r}")
         path = Path(path)
         if any(p == path for p, _, _ in self._entries):
-            raise ValueError(f"{path} opened twice in one atomic group")
+            raise InputError(f"{path} opened twice in one atomic group")
         fh, tmp = _open_temp(path, mode, encoding, newline)
         self._entries.append((path, tmp, fh))
         return fh

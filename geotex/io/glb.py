@@ -48,7 +48,8 @@ import numpy as np
 
 import geotex
 from geotex.errors import MeshFileError
-from geotex.io._common import build_mesh, load_texture_image, texture_to_png_bytes
+from geotex.io._common import build_mesh
+from geotex.io.images import load_texture_image, texture_to_png_bytes
 from geotex.io.limits import (MAX_SIDECAR_BYTES, RefusedInput, human_bytes, read_bounded,
                               sidecar_file)
 

@@ -31,6 +31,8 @@ import stat
 from pathlib import Path
 from urllib.parse import unquote
 
+from geotex.errors import InputError
+
 __all__ = ["MAX_SIDECAR_BYTES", "MAX_INFLATED_BYTES", "MAX_INFLATE_RATIO",
            "MAX_TEXTURE_PIXELS", "RefusedInput", "sidecar_file", "read_bounded",
            "inflate_member", "check_archive", "human_bytes"]
@@ -49,7 +51,7 @@ _SCHEME = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]*:")
 _CHUNK = 1 << 20
 
 
-class RefusedInput(ValueError):
+class RefusedInput(InputError):
     """A reference or a part a mesh file asks for is refused (message says why)."""
 
 

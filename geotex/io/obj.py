@@ -44,8 +44,8 @@ import numpy as np
 
 from geotex.errors import MeshFileError
 from geotex.io._common import (build_mesh, decode_text, first_bad_number, format_rows,
-                               line_starts, load_texture_image, texture_to_png_bytes,
-                               token_table, tokens_per_line, triangulate_polygons)
+                               line_starts, token_table, tokens_per_line, triangulate_polygons)
+from geotex.io.images import load_texture_image, texture_to_png_bytes
 from geotex.io.limits import MAX_SIDECAR_BYTES, RefusedInput, read_bounded, sidecar_file
 
 __all__ = ["read_obj", "write_obj"]

@@ -7,7 +7,8 @@ import numpy as np
 
 from geotex.errors import InputError
 
-__all__ = ["polygon_triangle_corners", "MAX_EAR_CLIP_CORNERS", "EAR_CLIP_BUDGET"]
+__all__ = ["polygon_triangle_corners", "without_flat_triangles", "MAX_EAR_CLIP_CORNERS",
+           "EAR_CLIP_BUDGET"]
 
 #: Polygons with more corners than this are not ear-clipped (the triangulator
 #: is quadratic on tangled outlines): convex ones are fanned, others refused.
@@ -100,10 +101,10 @@ def _ngon_corners(P: np.ndarray, *, ear_clip: bool = True) -> np.ndarray:
         return fan
     if tri.shape != (k - 2, 3) or tri.min() < 0 or tri.max() >= k:
         return fan
-    return _without_flat_triangles(pts, tri)
+    return without_flat_triangles(pts, tri)
 
 
-def _without_flat_triangles(pts: np.ndarray, tri: np.ndarray) -> np.ndarray:
+def without_flat_triangles(pts: np.ndarray, tri: np.ndarray) -> np.ndarray:
     """Flip interior edges until no triangle is flat (three collinear corners).
 
     Polygons with straight-angle corners (a vertex in the middle of a straight

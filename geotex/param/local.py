@@ -48,7 +48,7 @@ from scipy.sparse.linalg import splu
 from geotex.errors import InputError
 from geotex.mesh.arrays import as_mesh_arrays
 from geotex.mesh.topology import edge_topology, vertex_components
-from geotex.patches.grow import _check_triangles, boundary_loops, disc_problem
+from geotex.patches.grow import check_triangles, boundary_loops, disc_problem
 
 __all__ = ["field_aligned_parameterization", "harmonic_parameterization",
            "lscm_parameterization", "gradient_operator"]
@@ -187,7 +187,7 @@ def field_aligned_parameterization(V, F, patch_faces, field, *, scale=1.0, cente
         raise InputError(f"center_uv must be two finite numbers, got {center_uv!r}")
 
     sub = F[faces]
-    _check_triangles(sub, "F[patch_faces]")
+    check_triangles(sub, "F[patch_faces]")
     verts = np.unique(sub)
     Fl = np.searchsorted(verts, sub).astype(np.int64)
     P = V[verts]
@@ -241,7 +241,7 @@ def field_aligned_parameterization(V, F, patch_faces, field, *, scale=1.0, cente
 def _disc_mesh(V, F) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Validate a disc mesh; return ``(V, F, boundary loop)`` (loop counter-clockwise)."""
     V, F = as_mesh_arrays(V, F, allow_empty=False)
-    _check_triangles(F)
+    check_triangles(F)
     used = np.zeros(V.shape[0], bool)
     used[F.ravel()] = True
     if not used.all():

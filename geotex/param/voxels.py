@@ -21,7 +21,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from geotex.errors import GeotexError
+from geotex.errors import InputError, SolverError
 
 __all__ = ["MANIFOLD_BLOCKS", "voxel_grid", "occupancy", "non_manifold_corners",
            "manifold_solid", "largest_component"]
@@ -146,8 +146,10 @@ def manifold_solid(S: np.ndarray, winding: np.ndarray, *, strategy: str = "flip"
 
     Raises
     ------
-    GeotexError
+    SolverError
         If no manifold configuration is reached within ``max_rounds``.
+    InputError
+        If ``strategy`` is unknown.
     """
     P = np.pad(S, 1)
     score = np.pad(-np.abs(np.asarray(winding, dtype=np.float64) - 0.5), 1,
@@ -167,10 +169,10 @@ def manifold_solid(S: np.ndarray, winding: np.ndarray, *, strategy: str = "flip"
             P[pick[:, 0], pick[:, 1], pick[:, 2]] ^= True
             score[pick[:, 0], pick[:, 1], pick[:, 2]] -= 1.0
         else:
-            raise ValueError(f"unknown strategy {strategy!r}")
+            raise InputError(f"unknown strategy {strategy!r}")
         # the padding layer stays empty: the solid never reaches the grid border
         P[0], P[-1], P[:, 0], P[:, -1], P[:, :, 0], P[:, :, -1] = (False,) * 6
-    raise GeotexError(f"the voxel solid did not become manifold in {max_rounds} rounds")
+    raise SolverError(f"the voxel solid did not become manifold in {max_rounds} rounds")
 
 
 def largest_component(S: np.ndarray) -> tuple[np.ndarray, int]:

@@ -42,7 +42,7 @@ import scipy.sparse as sp
 from geotex.errors import InputError
 from geotex.mesh.arrays import as_faces, as_mesh_arrays
 from geotex.mesh.topology import edge_topology
-from geotex.patches.grow import _check_triangles, face_adjacency, region_topology
+from geotex.patches.grow import check_triangles, face_adjacency, region_topology
 
 __all__ = ["ClusterLevel", "ClusterHierarchy", "cluster_hierarchy", "is_disc_partition",
            "disc_clusters"]
@@ -461,7 +461,7 @@ def cluster_hierarchy(V, F, *, levels: int | None = None, min_clusters: int = 1,
     m, n = F.shape[0], V.shape[0]
     if m == 0:
         raise InputError("F is empty: the mesh has no faces to cluster")
-    _check_triangles(F)
+    check_triangles(F)
     if levels is not None and (int(levels) != levels or levels < 1):
         raise InputError(f"levels must be an integer >= 1, got {levels!r}")
     if int(min_clusters) != min_clusters or min_clusters < 1:

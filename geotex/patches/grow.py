@@ -26,7 +26,7 @@ from geotex.errors import InputError
 from geotex.mesh.arrays import as_faces, as_mesh_arrays
 from geotex.mesh.topology import edge_topology, half_edges, non_manifold_vertices
 
-__all__ = ["FaceAdjacency", "face_adjacency", "Patch", "grow_patch", "is_disc"]
+__all__ = ["FaceAdjacency", "face_adjacency", "Patch", "grow_patch", "is_disc", "check_triangles"]
 
 
 # ---------------------------------------------------------------------------
@@ -79,7 +79,21 @@ class FaceAdjacency:
     closable: np.ndarray
 
 
-def _check_triangles(F: np.ndarray, name: str = "F") -> None:
+def check_triangles(F: np.ndarray, name: str = "F") -> None:
+    """Refuse faces with a repeated vertex index.
+
+    Parameters
+    ----------
+    F : numpy.ndarray, (m, 3) int64
+        Faces.
+    name : str
+        How the message names ``F``.
+
+    Raises
+    ------
+    InputError
+        If a face repeats a vertex index.
+    """
     bad = (F[:, 0] == F[:, 1]) | (F[:, 1] == F[:, 2]) | (F[:, 2] == F[:, 0])
     if bad.any():
         raise InputError(f"{name} has faces with a repeated vertex index (first at face "
@@ -113,7 +127,7 @@ def face_adjacency(V, F) -> FaceAdjacency:
     True
     """
     V, F = as_mesh_arrays(V, F)
-    _check_triangles(F)
+    check_triangles(F)
     n, m = V.shape[0], F.shape[0]
     topo = edge_topology(F, n)
     FE = topo.half_to_edge.reshape(m, 3) if m else np.zeros((0, 3), np.int64)

@@ -244,7 +244,7 @@ def capped(V: np.ndarray, F: np.ndarray, domain, *, rel_tol: float = 1e-9):
     """
     import manifold3d
 
-    from geotex.mesh.polygons import _without_flat_triangles
+    from geotex.mesh.polygons import without_flat_triangles
     from geotex.quilting.seam import boundary_loops
 
     n = V.shape[0]
@@ -279,7 +279,7 @@ def capped(V: np.ndarray, F: np.ndarray, domain, *, rel_tol: float = 1e-9):
         if tri.shape[0] == 0:
             raise InputError("a prefilled element's cut opening could not be capped")
         # straight runs of the outline (e.g. along the flat bottom) give flat ears
-        tri = _without_flat_triangles(np.concatenate(polys), tri)
+        tri = without_flat_triangles(np.concatenate(polys), tri)
         caps.append(ids[tri])
         on_cut[ids] = True
     cap_faces = np.concatenate(caps)

@@ -145,14 +145,14 @@ def _shell_of(a: dict, meta: dict, path) -> Shell:
     res = int(meta["res"])
     if (corners.shape != (q, 4, 3) or q == 0 or labels.min() < 0 or labels.max() > 5
             or not 1 <= res <= 16 or a["origin"].shape != (3,)):
-        raise ValueError("quads")
+        raise InputError("quads")
     P, F, grid = subdivided_quads(corners, labels, res=res)
     n = P.shape[0]
     bv, bf = a["base_vertices"], a["base_faces"].astype(np.int64)
     if (a["Y"].shape != (n, 3) or a["D"].shape != (n, 3) or a["quad_folded"].shape != (q,)
             or bv.ndim != 2 or bv.shape[1] != 3 or bf.ndim != 2 or bf.shape[1] != 3
             or bf.shape[0] == 0 or bf.min() < 0 or bf.max() >= bv.shape[0]):
-        raise ValueError("arrays")
+        raise InputError("arrays")
     qe, qf, eax, eq, es = quad_edges(corners)
     pc = PolyCube(tile_size=float(meta["tile_size"]), res=res,
                   origin=a["origin"].astype(np.float64), P=P, Y=a["Y"].astype(np.float64),

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from geotex.errors import InputError
 from geotex.tiles.colors import EAST, NORTH, SOUTH, WEST
 from geotex.tiles.strips import Strip
 
@@ -40,7 +41,7 @@ def placed_half(strip: Strip, side: int) -> tuple[tuple[np.ndarray, np.ndarray],
         out[:, 0], out[:, 1] = 1.0 - s, t
         boxes = np.stack([1.0 - b[:, 3], b[:, 0], np.ones(len(b)), b[:, 2]], 1)
     else:
-        raise ValueError(f"side must be 0..3, got {side}")
+        raise InputError(f"side must be 0..3, got {side}")
     return (out, F), boxes
 
 

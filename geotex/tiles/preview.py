@@ -82,12 +82,12 @@ def _render(parts: dict, path, *, size, title: str = "", zoom: float = 1.0,
     from PIL import Image
 
     from geotex.io.atomic import atomic_output
-    from geotex.render import _pyvista
+    from geotex.render import offscreen_pyvista
 
     path = Path(path)
     if path.suffix.lower() != ".png":
         raise InputError(f"{path}: pictures are written as PNG; use a .png file name")
-    pv = _pyvista()
+    pv = offscreen_pyvista()
     plotter = pv.Plotter(off_screen=True, window_size=(int(size[0]), int(size[1])),
                          border=False)
     try:

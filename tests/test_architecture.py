@@ -1,0 +1,291 @@
+"""Import and error contracts of the geotex package (docs/architecture.md, "Conventions").
+
+The rules are checked on the source text with :mod:`ast`, so they cost no import:
+
+* no module imports a private name (a module or a symbol whose name starts with one
+  underscore) from another top-level subpackage of geotex;
+* the import graph between top-level subpackages has no cycle except the ones listed
+  in ``ALLOWED_CYCLE_EDGES`` (each with its reason);
+* every ``raise`` raises a :class:`geotex.errors.GeotexError` subclass, or re-raises
+  (a bare ``raise``, a variable holding a caught exception), except the documented
+  ``ALLOWED_RAISES``, ``ALLOWED_FACTORIES`` and ``ALLOWED_IN_FILE``;
+* no ``assert`` statement (it vanishes under ``python -O``).
+"""
+
+from __future__ import annotations
+
+import ast
+import builtins
+import inspect
+from pathlib import Path
+
+import pytest
+
+import geotex
+import geotex.errors
+
+PACKAGE_DIR = Path(geotex.__file__).resolve().parent
+
+#: Imports between subpackages that close a cycle on purpose: (importer, imported) -> reason.
+#: Every edge here is a lazy (function-level) import.
+ALLOWED_CYCLE_EDGES: dict[tuple[str, str], str] = {}
+
+#: Exception names a ``raise`` may use anywhere although they are no GeotexError, with the reason.
+ALLOWED_RAISES: dict[str, str] = {
+    "NotImplementedError": "abstract hooks that subclasses must override",
+    "KeyboardInterrupt": "re-raised after cleanup so Ctrl-C still stops the program",
+    "SystemExit": "the command line's exit path",
+    "StopIteration": "iterator protocol",
+}
+
+#: Functions that build the exception to raise (``raise factory(...)``), with the reason.
+ALLOWED_FACTORIES: dict[str, str] = {
+    "flag_error": "geotex.cli: returns a UsageError naming the flag, or the caught GeotexError",
+}
+
+#: (file, exception) pairs allowed in one file only, with the reason.
+ALLOWED_IN_FILE: dict[tuple[str, str], str] = {
+    ("geotex/testing.py", "AssertionError"):
+        "the assertion helpers for users' tests fail the way pytest's own asserts do",
+    ("geotex/tiles/__init__.py", "AttributeError"):
+        "module-level __getattr__ protocol (lazy catalog names)",
+    ("geotex/check/slicers.py", "ValueError"):
+        "pending: geotex/check is being reworked; the parsers' ValueError on unreadable "
+        "slicer output is caught in the same module and becomes an ExternalToolError",
+}
+
+
+def _modules():
+    for path in sorted(PACKAGE_DIR.rglob("*.py")):
+        parts = path.relative_to(PACKAGE_DIR).with_suffix("").parts
+        if parts[-1] == "__init__":
+            parts = parts[:-1]
+        name = ".".join(("geotex",) + parts)
+        is_package = path.name == "__init__.py"
+        yield name, is_package, path, ast.parse(path.read_text(encoding="utf-8"), str(path))
+
+
+MODULES = list(_modules())
+MODULE_NAMES = {name for name, *_ in MODULES}
+
+
+def _top(module: str) -> str:
+    """``geotex.fields.frames`` -> ``fields``; ``geotex`` -> ``""``."""
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else ""
+
+
+def _imports(name: str, is_package: bool, tree: ast.Module):
+    """Yield ``(imported module, imported symbol or None, line)`` of every geotex import."""
+    base = name if is_package else name.rpartition(".")[0]
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                if alias.name.split(".")[0] == "geotex":
+                    yield alias.name, None, node.lineno
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                pkg = base.split(".")
+                pkg = pkg[: len(pkg) - node.level + 1]
+                module = ".".join(pkg + ([node.module] if node.module else []))
+            else:
+                module = node.module or ""
+            if module.split(".")[0] != "geotex":
+                continue
+            for alias in node.names:
+                sub = f"{module}.{alias.name}"
+                if sub in MODULE_NAMES:  # ``from geotex.x import submodule``
+                    yield sub, None, node.lineno
+                else:
+                    yield module, alias.name, node.lineno
+
+
+def _private(module: str, symbol: str | None) -> bool:
+    names = module.split(".") + ([symbol] if symbol else [])
+    return any(n.startswith("_") and not n.startswith("__") for n in names)
+
+
+def test_no_private_import_across_subpackages():
+    bad = []
+    for name, is_package, path, tree in MODULES:
+        for module, symbol, line in _imports(name, is_package, tree):
+            if _top(module) != _top(name) and _private(module, symbol):
+                what = f"{module}.{symbol}" if symbol else module
+                bad.append(f"{path.relative_to(PACKAGE_DIR.parent)}:{line} imports {what}")
+    assert not bad, "private names imported across subpackages:\n" + "\n".join(bad)
+
+
+def _subpackage_graph():
+    graph: dict[str, set[str]] = {}
+    for name, is_package, _path, tree in MODULES:
+        src = _top(name)
+        if not src:
+            continue  # the package root re-exports everything; it is no layer
+        for module, _symbol, _line in _imports(name, is_package, tree):
+            dst = _top(module)
+            if dst and dst != src and (src, dst) not in ALLOWED_CYCLE_EDGES:
+                graph.setdefault(src, set()).add(dst)
+    return graph
+
+
+def _cycles(graph):
+    """Strongly connected components with more than one node (Tarjan)."""
+    index, low, stack, on_stack, out = {}, {}, [], set(), []
+    counter = [0]
+
+    def visit(v):
+        index[v] = low[v] = counter[0]
+        counter[0] += 1
+        stack.append(v)
+        on_stack.add(v)
+        for w in sorted(graph.get(v, ())):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                out.append(sorted(comp))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return out
+
+
+def test_no_import_cycle_between_subpackages():
+    graph = _subpackage_graph()
+    cycles = _cycles(graph)
+    detail = []
+    for comp in cycles:
+        edges = sorted((a, b) for a in comp for b in graph.get(a, ()) if b in comp)
+        detail.append(" ".join(f"{a}->{b}" for a, b in edges))
+    assert not cycles, "import cycles between subpackages:\n" + "\n".join(detail)
+
+
+def test_allowed_cycle_edges_are_used():
+    """A documented exception that no longer exists is removed from the list."""
+    seen = set()
+    for name, is_package, _path, tree in MODULES:
+        for module, _symbol, _line in _imports(name, is_package, tree):
+            seen.add((_top(name), _top(module)))
+    assert set(ALLOWED_CYCLE_EDGES) <= seen
+
+
+def _geotex_error_names() -> set[str]:
+    return {n for n, obj in inspect.getmembers(geotex.errors, inspect.isclass)
+            if issubclass(obj, geotex.errors.GeotexError)}
+
+
+def _local_error_names() -> set[str]:
+    """Classes defined in geotex whose bases name a GeotexError subclass (transitively)."""
+    known = _geotex_error_names()
+    classes = []
+    for _name, _is_package, _path, tree in MODULES:
+        classes += [n for n in ast.walk(tree) if isinstance(n, ast.ClassDef)]
+    changed = True
+    while changed:
+        changed = False
+        for cls in classes:
+            bases = {b.attr if isinstance(b, ast.Attribute) else getattr(b, "id", None)
+                     for b in cls.bases}
+            if cls.name not in known and bases & known:
+                known.add(cls.name)
+                changed = True
+    return known
+
+
+def _exc_name(node: ast.expr) -> str | None:
+    node = node.func if isinstance(node, ast.Call) else node
+    if isinstance(node, ast.Attribute):
+        return node.attr
+    return getattr(node, "id", None)
+
+
+def _stored_exceptions(tree: ast.Module, allowed: set[str]) -> set[str]:
+    """Variables that hold a caught exception or a GeotexError built earlier.
+
+    ``except X as exc`` binds ``exc``; ``error = exc`` or ``error = InputError(...)``
+    makes ``error`` one too, so ``raise error`` is a re-raise or a GeotexError.
+    """
+    names = {h.name for h in ast.walk(tree) if isinstance(h, ast.ExceptHandler) and h.name}
+    assigns = [n for n in ast.walk(tree) if isinstance(n, ast.Assign)
+               and len(n.targets) == 1 and isinstance(n.targets[0], ast.Name)]
+    changed = True
+    while changed:
+        changed = False
+        for a in assigns:
+            target, value = a.targets[0].id, a.value
+            holds = (isinstance(value, ast.Name) and value.id in names) or (
+                isinstance(value, ast.Call) and _exc_name(value) in allowed)
+            if holds and target not in names:
+                names.add(target)
+                changed = True
+    return names
+
+
+def _private_control_flow(tree: ast.Module) -> set[str]:
+    """Private exception classes (``_Name``) defined and caught in the same module."""
+    defined = {c.name for c in ast.walk(tree)
+               if isinstance(c, ast.ClassDef) and c.name.startswith("_")}
+    caught = set()
+    for h in ast.walk(tree):
+        if isinstance(h, ast.ExceptHandler) and h.type is not None:
+            types = h.type.elts if isinstance(h.type, ast.Tuple) else [h.type]
+            caught |= {_exc_name(t) for t in types}
+    return defined & caught
+
+
+def test_every_raise_is_a_geotex_error():
+    allowed = _local_error_names() | set(ALLOWED_RAISES)
+    bad = []
+    for _name, _is_package, path, tree in MODULES:
+        rel = path.relative_to(PACKAGE_DIR.parent).as_posix()
+        stored = _stored_exceptions(tree, allowed)
+        local = _private_control_flow(tree)
+        for node in ast.walk(tree):
+            if not isinstance(node, ast.Raise) or node.exc is None:
+                continue  # bare re-raise
+            name = _exc_name(node.exc)
+            call = isinstance(node.exc, ast.Call)
+            if (name in allowed or name in local or (rel, name) in ALLOWED_IN_FILE
+                    or (call and name in ALLOWED_FACTORIES)
+                    or (not call and name in stored)):
+                continue
+            bad.append(f"{rel}:{node.lineno} raises {name or ast.unparse(node.exc)}")
+    assert not bad, "raises that are no GeotexError:\n" + "\n".join(bad)
+
+
+def test_allowed_lists_are_used():
+    """A documented exception that no longer occurs is removed from its list."""
+    used_files, used_factories = set(), set()
+    for _name, _is_package, path, tree in MODULES:
+        rel = path.relative_to(PACKAGE_DIR.parent).as_posix()
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Raise) and node.exc is not None:
+                used_files.add((rel, _exc_name(node.exc)))
+                if isinstance(node.exc, ast.Call):
+                    used_factories.add(_exc_name(node.exc))
+    assert set(ALLOWED_IN_FILE) <= used_files
+    assert set(ALLOWED_FACTORIES) <= used_factories
+
+
+def test_no_assert_for_validation():
+    """``assert`` vanishes under ``python -O``; validation raises an InputError instead."""
+    bad = [f"{path.relative_to(PACKAGE_DIR.parent)}:{node.lineno}"
+           for _name, _is_package, path, tree in MODULES
+           for node in ast.walk(tree) if isinstance(node, ast.Assert)]
+    assert not bad, "assert statements in geotex:\n" + "\n".join(bad)
+
+
+@pytest.mark.parametrize("name", sorted(ALLOWED_RAISES))
+def test_allowed_raises_are_builtin_exceptions(name):
+    assert issubclass(getattr(builtins, name), BaseException)
