@@ -66,8 +66,8 @@ try:                                   # thin part from geotex's own primitives,
 except ImportError:
     pass
 
-COLUMNS = ["base", "genus", "faces in", "tile set", "tile size", "tile mm", "quads", "bare quads",
-           "coverage", "faces out", "seconds", "peak MB", "geotex", "prusa", "admesh",
+COLUMNS = ["base", "genus", "faces in", "tile set", "tile mm", "quads", "bare quads",
+           "covered 1 tile", "covered 1/4 tile", "faces out", "seconds", "peak MB", "geotex", "prusa", "admesh",
            "failure reason"]
 
 
@@ -291,16 +291,11 @@ def run_row(i: int, name: str, workdir: Path, env: dict) -> dict:
     if ts is None:
         m_ts = re.search(r"(\d+) tiles of ([0-9.eE+-]+)", text)
         ts = float(m_ts.group(2)) if m_ts else None
-    cov = dig(doc, "coverage.within_quarter_tile", "shell.coverage.within_quarter_tile",
-              "stats.coverage", "coverage")
-    scale = dig(doc, "scale_to_output", "stats.scale_to_output")
+    row.update(covered_fields(doc))
     row.update({
-        "tile size": ts,
-        "tile mm": ts * scale if isinstance(ts, (int, float)) and isinstance(scale, (int, float))
-        else dig(doc, "tile_mm"),
+        "tile mm": ts,
         "quads": dig(doc, "stats.quads", "shell.quads", "map.quads", "quads"),
         "bare quads": dig(doc, "stats.bare_quads", "map.bare_quads", "bare_quads"),
-        "coverage": cov if isinstance(cov, (int, float)) else None,
         "faces out": dig(doc, "stats.faces", "check.faces", "map.faces"),
         "report": doc,
     })
@@ -340,6 +335,16 @@ def fmt(v) -> str:
     return str(v).replace("|", "\\|").replace("\n", " ")
 
 
+def covered_fields(doc: dict) -> dict:
+    """Coverage columns from a --report JSON: within one tile (the target) and a quarter."""
+    out = {}
+    for col, key in (("covered 1 tile", "within_tile"), ("covered 1/4 tile",
+                                                          "within_quarter_tile")):
+        v = dig(doc, f"coverage.{key}", f"shell.coverage.{key}")
+        out[col] = v if isinstance(v, (int, float)) else None
+    return out
+
+
 def write_results(rows: list[dict], rejected: list[dict], meta: dict, name: str) -> None:
     res = HERE / "results"
     res.mkdir(exist_ok=True)
@@ -358,9 +363,10 @@ def write_results(rows: list[dict], rejected: list[dict], meta: dict, name: str)
              f"geotex commit `{meta['commit']}`; machine: {meta['machine']}; jobs {meta['jobs']}.",
              f"Seconds and peak MB (maximum resident set) are those of the `geotex texture` "
              f"process; the judges' own time is in the .json (`slicers.seconds`). "
-             f"Tile size is in the base's units, tile mm after the {SIZE_MM:g} mm scaling; "
-             f"coverage is the report's share of the base within a quarter tile of the shell "
-             f"(`coverage.within_quarter_tile`); quads, bare quads, faces out come from the "
+             f"Tile mm: the tile size chosen automatically, at print size; coverage: the "
+             f"share of the base area within one tile (target >= 0.99) and within a quarter "
+             f"tile of the fitted surface (`coverage.within_tile`, `within_quarter_tile`); "
+             f"quads, bare quads, faces out come from the "
              f"report (blank: not reported). geotex `no file`: the job wrote nothing.", "",
              f"**{ok} of {len(rows)} rows accepted by all three judges.**", "",
              "| " + " | ".join(COLUMNS) + " |",
