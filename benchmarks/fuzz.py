@@ -57,12 +57,12 @@ def run_peer(cases, *, batch: int = 25, workers: int = 2):
     """trimesh on every case; list of (case, outcome, seconds, maxrss)."""
     from concurrent.futures import ThreadPoolExecutor
 
-    from geotex.fuzzing import _env, _run   # same limits as the geotex runs
+    from geotex.fuzzing import limited_env, run_limited   # the limits of the geotex runs
 
-    env = _env()
+    env = limited_env()
 
     def job(group):
-        code, out, err, sec, rss = _run([sys.executable, "-c", _PEER]
+        code, out, err, sec, rss = run_limited([sys.executable, "-c", _PEER]
                                         + [str(c.path) for c in group],
                                         TIME_LIMIT * len(group), env)
         rows = {}
@@ -78,7 +78,7 @@ def run_peer(cases, *, batch: int = 25, workers: int = 2):
             if row is not None:
                 results.append((c, row["outcome"], row["seconds"], rss))
                 continue
-            code, out, err, sec, rss1 = _run([sys.executable, "-c", _PEER, str(c.path)],
+            code, out, err, sec, rss1 = run_limited([sys.executable, "-c", _PEER, str(c.path)],
                                              TIME_LIMIT, env)
             line = out.strip().splitlines()[-1:] if out.strip() else []
             if line:

@@ -396,7 +396,7 @@ def _limit_address_space():  # pragma: no cover - runs in the child
     os.nice(5)
 
 
-def _run(cmd, timeout, env):
+def run_limited(cmd, timeout, env):
     """Run ``cmd``; return (code or None, stdout, stderr, seconds, maxrss bytes)."""
     import subprocess
     import tempfile
@@ -425,7 +425,7 @@ def _run(cmd, timeout, env):
                 err.read().decode("utf-8", "replace"), seconds, usage.ru_maxrss * 1024)
 
 
-def _env():
+def limited_env():
     env = dict(os.environ)
     root = str(Path(__file__).resolve().parent.parent)
     env["PYTHONPATH"] = root + os.pathsep + env.get("PYTHONPATH", "")
@@ -438,7 +438,7 @@ def run_cases(cases, *, batch: int = 40, workers: int = 2) -> list[Outcome]:
     """Run ``geotex check`` on every case (see the module notes); outcomes in order."""
     from concurrent.futures import ThreadPoolExecutor
 
-    env = _env()
+    env = limited_env()
     jobs = []
     ordinary = [c for c in cases if not c.hostile]
     for c in cases:
@@ -450,10 +450,10 @@ def run_cases(cases, *, batch: int = 40, workers: int = 2) -> list[Outcome]:
     def run_job(group):
         if len(group) == 1 and group[0].hostile:
             c = group[0]
-            code, out, err, sec, rss = _run([sys.executable, "-m", "geotex", "check",
+            code, out, err, sec, rss = run_limited([sys.executable, "-m", "geotex", "check",
                                              str(c.path)], TIME_LIMIT, env)
             return [Outcome(c, code, out, err, sec, rss)]
-        code, out, err, sec, rss = _run([sys.executable, "-m", "geotex.fuzzing"]
+        code, out, err, sec, rss = run_limited([sys.executable, "-m", "geotex.fuzzing"]
                                         + [str(c.path) for c in group],
                                         TIME_LIMIT * len(group), env)
         rows = {}
@@ -467,7 +467,7 @@ def run_cases(cases, *, batch: int = 40, workers: int = 2) -> list[Outcome]:
         for c in group:
             row = rows.get(str(c.path))
             if row is None:           # the batch died: attribute by rerunning alone
-                c2, o2, e2, s2, r2 = _run([sys.executable, "-m", "geotex", "check",
+                c2, o2, e2, s2, r2 = run_limited([sys.executable, "-m", "geotex", "check",
                                            str(c.path)], TIME_LIMIT, env)
                 results.append(Outcome(c, c2, o2, e2, s2, r2, [f"batch exit {code}"]))
                 continue
