@@ -63,8 +63,8 @@ def run_peer(cases, *, batch: int = 25, workers: int = 2):
 
     def job(group):
         code, out, err, sec, rss = run_limited([sys.executable, "-c", _PEER]
-                                        + [str(c.path) for c in group],
-                                        TIME_LIMIT * len(group), env)
+                                               + [str(c.path) for c in group],
+                                               TIME_LIMIT * len(group), env)
         rows = {}
         for line in out.splitlines():
             try:
@@ -79,7 +79,7 @@ def run_peer(cases, *, batch: int = 25, workers: int = 2):
                 results.append((c, row["outcome"], row["seconds"], rss))
                 continue
             code, out, err, sec, rss1 = run_limited([sys.executable, "-c", _PEER, str(c.path)],
-                                             TIME_LIMIT, env)
+                                                    TIME_LIMIT, env)
             line = out.strip().splitlines()[-1:] if out.strip() else []
             if line:
                 row = json.loads(line[0])

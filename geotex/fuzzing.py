@@ -451,11 +451,11 @@ def run_cases(cases, *, batch: int = 40, workers: int = 2) -> list[Outcome]:
         if len(group) == 1 and group[0].hostile:
             c = group[0]
             code, out, err, sec, rss = run_limited([sys.executable, "-m", "geotex", "check",
-                                             str(c.path)], TIME_LIMIT, env)
+                                                   str(c.path)], TIME_LIMIT, env)
             return [Outcome(c, code, out, err, sec, rss)]
         code, out, err, sec, rss = run_limited([sys.executable, "-m", "geotex.fuzzing"]
-                                        + [str(c.path) for c in group],
-                                        TIME_LIMIT * len(group), env)
+                                               + [str(c.path) for c in group],
+                                               TIME_LIMIT * len(group), env)
         rows = {}
         for line in out.splitlines():
             try:
@@ -468,7 +468,7 @@ def run_cases(cases, *, batch: int = 40, workers: int = 2) -> list[Outcome]:
             row = rows.get(str(c.path))
             if row is None:           # the batch died: attribute by rerunning alone
                 c2, o2, e2, s2, r2 = run_limited([sys.executable, "-m", "geotex", "check",
-                                           str(c.path)], TIME_LIMIT, env)
+                                                 str(c.path)], TIME_LIMIT, env)
                 results.append(Outcome(c, c2, o2, e2, s2, r2, [f"batch exit {code}"]))
                 continue
             notes = [] if not err.strip() else [f"batch stderr: {err.strip()[:200]}"]
