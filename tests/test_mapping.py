@@ -224,3 +224,24 @@ def test_every_catalog_set_on_every_catalog_shell_writes_a_printable_file(tmp_pa
 def test_catalog_has_closed_sets_and_shells():
     assert {"studs", "knurl", "chainmail", "studs-complete"} <= set(_closed_sets())
     assert {"spot", "bob", "blub", "torus"} <= set(_catalog_shells())
+
+
+def test_folded_elements_are_shrunk_in_place_rather_than_dropped():
+    from geotex.mapping import folded_elements
+    from geotex.shells import load_named as load_shell
+    from geotex.tiles.catalog import load_named as load_tiles
+
+    shell, tiles = load_shell("blub"), load_tiles("studs")
+    res = textured_solid(shell, tiles, seed=0)
+    s = res.stats
+    assert res.report.printable, res.report.reasons
+    # Blub's fins fold some studs; most of those are re-seated, smaller
+    assert s["elements_reseated"] > s["elements_folded"] / 2 > 0
+    # the re-seated elements are free of self-crossings (only the rest are left out)
+    pc = shell.polycube
+    colors = edge_colors(pc.edge_axis, tiles.n_colors, seed=0)
+    tq = tiles_for_quads(tiles, pc.quad_axes, pc.quad_edge, colors, bare=pc.quad_folded)
+    h = texture_height(shell, tiles)
+    m = mapped_tiles(shell, tiles, tq, scale=h / tiles.height, anchor=0.2 * shell.tile_size)
+    label, folded = folded_elements(m.vertices, m.faces)
+    assert folded.size == s["elements_folded"] + s["elements_reseated"]

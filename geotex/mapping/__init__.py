@@ -2,13 +2,17 @@
 
 :func:`textured_solid` runs the whole job; its steps are :func:`edge_colors`
 and :func:`tiles_for_quads` (which tile where), :func:`mapped_tiles` (tile
-geometry into shell space, welded) and :func:`united_with_base` (one solid).
+geometry into shell space, welded), :func:`folded_elements` and
+:func:`reseated_elements` (elements the map folds, shrunk in place where that
+helps) and :func:`united_with_base` (one solid).
 """
 
 from geotex.mapping.assign import edge_colors, tiles_for_quads
-from geotex.mapping.place import MappedTiles, mapped_tiles
-from geotex.mapping.texture import MAP_PROGRESS, MAP_STAGES, TexturedSolid, texture_height, textured_solid
-from geotex.mapping.union import UnionStats, united_with_base
+from geotex.mapping.place import MappedTiles, mapped_tiles, reseated_elements, shell_positions
+from geotex.mapping.texture import (MAP_PROGRESS, MAP_STAGES, TexturedSolid, texture_height,
+                                    textured_solid)
+from geotex.mapping.union import UnionStats, folded_elements, united_with_base
 
-__all__ = ["textured_solid", "TexturedSolid", "MAP_STAGES", "MAP_PROGRESS", "texture_height", "edge_colors",
-           "tiles_for_quads", "mapped_tiles", "MappedTiles", "united_with_base", "UnionStats"]
+__all__ = ["textured_solid", "TexturedSolid", "MAP_STAGES", "MAP_PROGRESS", "texture_height",
+           "edge_colors", "tiles_for_quads", "mapped_tiles", "MappedTiles", "shell_positions",
+           "folded_elements", "reseated_elements", "united_with_base", "UnionStats"]

@@ -20,7 +20,8 @@ import numpy as np
 from geotex.shells.locate import interpolated
 from geotex.tiles.tileset import TileSet
 
-__all__ = ["gathered_tiles", "side_keys", "MappedTiles", "mapped_tiles"]
+__all__ = ["gathered_tiles", "side_keys", "MappedTiles", "mapped_tiles", "shell_positions",
+           "reseated_elements", "depth_scale"]
 
 
 def _ranges(starts: np.ndarray, counts: np.ndarray) -> np.ndarray:
@@ -120,12 +121,18 @@ class MappedTiles:
         Side vertices merged with their twin across a quad edge.
     dropped_faces : int
         Faces of elements left open (beside a quad without a tile).
+    quads : numpy.ndarray, (N,) int64
+        Quad every vertex was mapped through.
+    tile_points : numpy.ndarray, (N, 3) float64
+        Its ``(u, v, w)`` in that quad's tile frame.
     """
 
     vertices: np.ndarray
     faces: np.ndarray
     welded: int
     dropped_faces: int
+    quads: np.ndarray
+    tile_points: np.ndarray
 
 
 def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: float,
@@ -183,13 +190,101 @@ def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: floa
     used[faces.ravel()] = True
     new_index = np.cumsum(used) - 1
     kept = np.flatnonzero(used)
-    face, bary = pc.locate(quad_of_vertex[kept], uvw[kept, :2])
+    X = shell_positions(shell, quad_of_vertex[kept], uvw[kept], scale=scale,
+                        depth_scale=depth_scale(tiles, scale, anchor))
+    return MappedTiles(X, new_index[faces], int(on.sum() - start.sum()),
+                       int((~keep_face).sum()), quad_of_vertex[kept], uvw[kept])
+
+
+def depth_scale(tiles: TileSet, scale: float, anchor) -> float:
+    """World length of one unit of ``w`` below the surface (the anchor's stretch)."""
+    if anchor is None or tiles.depth <= 0:
+        return float(scale)
+    return float(scale) * max(1.0, float(anchor) / (tiles.depth * float(scale)))
+
+
+def shell_positions(shell, quads: np.ndarray, uvw: np.ndarray, *, scale: float,
+                    depth_scale: float | None = None) -> np.ndarray:
+    """Shell positions of tile points: ``x + w d`` at the located base point.
+
+    Parameters
+    ----------
+    shell : Shell
+    quads : numpy.ndarray, (k,) int64
+    uvw : numpy.ndarray, (k, 3) float64
+        Tile coordinates; ``w`` in tile units.
+    scale : float
+        World length of one unit of ``w`` above the surface.
+    depth_scale : float, optional
+        The same below the surface (default ``scale``).
+
+    Returns
+    -------
+    numpy.ndarray, (k, 3) float64
+    """
+    pc = shell.polycube
+    face, bary = pc.locate(quads, uvw[:, :2])
     YD = interpolated(np.hstack([pc.Y, shell.D]), pc.F, face, bary)
     d = YD[:, 3:]
     d /= np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-300)
-    w = uvw[kept, 2] * float(scale)
-    if anchor is not None and tiles.depth > 0:
-        w = np.where(w < 0, w * max(1.0, float(anchor) / (tiles.depth * float(scale))), w)
-    X = YD[:, :3] + w[:, None] * d
-    return MappedTiles(X, new_index[faces], int(on.sum() - start.sum()),
-                       int((~keep_face).sum()))
+    below = float(scale if depth_scale is None else depth_scale)
+    w = np.where(uvw[:, 2] < 0, uvw[:, 2] * below, uvw[:, 2] * float(scale))
+    return YD[:, :3] + w[:, None] * d
+
+
+def reseated_elements(shell, mapped: "MappedTiles", label: np.ndarray, elements, *,
+                      scale: float, depth_scale: float, factors=(0.75, 0.55)
+                      ) -> tuple[np.ndarray, np.ndarray]:
+    """Shrink folded elements in tile space about their centre and map them again.
+
+    An element the shell map folds onto itself (where the map bends it
+    around a crease) is scaled about the centre of its footprint (``u, v``)
+    and its height (``w``) by each of ``factors`` in turn, mapped again and
+    kept at the first size whose mapped faces do not cross each other
+    (exact test). Elements that span several quads are not changed.
+
+    Parameters
+    ----------
+    shell : Shell
+    mapped : MappedTiles
+    label : numpy.ndarray, (M,) int64
+        Element of every face of ``mapped.faces``.
+    elements : array_like of int
+        The folded elements.
+    scale, depth_scale : float
+        As in :func:`shell_positions`.
+    factors : sequence of float
+        Shrink factors tried.
+
+    Returns
+    -------
+    X : numpy.ndarray, (N, 3) float64
+        Mapped positions with the re-seated elements moved.
+    still_folded : numpy.ndarray, (k,) int64
+        Elements that could not be re-seated.
+    """
+    from geotex.check.intersections import self_intersecting_pairs
+
+    X = mapped.vertices.copy()
+    G = mapped.faces
+    order = np.argsort(label, kind="stable")
+    starts = np.searchsorted(label[order], np.arange(int(label.max()) + 2))
+    still = []
+    for e in np.asarray(elements, dtype=np.int64):
+        faces = G[order[starts[e]:starts[e + 1]]]
+        verts, local = np.unique(faces, return_inverse=True)
+        quads = mapped.quads[verts]
+        if np.any(quads != quads[0]):
+            still.append(e)
+            continue
+        uvw = mapped.tile_points[verts]
+        centre = 0.5 * (uvw[:, :2].min(axis=0) + uvw[:, :2].max(axis=0))
+        for f in factors:
+            P = np.column_stack([centre + f * (uvw[:, :2] - centre), f * uvw[:, 2]])
+            Xe = shell_positions(shell, quads, P, scale=scale, depth_scale=depth_scale)
+            if self_intersecting_pairs(Xe, local.reshape(-1, 3), max_pairs=1).size == 0:
+                X[verts] = Xe
+                break
+        else:
+            still.append(e)
+    return X, np.asarray(still, dtype=np.int64)

@@ -18,8 +18,8 @@ import numpy as np
 from geotex.check.report import CHECK_STAGES, CheckReport
 from geotex.errors import GeotexError, InputError
 from geotex.mapping.assign import edge_colors, tiles_for_quads
-from geotex.mapping.place import mapped_tiles
-from geotex.mapping.union import UNION_STAGES, united_with_base
+from geotex.mapping.place import depth_scale, mapped_tiles, reseated_elements
+from geotex.mapping.union import UNION_STAGES, folded_elements, united_with_base
 from geotex.printing.stored import printable_stored_solid
 from geotex.progress import report
 
@@ -179,13 +179,19 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
     times["assign"] = time.perf_counter() - t0
     report(progress, "map")
     t = time.perf_counter()
-    mapped = mapped_tiles(shell, tiles, tile_of_quad, scale=h / tiles.height,
+    scale = h / tiles.height
+    mapped = mapped_tiles(shell, tiles, tile_of_quad, scale=scale,
                           anchor=ANCHOR * shell.tile_size)
     times["map"] = time.perf_counter() - t
     report(progress, "union")
     t = time.perf_counter()
+    # elements the map folds onto themselves are shrunk in place where that helps
+    label, folded = folded_elements(mapped.vertices, mapped.faces)
+    X, still = reseated_elements(shell, mapped, label, folded, scale=scale,
+                                 depth_scale=depth_scale(tiles, scale, ANCHOR * shell.tile_size))
+    mapped = dataclasses.replace(mapped, vertices=X)
     V, F, union = united_with_base(shell.base_vertices, shell.base_faces, mapped.vertices,
-                                   mapped.faces, progress=progress)
+                                   mapped.faces, folded=still, progress=progress)
     times["union"] = time.perf_counter() - t
     rep = None
     retried = 0
@@ -208,7 +214,7 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
             exclude = _elements_near(points, mapped.vertices, mapped.faces, exclude)
             V, F, union = united_with_base(shell.base_vertices, shell.base_faces,
                                            mapped.vertices, mapped.faces, exclude=exclude,
-                                           progress=progress)
+                                           folded=still, progress=progress)
             solid = printable_stored_solid(V, F, precision=np.float32, rebuild=True,
                                            max_examples=ALL_DEFECTS, progress=progress)
             retried += 1
@@ -224,7 +230,9 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
              "mapped_faces": int(mapped.faces.shape[0]), "welded": mapped.welded,
              "open_faces_dropped": mapped.dropped_faces, "elements": union.elements,
              "union_operands": union.groups, "elements_floating": union.floating,
-             "elements_folded": union.folded, "union_retries": retried, **cleanup,
+             "elements_folded": union.folded,
+             "elements_reseated": int(folded.size - still.size),
+             "union_retries": retried, **cleanup,
              "vertices": int(V.shape[0]), "faces": int(F.shape[0]),
              "seconds": {k: round(v, 3) for k, v in times.items()}}
     return TexturedSolid(V, F, tile_of_quad, rep, stats)

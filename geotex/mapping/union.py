@@ -23,7 +23,7 @@ from geotex.errors import GeotexError
 from geotex.mesh.topology import compacted, face_components
 from geotex.progress import report
 
-__all__ = ["united_with_base", "element_groups", "UnionStats", "SLIVER_TOLERANCE",
+__all__ = ["united_with_base", "folded_elements", "element_groups", "UnionStats", "SLIVER_TOLERANCE",
            "UNION_STAGES"]
 
 #: Stage names passed to the ``progress`` callback of :func:`united_with_base`.
@@ -101,8 +101,25 @@ def element_groups(X: np.ndarray, G: np.ndarray) -> tuple[np.ndarray, np.ndarray
     return label, np.array([colour[i] for i in range(n_el)], dtype=np.int64)
 
 
+def folded_elements(X: np.ndarray, G: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Elements whose faces cross each other (the map folded them), exact test.
+
+    Returns
+    -------
+    label : numpy.ndarray, (l,) int64
+        Element of every face (:func:`geotex.mesh.topology.face_components`).
+    folded : numpy.ndarray, (k,) int64
+        Sorted folded elements.
+    """
+    _, label = face_components(G, X.shape[0])
+    pairs = self_intersecting_pairs(X, G)
+    same = label[pairs[:, 0]] == label[pairs[:, 1]]
+    return label, np.unique(label[pairs[same, 0]])
+
+
 def united_with_base(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray, *,
-                     exclude=None, progress=None) -> tuple[np.ndarray, np.ndarray, UnionStats]:
+                     exclude=None, folded=None, progress=None
+                     ) -> tuple[np.ndarray, np.ndarray, UnionStats]:
     """One solid: the base plus every usable closed element.
 
     Parameters
@@ -116,6 +133,9 @@ def united_with_base(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray,
     exclude : numpy.ndarray, (n_elements,) bool, optional
         Elements to leave out, numbered as by
         :func:`geotex.mesh.topology.face_components` of ``G``.
+    folded : array_like of int, optional
+        Elements already known to be folded (:func:`folded_elements`); by
+        default they are found here.
     progress : callable, optional
         Called with each stage of :data:`UNION_STAGES`.
 
@@ -143,8 +163,9 @@ def united_with_base(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray,
     label, group = element_groups(X, G)
     # an element the map folded onto itself cannot be united: leave it out
     report(progress, UNION_STAGES[0])
-    pairs = self_intersecting_pairs(X, G)
-    folded = np.unique(label[pairs[:, 0]][label[pairs[:, 0]] == label[pairs[:, 1]]])
+    if folded is None:
+        folded = folded_elements(X, G)[1]
+    folded = np.asarray(folded, dtype=np.int64)
     group[folded] = -1
     if exclude is not None:
         group[np.asarray(exclude, dtype=bool)] = -1
