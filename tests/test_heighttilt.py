@@ -438,18 +438,11 @@ def test_texture_record_is_immutable_copy():
 
 def test_fast_kernels_match_the_reference_implementations():
     from geotex.fields.oneforms import decode_one_form_at_vertices
-    from geotex.heighttilt._kernels import edge_topology_fast
     from geotex.heighttilt.base import base_geometry
     rng = np.random.default_rng(0)
     for V, F, _ in (spiky_sphere(subdivisions=2, seed=0), bumpy_plane(5, 7, seed=1),
                     tentacle_stick(n_around=8, n_along=10, seed=2)):
         F = F[rng.permutation(len(F))]
-        # shuffled faces, some flipped, some repeated (non-manifold): same topology arrays
-        Fx = np.concatenate([np.where(rng.random((len(F), 1)) < 0.3, F[:, ::-1], F), F[:3]])
-        a, b = edge_topology(Fx, len(V)), edge_topology_fast(Fx, len(V))
-        for k in ("edges", "half_to_edge", "face_count", "forward_count"):
-            assert np.array_equal(getattr(a, k), getattr(b, k))
-            assert getattr(a, k).dtype == getattr(b, k).dtype
         c = rng.normal(size=edge_topology(F, len(V)).edges.shape[0])
         np.testing.assert_allclose(base_geometry(V, F).decode(c),
                                    decode_one_form_at_vertices(V, F, c), atol=1e-12)

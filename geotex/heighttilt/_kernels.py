@@ -1,11 +1,10 @@
 """Vectorized kernels shared by extraction and reconstruction (private).
 
 Everything here works on already validated arrays and is written for large
-meshes: one pass of per-face geometry, column-wise float64 arithmetic instead
-of ``(m, 3, 3)`` temporaries, and a single sort for the edge topology.
+meshes: one pass of per-face geometry and column-wise float64 arithmetic
+instead of ``(m, 3, 3)`` temporaries; the edge topology is
+:func:`geotex.mesh.topology.edge_topology` (one sort of int64 half-edge keys).
 
-* :func:`edge_topology_fast` gives exactly :func:`geotex.mesh.topology.edge_topology`
-  (same edge order, same arrays) with one stable argsort of the half-edge keys.
 * :meth:`BaseGeometry.decode` is :func:`geotex.fields.oneforms.decode_one_form_at_vertices`
   with ``weighting="uniform"`` on meshes without degenerate faces (the only
   meshes a height-and-tilt base may be): the mean over the incident faces of
@@ -20,9 +19,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from geotex.mesh.topology import EdgeTopology
+from geotex.mesh.topology import EdgeTopology, edge_topology
 
-__all__ = ["edge_topology_fast", "cross", "dot", "edge_encode", "lowest_neighbours",
+__all__ = ["cross", "dot", "edge_encode", "lowest_neighbours",
            "BaseGeometry"]
 
 
@@ -38,49 +37,6 @@ def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 def dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Row-wise dot product of ``(k, 3)`` arrays."""
     return a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1] + a[:, 2] * b[:, 2]
-
-
-def edge_topology_fast(F: np.ndarray, n: int) -> EdgeTopology:
-    """:func:`geotex.mesh.topology.edge_topology` with one stable argsort.
-
-    Parameters
-    ----------
-    F : numpy.ndarray, (m, 3) int64
-        Validated faces (indices in ``[0, n)``).
-    n : int
-        Number of vertices.
-
-    Returns
-    -------
-    EdgeTopology
-        Equal, array for array, to ``edge_topology(F, n)``.
-    """
-    a = F.ravel()
-    b = np.roll(F, -1, axis=1).ravel()
-    fwd = a < b
-    key = np.minimum(a, b)
-    key *= max(n, 1)
-    key += np.maximum(a, b)
-    order = np.argsort(key, kind="stable")
-    ks = key[order]
-    del key
-    new = np.empty(ks.shape[0], dtype=bool)
-    if ks.shape[0]:
-        new[0] = True
-        np.not_equal(ks[1:], ks[:-1], out=new[1:])
-    first = np.flatnonzero(new)
-    run = np.cumsum(new, dtype=np.int64)
-    run -= 1
-    inv = np.empty(ks.shape[0], dtype=np.int64)
-    inv[order] = run
-    del run
-    uniq = ks[first]
-    lo = uniq // max(n, 1)
-    edges = np.stack([lo, uniq - lo * max(n, 1)], axis=1)
-    counts = np.diff(np.append(first, ks.shape[0])).astype(np.int64)
-    forward = np.bincount(inv, weights=fwd, minlength=first.shape[0]).astype(np.int64)
-    return EdgeTopology(edges=edges, half_to_edge=inv, face_count=counts,
-                        forward_count=forward)
 
 
 def lowest_neighbours(E: np.ndarray, n: int) -> np.ndarray:
@@ -163,7 +119,7 @@ class BaseGeometry:
     @property
     def topo(self) -> EdgeTopology:
         if self._topo is None:
-            self._topo = edge_topology_fast(self.F, self.V.shape[0])
+            self._topo = edge_topology(self.F, self.V.shape[0])
         return self._topo
 
     def unit_sum_normals(self) -> np.ndarray:

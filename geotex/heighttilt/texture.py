@@ -14,7 +14,7 @@ from geotex.errors import InputError, MeshFileError
 from geotex.io.atomic import atomic_output
 from geotex.io.limits import check_archive
 from geotex.mesh.arrays import as_faces
-from geotex.heighttilt._kernels import edge_topology_fast
+from geotex.mesh.topology import edge_topology
 
 __all__ = ["HeightTiltTexture", "save_texture", "load_texture", "FORMAT_TAG"]
 
@@ -62,7 +62,7 @@ class HeightTiltTexture:
         Fa = np.array(as_faces(self.faces, n, name="faces"), dtype=np.int64)
         if Fa.shape[0] == 0:
             raise InputError("faces is empty: a texture needs a connectivity")
-        e = edge_topology_fast(Fa, n).edges.shape[0]
+        e = edge_topology(Fa, n).edges.shape[0]
         t = np.array(self.tilt, dtype=np.float64)
         if t.shape != (e,):
             raise InputError(f"tilt must have shape ({e},), one coefficient per unique edge "
