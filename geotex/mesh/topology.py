@@ -202,6 +202,42 @@ def neighbour_mean(F: np.ndarray, n_vertices: int) -> sp.csr_matrix:
     return sp.csr_matrix((w, (i, j)), shape=(n_vertices, n_vertices))
 
 
+def faces_within_rings(F: np.ndarray, n_vertices: int, pairs: np.ndarray, rings: int
+                       ) -> np.ndarray:
+    """Which face pairs lie within ``rings`` vertex rings of each other.
+
+    Parameters
+    ----------
+    F : numpy.ndarray, (m, 3) int64
+    n_vertices : int
+    pairs : numpy.ndarray, (p, 2) int64
+        Face index pairs.
+    rings : int
+        0: the faces share a vertex; ``k``: a vertex of the second face is at
+        most ``k`` edges from a vertex of the first.
+
+    Returns
+    -------
+    numpy.ndarray, (p,) bool
+    """
+    pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+    p = pairs.shape[0]
+    if p == 0:
+        return np.zeros(0, dtype=bool)
+    E = edge_topology(F, n_vertices).edges
+    step = sp.csr_matrix((np.ones(2 * E.shape[0] + n_vertices),
+                          (np.concatenate([E[:, 0], E[:, 1], np.arange(n_vertices)]),
+                           np.concatenate([E[:, 1], E[:, 0], np.arange(n_vertices)]))),
+                         shape=(n_vertices, n_vertices))
+    cols = np.repeat(np.arange(p), 3)
+    reach = sp.csc_matrix((np.ones(3 * p), (F[pairs[:, 0]].ravel(), cols)), shape=(n_vertices, p))
+    for _ in range(rings):
+        reach = step @ reach
+    reach = reach.tocsr()
+    hit = np.asarray(reach[F[pairs[:, 1]].ravel(), cols] != 0).reshape(p, 3)
+    return hit.any(axis=1)
+
+
 def referenced_vertices(F: np.ndarray, n_vertices: int) -> np.ndarray:
     """Return a boolean mask, ``(n_vertices,)``, of vertices used by some face."""
     mask = np.zeros(n_vertices, dtype=bool)

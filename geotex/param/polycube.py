@@ -40,7 +40,7 @@ from geotex.check.intersections import self_intersecting_pairs
 from geotex.errors import GeotexError, InputError
 from geotex.mesh.arrays import as_mesh_arrays
 from geotex.mesh.geometry import face_areas, vertex_normals
-from geotex.mesh.topology import edge_topology, vertex_components
+from geotex.mesh.topology import edge_topology, faces_within_rings, vertex_components
 from geotex.param.distortion import distortion_summary
 from geotex.param.polycube_fit import SurfaceProjector, fitted_surface
 from geotex.param.polycube_quads import chart_axes, quad_edges
@@ -512,8 +512,12 @@ def _bad_quads(fit, F, n_quads, res, *, clearance: float = 0.05) -> np.ndarray:
     pairs = self_intersecting_pairs(np.vstack([Y, lifted]), np.vstack([F, F[:, ::-1] + n]))
     # the offset crossing only itself is a concave crease tighter than the
     # clearance (it limits the shell's height, not the map): not a bridge
-    pairs = pairs[(pairs < m).any(axis=1)]
-    faces = np.concatenate([np.flatnonzero(fit.folded), pairs.ravel() % m])
+    pairs = pairs[(pairs < m).any(axis=1)] % m
+    # nor is a crossing within a couple of rings (a sliver face at a sharp corner
+    # whose offset pokes through its neighbours): the two sides of a bridge are
+    # at least a voxel, ``res`` rings, apart on the surface
+    pairs = pairs[~faces_within_rings(F, n, pairs, max(1, res // 2))]
+    faces = np.concatenate([np.flatnonzero(fit.folded), pairs.ravel()])
     bad = np.zeros(n_quads, dtype=bool)
     bad[faces // (2 * res * res)] = True
     return bad

@@ -161,17 +161,29 @@ def _unit(X: np.ndarray) -> np.ndarray:
     return np.divide(X, n, out=np.zeros_like(X), where=n > 0)
 
 
-def folded_faces(Y: np.ndarray, F: np.ndarray, projector: SurfaceProjector) -> np.ndarray:
-    """Faces of ``(Y, F)`` facing away from the base face closest to their centroid."""
+def folded_faces(Y: np.ndarray, F: np.ndarray, projector: SurfaceProjector,
+                 vertex_base_face: np.ndarray) -> np.ndarray:
+    """Faces of ``(Y, F)`` turned over against the base below them.
+
+    A face is folded when its normal points away both from the base face
+    closest to its centroid and from the summed normals of the base faces its
+    three corners were projected onto (``vertex_base_face``, chosen on the
+    corners' own side). The second test keeps a face that spans a crest
+    thinner than itself (its corners on both flanks, its centroid closest to
+    the underside) from being called folded.
+    """
+    normals = face_normals(Y, F)
     _, below = projector.closest(Y[F].mean(axis=1))
-    return np.einsum("ij,ij->i", face_normals(Y, F), projector.normals[below]) <= 0
+    corner_side = projector.normals[vertex_base_face[F]].sum(axis=1)
+    return ((np.einsum("ij,ij->i", normals, projector.normals[below]) <= 0)
+            & (np.einsum("ij,ij->i", normals, corner_side) <= 0))
 
 
-def _refolded(bad, Y, F, moved, projector) -> np.ndarray:
+def _refolded(bad, Y, F, moved, projector, vertex_base_face) -> np.ndarray:
     """``bad`` with the faces touching the ``moved`` vertices tested again."""
     touch = np.flatnonzero(moved[F].any(axis=1))
     out = bad.copy()
-    out[touch] = folded_faces(Y, F[touch], projector)
+    out[touch] = folded_faces(Y, F[touch], projector, vertex_base_face)
     return out
 
 
@@ -237,7 +249,7 @@ def fitted_surface(P: np.ndarray, F: np.ndarray, projector: SurfaceProjector, *,
                 np.linalg.norm(Y - Y0, axis=1), 99) < tolerance * spacing:
             break
     Y, face = projector.project(Y, side(Y))
-    bad = folded_faces(Y, F, projector)
+    bad = folded_faces(Y, F, projector, face)
     before = int(bad.sum())
     ring = (M != 0).astype(np.float64)
     for rnd in range(repair_rounds):
@@ -254,5 +266,5 @@ def fitted_surface(P: np.ndarray, F: np.ndarray, projector: SurfaceProjector, *,
         for _ in range(10):
             side_idx = _unit(ref[idx] + _unit(inc_idx @ face_cross(Y, F_near)))
             Y[idx], face[idx] = projector.project(M_idx @ Y, side_idx)
-        bad = _refolded(bad, Y, F, sel, projector)
+        bad = _refolded(bad, Y, F, sel, projector, face)
     return SurfaceFit(Y=Y, base_face=face, folded=bad, repaired=before)

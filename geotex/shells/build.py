@@ -15,7 +15,7 @@ kept beside the map, unchanged.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -139,6 +139,66 @@ def max_offset_height(V: np.ndarray, F: np.ndarray, D: np.ndarray, *, steps: int
     return lo
 
 
+PINCH_PROBE = 0.125
+"""Height, in tiles, that every textured quad's offset must reach (see :func:`build_shell`)."""
+
+
+def _pinched_faces(Y, F, D, h) -> np.ndarray:
+    """Faces of ``(Y, F)`` whose offset by ``h`` along ``D`` flips or crosses the surface."""
+    Vo = Y + h * D
+    flipped = np.einsum("ij,ij->i", face_cross(Vo, F), face_cross(Y, F)) <= 0
+    m, n = F.shape[0], Y.shape[0]
+    pairs = self_intersecting_pairs(np.vstack([Y, Vo]), np.vstack([F, F[:, ::-1] + n]))
+    pairs = pairs[(pairs < m).any(axis=1)]     # the offset crossing only itself: a crease
+    return np.unique(np.concatenate([np.flatnonzero(flipped), pairs.ravel() % m]))
+
+
+def _unpinched(pc: PolyCube, D: np.ndarray, *, rounds: int = 4) -> tuple[PolyCube, np.ndarray]:
+    """Offset directions smoothed further where the offset cannot rise :data:`PINCH_PROBE` tiles.
+
+    The safe height is one number for the whole shell, so a single face whose
+    offset flips or crosses the surface right away (a fitted face spanning a
+    crest thinner than itself, its corners' directions on both flanks) would
+    cap the texture everywhere at almost nothing. Around such faces the
+    directions are smoothed more (a wider neighbourhood each round); quads
+    still pinched after the best of ``rounds`` carry no texture (``quad_folded`` is set).
+
+    Returns
+    -------
+    PolyCube
+        ``pc``, with the quads still pinched marked folded.
+    numpy.ndarray, (n, 3) float64
+        The directions.
+    """
+    used = np.flatnonzero(~pc.quad_folded[pc.face_quad])
+    F, h = pc.F[used], PINCH_PROBE * pc.tile_size
+    n = pc.Y.shape[0]
+    M = neighbour_mean(pc.F, n)
+    ring = (M != 0).astype(np.float64)
+    bad = _pinched_faces(pc.Y, F, D, h)
+    best = (bad, D)
+    for rnd in range(rounds):
+        if bad.size == 0:
+            return pc, D
+        sel = np.zeros(n, dtype=bool)
+        sel[F[bad].ravel()] = True
+        for _ in range(2 + rnd):
+            sel = (ring @ sel.astype(np.float64)) > 0
+        D = D.copy()
+        for _ in range(4 * pc.res):
+            Ds = 0.5 * D[sel] + 0.5 * (M @ D)[sel]
+            D[sel] = Ds / np.maximum(np.linalg.norm(Ds, axis=1, keepdims=True), 1e-300)
+        bad = _pinched_faces(pc.Y, F, D, h)
+        if bad.size < best[0].size:
+            best = (bad, D)
+    bad, D = best
+    if bad.size == 0:
+        return pc, D
+    folded = pc.quad_folded.copy()
+    folded[pc.face_quad[used[bad]]] = True
+    return replace(pc, quad_folded=folded), D
+
+
 def build_shell(V, F, *, tile_size: float | None = None, name: str = "shell", source: str = "",
                 recipe: dict | None = None, progress=None, **polycube_options) -> Shell:
     """Build the shell of a closed base mesh.
@@ -180,21 +240,19 @@ def build_shell(V, F, *, tile_size: float | None = None, name: str = "shell", so
     # Smoothing the directions over about a tile lets the shell rise higher in
     # concave creases; too much makes them lean, so a lighter smoothing is
     # tried as well when the first one does not reach half a tile.
-    h, D = -1.0, None
-    used = pc.F[~pc.quad_folded[pc.face_quad]]
-    upper = 2.0 * pc.tile_size
-    base_normals = face_cross(pc.Y, used)
+    h, D, upper, fitted = -1.0, None, 2.0 * pc.tile_size, pc
     for steps in (8 * pc.res, 2 * pc.res):
-        Dk = offset_directions(pc.Y, pc.F, smoothing=steps)
+        pck, Dk = _unpinched(fitted, offset_directions(fitted.Y, fitted.F, smoothing=steps))
+        used = pck.F[~pck.quad_folded[pck.face_quad]]
         if D is None:
             report(progress, "height")
-        elif not _offset_ok(pc.Y, used, Dk, h + upper / 64, base_normals):
+        elif not _offset_ok(pck.Y, used, Dk, h + upper / 64, face_cross(pck.Y, used)):
             break          # the lighter smoothing cannot beat the first by a step: done
         # a texture taller than two tiles is never wanted: that bounds the search;
         # quads left bare carry no texture and do not limit it
-        hk = max_offset_height(pc.Y, used, Dk, upper=upper, steps=6)
+        hk = max_offset_height(pck.Y, used, Dk, upper=upper, steps=6)
         if hk > h:
-            h, D = hk, Dk
+            h, D, pc = hk, Dk, pck
         if h >= 0.5 * pc.tile_size:
             break
     return Shell(name=name, polycube=pc, D=D, max_height=float(h),
