@@ -227,7 +227,7 @@ def test_catalog_has_closed_sets_and_shells():
 
 
 def test_folded_elements_are_shrunk_in_place_rather_than_dropped():
-    from geotex.mapping import folded_elements
+    from geotex.mapping import element_contacts
     from geotex.shells import load_named as load_shell
     from geotex.tiles.catalog import load_named as load_tiles
 
@@ -243,5 +243,5 @@ def test_folded_elements_are_shrunk_in_place_rather_than_dropped():
     tq = tiles_for_quads(tiles, pc.quad_axes, pc.quad_edge, colors, bare=pc.quad_folded)
     h = texture_height(shell, tiles)
     m = mapped_tiles(shell, tiles, tq, scale=h / tiles.height, anchor=0.2 * shell.tile_size)
-    label, folded = folded_elements(m.vertices, m.faces)
+    folded = element_contacts(m.vertices, m.faces).folded
     assert folded.size == s["elements_folded"] + s["elements_reseated"]

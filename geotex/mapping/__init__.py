@@ -2,7 +2,7 @@
 
 :func:`textured_solid` runs the whole job; its steps are :func:`edge_colors`
 and :func:`tiles_for_quads` (which tile where), :func:`mapped_tiles` (tile
-geometry into shell space, welded), :func:`folded_elements` and
+geometry into shell space, welded), :func:`element_contacts` and
 :func:`reseated_elements` (elements the map folds, shrunk in place where that
 helps) and :func:`united_with_base` (one solid).
 """
@@ -11,8 +11,9 @@ from geotex.mapping.assign import edge_colors, tiles_for_quads
 from geotex.mapping.place import MappedTiles, mapped_tiles, reseated_elements, shell_positions
 from geotex.mapping.texture import (MAP_PROGRESS, MAP_STAGES, TexturedSolid, texture_height,
                                     textured_solid)
-from geotex.mapping.union import UnionStats, folded_elements, united_with_base
+from geotex.mapping.union import ElementContacts, UnionStats, element_contacts, united_with_base
 
 __all__ = ["textured_solid", "TexturedSolid", "MAP_STAGES", "MAP_PROGRESS", "texture_height",
            "edge_colors", "tiles_for_quads", "mapped_tiles", "MappedTiles", "shell_positions",
-           "folded_elements", "reseated_elements", "united_with_base", "UnionStats"]
+           "element_contacts", "ElementContacts",
+           "reseated_elements", "united_with_base", "UnionStats"]

@@ -19,7 +19,7 @@ from geotex.check.report import CHECK_STAGES, CheckReport
 from geotex.errors import GeotexError, InputError
 from geotex.mapping.assign import edge_colors, tiles_for_quads
 from geotex.mapping.place import depth_scale, mapped_tiles, reseated_elements
-from geotex.mapping.union import UNION_STAGES, folded_elements, united_with_base
+from geotex.mapping.union import UNION_STAGES, element_contacts, united_with_base
 from geotex.printing.stored import printable_stored_solid
 from geotex.progress import report
 
@@ -186,12 +186,15 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
     report(progress, "union")
     t = time.perf_counter()
     # elements the map folds onto themselves are shrunk in place where that helps
-    label, folded = folded_elements(mapped.vertices, mapped.faces)
-    X, still = reseated_elements(shell, mapped, label, folded, scale=scale,
+    contacts = element_contacts(mapped.vertices, mapped.faces)
+    folded = contacts.folded
+    X, still = reseated_elements(shell, mapped, contacts.label, folded, scale=scale,
                                  depth_scale=depth_scale(tiles, scale, ANCHOR * shell.tile_size))
     mapped = dataclasses.replace(mapped, vertices=X)
+    moved = np.setdiff1d(folded, still)
     V, F, union = united_with_base(shell.base_vertices, shell.base_faces, mapped.vertices,
-                                   mapped.faces, folded=still, progress=progress)
+                                   mapped.faces, contacts=contacts, moved=moved,
+                                   progress=progress)
     times["union"] = time.perf_counter() - t
     rep = None
     retried = 0
@@ -200,9 +203,11 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
         report(progress, "validate")
         t = time.perf_counter()
         # judged as an STL stores it (float32; every other format stores these
-        # values exactly), after collapsing what the rounding broke
+        # values exactly); rebuilt by manifold3d only if the rounding broke it.
+        # The union's own cleanup (needle_free) keeps that rare, and manifold3d's
+        # verdict, a subset of the check's, is not asked again
         report(progress, "float32")
-        solid = printable_stored_solid(V, F, precision=np.float32, rebuild=True,
+        solid = printable_stored_solid(V, F, precision=np.float32, manifold3d=False,
                                        max_examples=ALL_DEFECTS, progress=progress)
         # the boolean can leave needle faces where an element grazes the base
         # or a neighbour; leave the elements there out and unite again
@@ -214,8 +219,8 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
             exclude = _elements_near(points, mapped.vertices, mapped.faces, exclude)
             V, F, union = united_with_base(shell.base_vertices, shell.base_faces,
                                            mapped.vertices, mapped.faces, exclude=exclude,
-                                           folded=still, progress=progress)
-            solid = printable_stored_solid(V, F, precision=np.float32, rebuild=True,
+                                           contacts=contacts, moved=moved, progress=progress)
+            solid = printable_stored_solid(V, F, precision=np.float32, manifold3d=False,
                                            max_examples=ALL_DEFECTS, progress=progress)
             retried += 1
         V, F = solid.vertices, solid.faces

@@ -4,10 +4,10 @@ Mapped elements are closed, but the shell map can bend neighbours into each
 other where it is strongly distorted. manifold3d unites any number of
 operands correctly as long as each operand is free of self-intersection, so
 the elements are split into a few groups of pairwise separate ones: a greedy
-colouring of the graph of elements whose bounding boxes overlap. Every group
-is one multi-component operand; one batch boolean adds the groups to the base.
-An element that the map folds onto itself (found by geotex's exact
-self-intersection test) is left out.
+colouring of the graph of elements that meet (one exact self-intersection
+test of all elements finds those, and the elements the map folds onto
+themselves, which are left out). Every group is one multi-component operand;
+one batch boolean adds the groups to the base.
 Pieces of the result that are not part of the body (elements that float above
 a concave base) are left out, so the print is one solid.
 """
@@ -15,25 +15,27 @@ a concave base) are left out, so the print is one solid.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
 from geotex.check.intersections import self_intersecting_pairs
 from geotex.errors import GeotexError
+from geotex.mesh.needles import needle_free
 from geotex.mesh.topology import compacted, face_components
 from geotex.progress import report
 
-__all__ = ["united_with_base", "folded_elements", "element_groups", "UnionStats", "SLIVER_TOLERANCE",
-           "UNION_STAGES"]
+__all__ = ["united_with_base", "element_contacts", "ElementContacts", "element_groups",
+           "UnionStats", "SLIVER_TOLERANCE", "UNION_STAGES"]
 
 #: Stage names passed to the ``progress`` callback of :func:`united_with_base`.
 UNION_STAGES = ("union: folded elements", "union: boolean", "union: slivers")
 
-#: The union's result is simplified at this fraction of the bounding-box
-#: diagonal (manifold3d ``simplify``: short edges and needle triangles
-#: collapse). 1e-6 (0.1 micrometre on a 100 mm part) is about ten float32
-#: steps, so what remains survives the rounding to float32 of an STL file;
-#: at 1e-7 the rounding broke hundreds of slivers on chain mail.
+#: Needle triangles of the union lower than this fraction of the bounding-box
+#: diagonal are removed (:func:`geotex.mesh.needles.needle_free`). 1e-6 (0.1
+#: micrometre on a 100 mm part) is about ten float32 steps, so what remains
+#: survives the rounding to float32 of an STL file; at 1e-7 the rounding broke
+#: hundreds of slivers on chain mail.
 SLIVER_TOLERANCE = 1e-6
 
 
@@ -59,13 +61,63 @@ class UnionStats:
     folded: int = 0
 
 
-def element_groups(X: np.ndarray, G: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Split elements into groups whose members' bounding boxes do not overlap.
+class ElementContacts(NamedTuple):
+    """Which mapped elements cross themselves or each other (exact test).
+
+    Attributes
+    ----------
+    label : numpy.ndarray, (l,) int64
+        Element (connected component) of every face
+        (:func:`geotex.mesh.topology.face_components`).
+    folded : numpy.ndarray, (k,) int64
+        Sorted elements whose own faces cross (the map folded them).
+    touching : numpy.ndarray, (p, 2) int64
+        Pairs ``i < j`` of distinct elements whose faces meet, sorted.
+    """
+
+    label: np.ndarray
+    folded: np.ndarray
+    touching: np.ndarray
+
+
+def element_contacts(X: np.ndarray, G: np.ndarray) -> ElementContacts:
+    """Elements the map folds, and pairs of elements that meet (one exact test).
 
     Parameters
     ----------
     X : numpy.ndarray, (k, 3) float64
     G : numpy.ndarray, (l, 3) int64
+
+    Returns
+    -------
+    ElementContacts
+    """
+    _, label = face_components(G, X.shape[0])
+    pairs = self_intersecting_pairs(X, G)
+    a, b = label[pairs[:, 0]], label[pairs[:, 1]]
+    same = a == b
+    touching = np.unique(np.sort(np.stack([a[~same], b[~same]], axis=1), axis=1), axis=0)
+    return ElementContacts(label, np.unique(a[same]), touching.reshape(-1, 2))
+
+
+def element_groups(X: np.ndarray, G: np.ndarray, *, touching=None, moved=None
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """Split elements into groups whose members do not meet.
+
+    Without ``touching``, members of a group have bounding boxes that do not
+    overlap. With it (from :func:`element_contacts`), only elements that
+    meet, and elements whose box overlaps one that has ``moved`` since,
+    are kept apart, so most elements share the first group.
+
+    Parameters
+    ----------
+    X : numpy.ndarray, (k, 3) float64
+    G : numpy.ndarray, (l, 3) int64
+    touching : numpy.ndarray, (p, 2) int64, optional
+        Pairs of elements that meet.
+    moved : array_like of int, optional
+        Elements moved after ``touching`` was found (their contacts are
+        judged by bounding boxes).
 
     Returns
     -------
@@ -94,6 +146,12 @@ def element_groups(X: np.ndarray, G: np.ndarray) -> tuple[np.ndarray, np.ndarray
         overlap = np.all(np.abs(centre[cand[:, 0]] - centre[cand[:, 1]])
                          <= half[cand[:, 0]] + half[cand[:, 1]], axis=1)
         cand = cand[overlap]
+    if touching is not None:
+        was_moved = np.zeros(n_el, dtype=bool)
+        if moved is not None:
+            was_moved[np.asarray(moved, dtype=np.int64)] = True
+        cand = np.concatenate([np.asarray(touching, dtype=np.int64).reshape(-1, 2),
+                               cand[was_moved[cand].any(axis=1)]])
     graph = nx.Graph()
     graph.add_nodes_from(range(n_el))
     graph.add_edges_from(map(tuple, cand.tolist()))
@@ -101,25 +159,9 @@ def element_groups(X: np.ndarray, G: np.ndarray) -> tuple[np.ndarray, np.ndarray
     return label, np.array([colour[i] for i in range(n_el)], dtype=np.int64)
 
 
-def folded_elements(X: np.ndarray, G: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Elements whose faces cross each other (the map folded them), exact test.
-
-    Returns
-    -------
-    label : numpy.ndarray, (l,) int64
-        Element of every face (:func:`geotex.mesh.topology.face_components`).
-    folded : numpy.ndarray, (k,) int64
-        Sorted folded elements.
-    """
-    _, label = face_components(G, X.shape[0])
-    pairs = self_intersecting_pairs(X, G)
-    same = label[pairs[:, 0]] == label[pairs[:, 1]]
-    return label, np.unique(label[pairs[same, 0]])
-
-
 def united_with_base(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray, *,
-                     exclude=None, folded=None, progress=None
-                     ) -> tuple[np.ndarray, np.ndarray, UnionStats]:
+                     exclude=None, contacts: ElementContacts | None = None, moved=None,
+                     progress=None) -> tuple[np.ndarray, np.ndarray, UnionStats]:
     """One solid: the base plus every usable closed element.
 
     Parameters
@@ -133,9 +175,12 @@ def united_with_base(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray,
     exclude : numpy.ndarray, (n_elements,) bool, optional
         Elements to leave out, numbered as by
         :func:`geotex.mesh.topology.face_components` of ``G``.
-    folded : array_like of int, optional
-        Elements already known to be folded (:func:`folded_elements`); by
-        default they are found here.
+    contacts : ElementContacts, optional
+        Folded and touching elements (:func:`element_contacts`) when already
+        known; by default they are found here.
+    moved : array_like of int, optional
+        Elements moved since ``contacts`` was found (re-seated); an element
+        folded in ``contacts`` that is not moved is left out.
     progress : callable, optional
         Called with each stage of :data:`UNION_STAGES`.
 
@@ -160,12 +205,13 @@ def united_with_base(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray,
                           " run 'geotex repair' on it")
     if len(G) == 0:
         return np.array(V, dtype=np.float64), np.array(F, dtype=np.int64), UnionStats(0, 0, 0)
-    label, group = element_groups(X, G)
     # an element the map folded onto itself cannot be united: leave it out
     report(progress, UNION_STAGES[0])
-    if folded is None:
-        folded = folded_elements(X, G)[1]
-    folded = np.asarray(folded, dtype=np.int64)
+    if contacts is None:
+        contacts = element_contacts(X, G)
+    moved = np.zeros(0, dtype=np.int64) if moved is None else np.asarray(moved, np.int64)
+    folded = np.setdiff1d(contacts.folded, moved)
+    label, group = element_groups(X, G, touching=contacts.touching, moved=moved)
     group[folded] = -1
     if exclude is not None:
         group[np.asarray(exclude, dtype=bool)] = -1
@@ -182,13 +228,13 @@ def united_with_base(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray,
     solid.num_tri()                      # evaluate here (manifold3d is lazy)
     report(progress, UNION_STAGES[2])
     # the boolean leaves needle triangles (area ~1e-13 of the solid) where element
-    # and base surfaces cross nearly tangentially; they fold onto their neighbours.
-    # Collapsing edges below SLIVER_TOLERANCE of the diagonal removes them,
-    # keeping the solid manifold and changing the shape by less than that
-    if SLIVER_TOLERANCE > 0:
-        diag = float(np.linalg.norm(np.ptp(np.vstack([V, X]), axis=0)))
-        solid = solid.simplify(SLIVER_TOLERANCE * diag)
-    V2, F2 = arrays_of_manifold(solid)
+    # and base surfaces cross nearly tangentially; float32 rounding folds them onto
+    # their neighbours. Local collapses and flips remove those lower than
+    # SLIVER_TOLERANCE of the diagonal, keeping the solid closed and manifold and
+    # changing the shape by less than that (manifold3d's simplify at the same
+    # tolerance took longer and kept a third of them, where a collapse moves a crease)
+    diag = float(np.linalg.norm(np.ptp(np.vstack([V, X]), axis=0)))
+    V2, F2, _ = needle_free(*arrays_of_manifold(solid), tolerance=SLIVER_TOLERANCE * diag)
     # elements that do not reach the base (where the fitted surface lies above a
     # concave base) would print as loose pieces: keep the body they are part of
     parts, label = face_components(F2, V2.shape[0])

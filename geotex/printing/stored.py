@@ -111,7 +111,8 @@ class StoredSolid:
 
 
 def printable_stored_solid(V, F, *, precision=np.float32, rebuild: bool = False,
-                           max_examples: int = 5, progress=None) -> StoredSolid:
+                           manifold3d: bool = True, max_examples: int = 5,
+                           progress=None) -> StoredSolid:
     """Round a solid to a file's precision, repair what rounding broke, judge it.
 
     The solid is judged as stored (:func:`stored_form`); if that fails (or
@@ -134,6 +135,9 @@ def printable_stored_solid(V, F, *, precision=np.float32, rebuild: bool = False,
     rebuild : bool, optional
         Rebuild before the first verdict (saves a check when the rounding is
         known to break slivers, as after a boolean).
+    manifold3d : bool, optional
+        Ask manifold3d for its verdict too (see
+        :func:`~geotex.check.report.check_mesh`).
     max_examples : int, optional
         Offending elements kept in the report's ``examples``.
     progress : callable, optional
@@ -149,17 +153,19 @@ def printable_stored_solid(V, F, *, precision=np.float32, rebuild: bool = False,
     InputError
         Malformed arrays or coordinates outside the float32 range.
     """
-    import manifold3d
+    import manifold3d as m3d
+
+    def judged(Vx, Fx):
+        return check_mesh(Vx, Fx, manifold3d=manifold3d, max_examples=max_examples,
+                          progress=progress)
 
     Vs, Fs = stored_form(V, F, precision=precision)
     if not rebuild or Fs.shape[0] == 0:
-        rep = check_mesh(Vs, Fs, max_examples=max_examples, progress=progress)
+        rep = judged(Vs, Fs)
         if rep.printable or Fs.shape[0] == 0:
             return StoredSolid(Vs, Fs, rep)
     solid = manifold_of(Vs, Fs)
-    if solid.status() != manifold3d.Error.NoError:     # not a solid: nothing to rebuild
-        rep = check_mesh(Vs, Fs, max_examples=max_examples, progress=progress)
-        return StoredSolid(Vs, Fs, rep)
+    if solid.status() != m3d.Error.NoError:     # not a solid: nothing to rebuild
+        return StoredSolid(Vs, Fs, judged(Vs, Fs))
     Vc, Fc = stored_form(*arrays_of_manifold(solid), precision=precision)
-    rep = check_mesh(Vc, Fc, max_examples=max_examples, progress=progress)
-    return StoredSolid(Vc, Fc, rep, True, Fs.shape[0] - Fc.shape[0])
+    return StoredSolid(Vc, Fc, judged(Vc, Fc), True, Fs.shape[0] - Fc.shape[0])
