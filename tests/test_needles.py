@@ -84,3 +84,4 @@ def test_collapse_refused_when_the_link_condition_fails():
     V2, F2, ops = needle_free(V, F, tolerance=1e-3)
     assert F2.shape == F.shape
     assert np.array_equal(np.sort(F2, axis=None), np.sort(F, axis=None))
+

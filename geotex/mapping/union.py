@@ -228,11 +228,11 @@ def united_with_base(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray,
     solid.num_tri()                      # evaluate here (manifold3d is lazy)
     report(progress, UNION_STAGES[2])
     # the boolean leaves needle triangles (area ~1e-13 of the solid) where element
-    # and base surfaces cross nearly tangentially; float32 rounding folds them onto
-    # their neighbours. Local collapses and flips remove those lower than
+    # and base surfaces cross nearly tangentially; float32 rounding (STL) folds some
+    # onto their neighbours. Local collapses and flips remove those lower than
     # SLIVER_TOLERANCE of the diagonal, keeping the solid closed and manifold and
     # changing the shape by less than that (manifold3d's simplify at the same
-    # tolerance took longer and kept a third of them, where a collapse moves a crease)
+    # tolerance kept most of them, where a collapse would move a crease)
     diag = float(np.linalg.norm(np.ptp(np.vstack([V, X]), axis=0)))
     V2, F2, _ = needle_free(*arrays_of_manifold(solid), tolerance=SLIVER_TOLERANCE * diag)
     # elements that do not reach the base (where the fitted surface lies above a

@@ -2,26 +2,29 @@
 
 A boolean union leaves triangles whose height is a tiny fraction of the
 model (where two surfaces cross nearly tangentially). Rounding their
-corners to a file's float32 can fold them onto a neighbour. manifold3d's
-``simplify`` collapses most of them but keeps some where the collapse would
-move a crease; :func:`needle_free` removes the rest:
+corners to a file's float32 can fold them onto a neighbour (manifold3d's
+``simplify`` keeps most of them, where a collapse would move a crease).
+:func:`needle_free` removes them:
 
 * a *dart* (one edge shorter than the tolerance) loses that edge: one end
   moves onto the other (the mesh changes by less than the tolerance), when
   the link condition holds (the two ends share exactly the two opposite
-  vertices, so the mesh stays a manifold) and no surrounding face turns over;
+  vertices, so the mesh stays a manifold), no two faces would double up and
+  no surrounding face turns over;
 * a *cap* (every edge long, one corner almost on the opposite edge) has its
   longest edge flipped, when the flipped edge does not exist already and
   both new faces face the way the old ones did.
 
-Operations in one round touch disjoint vertex neighbourhoods; rounds repeat
-while needles remain and something changed. Only the few needle faces are
-visited in Python; everything else is vectorized.
+Every needle proposes its operation; the valid ones whose footprints (the
+vertices whose faces they read or change) are disjoint run together, lowest
+needle first, all vectorized (a million-face union can hold ten thousand
+needles); rounds repeat while needles remain and something changed.
 """
 
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse as sp
 
 from geotex.mesh.geometry import face_cross
 from geotex.mesh.topology import compacted
@@ -102,17 +105,29 @@ def needle_free(V: np.ndarray, F: np.ndarray, *, tolerance: float
     complete = (np.bincount(F[region].ravel(), minlength=V.shape[0])
                 == np.bincount(F.ravel(), minlength=V.shape[0]))
     sub = F[region]
+    height = _heights(V, sub)
     done = 0
     for _ in range(_MAX_ROUNDS):
-        local = needle_faces(V, sub, tolerance=tolerance)
-        local = local[complete[sub[local]].all(axis=1)]
+        local = np.flatnonzero(height < tolerance)
+        local = local[np.argsort(height[local], kind="stable")]
         if local.size == 0:
             break
-        applied = _one_round(V, sub, local, tolerance)
+        # one round reads the fans of the needles' corners only
+        corner = np.zeros(V.shape[0], dtype=bool)
+        corner[sub[local].ravel()] = True
+        work = np.flatnonzero(corner[np.maximum(sub, 0)].any(axis=1) & (sub[:, 0] >= 0))
+        at = np.full(sub.shape[0], -1, dtype=np.int64)
+        at[work] = np.arange(work.size)
+        W = sub[work]
+        applied, changed = _one_round(V, W, at[local], tolerance, complete)
+        sub[work] = W
+        changed = work[changed]
         if applied == 0:
             break
         done += applied
-        sub = sub[sub[:, 0] >= 0]
+        height[changed] = _heights(V, np.maximum(sub[changed], 0))
+        height[sub[:, 0] < 0] = np.inf
+    sub = sub[sub[:, 0] >= 0]
     if done == 0:
         return V, F, 0
     keep = np.ones(F.shape[0], dtype=bool)
@@ -121,90 +136,129 @@ def needle_free(V: np.ndarray, F: np.ndarray, *, tolerance: float
     return V2, F2, done
 
 
-def _one_round(V, F, needles, tolerance) -> int:
-    """Apply disjoint operations in place (deleted faces get -1); return their count."""
-    flat = F.ravel()
+def _one_round(V, F, needles, tolerance, complete) -> tuple[int, np.ndarray]:
+    """Apply, in place, a set of valid operations with disjoint footprints.
+
+    Deleted faces get -1. Every needle proposes one operation; invalid ones
+    are dropped, then an operation is applied when it has the lowest needle
+    (by height) among all operations whose footprints (the vertices whose
+    faces it reads or changes) share a vertex with its own.
+    Returns the number applied and the faces changed or deleted.
+    """
+    n, q = V.shape[0], needles.size
+    T = F[needles]
+    nxt = np.roll(T, -1, axis=1)
+    length = np.linalg.norm(V[nxt] - V[T], axis=2)
+    rows = np.arange(q)
+    kmin, kmax = np.argmin(length, axis=1), np.argmax(length, axis=1)
+    dart = length[rows, kmin] < tolerance
+    k = np.where(dart, kmin, kmax)
+    # the operation's edge (a, b) in the needle's direction, and its apex c
+    a, b, c = T[rows, k], T[rows, (k + 1) % 3], T[rows, (k + 2) % 3]
+    # the other face g on the edge (it runs b -> a) and its apex d
+    keys = F * n + np.roll(F, -1, axis=1)
+    live = F[:, 0] >= 0
+    flat = np.where(live[:, None], keys, -1).ravel()
     order = np.argsort(flat, kind="stable")
-    starts = np.searchsorted(flat[order], np.arange(V.shape[0] + 1))
-    locked = np.zeros(V.shape[0], dtype=bool)
+    pos = np.searchsorted(flat[order], b * n + a)
+    pos = np.minimum(pos, flat.size - 1)
+    found = flat[order[pos]] == b * n + a
+    g = order[pos] // 3
+    d = F[g, (order[pos] % 3 + 2) % 3]
+    f = needles
+    adjacency = _adjacency(F[live], n)
+    valid = found & (d != c) & complete[a] & complete[b] & complete[c]
+    cd_edge = _adjacent(adjacency, c, d)
+    # faces around every vertex (of the live faces)
+    corner = np.where(live[:, None], F, n).ravel()
+    vorder = np.argsort(corner, kind="stable")
+    starts = np.searchsorted(corner[vorder], np.arange(n + 1))
 
-    def faces_of(u):
-        return order[starts[u]:starts[u + 1]] // 3
+    def around(verts):
+        """(operation, face) for every face around ``verts[i]``."""
+        counts = starts[verts + 1] - starts[verts]
+        op = np.repeat(np.arange(verts.size), counts)
+        first = np.repeat(starts[verts] - np.cumsum(counts) + counts, counts)
+        return op, vorder[first + np.arange(op.size)] // 3
 
-    applied = 0
-    for f in needles.tolist():
-        tri = F[f]
-        if tri[0] < 0 or locked[tri].any():
-            continue
-        edge = V[np.roll(tri, -1)] - V[tri]
-        length = np.linalg.norm(edge, axis=1)
-        k = int(np.argmin(length))
-        if length[k] < tolerance:
-            ok = _collapse(V, F, tri[k], tri[(k + 1) % 3], faces_of, locked)
-        else:
-            ok = _flip(V, F, f, int(np.argmax(length)), faces_of, locked)
-        applied += ok
-    return applied
-
-
-def _normals_kept(V, old, new) -> bool:
-    """Every new face is non-degenerate and on the same side as the old one."""
-    a = face_cross(V, old)
-    b = face_cross(V, new)
-    return bool(np.all(np.einsum("ij,ij->i", a, b) > 0))
-
-
-def _shares_a_face(T, U) -> bool:
-    """Whether a face of ``T`` has the vertex set of a face of ``U``."""
-    S, R = np.sort(T, axis=1), np.sort(U, axis=1)
-    return bool((S[:, None, :] == R[None, :, :]).all(axis=2).any())
-
-
-def _collapse(V, F, u, v, faces_of, locked) -> bool:
-    """Move ``u`` onto ``v`` (or ``v`` onto ``u``) if the mesh stays manifold and unfolded."""
-    fu, fv = faces_of(u), faces_of(v)
-    fu, fv = fu[F[fu, 0] >= 0], fv[F[fv, 0] >= 0]
-    shared = np.intersect1d(fu, fv)
-    if shared.size != 2:
-        return False
-    ring_u = np.setdiff1d(np.unique(F[fu]), [u])
-    ring_v = np.setdiff1d(np.unique(F[fv]), [v])
-    opposite = np.setdiff1d(np.unique(F[shared]), [u, v])
-    if not np.array_equal(np.intersect1d(ring_u, ring_v), opposite):
-        return False
-    for gone, keep, around in ((u, v, fu), (v, u, fv)):
-        moved = np.setdiff1d(around, shared)
-        new = np.where(F[moved] == gone, keep, F[moved])
-        # a face already on these three vertices (a tetrahedron's) would double up
-        others = np.setdiff1d(fv if keep == v else fu, shared)
-        if not _shares_a_face(new, F[others]) and _normals_kept(V, F[moved], new):
-            F[moved] = new
-            F[shared] = -1
-            locked[np.unique(F[np.concatenate([fu, fv])].ravel())] = True
-            locked[[u, v]] = True
-            return True
-    return False
+    # darts: collapse (a, b); the link condition and no face turned over
+    common = np.asarray(adjacency[a].multiply(adjacency[b]).sum(axis=1)).ravel()
+    keep_b = _turns_none(V, F, a, b, f, g, around)      # a moves onto b
+    keep_a = _turns_none(V, F, b, a, f, g, around)      # b moves onto a
+    # faces (a, c, d) and (b, c, d) both present (a tetrahedron's): they would double up
+    doubled = _has_face(F, a, c, d, around) & _has_face(F, b, c, d, around)
+    dart_ok = valid & dart & (common == 2) & ~doubled & (keep_b | keep_a)
+    gone = np.where(keep_b, a, b)
+    stay = np.where(keep_b, b, a)
+    # caps: flip (a, b) to (c, d) when both new faces face g's way and are higher
+    new1 = np.stack([a, d, c], axis=1)
+    new2 = np.stack([d, b, c], axis=1)
+    cg = face_cross(V, F[g])
+    higher = (np.minimum(_heights(V, new1), _heights(V, new2))
+              > np.minimum(_heights(V, T), _heights(V, F[g])))
+    cap_ok = (valid & ~dart & ~cd_edge & higher
+              & (np.einsum("ij,ij->i", face_cross(V, new1), cg) > 0)
+              & (np.einsum("ij,ij->i", face_cross(V, new2), cg) > 0))
+    ok = dart_ok | cap_ok
+    # footprints: a dart reads and writes the faces around both ends, a flip the
+    # two faces' corners
+    op_u, face_u = around(a)
+    op_v, face_v = around(b)
+    fp_op = np.concatenate([np.repeat(op_u, 3), np.repeat(op_v, 3), np.repeat(rows, 4)])
+    fp_vert = np.concatenate([F[face_u].ravel(), F[face_v].ravel(),
+                              np.stack([a, b, c, d], axis=1).ravel()])
+    used = (dart[fp_op] | (np.arange(fp_op.size) >= 3 * (op_u.size + op_v.size))) & ok[fp_op]
+    fp_op, fp_vert = fp_op[used], fp_vert[used]
+    lowest = np.full(n, q, dtype=np.int64)
+    np.minimum.at(lowest, fp_vert, fp_op)
+    win = ok & (np.bincount(fp_op, weights=(lowest[fp_vert] != fp_op).astype(float),
+                            minlength=q) == 0)
+    # apply the collapses: faces around the vertex that goes get the one that stays
+    wd = np.flatnonzero(win & dart)
+    op_g, face_g = around(gone[wd])
+    Fg = F[face_g]
+    F[face_g] = np.where(Fg == gone[wd][op_g, None], stay[wd][op_g, None], Fg)
+    F[f[wd]] = -1
+    F[g[wd]] = -1
+    wc = np.flatnonzero(win & ~dart)
+    F[f[wc]] = new1[wc]
+    F[g[wc]] = new2[wc]
+    return int(wd.size + wc.size), np.unique(np.concatenate([face_g, f[wc], g[wc]]))
 
 
-def _flip(V, F, f, k, faces_of, locked) -> bool:
-    """Flip edge ``k`` of face ``f`` (its longest) if the result is valid and better."""
-    a, b, c = F[f, k], F[f, (k + 1) % 3], F[f, (k + 2) % 3]
-    around = faces_of(a)
-    around = around[F[around, 0] >= 0]
-    other = [g for g in around.tolist() if g != f and b in F[g]]
-    if len(other) != 1:
-        return False
-    g = other[0]
-    d = int(np.setdiff1d(F[g], [a, b])[0])
-    if locked[d] or np.any(F[faces_of(c)] == d):
-        return False
-    old = F[[f, g]]
-    new = np.array([[a, d, c], [d, b, c]])
-    # the needle's own normal is unreliable: judge by its well-shaped neighbour
-    if not _normals_kept(V, old[[1, 1]], new):
-        return False
-    if _heights(V, new).min() <= _heights(V, old).min():
-        return False
-    F[f], F[g] = new
-    locked[[a, b, c, d]] = True
-    return True
+def _adjacency(F, n):
+    """Symmetric vertex adjacency, ``(n, n)`` CSR of ones."""
+    i = F.ravel()
+    j = np.roll(F, -1, axis=1).ravel()
+    A = sp.csr_matrix((np.ones(2 * i.size), (np.concatenate([i, j]), np.concatenate([j, i]))),
+                      shape=(n, n))
+    A.data[:] = 1.0
+    return A
+
+
+def _adjacent(A, i, j) -> np.ndarray:
+    """Whether vertices ``i[k]`` and ``j[k]`` share an edge."""
+    return np.asarray(A[i, j]).ravel() > 0
+
+
+def _has_face(F, x, y, z, around) -> np.ndarray:
+    """Whether a face on the vertices ``x[k], y[k], z[k]`` exists (read around ``x``)."""
+    op, face = around(x)
+    T = F[face]
+    hit = (T == y[op, None]).any(axis=1) & (T == z[op, None]).any(axis=1)
+    return np.bincount(op, weights=hit.astype(float), minlength=x.size) > 0
+
+
+def _turns_none(V, F, gone, stay, f, g, around) -> np.ndarray:
+    """Whether moving ``gone[k]`` onto ``stay[k]`` turns no face around it over.
+
+    The faces ``f[k]`` and ``g[k]`` on the collapsed edge disappear and are
+    not judged.
+    """
+    op, face = around(gone)
+    kept = (face != f[op]) & (face != g[op])
+    op, face = op[kept], face[kept]
+    old = F[face]
+    new = np.where(old == gone[op, None], stay[op, None], old)
+    dot = np.einsum("ij,ij->i", face_cross(V, old), face_cross(V, new))
+    return np.bincount(op, weights=(dot <= 0).astype(float), minlength=gone.size) == 0
