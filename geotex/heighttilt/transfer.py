@@ -245,7 +245,6 @@ def transfer_texture(Vs_src, F_src, tex: HeightTiltTexture, V_dst, F_dst, *, cor
 
     height = np.einsum("pk,pk->p", bary, tex.height[Fs[faces]])
     n_dst = base_normals(Vd, Fd)
-    _, D1, D2 = tilt_frames(Vd, Fd)
     # vertex targets
     tv, nv = source_at(faces, bary)
     tv = _rotate(tv, nv, n_dst)
@@ -266,7 +265,9 @@ def transfer_texture(Vs_src, F_src, tex: HeightTiltTexture, V_dst, F_dst, *, cor
     tq -= np.einsum("kd,kd->k", tq, nd)[:, None] * nd
     c = line_integrals(tq.reshape(E.shape[0], samples, 3), Vd[E[:, 0]], Vd[E[:, 1]],
                        samples=samples)
-    miss = tv - decode_tilt(Vd, Fd, c, topology=topo)
+    u = decode_tilt(Vd, Fd, c, topology=topo)
+    _, D1, D2 = tilt_frames(Vd, Fd, c)
+    miss = tv - u
     r = np.column_stack([np.einsum("nd,nd->n", miss, D1), np.einsum("nd,nd->n", miss, D2)])
     meta = {"source": "transfer_texture", "samples": samples}
     return HeightTiltTexture(height=height, tilt=c, faces=Fd, residual=r, metadata=meta)
