@@ -13,23 +13,24 @@ instead of ``(m, 3, 3)`` temporaries; the edge topology is
   corner).
 * :func:`edge_encode` is the direct per-edge encoding
   ``c_ij = <(t_i + t_j) / 2, p_j - p_i>`` clipped to ``|c_ij| <= |p_j - p_i|``.
-* :meth:`BaseGeometry.incidence` writes the projected decoder ``P D`` edge by
-  edge: the decoded vector at a vertex only involves the coefficients of the
+* :meth:`BaseGeometry.decoder_transpose` writes the projected decoder ``P D``
+  edge by edge: the decoded vector at a vertex only involves the coefficients of the
   edges *incident* to it (corner ``k`` of a face uses the two face edges at
   ``k``), so ``(P D c)_v = sum_{e=(v,j)} a_e c_e + sum_{e=(i,v)} b_e c_e`` with
   one tangent vector ``a_e`` (at the first endpoint) and ``b_e`` (at the
-  second) per edge.  Applying ``P D`` is then six ``bincount`` calls over the
-  edges and its adjoint two gathers: :func:`lsq_encode` iterates on these
-  instead of assembling a sparse matrix.
+  second) per edge.  In tangent frames that is four numbers per edge: the
+  transpose is a CSR matrix with four entries per row, built without a sort,
+  and :func:`lsq_encode` iterates on it.
 """
 
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse as sp
 
 from geotex.mesh.topology import EdgeTopology, edge_topology
 
-__all__ = ["cross", "dot", "edge_encode", "lsq_encode", "BaseGeometry",
+__all__ = ["cross", "dot", "axis_frames", "edge_encode", "lsq_encode", "BaseGeometry",
            "LSQ_DAMPING", "LSQ_ITERATIONS", "LSQ_RTOL", "LSQ_ROUNDS", "LSQ_ROUND_ITERATIONS"]
 
 
@@ -45,6 +46,33 @@ def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 def dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Row-wise dot product of ``(k, 3)`` arrays."""
     return a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1] + a[:, 2] * b[:, 2]
+
+
+#: Fixed generic directions for :func:`axis_frames` (no ties on axis-aligned meshes).
+_FRAME_AXIS = np.array([1.0, np.sqrt(2.0), np.sqrt(3.0)]) / np.sqrt(6.0)
+_FRAME_AXIS_ALT = np.array([np.sqrt(3.0), -1.0, -np.sqrt(0.5)])
+_FRAME_AXIS_ALT = _FRAME_AXIS_ALT - (_FRAME_AXIS_ALT @ _FRAME_AXIS) * _FRAME_AXIS
+_FRAME_AXIS_ALT /= np.linalg.norm(_FRAME_AXIS_ALT)
+
+
+def axis_frames(nrm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Orthonormal tangent frames from a fixed direction, independent of the indexing.
+
+    ``X1`` is the generic direction ``(1, sqrt 2, sqrt 3) / sqrt 6`` made
+    tangent and normalised, or a second direction orthogonal to it where the
+    normal is within about 37 degrees of it (``|n . a| > 0.8``); ``X2 = n x X1``.
+    A generic direction, unlike a coordinate axis chosen by the smallest
+    normal component, has no ties on axis-aligned meshes, where round-off would
+    otherwise pick the axis.  Fixed in space (not rotation invariant).
+    """
+    ca = nrm @ _FRAME_AXIS
+    alt = np.abs(ca) > 0.8
+    X1 = np.broadcast_to(_FRAME_AXIS, nrm.shape).copy()
+    X1[alt] = _FRAME_AXIS_ALT
+    c = np.where(alt, nrm @ _FRAME_AXIS_ALT, ca)
+    X1 -= c[:, None] * nrm
+    X1 /= np.sqrt(dot(X1, X1))[:, None]
+    return X1, cross(nrm, X1)
 
 
 def edge_encode(V: np.ndarray, E: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -103,7 +131,7 @@ class BaseGeometry:
         self.valence = np.bincount(F.ravel(), minlength=n).astype(np.float64)
         self._topo = topo
         self._normals = None
-        self._incidence = None
+        self._transpose = None
 
     @property
     def topo(self) -> EdgeTopology:
@@ -158,61 +186,70 @@ class BaseGeometry:
             out[:, d] = acc / self.valence
         return out
 
-    def incidence(self) -> tuple[np.ndarray, np.ndarray]:
-        """Per-edge decoder vectors ``(a, b)``, (e, 3) each (see the module docstring).
+    def decoder_transpose(self) -> tuple[sp.csr_matrix, np.ndarray, np.ndarray]:
+        """``(P D)^T`` in per-vertex tangent frames, with the frames; cached.
 
-        ``(P D c)_v = sum over edges (v, j) of a_e c_e + sum over edges (i, v)
-        of b_e c_e``; both are tangent to the base normal at their vertex and
-        include the ``1 / valence`` of the uniform average.  Cached.
+        Returns ``AT`` (e, 2n) CSR with four entries per row, the components
+        of ``a_e`` and ``b_e`` (module docstring) along the frames of the
+        edge's two endpoints, and the frames ``X1, X2`` (n, 3) of
+        :func:`axis_frames`.  Half-edge ``k`` of a face (``F_k -> F_{k+1}``)
+        enters corner ``k`` with ``+G_{k+1}`` and corner ``k+1`` with ``-G_k``
+        (signed by its orientation against the edge), so the four entries of
+        every edge are the sum over its (one or two) half-edges, gathered
+        through the topology's grouped half-edges; the rows are built
+        directly (no sort).  ``AT.T`` (CSC, no copy) applies ``P D`` to
+        coefficients and gives the two frame components of every vertex vector.
         """
-        if self._incidence is None:
+        if self._transpose is None:
             m = self.F.shape[0]
+            n = self.V.shape[0]
             E = self.topo.edges
             e = E.shape[0]
             FT = self.FT
-            h2e = self.topo.half_to_edge
+            X1, X2 = axis_frames(self.normals)
             inv = 1.0 / self.N2
             G = []
             for k in range(3):
                 (n0, n1, n2), (x0, x1, x2) = self.N, self.e[k]
                 G.append(((n1 * x2 - n2 * x1) * inv, (n2 * x0 - n0 * x2) * inv,
                           (n0 * x1 - n1 * x0) * inv))
-            # half-edge k of a face runs F_k -> F_{k+1}; its coefficient s_k enters
-            # corner k with +G_{k+1} and corner k+1 with -G_k (decode's formula)
-            fwd = np.concatenate([FT[k] < FT[(k + 1) % 3] for k in range(3)])
-            sg = np.where(fwd, 1.0, -1.0)
-            idx = h2e.reshape(m, 3).T.ravel()
-            a = np.empty((e, 3))
-            b = np.empty((e, 3))
-            for d in range(3):
-                st = np.concatenate([G[(k + 1) % 3][d] for k in range(3)]) * sg
-                en = -np.concatenate([G[k][d] for k in range(3)]) * sg
-                a[:, d] = np.bincount(idx, weights=np.where(fwd, st, en), minlength=e)
-                b[:, d] = np.bincount(idx, weights=np.where(fwd, en, st), minlength=e)
-            nrm = self.normals
-            for S, col in ((a, E[:, 0]), (b, E[:, 1])):
-                S /= self.valence[col][:, None]
-                nv = nrm[col]
-                S -= dot(S, nv)[:, None] * nv
-            self._incidence = (a, b)
-        return self._incidence
-
-    def apply_decoder(self, c: np.ndarray) -> np.ndarray:
-        """``P D c`` through :meth:`incidence`, (n, 3)."""
-        a, b = self.incidence()
-        E = self.topo.edges
-        n = self.V.shape[0]
-        out = np.empty((n, 3))
-        for d in range(3):
-            out[:, d] = (np.bincount(E[:, 0], weights=a[:, d] * c, minlength=n)
-                         + np.bincount(E[:, 1], weights=b[:, d] * c, minlength=n))
-        return out
-
-    def apply_adjoint(self, w: np.ndarray) -> np.ndarray:
-        """``(P D)^T w`` for per-vertex vectors ``w`` (n, 3), (e,)."""
-        a, b = self.incidence()
-        E = self.topo.edges
-        return dot(a, w[E[:, 0]]) + dot(b, w[E[:, 1]])
+            iv = 1.0 / self.valence
+            # frame axes at the face corners, divided by the corner's valence:
+            # C[k][j][d] = X_j[F_k, d] / valence(F_k)  (one gather per corner)
+            C = []
+            for k in range(3):
+                w = iv[FT[k]]
+                C.append([tuple(np.ascontiguousarray(X[:, d])[FT[k]] * w for d in range(3))
+                          for X in (X1, X2)])
+            # H[f, k] = the four numbers of half-edge k of face f, in its edge's slots
+            H = np.empty((m, 3, 4))
+            for k in range(3):
+                k1 = (k + 1) % 3
+                fwd = FT[k] < FT[k1]
+                for j in range(2):
+                    xs, xe = C[k][j], C[k1][j]
+                    vs = G[k1][0] * xs[0] + G[k1][1] * xs[1] + G[k1][2] * xs[2]
+                    ve = G[k][0] * xe[0] + G[k][1] * xe[1] + G[k][2] * xe[2]
+                    # forward: (+vs at slot 0, -ve at slot 2); backward: sign flips and
+                    # F_k sits in slot 2
+                    H[:, k, j] = np.where(fwd, vs, ve)
+                    H[:, k, 2 + j] = np.where(fwd, -ve, -vs)
+            H = H.reshape(3 * m, 4)
+            topo = self.topo
+            order = topo.grouped_half_edges()
+            start = topo.edge_starts()
+            data = H[order[start]]
+            two = np.flatnonzero(topo.face_count == 2)
+            data[two] += H[order[start[two] + 1]]
+            cols = np.empty((e, 4), dtype=np.int64)
+            cols[:, 0] = 2 * E[:, 0]
+            cols[:, 1] = cols[:, 0] + 1
+            cols[:, 2] = 2 * E[:, 1]
+            cols[:, 3] = cols[:, 2] + 1
+            AT = sp.csr_matrix((data.ravel(), cols.ravel(), 4 * np.arange(e + 1, dtype=np.int64)),
+                               shape=(e, 2 * n))
+            self._transpose = (AT, X1, X2)
+        return self._transpose
 
     def tangent(self, X: np.ndarray) -> np.ndarray:
         """``X`` minus its component along the base normals."""
@@ -227,12 +264,12 @@ def _norm2(v) -> np.ndarray:
 #: Relative Tikhonov weight of :func:`lsq_encode` (towards the edge encoding).
 LSQ_DAMPING = 1e-3
 #: Conjugate-gradient iterations of the unconstrained fit, at most.
-LSQ_ITERATIONS = 24
+LSQ_ITERATIONS = 16
 #: Relative residual at which the unconstrained fit stops early.
 LSQ_RTOL = 1e-3
 #: Active-set rounds for the bound ``|c_e| <= |e|``, and iterations per round.
-LSQ_ROUNDS = 3
-LSQ_ROUND_ITERATIONS = 6
+LSQ_ROUNDS = 2
+LSQ_ROUND_ITERATIONS = 4
 
 
 def lsq_encode(g: BaseGeometry, t: np.ndarray) -> np.ndarray:
@@ -243,7 +280,7 @@ def lsq_encode(g: BaseGeometry, t: np.ndarray) -> np.ndarray:
     damping target: there are more edges than tangential equations) and
     ``K_ee`` the diagonal of the normal matrix (scale-free damping).  Solved by
     Jacobi-preconditioned conjugate gradients on the normal equations through
-    :meth:`BaseGeometry.apply_decoder` / :meth:`BaseGeometry.apply_adjoint`
+    :meth:`BaseGeometry.decoder_transpose` (four entries per edge)
     (at most ``LSQ_ITERATIONS``, stopping at relative residual ``LSQ_RTOL``),
     then ``LSQ_ROUNDS`` active-set rounds: coefficients past their bound are
     fixed at it and the free ones re-fitted (``LSQ_ROUND_ITERATIONS`` each);
@@ -265,18 +302,22 @@ def lsq_encode(g: BaseGeometry, t: np.ndarray) -> np.ndarray:
     c0 = edge_encode(g.V, E, t)
     if E.shape[0] == 0:
         return c0
-    a, b = g.incidence()
+    AT, X1, X2 = g.decoder_transpose()
+    A = AT.T
     lim = np.sqrt(np.einsum("ed,ed->e", g.V[E[:, 1]] - g.V[E[:, 0]],
                             g.V[E[:, 1]] - g.V[E[:, 0]]))
-    diag = dot(a, a) + dot(b, b)
+    diag = np.asarray(AT.multiply(AT).sum(axis=1)).ravel()
     reg = LSQ_DAMPING * diag
     Kd = diag + reg
     Kd[Kd <= 0] = 1.0
 
     def K(x):
-        return g.apply_adjoint(g.apply_decoder(x)) + reg * x
+        return AT @ (A @ x) + reg * x
 
-    rhs = g.apply_adjoint(t - g.apply_decoder(c0))
+    t2 = np.empty((t.shape[0], 2))
+    t2[:, 0] = dot(t, X1)
+    t2[:, 1] = dot(t, X2)
+    rhs = AT @ (t2.ravel() - A @ c0)
     lo, hi = -lim - c0, lim - c0
     d = _pcg(K, rhs, np.zeros_like(c0), Kd, None, LSQ_ITERATIONS, LSQ_RTOL)
     free = np.ones(c0.shape, dtype=bool)

@@ -28,7 +28,7 @@ import scipy.sparse.linalg as spla
 from geotex.errors import InputError
 from geotex.fields.sparse import single_threaded_blas
 from geotex.fields.oneforms import projected_decoder
-from geotex.heighttilt._kernels import BaseGeometry, dot, edge_encode, lsq_encode
+from geotex.heighttilt._kernels import BaseGeometry, axis_frames, dot, edge_encode, lsq_encode
 from geotex.heighttilt.smoothing import smoothed_base
 from geotex.mesh.arrays import as_mesh_arrays
 from geotex.mesh.topology import EdgeTopology
@@ -144,7 +144,8 @@ def base_normals(Vs, F) -> np.ndarray:
     return base_geometry(Vs, F, name="Vs").normals.copy()
 
 
-#: Below this length a decoded tilt (dimensionless, at most 1) gives no frame direction.
+#: Below this length a decoded tilt (dimensionless, at most 1) gives no frame direction
+#: (the direction of a shorter vector would carry its round-off, magnified, into the frame).
 FRAME_TOLERANCE = 1e-7
 
 
@@ -160,8 +161,8 @@ def tilt_frames(Vs, F, c=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     2. otherwise the tangent part of the sum of ``u`` over the vertex's
        neighbours, where that is longer than ``FRAME_TOLERANCE``;
     3. otherwise (the 1-form vanishes on the whole one-ring, e.g. ``c`` is
-       None or zero) the coordinate axis least aligned with ``n`` (ties to
-       the lower axis) projected onto the tangent plane.
+       None or zero) a fixed generic direction projected onto the tangent
+       plane (:func:`geotex.heighttilt._kernels.axis_frames`).
 
     Steps 1 and 2 move with the mesh under rigid motions and do not change
     under uniform scaling; step 3 is fixed in space (still independent of the
@@ -209,11 +210,8 @@ def frames_of(g: BaseGeometry, u: np.ndarray) -> tuple[np.ndarray, np.ndarray, n
         ln[weak] = np.sqrt(dot(ring[weak], ring[weak]))
         still = ln <= FRAME_TOLERANCE
         if still.any():
-            nv = nrm[still]
-            axis = np.zeros_like(nv)
-            axis[np.arange(nv.shape[0]), np.argmin(np.abs(nv), axis=1)] = 1.0
-            T1[still] = axis - dot(axis, nv)[:, None] * nv
-            ln[still] = np.sqrt(dot(T1[still], T1[still]))
+            T1[still] = axis_frames(nrm[still])[0]
+            ln[still] = 1.0
     T1 /= ln[:, None]
     return nrm, T1, np.cross(nrm, T1)
 
