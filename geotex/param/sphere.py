@@ -1,12 +1,14 @@
 """Near-conformal maps of closed genus-0 meshes onto the unit sphere, and their alignment.
 
 :func:`sphere_map` follows the punctured-sphere construction of Angenent,
-Haker et al.: the mesh punctured at one face (the *pole face*, chosen from
-the geometry, not the indexing) is mapped conformally onto the plane by
+Haker et al.: the mesh punctured at one face (the *pole face*) is mapped conformally onto the plane by
 solving two cotangent-Laplacian systems whose right-hand side is the
 discrete derivative of a delta at the pole face (so the pole face goes to
 infinity; cotan weights below a small positive floor are raised to it), and
-the plane is wrapped onto the sphere by inverse stereographic projection.  The result is normalised by
+the plane is wrapped onto the sphere by inverse stereographic projection.
+The discretisation is least accurate around the pole, so a few pole faces
+chosen from the geometry (not the indexing) are tried and the map with the
+smallest area-weighted conformal error is kept.  The result is normalised by
 *Mobius centring*: hyperbolic translations of the unit ball (conformal on
 the sphere) are applied until the area-weighted centroid of the sphere
 points is at the origin, which fixes the map up to a rotation.
@@ -35,9 +37,11 @@ from geotex.errors import InputError
 from geotex.mesh.arrays import as_mesh_arrays
 from geotex.mesh.geometry import face_areas, signed_volume
 from geotex.mesh.topology import edge_topology, vertex_components
+from geotex.param.distortion import singular_values
 
 __all__ = ["sphere_map", "aligned_sphere_map", "principal_frame", "landmark_rotation",
-           "point_on_sphere", "CENTERING_ITERATIONS"]
+           "point_on_sphere", "conformal_error", "check_sphere_topology",
+           "CENTERING_ITERATIONS"]
 
 #: Mobius centring steps at most (stops when the centroid is within 1e-9 of the origin).
 CENTERING_ITERATIONS = 200
@@ -84,12 +88,48 @@ def _vertex_areas(V, F) -> np.ndarray:
     return np.bincount(F.ravel(), weights=np.repeat(a, 3), minlength=V.shape[0])
 
 
-def _pole_face(V, F) -> int:
-    """The face whose centroid is farthest from the area-weighted centroid (index free)."""
-    w = _vertex_areas(V, F)
-    c = (w[:, None] * V).sum(axis=0) / w.sum()
-    d = np.linalg.norm(V[F].mean(axis=1) - c, axis=1)
-    return int(np.argmax(d))
+def _pole_candidates(V, F) -> list[int]:
+    """Pole faces to try, chosen from the geometry (not the indexing).
+
+    The faces nearest to and farthest from the area-weighted centroid, and the
+    two extreme faces along the middle principal axis.  Which pole gives the
+    most conformal map depends on the shape (a tip is best for an ellipsoid, a
+    point on the body for Spot, whose tips are horns and ears), so
+    :func:`sphere_map` keeps the candidate with the smallest measured error.
+    """
+    C = V[F].mean(axis=1)
+    c, axes, _ = principal_frame(V, F)
+    d = np.linalg.norm(C - c, axis=1)
+    along = (C - c) @ axes[1]
+    out = []
+    for f in (int(np.argmin(d)), int(np.argmax(d)), int(np.argmax(along)), int(np.argmin(along))):
+        if f not in out:
+            out.append(f)
+    return out
+
+
+def conformal_error(V, F, S) -> float:
+    """Area-weighted mean conformal error ``(s1/s2 + s2/s1)/2 - 1`` of the map ``V -> S``.
+
+    Per face, the linear map between the two triangles (each in its own plane).
+    """
+    def planar(P):
+        e1, e2 = P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]
+        l1 = np.linalg.norm(e1, axis=1)
+        x = e1 / l1[:, None]
+        nn = np.cross(e1, e2)
+        y = np.cross(nn / np.linalg.norm(nn, axis=1)[:, None], x)
+        M = np.empty((P.shape[0], 2, 2))
+        M[:, 0, 0], M[:, 1, 0] = l1, 0.0
+        M[:, 0, 1], M[:, 1, 1] = (e2 * x).sum(1), (e2 * y).sum(1)
+        return M
+    A, B = planar(V[F]), planar(S[F])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        J = B @ np.linalg.inv(A)
+        s1, s2, _ = singular_values(J)
+        err = np.where(s2 > 0, 0.5 * (s1 / s2 + s2 / s1) - 1.0, np.inf)
+    w = face_areas(V, F)
+    return float(np.sum(w * err) / w.sum())
 
 
 def _planar_map(V, F, pole: int) -> np.ndarray:
@@ -177,16 +217,19 @@ def sphere_map(V, F) -> np.ndarray:
     True
     """
     V, F = check_sphere_topology(V, F)
-    pole = _pole_face(V, F)
-    uv = _planar_map(V, F, pole)
-    # the pole face is the outer boundary: put it far out so the disc covers most
-    # of the sphere; the Mobius centring fixes the scale anyway
     w = _vertex_areas(V, F)
-    scale = np.sqrt(np.average((uv * uv).sum(axis=1), weights=w))
-    S = _inverse_stereographic(uv / max(scale, 1e-300))
-    if signed_volume(S, F) < 0:
-        S[:, 2] = -S[:, 2]
-    return _mobius_centered(S, w)
+    best, best_err = None, np.inf
+    for pole in _pole_candidates(V, F):
+        uv = _planar_map(V, F, pole)
+        scale = np.sqrt(np.average((uv * uv).sum(axis=1), weights=w))
+        S = _inverse_stereographic(uv / max(scale, 1e-300))
+        if signed_volume(S, F) < 0:
+            S[:, 2] = -S[:, 2]
+        S = _mobius_centered(S, w)
+        err = conformal_error(V, F, S)
+        if err < best_err:
+            best, best_err = S, err
+    return best
 
 
 def principal_frame(V, F) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
