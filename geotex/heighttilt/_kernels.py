@@ -194,10 +194,10 @@ class BaseGeometry:
         edge's two endpoints, and the frames ``X1, X2`` (n, 3) of
         :func:`axis_frames`.  Half-edge ``k`` of a face (``F_k -> F_{k+1}``)
         enters corner ``k`` with ``+G_{k+1}`` and corner ``k+1`` with ``-G_k``
-        (signed by its orientation against the edge), so the four entries of
-        every edge are the sum over its (one or two) half-edges, gathered
-        through the topology's grouped half-edges; the rows are built
-        directly (no sort).  ``AT.T`` (CSC, no copy) applies ``P D`` to
+        (signed by its orientation against the edge), so the two vectors of
+        every edge are sums over its (one or two) half-edges, gathered
+        through the topology's grouped half-edges, then projected on the
+        frames of the endpoints; the rows are built directly (no sort).  ``AT.T`` (CSC, no copy) applies ``P D`` to
         coefficients and gives the two frame components of every vertex vector.
         """
         if self._transpose is None:
@@ -205,42 +205,45 @@ class BaseGeometry:
             n = self.V.shape[0]
             E = self.topo.edges
             e = E.shape[0]
-            FT = self.FT
             X1, X2 = axis_frames(self.normals)
+            # Gs[3 f + k] = G_k of face f = N x e_k / |N|^2
+            Gs = np.empty((m, 3, 3))
             inv = 1.0 / self.N2
-            G = []
             for k in range(3):
                 (n0, n1, n2), (x0, x1, x2) = self.N, self.e[k]
-                G.append(((n1 * x2 - n2 * x1) * inv, (n2 * x0 - n0 * x2) * inv,
-                          (n0 * x1 - n1 * x0) * inv))
-            iv = 1.0 / self.valence
-            # frame axes at the face corners, divided by the corner's valence:
-            # C[k][j][d] = X_j[F_k, d] / valence(F_k)  (one gather per corner)
-            C = []
-            for k in range(3):
-                w = iv[FT[k]]
-                C.append([tuple(np.ascontiguousarray(X[:, d])[FT[k]] * w for d in range(3))
-                          for X in (X1, X2)])
-            # H[f, k] = the four numbers of half-edge k of face f, in its edge's slots
-            H = np.empty((m, 3, 4))
-            for k in range(3):
-                k1 = (k + 1) % 3
-                fwd = FT[k] < FT[k1]
-                for j in range(2):
-                    xs, xe = C[k][j], C[k1][j]
-                    vs = G[k1][0] * xs[0] + G[k1][1] * xs[1] + G[k1][2] * xs[2]
-                    ve = G[k][0] * xe[0] + G[k][1] * xe[1] + G[k][2] * xe[2]
-                    # forward: (+vs at slot 0, -ve at slot 2); backward: sign flips and
-                    # F_k sits in slot 2
-                    H[:, k, j] = np.where(fwd, vs, ve)
-                    H[:, k, 2 + j] = np.where(fwd, -ve, -vs)
-            H = H.reshape(3 * m, 4)
+                Gs[:, k, 0] = (n1 * x2 - n2 * x1) * inv
+                Gs[:, k, 1] = (n2 * x0 - n0 * x2) * inv
+                Gs[:, k, 2] = (n0 * x1 - n1 * x0) * inv
+            Gs = Gs.reshape(3 * m, 3)
+            # half-edge h = 3 f + k runs F_k -> F_{k+1}; the edge's first vertex gets
+            # +G_{k+1} if h runs along the edge (a -> b), else +G_k; the second -G_k,
+            # else -G_{k+1}: sum over the edge's half-edges, then project on the frames
             topo = self.topo
             order = topo.grouped_half_edges()
             start = topo.edge_starts()
-            data = H[order[start]]
-            two = np.flatnonzero(topo.face_count == 2)
-            data[two] += H[order[start[two] + 1]]
+            Fr = self.F.ravel()
+            last = 3 * m - 1
+            a_vec = b_vec = None
+            for which in (0, 1):
+                h = order[np.minimum(start + which, last)]
+                f3 = h - h % 3
+                k1 = f3 + (h + 1) % 3
+                fwd = Fr[h] < Fr[k1]
+                ga = np.take(Gs, np.where(fwd, k1, h), axis=0)
+                gb = np.take(Gs, np.where(fwd, h, k1), axis=0)
+                if which == 0:
+                    a_vec, b_vec = ga, -gb
+                else:
+                    two = (topo.face_count == 2)[:, None]
+                    a_vec += np.where(two, ga, 0.0)
+                    b_vec -= np.where(two, gb, 0.0)
+            iv = 1.0 / self.valence
+            data = np.empty((e, 4))
+            wa, wb = iv[E[:, 0]], iv[E[:, 1]]
+            data[:, 0] = dot(a_vec, X1[E[:, 0]]) * wa
+            data[:, 1] = dot(a_vec, X2[E[:, 0]]) * wa
+            data[:, 2] = dot(b_vec, X1[E[:, 1]]) * wb
+            data[:, 3] = dot(b_vec, X2[E[:, 1]]) * wb
             cols = np.empty((e, 4), dtype=np.int64)
             cols[:, 0] = 2 * E[:, 0]
             cols[:, 1] = cols[:, 0] + 1
