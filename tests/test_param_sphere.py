@@ -78,7 +78,8 @@ def test_landmarks_fix_the_rotation():
     with pytest.raises(InputError, match="at least two"):
         landmark_rotation(a[:1], a[:1])
     with pytest.raises(InputError, match="one line"):
-        landmark_rotation(np.array([[0, 0, 1.0], [0, 0, -1.0]]), np.array([[0, 0, 1.0], [0, 0, -1.0]]))
+        line = np.array([[0, 0, 1.0], [0, 0, -1.0]])
+        landmark_rotation(line, line)
 
 
 def test_sphere_map_rejects_other_topologies():

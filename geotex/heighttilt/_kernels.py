@@ -197,8 +197,9 @@ class BaseGeometry:
         (signed by its orientation against the edge), so the two vectors of
         every edge are sums over its (one or two) half-edges, gathered
         through the topology's grouped half-edges, then projected on the
-        frames of the endpoints; the rows are built directly (no sort).  ``AT.T`` (CSC, no copy) applies ``P D`` to
-        coefficients and gives the two frame components of every vertex vector.
+        frames of the endpoints; the rows are built directly (no sort).
+        ``AT.T`` (CSC, no copy) applies ``P D`` to coefficients and gives the
+        two frame components of every vertex vector.
         """
         if self._transpose is None:
             m = self.F.shape[0]

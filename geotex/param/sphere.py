@@ -1,11 +1,12 @@
 """Near-conformal maps of closed genus-0 meshes onto the unit sphere, and their alignment.
 
 :func:`sphere_map` follows the punctured-sphere construction of Angenent,
-Haker et al.: the mesh punctured at one face (the *pole face*) is mapped conformally onto the plane by
-solving two cotangent-Laplacian systems whose right-hand side is the
-discrete derivative of a delta at the pole face (so the pole face goes to
-infinity; cotan weights below a small positive floor are raised to it), and
-the plane is wrapped onto the sphere by inverse stereographic projection.
+Haker et al.: the mesh punctured at one face (the *pole face*) is mapped
+conformally onto the plane by solving two cotangent-Laplacian systems whose
+right-hand side is the discrete derivative of a delta at the pole face (so
+the pole face goes to infinity; cotan weights below a small positive floor
+are raised to it), and the plane is wrapped onto the sphere by inverse
+stereographic projection.
 The discretisation is least accurate around the pole, so a few pole faces
 chosen from the geometry (not the indexing) are tried and the map with the
 smallest area-weighted conformal error is kept.  The result is normalised by
