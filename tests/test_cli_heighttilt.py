@@ -279,3 +279,17 @@ def test_transfer_onto_another_shape_uses_the_sphere_map(capsys, tmp_path):
                        "--target-base", dst, "--landmarks", marks, "-o", bad)
     assert code != 0 and "at least two" in err and len(err.strip().splitlines()) == 1
     assert not bad.exists()
+
+
+def test_sphere_transfer_onto_a_torus_is_a_one_line_error(capsys, tmp_path):
+    from geotex.mesh.primitives import torus
+    V0, F, Vs = spiky_sphere(subdivisions=2, spikes=4, seed=1)
+    base = write_mesh(tmp_path / "base.ply", Mesh(Vs, F))
+    src = write_mesh(tmp_path / "src.ply", Mesh(V0, F))
+    ring = write_mesh(tmp_path / "ring.ply", Mesh(*torus(n_major=16, n_minor=8)))
+    tex, out = tmp_path / "t.npz", tmp_path / "t2.npz"
+    run(capsys, "heighttilt", "extract", src, "--base", base, "-o", tex)
+    code, _, err = run(capsys, "heighttilt", "transfer", tex, "--source-base", base,
+                       "--target-base", ring, "--map", "sphere", "-o", out)
+    assert code != 0 and "--target-base" in err and "genus 1" in err
+    assert len(err.strip().splitlines()) == 1 and not out.exists()

@@ -306,9 +306,19 @@ def run_transfer(args) -> int:
                                correspondence=corr, samples=args.samples)
         print("map: closest points")
     else:
-        new, report = transfer_between_shapes(src.vertices, src.faces, tex, dst.vertices,
-                                              dst.faces, landmarks=landmarks,
-                                              samples=args.samples)
+        from geotex.errors import InputError
+
+        try:
+            new, report = transfer_between_shapes(src.vertices, src.faces, tex, dst.vertices,
+                                                  dst.faces, landmarks=landmarks,
+                                                  samples=args.samples)
+        except InputError as exc:
+            msg = str(exc)
+            for name, flag, path in (("V_dst ", "--target-base", args.target),
+                                     ("Vs_src ", "--source-base", args.source_base)):
+                if msg.startswith(name):
+                    raise UsageError(f"{flag} {path}: {msg[len(name):]} (--map sphere)") from None
+            raise
         print("\n".join(report.lines()))
     with _all_or_none() as done:
         if applied is not None:
