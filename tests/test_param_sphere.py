@@ -88,5 +88,9 @@ def test_sphere_map_rejects_other_topologies():
     with pytest.raises(InputError, match="boundary"):
         sphere_map(*grid_plane(4, 4))
     V, F = icosphere(1)
+    flipped = F.copy()
+    flipped[0] = flipped[0, ::-1]
+    with pytest.raises(InputError, match="oriented"):
+        sphere_map(V, flipped)
     with pytest.raises(InputError, match="2 components"):
         sphere_map(np.vstack([V, V + 5]), np.vstack([F, F + len(V)]))

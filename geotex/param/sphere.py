@@ -55,8 +55,9 @@ def check_sphere_topology(V, F, *, name: str = "V") -> tuple[np.ndarray, np.ndar
     Raises
     ------
     InputError
-        Empty mesh, boundary or non-manifold edges, unused vertices, several
-        components, or an Euler characteristic other than 2.
+        Empty mesh, boundary or non-manifold edges, inconsistent orientation,
+        unused vertices, several components, or an Euler characteristic other
+        than 2.
     """
     V, F = as_mesh_arrays(V, F)
     n, m = V.shape[0], F.shape[0]
@@ -70,6 +71,9 @@ def check_sphere_topology(V, F, *, name: str = "V") -> tuple[np.ndarray, np.ndar
     if topo.boundary.size:
         raise InputError(f"{name} has {topo.boundary.size} boundary edges; a sphere map needs "
                          "a closed mesh (fill the holes first)")
+    if np.any(topo.forward_count != 1):
+        raise InputError(f"{name} is not consistently oriented (an edge is used twice in the "
+                         "same direction); orient the faces first (geotex.repair)")
     if np.bincount(F.ravel(), minlength=n).min() == 0:
         raise InputError(f"{name} has vertices used by no face; remove them first")
     k, _ = vertex_components(F, n)
