@@ -244,3 +244,52 @@ def test_apply_on_a_deformed_base_keeps_elements_with_original(capsys, tmp_path,
     code, _, err = run(capsys, "heighttilt", "apply", tex, "--base", big, "--original", other,
                        "-o", tmp_path / "x.ply")
     assert code == 2 and "same faces" in err and not (tmp_path / "x.ply").exists()
+
+
+def test_transfer_onto_another_shape_uses_the_sphere_map(capsys, tmp_path):
+    import json
+
+    from geotex.mesh.primitives import icosphere
+    V0, F, Vs = spiky_sphere(subdivisions=3, spikes=6, height=0.2, width=0.4, lean_degrees=30,
+                             seed=1)
+    src = write_mesh(tmp_path / "src.ply", Mesh(V0, F))
+    base = write_mesh(tmp_path / "base.ply", Mesh(Vs, F))
+    Vd, Fd = icosphere(3)
+    dst = write_mesh(tmp_path / "egg.ply", Mesh(Vd * np.array([1.0, 1.0, 2.0]), Fd))
+    tex, out = tmp_path / "t.npz", tmp_path / "t2.npz"
+    run(capsys, "heighttilt", "extract", src, "--base", base, "-o", tex)
+    code, text, err = run(capsys, "heighttilt", "transfer", tex, "--source-base", base,
+                          "--target-base", dst, "-o", out)
+    assert code == 0, err
+    assert "map: sphere, aligned by principal axes" in text and "elements" in text
+    assert load_texture(out).metadata["map"] == "sphere"
+    marks = tmp_path / "marks.json"
+    marks.write_text(json.dumps([[[0, 0, 1], [0, 0, 2]], [[1, 0, 0], [1, 0, 0]]]))
+    code, text, err = run(capsys, "heighttilt", "transfer", tex, "--source-base", base,
+                          "--target-base", dst, "--landmarks", marks, "-o", out)
+    assert code == 0, err
+    assert "aligned by landmarks" in text
+    # closest points on request; landmark errors are one line, nothing written
+    code, text, _ = run(capsys, "heighttilt", "transfer", tex, "--source-base", base,
+                        "--target-base", dst, "--map", "closest", "-o", out)
+    assert code == 0 and "closest" in text
+    marks.write_text(json.dumps([[[0, 0, 1], [0, 0, 2]]]))
+    bad = tmp_path / "bad.npz"
+    code, _, err = run(capsys, "heighttilt", "transfer", tex, "--source-base", base,
+                       "--target-base", dst, "--landmarks", marks, "-o", bad)
+    assert code != 0 and "at least two" in err and len(err.strip().splitlines()) == 1
+    assert not bad.exists()
+
+
+def test_sphere_transfer_onto_a_torus_is_a_one_line_error(capsys, tmp_path):
+    from geotex.mesh.primitives import torus
+    V0, F, Vs = spiky_sphere(subdivisions=2, spikes=4, seed=1)
+    base = write_mesh(tmp_path / "base.ply", Mesh(Vs, F))
+    src = write_mesh(tmp_path / "src.ply", Mesh(V0, F))
+    ring = write_mesh(tmp_path / "ring.ply", Mesh(*torus(n_major=16, n_minor=8)))
+    tex, out = tmp_path / "t.npz", tmp_path / "t2.npz"
+    run(capsys, "heighttilt", "extract", src, "--base", base, "-o", tex)
+    code, _, err = run(capsys, "heighttilt", "transfer", tex, "--source-base", base,
+                       "--target-base", ring, "--map", "sphere", "-o", out)
+    assert code != 0 and "--target-base" in err and "genus 1" in err
+    assert len(err.strip().splitlines()) == 1 and not out.exists()

@@ -285,3 +285,75 @@ def test_transfer_is_invariant_under_rigid_motion_and_uniform_scaling(sphere):
     np.testing.assert_allclose(out2.tilt, s * out.tilt, atol=1e-9 * s)
     np.testing.assert_allclose(apply_texture(moved(Vd), Fd, out2),
                                moved(apply_texture(Vd, Fd, out)), atol=1e-9 * s)
+
+
+# ---------------------------------------------------------------- different shapes
+
+def _ellipsoid(sub=4, axes=(1.0, 1.0, 1.8)):
+    from geotex.mesh.primitives import icosphere
+    V, F = icosphere(sub)
+    return V * np.array(axes), F
+
+
+def test_transfer_between_shapes_keeps_element_heights_and_lean_directions():
+    from geotex.heighttilt import spiky_sphere
+    from geotex.heighttilt.transfer import transfer_between_shapes
+    V0, F, Vs = spiky_sphere(subdivisions=3, spikes=8, width=0.3, height=0.3,
+                             lean_degrees=40.0, seed=2)
+    tex, _ = extract_texture(V0, F, base=Vs)
+    Vd, Fd = _ellipsoid()
+    out, rep = transfer_between_shapes(Vs, F, tex, Vd, Fd)
+    assert out.height.shape == (len(Vd),) and out.metadata["map"] == "sphere"
+    assert rep.target.elements == rep.source.elements
+    # measured: 7 elements, mean element height 0.281 -> 0.261, tilt direction median 3.2 deg
+    assert abs(rep.target.mean_element_height / rep.source.mean_element_height - 1) < 0.1
+    assert rep.tilt_direction_error_deg[0] < 10.0
+    assert rep.distortion.angle.mean < 0.02            # near-conformal map
+    from geotex.mesh.topology import edge_topology
+    E = edge_topology(Fd, len(Vd)).edges
+    assert (np.abs(out.tilt) <= np.linalg.norm(Vd[E[:, 1]] - Vd[E[:, 0]], axis=1) + 1e-15).all()
+    # the textured target: every displacement keeps its source height and lean angle
+    D = apply_texture(Vd, Fd, out) - Vd
+    np.testing.assert_allclose(np.linalg.norm(D, axis=1), np.abs(out.height), atol=1e-12)
+    assert "elements" in "\n".join(rep.lines())
+
+
+def test_transfer_between_shapes_onto_a_rotated_copy_follows_the_rotation():
+    # a texture moved onto a rotated and re-meshed copy of its own base lands where
+    # the rotation takes it: the carried lean directions are the rotated ones
+    from geotex.heighttilt import spiky_sphere
+    from geotex.heighttilt.transfer import transfer_between_shapes
+    V0, F, Vs = spiky_sphere(subdivisions=4, spikes=6, width=0.35, height=0.3,
+                             lean_degrees=40.0, seed=4)
+    stretch = np.array([1.0, 0.8, 1.5])
+    Vs, V0 = Vs * stretch, Vs * stretch + (V0 - Vs)   # an ellipsoid base, asymmetric axes
+    Vs = Vs + 0.25 * Vs[:, [2]] ** 2 * np.array([[1.0, 0.0, 0.0]])   # and no mirror symmetry
+    V0 = Vs + (V0 - Vs)
+    tex, _ = extract_texture(V0, F, base=Vs)
+    q = np.random.default_rng(1).normal(size=4)
+    a, b, c, d = q / np.linalg.norm(q)
+    R = np.array([[a*a + b*b - c*c - d*d, 2*(b*c - a*d), 2*(b*d + a*c)],
+                  [2*(b*c + a*d), a*a - b*b + c*c - d*d, 2*(c*d - a*b)],
+                  [2*(b*d - a*c), 2*(c*d + a*b), a*a - b*b - c*c + d*d]])
+    out, rep = transfer_between_shapes(Vs, F, tex, Vs @ R.T, F)
+    np.testing.assert_allclose(out.height, tex.height, atol=1e-6)
+    np.testing.assert_allclose(apply_texture(Vs @ R.T, F, out), V0 @ R.T, atol=1e-3)
+
+
+def test_transfer_between_shapes_input_errors():
+    from geotex.heighttilt import spiky_sphere
+    from geotex.heighttilt.transfer import transfer_between_shapes
+    from geotex.mesh.primitives import torus
+    V0, F, Vs = spiky_sphere(subdivisions=2, spikes=4, seed=0)
+    tex, _ = extract_texture(V0, F, base=Vs)
+    with pytest.raises(InputError, match="genus"):
+        transfer_between_shapes(Vs, F, tex, *torus(n_major=12, n_minor=8))
+    Vd, Fd = _ellipsoid(2)
+    with pytest.raises(InputError, match="landmarks"):
+        transfer_between_shapes(Vs, F, tex, Vd, Fd, landmarks=[[[0, 0, 1], [0, 0, 2]]])
+    with pytest.raises(InputError, match="landmarks"):
+        transfer_between_shapes(Vs, F, tex, Vd, Fd, landmarks=[[0, 0, 1], [0, 0, 2]])
+    out, rep = transfer_between_shapes(Vs, F, tex, Vd, Fd,
+                                       landmarks=[[[0, 0, 1], [0, 0, 1.8]], [[1, 0, 0], [1, 0, 0]],
+                                                  [[0, 1, 0], [0, 1, 0]]])
+    assert rep.aligned_by == "landmarks"

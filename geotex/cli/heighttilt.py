@@ -42,13 +42,26 @@ def register(sub):
 
     t = hs.add_parser("transfer", help="carry a texture onto another base mesh",
                       description="Transfer a texture from its base (--source-base) onto "
-                      "TARGET, matching every target vertex to the closest point of the source "
-                      "base; the tilt is integrated along target edges.  With --planar the "
-                      "source is a flat texture in the XY plane, tiled over the (refined) "
-                      "target through field-aligned patch parameterizations.")
+                      "the target base.  --map sphere (for a target of another shape; both "
+                      "bases closed genus 0): both bases are mapped near-conformally onto the "
+                      "unit sphere, aligned by principal axes or --landmarks, and the texture "
+                      "is resampled through that map.  --map closest (for a target that nearly "
+                      "coincides with the source base): every target vertex takes the closest "
+                      "point of the source base.  The tilt is integrated along target edges "
+                      "either way.  With --planar the source is a flat texture in the XY "
+                      "plane, tiled over the (refined) target through field-aligned patch "
+                      "parameterizations.")
     t.add_argument("texture", help="texture file (.npz)")
     t.add_argument("--source-base", required=True, help="the base mesh the texture lives on")
-    t.add_argument("--target", required=True, help="base mesh to receive the texture")
+    t.add_argument("--target-base", "--target", dest="target", required=True, metavar="MESH",
+                   help="base mesh to receive the texture")
+    t.add_argument("--map", choices=("auto", "closest", "sphere"), default="auto",
+                   help="correspondence: sphere (different shapes), closest (nearly the same "
+                   "surface); auto (default) picks closest when every target vertex lies within "
+                   "2%% of the source base's bounding-box diagonal of it, else sphere")
+    t.add_argument("--landmarks", metavar="L.json",
+                   help="with --map sphere: JSON list of [[sx, sy, sz], [tx, ty, tz]] pairs of "
+                   "corresponding source and target points (at least two)")
     t.add_argument("--samples", type=int, default=5,
                    help="samples per edge for the tilt integrals (default 5)")
     t.add_argument("-o", "--output", required=True, help="texture file to write (.npz)")
@@ -227,25 +240,86 @@ def run_edit(args) -> int:
     return EXIT_OK
 
 
+#: --map auto picks closest points when the target lies this close to the source base
+#: (fraction of the source base's bounding-box diagonal), else the sphere map.
+AUTO_CLOSEST_DISTANCE = 0.02
+
+
+def _landmarks(path):
+    import json
+
+    try:
+        with open(path, encoding="utf-8") as fh:
+            data = json.load(fh)
+    except FileNotFoundError:
+        raise UsageError(f"--landmarks {path}: no such file") from None
+    except (OSError, ValueError) as exc:
+        raise UsageError(f"--landmarks {path}: not readable JSON ({exc})") from None
+    from geotex.heighttilt.transfer import check_landmarks
+    from geotex.errors import InputError
+
+    try:
+        check_landmarks(data)
+    except InputError as exc:
+        raise UsageError(f"--landmarks {path}: {exc}") from None
+    return data
+
+
+def _auto_map(src, dst) -> str:
+    import igl
+    import numpy as np
+
+    diag = float(np.linalg.norm(np.ptp(src.vertices, axis=0)))
+    d2, _, _ = igl.point_mesh_squared_distance(dst.vertices, src.vertices, src.faces)
+    return "closest" if float(np.sqrt(np.max(d2))) <= AUTO_CLOSEST_DISTANCE * diag else "sphere"
+
+
 def run_transfer(args) -> int:
     if args.planar:
+        if args.map != "auto" or args.landmarks:
+            raise UsageError("--map and --landmarks do not apply to --planar")
         return _run_planar(args)
     if args.scale is not None or args.base_out:
         raise UsageError("--scale and --base-out belong to the planar mode; add --planar")
+    if args.landmarks and args.map == "closest":
+        raise UsageError("--landmarks belongs to --map sphere")
     from geotex.heighttilt import (apply_texture, closest_point_correspondence, load_texture,
                                    save_texture, transfer_texture)
+    from geotex.heighttilt.transfer import transfer_between_shapes
     from geotex.io import read_mesh, write_mesh
 
-    out = guard_output(args.output, args.texture, args.source_base, args.target)
+    inputs = (args.texture, args.source_base, args.target) + ((args.landmarks,)
+                                                              if args.landmarks else ())
+    out = guard_output(args.output, *inputs)
     _npz(out)
-    applied = (_mesh_out(guard_output(args.apply, args.texture, args.source_base, args.target))
-               if args.apply else None)
+    applied = _mesh_out(guard_output(args.apply, *inputs)) if args.apply else None
+    landmarks = _landmarks(args.landmarks) if args.landmarks else None
     tex = load_texture(args.texture)
     src = read_mesh(args.source_base)
     dst = read_mesh(args.target)
-    corr = closest_point_correspondence(dst.vertices, src.vertices, src.faces)
-    new = transfer_texture(src.vertices, src.faces, tex, dst.vertices, dst.faces,
-                           correspondence=corr, samples=args.samples)
+    how = args.map
+    if how == "auto":
+        how = "sphere" if landmarks is not None else _auto_map(src, dst)
+    if how == "closest":
+        corr = closest_point_correspondence(dst.vertices, src.vertices, src.faces)
+        new = transfer_texture(src.vertices, src.faces, tex, dst.vertices, dst.faces,
+                               correspondence=corr, samples=args.samples)
+        print("map: closest points")
+    else:
+        from geotex.errors import InputError
+
+        try:
+            new, report = transfer_between_shapes(src.vertices, src.faces, tex, dst.vertices,
+                                                  dst.faces, landmarks=landmarks,
+                                                  samples=args.samples)
+        except InputError as exc:
+            msg = str(exc)
+            for name, flag, path in (("V_dst ", "--target-base", args.target),
+                                     ("Vs_src ", "--source-base", args.source_base)):
+                if msg.startswith(name):
+                    raise UsageError(f"{flag} {path}: {msg[len(name):]} (--map sphere)") from None
+            raise
+        print("\n".join(report.lines()))
     with _all_or_none() as done:
         if applied is not None:
             V = apply_texture(dst.vertices, dst.faces, new)

@@ -1,8 +1,9 @@
 """Height-and-tilt geometric texture (Andersen, Desbrun, Bærentzen, Aanæs).
 
 A textured mesh ``V0`` over a base ``Vs`` with the same connectivity is
-stored as a pseudo-height per vertex and a tilt 1-form per edge (plus a
-per-vertex residual that makes the round trip exact):
+stored as a pseudo-height per vertex and a tilt 1-form per edge (the
+paper's bounded least squares, plus a per-vertex residual that makes the
+round trip exact):
 
 >>> from geotex.heighttilt import spiky_sphere, extract_texture, apply_texture
 >>> V0, F, Vs = spiky_sphere(subdivisions=2, spikes=6, seed=0)
@@ -22,7 +23,9 @@ from geotex.heighttilt.procedural import bumpy_plane, spiky_sphere, tentacle_sti
 from geotex.heighttilt.refine import refine_base
 from geotex.heighttilt.reconstruct import apply_texture, displacements
 from geotex.heighttilt.texture import HeightTiltTexture, load_texture, save_texture
-from geotex.heighttilt.transfer import closest_point_correspondence, transfer_texture
+from geotex.heighttilt.transfer import (ShapeTransferReport, closest_point_correspondence,
+                                        sphere_correspondence, transfer_between_shapes,
+                                        transfer_texture)
 
 __all__ = [
     "HeightTiltTexture", "save_texture", "load_texture",
@@ -33,5 +36,6 @@ __all__ = [
     "spiky_sphere", "bumpy_plane", "tentacle_stick",
     "reapplied", "deformed_texture", "bend", "twist", "scale_base", "naive_space_deformation",
     "transfer_texture", "closest_point_correspondence",
+    "transfer_between_shapes", "sphere_correspondence", "ShapeTransferReport",
     "transfer_planar", "PlanarTransfer", "refine_base",
 ]

@@ -13,16 +13,25 @@ instead of ``(m, 3, 3)`` temporaries; the edge topology is
   corner).
 * :func:`edge_encode` is the direct per-edge encoding
   ``c_ij = <(t_i + t_j) / 2, p_j - p_i>`` clipped to ``|c_ij| <= |p_j - p_i|``.
+* :meth:`BaseGeometry.decoder_transpose` writes the projected decoder ``P D``
+  edge by edge: the decoded vector at a vertex only involves the coefficients of the
+  edges *incident* to it (corner ``k`` of a face uses the two face edges at
+  ``k``), so ``(P D c)_v = sum_{e=(v,j)} a_e c_e + sum_{e=(i,v)} b_e c_e`` with
+  one tangent vector ``a_e`` (at the first endpoint) and ``b_e`` (at the
+  second) per edge.  In tangent frames that is four numbers per edge: the
+  transpose is a CSR matrix with four entries per row, built without a sort,
+  and :func:`lsq_encode` iterates on it.
 """
 
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse as sp
 
 from geotex.mesh.topology import EdgeTopology, edge_topology
 
-__all__ = ["cross", "dot", "edge_encode", "lowest_neighbours",
-           "BaseGeometry"]
+__all__ = ["cross", "dot", "axis_frames", "edge_encode", "lsq_encode", "BaseGeometry",
+           "LSQ_DAMPING", "LSQ_ITERATIONS", "LSQ_RTOL", "LSQ_ROUNDS", "LSQ_ROUND_ITERATIONS"]
 
 
 def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -39,23 +48,31 @@ def dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1] + a[:, 2] * b[:, 2]
 
 
-def lowest_neighbours(E: np.ndarray, n: int) -> np.ndarray:
-    """Lowest-index neighbour of every vertex (``-1`` for isolated vertices).
+#: Fixed generic directions for :func:`axis_frames` (no ties on axis-aligned meshes).
+_FRAME_AXIS = np.array([1.0, np.sqrt(2.0), np.sqrt(3.0)]) / np.sqrt(6.0)
+_FRAME_AXIS_ALT = np.array([np.sqrt(3.0), -1.0, -np.sqrt(0.5)])
+_FRAME_AXIS_ALT = _FRAME_AXIS_ALT - (_FRAME_AXIS_ALT @ _FRAME_AXIS) * _FRAME_AXIS
+_FRAME_AXIS_ALT /= np.linalg.norm(_FRAME_AXIS_ALT)
 
-    ``E`` are the sorted unique edges ``(i, j)``, ``i < j``: neighbours below a
-    vertex ``v`` appear as ``(i, v)`` and are all lower than those above it,
-    which appear as ``(v, j)``; the first ``(v, j)`` in the sorted order has the
-    smallest ``j``.
+
+def axis_frames(nrm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Orthonormal tangent frames from a fixed direction, independent of the indexing.
+
+    ``X1`` is the generic direction ``(1, sqrt 2, sqrt 3) / sqrt 6`` made
+    tangent and normalised, or a second direction orthogonal to it where the
+    normal is within about 37 degrees of it (``|n . a| > 0.8``); ``X2 = n x X1``.
+    A generic direction, unlike a coordinate axis chosen by the smallest
+    normal component, has no ties on axis-aligned meshes, where round-off would
+    otherwise pick the axis.  Fixed in space (not rotation invariant).
     """
-    below = np.full(n, n, dtype=np.int64)
-    np.minimum.at(below, E[:, 1], E[:, 0])
-    out = np.full(n, -1, dtype=np.int64)
-    if E.shape[0]:
-        start = np.flatnonzero(np.r_[True, E[1:, 0] != E[:-1, 0]])
-        out[E[start, 0]] = E[start, 1]
-    has_below = below < n
-    out[has_below] = below[has_below]
-    return out
+    ca = nrm @ _FRAME_AXIS
+    alt = np.abs(ca) > 0.8
+    X1 = np.broadcast_to(_FRAME_AXIS, nrm.shape).copy()
+    X1[alt] = _FRAME_AXIS_ALT
+    c = np.where(alt, nrm @ _FRAME_AXIS_ALT, ca)
+    X1 -= c[:, None] * nrm
+    X1 /= np.sqrt(dot(X1, X1))[:, None]
+    return X1, cross(nrm, X1)
 
 
 def edge_encode(V: np.ndarray, E: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -114,7 +131,7 @@ class BaseGeometry:
         self.valence = np.bincount(F.ravel(), minlength=n).astype(np.float64)
         self._topo = topo
         self._normals = None
-        self._frames = None
+        self._transpose = None
 
     @property
     def topo(self) -> EdgeTopology:
@@ -169,6 +186,75 @@ class BaseGeometry:
             out[:, d] = acc / self.valence
         return out
 
+    def decoder_transpose(self) -> tuple[sp.csr_matrix, np.ndarray, np.ndarray]:
+        """``(P D)^T`` in per-vertex tangent frames, with the frames; cached.
+
+        Returns ``AT`` (e, 2n) CSR with four entries per row, the components
+        of ``a_e`` and ``b_e`` (module docstring) along the frames of the
+        edge's two endpoints, and the frames ``X1, X2`` (n, 3) of
+        :func:`axis_frames`.  Half-edge ``k`` of a face (``F_k -> F_{k+1}``)
+        enters corner ``k`` with ``+G_{k+1}`` and corner ``k+1`` with ``-G_k``
+        (signed by its orientation against the edge), so the two vectors of
+        every edge are sums over its (one or two) half-edges, gathered
+        through the topology's grouped half-edges, then projected on the
+        frames of the endpoints; the rows are built directly (no sort).
+        ``AT.T`` (CSC, no copy) applies ``P D`` to coefficients and gives the
+        two frame components of every vertex vector.
+        """
+        if self._transpose is None:
+            m = self.F.shape[0]
+            n = self.V.shape[0]
+            E = self.topo.edges
+            e = E.shape[0]
+            X1, X2 = axis_frames(self.normals)
+            # Gs[3 f + k] = G_k of face f = N x e_k / |N|^2
+            Gs = np.empty((m, 3, 3))
+            inv = 1.0 / self.N2
+            for k in range(3):
+                (n0, n1, n2), (x0, x1, x2) = self.N, self.e[k]
+                Gs[:, k, 0] = (n1 * x2 - n2 * x1) * inv
+                Gs[:, k, 1] = (n2 * x0 - n0 * x2) * inv
+                Gs[:, k, 2] = (n0 * x1 - n1 * x0) * inv
+            Gs = Gs.reshape(3 * m, 3)
+            # half-edge h = 3 f + k runs F_k -> F_{k+1}; the edge's first vertex gets
+            # +G_{k+1} if h runs along the edge (a -> b), else +G_k; the second -G_k,
+            # else -G_{k+1}: sum over the edge's half-edges, then project on the frames
+            topo = self.topo
+            order = topo.grouped_half_edges()
+            start = topo.edge_starts()
+            Fr = self.F.ravel()
+            last = 3 * m - 1
+            a_vec = b_vec = None
+            for which in (0, 1):
+                h = order[np.minimum(start + which, last)]
+                f3 = h - h % 3
+                k1 = f3 + (h + 1) % 3
+                fwd = Fr[h] < Fr[k1]
+                ga = np.take(Gs, np.where(fwd, k1, h), axis=0)
+                gb = np.take(Gs, np.where(fwd, h, k1), axis=0)
+                if which == 0:
+                    a_vec, b_vec = ga, -gb
+                else:
+                    two = (topo.face_count == 2)[:, None]
+                    a_vec += np.where(two, ga, 0.0)
+                    b_vec -= np.where(two, gb, 0.0)
+            iv = 1.0 / self.valence
+            data = np.empty((e, 4))
+            wa, wb = iv[E[:, 0]], iv[E[:, 1]]
+            data[:, 0] = dot(a_vec, X1[E[:, 0]]) * wa
+            data[:, 1] = dot(a_vec, X2[E[:, 0]]) * wa
+            data[:, 2] = dot(b_vec, X1[E[:, 1]]) * wb
+            data[:, 3] = dot(b_vec, X2[E[:, 1]]) * wb
+            cols = np.empty((e, 4), dtype=np.int64)
+            cols[:, 0] = 2 * E[:, 0]
+            cols[:, 1] = cols[:, 0] + 1
+            cols[:, 2] = 2 * E[:, 1]
+            cols[:, 3] = cols[:, 2] + 1
+            AT = sp.csr_matrix((data.ravel(), cols.ravel(), 4 * np.arange(e + 1, dtype=np.int64)),
+                               shape=(e, 2 * n))
+            self._transpose = (AT, X1, X2)
+        return self._transpose
+
     def tangent(self, X: np.ndarray) -> np.ndarray:
         """``X`` minus its component along the base normals."""
         nrm = self.normals
@@ -177,3 +263,106 @@ class BaseGeometry:
 
 def _norm2(v) -> np.ndarray:
     return v[0] * v[0] + v[1] * v[1] + v[2] * v[2]
+
+
+#: Relative Tikhonov weight of :func:`lsq_encode` (towards the edge encoding).
+LSQ_DAMPING = 1e-3
+#: Conjugate-gradient iterations of the unconstrained fit, at most.
+LSQ_ITERATIONS = 16
+#: Relative residual at which the unconstrained fit stops early.
+LSQ_RTOL = 1e-3
+#: Active-set rounds for the bound ``|c_e| <= |e|``, and iterations per round.
+LSQ_ROUNDS = 2
+LSQ_ROUND_ITERATIONS = 4
+
+
+def lsq_encode(g: BaseGeometry, t: np.ndarray) -> np.ndarray:
+    """The paper's bounded least-squares 1-form of a tangent vertex field, matrix-free.
+
+    Minimises ``|P D c - t|^2 + damping sum_e K_ee (c_e - c0_e)^2`` subject to
+    ``|c_e| <= |e|``, with ``c0`` = :func:`edge_encode` (the start and the
+    damping target: there are more edges than tangential equations) and
+    ``K_ee`` the diagonal of the normal matrix (scale-free damping).  Solved by
+    Jacobi-preconditioned conjugate gradients on the normal equations through
+    :meth:`BaseGeometry.decoder_transpose` (four entries per edge)
+    (at most ``LSQ_ITERATIONS``, stopping at relative residual ``LSQ_RTOL``),
+    then ``LSQ_ROUNDS`` active-set rounds: coefficients past their bound are
+    fixed at it and the free ones re-fitted (``LSQ_ROUND_ITERATIONS`` each);
+    the result is clipped so the bound holds exactly.  A truncated solve: the
+    iteration counts are fixed, so the cost is a few dozen passes over the
+    edges whatever the mesh size.
+
+    Parameters
+    ----------
+    g : BaseGeometry
+    t : numpy.ndarray, (n, 3) float64
+        Tangent vertex vectors.
+
+    Returns
+    -------
+    numpy.ndarray, (e,) float64
+    """
+    E = g.topo.edges
+    c0 = edge_encode(g.V, E, t)
+    if E.shape[0] == 0:
+        return c0
+    AT, X1, X2 = g.decoder_transpose()
+    A = AT.T
+    lim = np.sqrt(np.einsum("ed,ed->e", g.V[E[:, 1]] - g.V[E[:, 0]],
+                            g.V[E[:, 1]] - g.V[E[:, 0]]))
+    diag = np.asarray(AT.multiply(AT).sum(axis=1)).ravel()
+    reg = LSQ_DAMPING * diag
+    Kd = diag + reg
+    Kd[Kd <= 0] = 1.0
+
+    def K(x):
+        return AT @ (A @ x) + reg * x
+
+    t2 = np.empty((t.shape[0], 2))
+    t2[:, 0] = dot(t, X1)
+    t2[:, 1] = dot(t, X2)
+    rhs = AT @ (t2.ravel() - A @ c0)
+    lo, hi = -lim - c0, lim - c0
+    d = _pcg(K, rhs, np.zeros_like(c0), Kd, None, LSQ_ITERATIONS, LSQ_RTOL)
+    free = np.ones(c0.shape, dtype=bool)
+    for _ in range(LSQ_ROUNDS):
+        out = free & ((d > hi) | (d < lo))
+        if not out.any():
+            break
+        np.clip(d, lo, hi, out=d)
+        free &= ~out
+        d = _pcg(K, rhs, d, Kd, free, LSQ_ROUND_ITERATIONS, 0.0)
+    c = c0 + d
+    return np.clip(c, -lim, lim, out=c)
+
+
+def _pcg(K, rhs, x, Kd, free, iterations, rtol):
+    """Jacobi-preconditioned CG on ``K x = rhs`` over the ``free`` unknowns."""
+    mask = None if free is None else free.astype(np.float64)
+    r = rhs - K(x)
+    if mask is not None:
+        r *= mask
+    z = r / Kd
+    p = z.copy()
+    rz = _vdot(r, z)
+    stop = rtol * rtol * _vdot(rhs, rhs)
+    for _ in range(iterations):
+        if rz <= 0.0 or _vdot(r, r) <= stop:
+            break
+        Kp = K(p)
+        if mask is not None:
+            Kp *= mask
+        alpha = rz / _vdot(p, Kp)
+        x += alpha * p
+        r -= alpha * Kp
+        z = r / Kd
+        rz_new = _vdot(r, z)
+        p *= rz_new / rz
+        p += z
+        rz = rz_new
+    return x
+
+
+def _vdot(x: np.ndarray, y: np.ndarray) -> float:
+    # einsum's own loop: BLAS ddot may spawn threads, slow on a busy machine
+    return float(np.einsum("i,i->", x, y))

@@ -27,8 +27,8 @@ import scipy.sparse.linalg as spla
 
 from geotex.errors import InputError
 from geotex.fields.sparse import single_threaded_blas
-from geotex.fields.oneforms import encode_one_form, projected_decoder
-from geotex.heighttilt._kernels import BaseGeometry, dot, edge_encode, lowest_neighbours
+from geotex.fields.oneforms import projected_decoder
+from geotex.heighttilt._kernels import BaseGeometry, axis_frames, dot, edge_encode, lsq_encode
 from geotex.heighttilt.smoothing import smoothed_base
 from geotex.mesh.arrays import as_mesh_arrays
 from geotex.mesh.topology import EdgeTopology
@@ -144,63 +144,94 @@ def base_normals(Vs, F) -> np.ndarray:
     return base_geometry(Vs, F, name="Vs").normals.copy()
 
 
-def tilt_frames(Vs, F) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Per-vertex frames ``(n, T1, T2)`` intrinsic to the base mesh.
+#: Below this length a decoded tilt (dimensionless, at most 1) gives no frame direction
+#: (the direction of a shorter vector would carry its round-off, magnified, into the frame).
+FRAME_TOLERANCE = 1e-7
 
-    ``n`` is :func:`base_normals`; ``T1`` is the direction to the vertex's
-    lowest-index neighbour projected onto the tangent plane and normalised
-    (or, if that edge is parallel to ``n``, the next neighbour); ``T2 = n x T1``.
-    The frames move with the mesh under rigid motions and do not change under
-    uniform scaling.  They are only used to store the tilt residual.
+
+def tilt_frames(Vs, F, c=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per-vertex frames ``(n, T1, T2)`` in which the tilt residual is stored.
+
+    ``n`` is :func:`base_normals` and ``T2 = n x T1``.  ``T1`` follows the
+    texture's own 1-form ``c``, so it depends on neither the vertex nor the
+    face order (the paper's objection to edge-ordering bases):
+
+    1. the direction of the decoded tilt ``u = P D(c)`` at the vertex, where
+       ``|u| > FRAME_TOLERANCE``;
+    2. otherwise the tangent part of the sum of ``u`` over the vertex's
+       neighbours, where that is longer than ``FRAME_TOLERANCE``;
+    3. otherwise (the 1-form vanishes on the whole one-ring, e.g. ``c`` is
+       None or zero) a fixed generic direction projected onto the tangent
+       plane (:func:`geotex.heighttilt._kernels.axis_frames`).
+
+    Steps 1 and 2 move with the mesh under rigid motions and do not change
+    under uniform scaling; step 3 is fixed in space (still independent of the
+    indexing).
+
+    Parameters
+    ----------
+    Vs : array_like, (n, 3) float64
+    F : array_like, (m, 3) int64
+    c : array_like, (e,) float64, optional
+        The texture's tilt 1-form (geotex's unique edge order of ``F``).
 
     Returns
     -------
     n, T1, T2 : numpy.ndarray, (n, 3) float64 each
+
+    Raises
+    ------
+    InputError
+        See :func:`check_base_mesh`; ``c`` of the wrong shape.
     """
-    return tuple(a.copy() for a in frames_of(base_geometry(Vs, F, name="Vs")))
+    g = base_geometry(Vs, F, name="Vs")
+    if c is None:
+        u = np.zeros_like(g.V)
+    else:
+        u = g.tangent(g.decode(_coefficients(g, c)))
+    return frames_of(g, u)
 
 
-def frames_of(g: BaseGeometry) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`tilt_frames` of a validated base geometry (cached on ``g``)."""
-    if g._frames is None:
-        Vs, nrm = g.V, g.normals
-        nb = lowest_neighbours(g.topo.edges, Vs.shape[0])
-        raw = Vs[nb] - Vs
-        vec = raw - np.einsum("kd,kd->k", raw, nrm)[:, None] * nrm
-        ln = np.linalg.norm(vec, axis=1)
-        ok = ln > 1e-9 * np.maximum(np.linalg.norm(raw, axis=1), 1e-300)
-        if ok.all():
-            T1 = vec / ln[:, None]
-            g._frames = (nrm, T1, np.cross(nrm, T1))
-        else:
-            g._frames = _frames_by_sorting(Vs, nrm, g.topo)
-    return g._frames
+def frames_of(g: BaseGeometry, u: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`tilt_frames` of a validated base from the decoded 1-form ``u = P D(c)``."""
+    nrm = g.normals
+    n = nrm.shape[0]
+    T1 = u.copy()
+    ln = np.sqrt(dot(T1, T1))
+    weak = ln <= FRAME_TOLERANCE
+    if weak.any():
+        E = g.topo.edges
+        ring = np.empty((n, 3))
+        for d in range(3):
+            ring[:, d] = (np.bincount(E[:, 0], weights=u[E[:, 1], d], minlength=n)
+                          + np.bincount(E[:, 1], weights=u[E[:, 0], d], minlength=n))
+        ring = g.tangent(ring)
+        T1[weak] = ring[weak]
+        ln[weak] = np.sqrt(dot(ring[weak], ring[weak]))
+        still = ln <= FRAME_TOLERANCE
+        if still.any():
+            T1[still] = axis_frames(nrm[still])[0]
+            ln[still] = 1.0
+    T1 /= ln[:, None]
+    return nrm, T1, np.cross(nrm, T1)
 
 
-def _frames_by_sorting(Vs: np.ndarray, nrm: np.ndarray, topo: EdgeTopology
-                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Frames through every neighbour in order (when a lowest edge is parallel to ``n``)."""
-    E = topo.edges
-    both = np.concatenate([E, E[:, ::-1]])
-    order = np.lexsort((both[:, 1], both[:, 0]))
-    both = both[order]
-    vec = Vs[both[:, 1]] - Vs[both[:, 0]]
-    vec -= np.einsum("kd,kd->k", vec, nrm[both[:, 0]])[:, None] * nrm[both[:, 0]]
-    ln = np.linalg.norm(vec, axis=1)
-    ok = ln > 1e-9 * np.maximum(np.linalg.norm(Vs[both[:, 1]] - Vs[both[:, 0]], axis=1), 1e-300)
-    cand = np.flatnonzero(ok)
-    src = both[cand, 0]
-    first = cand[np.unique(src, return_index=True)[1]]
-    T1 = np.zeros_like(Vs)
-    T1[both[first, 0]] = vec[first] / ln[first, None]
-    T2 = np.cross(nrm, T1)
-    return nrm, T1, T2
+def _coefficients(g: BaseGeometry, c) -> np.ndarray:
+    e = g.topo.edges.shape[0]
+    try:
+        c = np.ascontiguousarray(c, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"c must be a numeric ({e},) array: {exc}") from None
+    if c.shape != (e,) or not np.isfinite(c).all():
+        raise InputError(f"c must be a finite ({e},) array, one coefficient per unique edge, "
+                         f"got shape {c.shape}")
+    return c
 
 
 #: Conjugate-gradient iterations of the minimum-norm correction in :func:`encode_tilt`.
 CORRECTION_ITERATIONS = 400
 #: Tilt encodings accepted by :func:`encode_tilt` and the extraction.
-ENCODINGS = ("edge", "lsq")
+ENCODINGS = ("lsq", "edge")
 
 
 def check_encoding(encode) -> str:
@@ -211,21 +242,26 @@ def check_encoding(encode) -> str:
     return encode
 
 
-def encode_tilt(Vs, F, tilt, *, encode: str = "edge", exact: bool = False,
+def encode_tilt(Vs, F, tilt, *, encode: str = "lsq", exact: bool = False,
                 topology: EdgeTopology | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Encode per-vertex tilt vectors as a 1-form plus a per-vertex residual.
 
     1. The 1-form ``c`` from the tangential tilt ``P t`` (``P`` the projector
        onto the tangent plane of :func:`base_normals`):
 
-       * ``encode="edge"`` (default, fast): ``c_ij = <(t_i + t_j) / 2, p_j - p_i>``,
+       * ``encode="lsq"`` (default): the paper's bounded least squares
+         (sections 2 and 5): ``c`` fits the decoded vertex vectors,
+         ``min |P D(c) - P t|^2`` subject to ``|c_e| <= |e|``, lightly damped
+         towards the edge encoding below (there are more edges than tangential
+         equations).  Matrix-free truncated conjugate gradients with a few
+         active-set rounds for the bound
+         (:func:`geotex.heighttilt._kernels.lsq_encode`): a fixed number of
+         passes over the edges.
+       * ``encode="edge"`` (fast): ``c_ij = <(t_i + t_j) / 2, p_j - p_i>``,
          the exact line integral of the linearly interpolated tilt along the
-         edge, clipped to the paper's bound ``|c_ij| <= |p_j - p_i|``.  One
-         gather per edge; no linear system.
-       * ``encode="lsq"``: the paper's bounded least squares
-         ``encode_one_form(Vs, F, P t, at="vertices", bound=True)`` (section 5),
-         which fits the decoded vertex vectors (slower: conjugate gradients and
-         an active-set solve on the normal equations).
+         edge, clipped to ``|c_ij| <= |p_j - p_i|``.  One gather per edge; the
+         decoded 1-form is a one-ring average of the tilt, so sharp elements
+         lose much of their lean in it (the residual holds the rest).
 
     2. With ``exact=True``, the minimum-norm correction towards exact vertex
        interpolation: ``c <- c + B^T y``, ``(B B^T + eps I) y = t2 - B c``,
@@ -239,8 +275,9 @@ def encode_tilt(Vs, F, tilt, *, encode: str = "edge", exact: bool = False,
        After it, the 1-form alone decodes to the tilt (to round-off on
        closed meshes).
     3. The residual ``r = t - P D(c)`` that the 1-form does not reproduce,
-       stored as its two components in :func:`tilt_frames` (intrinsic:
-       rigid-motion and scale invariant).  ``P D(c) + r`` equals the target
+       stored as its two components in the frames :func:`tilt_frames` builds
+       from ``c`` itself (``T1`` along the decoded 1-form: independent of
+       the indexing, rigid-motion and scale invariant).  ``P D(c) + r`` equals the target
        to round-off whatever the encoding: this is what makes extraction
        followed by reconstruction exact.
 
@@ -252,7 +289,7 @@ def encode_tilt(Vs, F, tilt, *, encode: str = "edge", exact: bool = False,
     tilt : array_like, (n, 3) float64
         Target tilt per vertex; only its part tangent to :func:`base_normals`
         is encoded.
-    encode : {"edge", "lsq"}, optional
+    encode : {"lsq", "edge"}, optional
         How the 1-form is computed (step 1).
     exact : bool, optional
         Apply step 2 (default False: the residual holds what the 1-form misses).
@@ -264,7 +301,7 @@ def encode_tilt(Vs, F, tilt, *, encode: str = "edge", exact: bool = False,
     c : numpy.ndarray, (e,) float64
         Coefficients in geotex's unique edge order.
     residual : numpy.ndarray, (n, 2) float64
-        Components of ``t - P D(c)`` along ``(T1, T2)`` of :func:`tilt_frames`.
+        Components of ``t - P D(c)`` along ``(T1, T2)`` of ``tilt_frames(Vs, F, c)``.
 
     Raises
     ------
@@ -283,22 +320,19 @@ def encode_tilt(Vs, F, tilt, *, encode: str = "edge", exact: bool = False,
     return encode_on(g, t, encode=encode, exact=bool(exact))
 
 
-def encode_on(g: BaseGeometry, t: np.ndarray, *, encode: str = "edge", exact: bool = False
+def encode_on(g: BaseGeometry, t: np.ndarray, *, encode: str = "lsq", exact: bool = False
               ) -> tuple[np.ndarray, np.ndarray]:
     """:func:`encode_tilt` on a validated base geometry and a checked ``(n, 3)`` tilt."""
     n = g.V.shape[0]
-    _, T1, T2 = frames_of(g)
     t = g.tangent(t)
-    B3 = None
     if encode == "edge":
         c = edge_encode(g.V, g.topo.edges, t)
     else:
-        B3, onrm = projected_decoder(g.V, g.F, topology=g.topo)
-        c = encode_one_form(g.V, g.F, t, at="vertices", bound=True, weighting="uniform",
-                            topology=g.topo, decoder=(B3, onrm))
+        c = lsq_encode(g, t)
     if exact:
-        if B3 is None:
-            B3, _ = projected_decoder(g.V, g.F, topology=g.topo)
+        B3, _ = projected_decoder(g.V, g.F, topology=g.topo)
+        # the correction is expressed in frames that do not depend on c
+        _, T1, T2 = frames_of(g, np.zeros_like(t))
         rows = np.repeat(np.arange(2 * n), 3)
         cols = np.repeat((3 * np.arange(n)[:, None] + np.arange(3)), 2, axis=0)
         vals = np.stack([T1, T2], axis=1)
@@ -315,6 +349,7 @@ def encode_on(g: BaseGeometry, t: np.ndarray, *, encode: str = "edge", exact: bo
                            M=pre)
         c = c + B.T @ y
     Pc = g.tangent(g.decode(c))
+    _, T1, T2 = frames_of(g, Pc)
     r = np.stack([dot(t - Pc, T1), dot(t - Pc, T2)], axis=1)
     # one step of iterative refinement against exactly what decode_on computes,
     # so the decoded tilt is t to the last bit or so (|t| near 1 is ill-conditioned
@@ -334,7 +369,7 @@ def decode_tilt(Vs, F, c, residual=None, *, topology: EdgeTopology | None = None
     F : array_like, (m, 3) int64
     c : array_like, (e,) float64
     residual : array_like, (n, 2) float64, optional
-        Components along :func:`tilt_frames`; zero if omitted.
+        Components along ``tilt_frames(Vs, F, c)``; zero if omitted.
     topology : EdgeTopology, optional
 
     Returns
@@ -349,14 +384,7 @@ def decode_tilt(Vs, F, c, residual=None, *, topology: EdgeTopology | None = None
         or with non-finite values.
     """
     g = base_geometry(Vs, F, name="Vs", topology=topology)
-    e = g.topo.edges.shape[0]
-    try:
-        c = np.ascontiguousarray(c, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"c must be a numeric ({e},) array: {exc}") from None
-    if c.shape != (e,) or not np.isfinite(c).all():
-        raise InputError(f"c must be a finite ({e},) array, one coefficient per unique edge, "
-                         f"got shape {c.shape}")
+    c = _coefficients(g, c)
     return decode_on(g, c, residual)
 
 
@@ -367,6 +395,6 @@ def decode_on(g: BaseGeometry, c: np.ndarray, residual=None) -> np.ndarray:
         r = np.asarray(residual, dtype=np.float64)
         if r.shape != (g.V.shape[0], 2):
             raise InputError(f"residual must have shape ({g.V.shape[0]}, 2), got {r.shape}")
-        _, T1, T2 = frames_of(g)
+        _, T1, T2 = frames_of(g, t)
         t = t + (r[:, :1] * T1 + r[:, 1:] * T2)
     return t

@@ -26,9 +26,10 @@ therefore also recomputes the per-vertex residual of the texture
 (:func:`geotex.heighttilt.base.encode_tilt`) so that the decoded tilt is the
 original vertex tilt carried into the deformed vertex frame: its components
 along the intrinsic frames ``(T1, T2)`` of
-:func:`geotex.heighttilt.base.tilt_frames` are kept.  The lean angle of every
+:func:`geotex.heighttilt.base.tilt_frames` (built from the 1-form itself:
+``T1`` along its decoded direction) are kept.  The lean angle of every
 vertex is then kept to round-off and its lean direction is kept relative to
-the vertex's reference edge.
+the direction the carried 1-form decodes to.
 """
 
 from __future__ import annotations
@@ -101,10 +102,10 @@ def deformed_texture(Vs, Vs_deformed, F, tex: HeightTiltTexture) -> HeightTiltTe
         raise InputError("Vs has zero-length edges: the tilt rescaling |e'|/|e| is undefined")
     c = tex.tilt * (l1 / l0)
     t0 = decode_tilt(Vb, F, tex.tilt, tex.residual, topology=topo)
-    _, T1, T2 = tilt_frames(Vb, F)
+    _, T1, T2 = tilt_frames(Vb, F, tex.tilt)
     a = np.einsum("nd,nd->n", t0, T1)
     b = np.einsum("nd,nd->n", t0, T2)
-    _, S1, S2 = tilt_frames(Vd, F)
+    _, S1, S2 = tilt_frames(Vd, F, c)
     target = a[:, None] * S1 + b[:, None] * S2
     miss = target - decode_tilt(Vd, F, c, topology=topo)
     r = np.column_stack([np.einsum("nd,nd->n", miss, S1), np.einsum("nd,nd->n", miss, S2)])

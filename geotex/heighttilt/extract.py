@@ -35,7 +35,7 @@ def displacement_to_height_tilt(d: np.ndarray, n: np.ndarray) -> tuple[np.ndarra
 
 
 def extract_texture(V0, F, *, base=None, steps: int = 3, time_step: float | None = None,
-                    encode: str = "edge", exact: bool = False
+                    encode: str = "lsq", exact: bool = False
                     ) -> tuple[HeightTiltTexture, np.ndarray]:
     """Split a textured mesh into a base shape and a height-and-tilt texture.
 
@@ -51,12 +51,13 @@ def extract_texture(V0, F, *, base=None, steps: int = 3, time_step: float | None
     steps, time_step
         Passed to :func:`~geotex.heighttilt.base.smoothed_base` when ``base``
         is not given.
-    encode : {"edge", "lsq"}, optional
+    encode : {"lsq", "edge"}, optional
         Tilt 1-form encoding, passed to
-        :func:`~geotex.heighttilt.base.encode_tilt`: ``"edge"`` (default) the
-        direct per-edge integral of the interpolated tilt, ``"lsq"`` the
-        paper's bounded least squares (slower).  The round trip is exact
-        either way: the residual holds what the 1-form misses.
+        :func:`~geotex.heighttilt.base.encode_tilt`: ``"lsq"`` (default) the
+        paper's bounded least squares, ``"edge"`` the direct per-edge integral
+        of the interpolated tilt (faster, but its 1-form alone loses much of
+        the lean of sharp elements).  The round trip is exact either way: the
+        residual holds what the 1-form misses.
     exact : bool, optional
         Passed to :func:`~geotex.heighttilt.base.encode_tilt` (minimum-norm
         correction so that the 1-form alone decodes to the tilt; slow).

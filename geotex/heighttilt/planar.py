@@ -415,8 +415,9 @@ def _resample(g, src, pid, vid, uv, dist, gu, gv, scale, band, samples):
     c = edge_encode(g.V, E, tv)              # fallback where no chart holds an edge
     has = den > 0
     c[has] = num[has] / den[has]
-    _, T1, T2 = frames_of(g)
-    miss = tv - decode_on(g, c)
+    u = decode_on(g, c)
+    _, T1, T2 = frames_of(g, u)
+    miss = tv - u
     r = np.stack([dot(miss, T1), dot(miss, T2)], axis=1)
     out = HeightTiltTexture._trusted(height, c, g.F, r, {"source": "transfer_planar",
                                                          "samples": samples,

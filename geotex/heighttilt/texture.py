@@ -36,9 +36,11 @@ class HeightTiltTexture:
         Connectivity the texture belongs to.
     residual : numpy.ndarray, (n, 2) float64
         The part of the vertex tilt the 1-form does not reproduce, as
-        components in the intrinsic vertex frames of
-        :func:`geotex.heighttilt.base.tilt_frames` (zero for a purely
-        intrinsic texture; see :func:`geotex.heighttilt.base.encode_tilt`).
+        components in the vertex frames
+        ``geotex.heighttilt.base.tilt_frames(Vs, faces, tilt)``: ``T1`` along
+        the direction the 1-form itself decodes to, so the numbers do not
+        depend on the indexing (zero for a purely 1-form texture; see
+        :func:`geotex.heighttilt.base.encode_tilt`).
     metadata : dict
         JSON-serialisable extra information.
 
