@@ -38,7 +38,7 @@ Euler characteristic (:mod:`geotex.fields.singularities`).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from numbers import Integral, Real
+from numbers import Integral
 
 import igl
 import numpy as np
@@ -52,6 +52,7 @@ from geotex.fields.sparse import factor_hpd, single_threaded_blas
 from geotex.fields.frames import (FaceConnection, _checked_arrays, _connection, _frames,
                                   tangent_angles, vectors_from_angles)
 from geotex.fields.singularities import _index_numerators, _singularity_list
+from geotex.options import positive_number
 
 __all__ = [
     "Constraint",
@@ -134,13 +135,6 @@ def _vector3(value, what: str) -> np.ndarray:
     return arr
 
 
-def _positive(value, what: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, Real) or not np.isfinite(value) \
-            or value <= 0:
-        raise InputError(f"{what} must be a positive finite number, got {value!r}")
-    return float(value)
-
-
 def _resolve_constraints(V: np.ndarray, F: np.ndarray, conn: FaceConnection, constraints,
                          *, max_snap_distance=None, name: str = "constraints") -> _Resolved:
     """Validate constraints, snap points to faces and project directions."""
@@ -175,11 +169,11 @@ def _resolve_constraints(V: np.ndarray, F: np.ndarray, conn: FaceConnection, con
         dirs[i] = _vector3(c["direction"], f"{where} direction")
         if not np.linalg.norm(dirs[i]) > 0:
             raise InputError(f"{where} direction is zero; give a non-zero tangent direction")
-        weights[i] = _positive(c.get("weight", 1.0), f"{where} weight")
+        weights[i] = positive_number(c.get("weight", 1.0), name=f"{where} weight")
         if c.get("radius") is not None:
-            radii[i] = _positive(c["radius"], f"{where} radius")
+            radii[i] = positive_number(c["radius"], name=f"{where} radius")
         if c.get("scale") is not None:
-            scales[i] = _positive(c["scale"], f"{where} scale")
+            scales[i] = positive_number(c["scale"], name=f"{where} scale")
         if face is not None:
             if isinstance(face, bool) or not isinstance(face, Integral):
                 raise InputError(f"{where} face must be an integer index, got {face!r}")
@@ -197,7 +191,7 @@ def _resolve_constraints(V: np.ndarray, F: np.ndarray, conn: FaceConnection, con
             limit = SNAP_FRACTION * float(np.linalg.norm(V.max(axis=0) - V.min(axis=0)))
             how = "1% of the bounding-box diagonal"
         else:
-            limit = _positive(max_snap_distance, "max_snap_distance")
+            limit = positive_number(max_snap_distance, name="max_snap_distance")
             how = "max_snap_distance"
         far = np.flatnonzero(dist > limit)
         if far.size:
@@ -452,7 +446,7 @@ def smooth_direction_field(V, F, *, symmetry: int = 1, constraints=None, mode: s
     N = _check_symmetry(symmetry)
     if mode not in ("hard", "soft"):
         raise InputError(f"mode must be 'hard' or 'soft', got {mode!r}")
-    strength = _positive(soft_strength, "soft_strength")
+    strength = positive_number(soft_strength, name="soft_strength")
     conn = _connection(V, F)
     res = _resolve_constraints(V, F, conn, constraints, max_snap_distance=max_snap_distance)
     rng = np.random.default_rng(0 if seed is None else seed)
@@ -530,7 +524,7 @@ def projected_direction_field(V, F, direction, *, tolerance: float = 1e-3
     ([0.0, 1.0, 0.0], False)
     """
     V, F = _checked_arrays(V, F)
-    tol = _positive(tolerance, "tolerance")
+    tol = positive_number(tolerance, name="tolerance")
     m = F.shape[0]
     d = np.asarray(direction, dtype=np.float64) if not isinstance(direction, str) else None
     if d is None or d.shape not in ((3,), (m, 3)):

@@ -31,9 +31,10 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
 from geotex.errors import InputError
-from geotex.fields.directions import DirectionField, _fill, _positive, _resolve_constraints
+from geotex.fields.directions import DirectionField, _fill, _resolve_constraints
 from geotex.fields.frames import _checked_arrays, _connection, tangent_angles
 from geotex.fields.singularities import _index_numerators, _singularity_list
+from geotex.options import positive_number
 
 __all__ = ["rbf_direction_field", "KERNELS", "surface_distances"]
 
@@ -156,7 +157,7 @@ def rbf_direction_field(V, F, constraints, *, kernel: str = "gaussian", radius=N
     if isinstance(smoothing, bool) or not isinstance(smoothing, Real) \
             or not np.isfinite(smoothing) or smoothing < 0:
         raise InputError(f"smoothing must be a finite number >= 0, got {smoothing!r}")
-    tol = _positive(tolerance, "tolerance")
+    tol = positive_number(tolerance, name="tolerance")
     conn = _connection(V, F)
     res = _resolve_constraints(V, F, conn, constraints, max_snap_distance=max_snap_distance)
     if res.faces.size == 0:
@@ -180,7 +181,7 @@ def rbf_direction_field(V, F, constraints, *, kernel: str = "gaussian", radius=N
         if not r_default > 0:                          # every face is a constraint face
             r_default = float(conn.dual_length.mean()) if conn.dual_length.size else 1.0
     else:
-        r_default = _positive(radius, "radius")
+        r_default = positive_number(radius, name="radius")
     if kernel == "thin_plate" and not np.isnan(res.radii).all():
         i = int(np.flatnonzero(~np.isnan(res.radii))[0])
         raise InputError(f"constraints[{i}] radius cannot be used with kernel='thin_plate' "

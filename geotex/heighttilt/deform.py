@@ -38,11 +38,11 @@ import numpy as np
 
 from geotex.errors import InputError
 from geotex.heighttilt.base import decode_tilt, tilt_frames
-from geotex.heighttilt.edit import _number
 from geotex.heighttilt.reconstruct import apply_texture, check_texture
 from geotex.heighttilt.texture import HeightTiltTexture
 from geotex.mesh.arrays import as_mesh_arrays, as_vertices
 from geotex.mesh.topology import edge_topology
+from geotex.options import finite_number
 
 __all__ = ["deformed_texture", "reapplied", "bend", "twist", "scale_base",
            "naive_space_deformation"]
@@ -50,8 +50,8 @@ __all__ = ["deformed_texture", "reapplied", "bend", "twist", "scale_base",
 
 def _span(u: np.ndarray, origin, length) -> tuple[float, float]:
     """Start and length of a deformation along ``u`` (default: the range of ``u``)."""
-    u0 = float(u.min()) if origin is None else _number("origin", origin)
-    L = float(u.max() - u.min()) if length is None else _number("length", length)
+    u0 = float(u.min()) if origin is None else finite_number(origin, name="origin")
+    L = float(u.max() - u.min()) if length is None else finite_number(length, name="length")
     if not L > 0:
         raise InputError(f"length must be positive, got {L!r}")
     return u0, L
@@ -207,7 +207,7 @@ def bend(V, *, angle, axis: int = 2, toward: int | None = None, origin: float | 
     toward = (axis + 1) % 3 if toward is None else _axis("toward", toward)
     if toward == axis:
         raise InputError(f"toward must differ from axis, both are {axis}")
-    ang = _number("angle", angle)
+    ang = finite_number(angle, name="angle")
     out = V.copy()
     if V.shape[0] == 0 or ang == 0.0:
         return out
@@ -249,7 +249,7 @@ def twist(V, *, turns, axis: int = 2, origin: float | None = None,
     """
     V = as_vertices(V)
     axis = _axis("axis", axis)
-    tr = _number("turns", turns)
+    tr = finite_number(turns, name="turns")
     out = V.copy()
     if V.shape[0] == 0 or tr == 0.0:
         return out
@@ -283,7 +283,7 @@ def scale_base(V, s, *, center=None) -> np.ndarray:
         Malformed ``V`` or ``center``, or a non-positive ``s``.
     """
     V = as_vertices(V)
-    f = _number("s", s)
+    f = finite_number(s, name="s")
     if not f > 0:
         raise InputError(f"s must be a positive number, got {s!r}")
     if center is None:

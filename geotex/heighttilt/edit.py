@@ -23,6 +23,7 @@ from geotex.errors import InputError
 from geotex.heighttilt.base import base_normals, decode_tilt, encode_tilt
 from geotex.heighttilt.reconstruct import check_texture
 from geotex.heighttilt.texture import HeightTiltTexture
+from geotex.options import finite_number
 
 __all__ = ["scale_height", "set_tilt", "wrap", "wiggle"]
 
@@ -42,16 +43,6 @@ def _mask(mask, n: int) -> np.ndarray:
     if not np.isfinite(w).all() or w.min() < 0 or w.max() > 1:
         raise InputError("mask weights must be finite and in [0, 1]")
     return w
-
-
-def _number(name, value) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{name} must be a finite number, got {value!r}") from None
-    if not np.isfinite(v):
-        raise InputError(f"{name} must be a finite number, got {value!r}")
-    return v
 
 
 def _lean_dirs(Vs, F, nrm, direction, current) -> np.ndarray:
@@ -115,7 +106,7 @@ def scale_height(tex: HeightTiltTexture, s, *, mask=None) -> HeightTiltTexture:
     """
     if not isinstance(tex, HeightTiltTexture):
         raise InputError(f"tex must be a HeightTiltTexture, got {type(tex).__name__}")
-    s = _number("s", s)
+    s = finite_number(s, name="s")
     w = _mask(mask, tex.n_vertices)
     return tex.replace(height=tex.height * ((1.0 - w) + w * s),
                        metadata={**tex.metadata, "edit": f"scale_height({s!r})"})
@@ -156,7 +147,7 @@ def set_tilt(Vs, F, tex: HeightTiltTexture, *, angle_degrees, direction=None,
         shape, non-finite, the zero vector) or mask.
     """
     Vs, F = check_texture(Vs, F, tex)
-    a = _number("angle_degrees", angle_degrees)
+    a = finite_number(angle_degrees, name="angle_degrees")
     if not 0.0 <= a <= 90.0:
         raise InputError(f"angle_degrees must be in [0, 90], got {angle_degrees!r}")
     w = _mask(mask, Vs.shape[0])
@@ -191,7 +182,7 @@ def wrap(Vs, F, tex: HeightTiltTexture, *, k, direction=None, mask=None) -> Heig
         Connectivity mismatch, negative ``k``, bad direction or mask.
     """
     Vs, F = check_texture(Vs, F, tex)
-    k = _number("k", k)
+    k = finite_number(k, name="k")
     if k < 0:
         raise InputError(f"k must be >= 0, got {k!r}")
     w = _mask(mask, Vs.shape[0])
@@ -239,10 +230,10 @@ def wiggle(Vs, F, tex: HeightTiltTexture, *, amplitude, phase, direction,
         Connectivity mismatch, bad amplitude, direction, wavelength or mask.
     """
     Vs, F = check_texture(Vs, F, tex)
-    amp = _number("amplitude", amplitude)
+    amp = finite_number(amplitude, name="amplitude")
     if not 0.0 <= amp <= 90.0:
         raise InputError(f"amplitude must be in [0, 90] degrees, got {amplitude!r}")
-    ph = _number("phase", phase)
+    ph = finite_number(phase, name="phase")
     try:
         wdir = np.asarray(direction, dtype=np.float64)
     except (TypeError, ValueError):
@@ -256,7 +247,7 @@ def wiggle(Vs, F, tex: HeightTiltTexture, *, amplitude, phase, direction,
         if not lam > 0:
             raise InputError("the base has no extent along direction; give a wavelength")
     else:
-        lam = _number("wavelength", wavelength)
+        lam = finite_number(wavelength, name="wavelength")
         if lam <= 0:
             raise InputError(f"wavelength must be > 0, got {wavelength!r}")
     w = _mask(mask, Vs.shape[0])

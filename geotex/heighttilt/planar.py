@@ -64,6 +64,7 @@ from geotex.heighttilt.transfer import _project
 from geotex.param.local import field_aligned_parameterization, gradient_operator
 from geotex.patches.grow import face_adjacency, grow_patch
 from geotex.progress import report
+from geotex.options import positive_number
 
 __all__ = ["PlanarTransfer", "transfer_planar", "planar_source"]
 
@@ -152,16 +153,6 @@ def planar_source(Vs, F, tex) -> _Source:
     t = decode_on(g, tex.tilt, tex.residual)
     return _Source(V=g.V, F=g.F, height=tex.height, tilt=np.ascontiguousarray(t[:, :2]),
                    origin=lo[:2].copy(), period=ext[:2].copy(), spacing=spacing, z=float(lo[2]))
-
-
-def _positive(value, name) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{name} must be a positive number, got {value!r}") from None
-    if not (math.isfinite(v) and v > 0):
-        raise InputError(f"{name} must be a positive number, got {value!r}")
-    return v
 
 
 def _cover(V, F, field, radius, start_face, rng):
@@ -305,8 +296,9 @@ def transfer_planar(Vs_src, F_src, tex: HeightTiltTexture, V_dst, F_dst, *, scal
         non-positive ``scale``, ``patch_radius`` or ``samples``, negative
         ``blend``, unknown ``field`` or ``refine``, a field of the wrong shape.
     """
-    scale = _positive(scale, "scale")
-    radius = 1.5 * scale if patch_radius is None else _positive(patch_radius, "patch_radius")
+    scale = positive_number(scale, name="scale")
+    radius = (1.5 * scale if patch_radius is None
+              else positive_number(patch_radius, name="patch_radius"))
     try:
         blend = float(blend)
     except (TypeError, ValueError):

@@ -7,25 +7,9 @@ import numpy as np
 from geotex.errors import InputError
 from geotex.heighttilt.base import base_normals
 from geotex.mesh.primitives import grid_plane, icosphere
+from geotex.options import count, positive_number
 
 __all__ = ["spiky_sphere", "bumpy_plane", "tentacle_stick"]
-
-
-def _positive(name, value) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{name} must be a positive number, got {value!r}") from None
-    if not (np.isfinite(v) and v > 0):
-        raise InputError(f"{name} must be a positive number, got {value!r}")
-    return v
-
-
-def _count(name, value, lo=1) -> int:
-    if (isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer))
-            or value < lo):
-        raise InputError(f"{name} must be an integer >= {lo}, got {value!r}")
-    return int(value)
 
 
 def _lean(name, value) -> float:
@@ -83,11 +67,11 @@ def spiky_sphere(*, spikes: int = 24, lean_degrees: float = 60.0, subdivisions: 
     InputError
         On non-positive counts or sizes, or a lean outside ``[0, 90)``.
     """
-    spikes = _count("spikes", spikes)
+    spikes = count(spikes, name="spikes")
     lean = _lean("lean_degrees", lean_degrees)
-    height = _positive("height", height)
-    width = _positive("width", width)
-    Vs, F = icosphere(_count("subdivisions", subdivisions, 0))
+    height = positive_number(height, name="height")
+    width = positive_number(width, name="width")
+    Vs, F = icosphere(count(subdivisions, name="subdivisions", minimum=0))
     rng = np.random.default_rng(seed)
     centres = rng.normal(size=(spikes, 3))
     centres /= np.linalg.norm(centres, axis=1, keepdims=True)
@@ -139,10 +123,10 @@ def bumpy_plane(nx: int = 32, ny: int = 32, *, bumps: int = 12, height: float = 
     InputError
         On non-positive counts or sizes.
     """
-    Vs, F = grid_plane(_count("nx", nx), _count("ny", ny))
-    bumps = _count("bumps", bumps)
-    height = _positive("height", height)
-    radius = _positive("radius", radius)
+    Vs, F = grid_plane(count(nx, name="nx"), count(ny, name="ny"))
+    bumps = count(bumps, name="bumps")
+    height = positive_number(height, name="height")
+    radius = positive_number(radius, name="radius")
     lean = _lean("lean_degrees", lean_degrees)
     if periodic and radius >= 0.5:
         raise InputError(f"radius must be below 0.5 for a periodic plane, got {radius!r}")
@@ -200,13 +184,13 @@ def tentacle_stick(*, length: float = 3.0, radius: float = 0.25, n_around: int =
     InputError
         On non-positive counts or sizes.
     """
-    length = _positive("length", length)
-    radius = _positive("radius", radius)
-    na = _count("n_around", n_around, 3)
-    nl = _count("n_along", n_along)
-    suckers = _count("suckers", suckers)
-    height = _positive("height", height)
-    size = _positive("size", size)
+    length = positive_number(length, name="length")
+    radius = positive_number(radius, name="radius")
+    na = count(n_around, name="n_around", minimum=3)
+    nl = count(n_along, name="n_along")
+    suckers = count(suckers, name="suckers")
+    height = positive_number(height, name="height")
+    size = positive_number(size, name="size")
     lean = _lean("lean_degrees", lean_degrees)
     th = 2 * np.pi * np.arange(na) / na
     z = np.linspace(0.0, length, nl + 1)

@@ -40,9 +40,10 @@ the angle between the face and the vertex normal.
 The minimal rotation is meant for bases that nearly coincide in space (as with
 :func:`closest_point_correspondence`); between different shapes use
 :func:`transfer_between_shapes`, which carries vectors by the map itself.
-The minimal rotation is not equivariant under a rigid motion of one base only: the minimal rotation from ``n`` to ``Q n`` differs
-from ``Q`` by a spin about ``Q n``, so for a correspondence between shapes in
-different poses the lean directions would be turned about the normal (the
+The minimal rotation is not equivariant under a rigid motion of one base
+only: the minimal rotation from ``n`` to ``Q n`` differs from ``Q`` by a
+spin about ``Q n``, so for a correspondence between shapes in different
+poses the lean directions would be turned about the normal (the
 magnitudes, i.e. the lean angles, are kept by the rotation up to the final
 tangent projection).
 """
