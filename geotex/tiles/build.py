@@ -24,7 +24,8 @@ from geotex.errors import GeotexError, InputError
 from geotex.progress import report
 from geotex.tiles.colors import COMPLETE_GROUPS, PLANAR_GROUPS, parse_colors, tile_keys
 from geotex.tiles.frame import concatenated, frame_of
-from geotex.tiles.strips import GAP, corner_margin, element_boxes, lattice_phase, pick_strips
+from geotex.tiles.strips import (GAP, element_boxes, largest_footprint, lattice_corner,
+                                 lattice_phase, pick_strips)
 from geotex.tiles.tileset import TileSet
 from geotex.tiles.verify import side_boundaries
 
@@ -322,7 +323,8 @@ def _lattice(src: Source) -> tuple[float, float, float]:
     if not isinstance(p, (int, float)) or not p > 0 or abs(1 / p - round(1 / p)) > 1e-9:
         raise InputError(f"lattice: needs an exemplar whose pitch divides the tile "
                          f"(1 / pitch a whole number), got pitch {p!r}")
-    return (float(p),) + lattice_phase(src.lo, src.hi, float(p))
+    phase = lattice_phase(src.lo, src.hi, float(p))
+    return (float(p),) + lattice_corner(src.lo, src.hi, float(p), phase)
 
 
 def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool = False,
@@ -354,10 +356,11 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
     lattice : bool
         For exemplars laid out on a lattice of period ``params["pitch"]``
         (``1 / pitch`` a whole number): strips and quilting windows start
-        only on lattice points (phase from :func:`~geotex.tiles.strips.lattice_phase`),
-        so every tile holds the lattice in the same phase and neighbouring
-        elements do not collide across the tiles. Tile corners then sit on a
-        lattice point that no element may cross: one gap per tile corner.
+        only on lattice points (phase from :func:`~geotex.tiles.strips.lattice_phase`,
+        moved by half a pitch where that puts the tile corners between
+        elements, :func:`~geotex.tiles.strips.lattice_corner`), so every tile
+        holds the lattice in the same phase, neighbouring elements do not
+        collide across the tiles and no lattice site is left empty.
     seed : int
         Random seed; same inputs and seed give the same set, byte for byte.
     interior : {"quilt", "paste"}
@@ -402,14 +405,15 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
                          f"{colors!r}")
     rng = np.random.default_rng(seed)
     report(progress, "strips")
-    margin = corner_margin(src.lo, src.hi)
+    largest_footprint(src.lo, src.hi)
     grid = _lattice(src) if lattice else None
     strips, taken = {}, set()
     for cls in ((0,) if isotropic else range(3)):
         if n_colors[cls]:
+            before = [st for c in strips for st in strips[c]]
             strips[cls], taken = pick_strips(src.V, src.F, src.size, count=n_colors[cls],
-                                             along=STRIP_AXIS[cls], rng=rng, margin=margin,
-                                             taken=taken, lattice=grid)
+                                             along=STRIP_AXIS[cls], rng=rng, taken=taken,
+                                             lattice=grid, chosen_before=before)
     if isotropic:
         strips[1] = strips[2] = strips[0]
     groups, cols = tile_keys(n_colors, PLANAR_GROUPS if planar or isotropic
@@ -443,7 +447,7 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
                    "isotropic": bool(isotropic), "lattice": bool(lattice), "seed": int(seed),
                    "interior": interior},
         "isotropic": bool(isotropic),
-        "corner_margin": margin,
+        "corner_clearance": CLEAR,
         "lattice": None if grid is None else [round(float(g), 9) for g in grid],
         "coverage_mean": round(float(np.mean(coverage)), 6),
     }
