@@ -185,8 +185,12 @@ def interior_quilt(src: Source, frame, frame_boxes: np.ndarray, rng: np.random.G
         The whole tile (frame, possibly merged with copies, plus the interior),
         or None when no attempt was accepted.
     stats : dict
-        ``elements``, ``attempts``, ``merges`` (stitched + union) and, on
-        failure, the last ``problem``.
+        ``elements``, ``attempts``, ``merges`` (stitched + union),
+        ``stitched`` and the quilting report's seam figures
+        (``seam_gap_max`` relative to the cell, ``seam_normal_jump_mean``,
+        ``seam_normal_jump_max`` in degrees; ``nan`` without stitches, and
+        counting merges that were undone afterwards) and, on failure, the last
+        ``problem``.
     """
     from geotex.quilting import quilt_texture
 
@@ -224,7 +228,11 @@ def interior_quilt(src: Source, frame, frame_boxes: np.ndarray, rng: np.random.G
             return tile, {"elements": res.report.elements - changes["dropped"],
                           "attempts": attempt, "reverted": changes["reverted"],
                           "dropped": changes["dropped"],
-                          "merges": int(m.get("stitched", 0) + m.get("union", 0))}
+                          "merges": int(m.get("stitched", 0) + m.get("union", 0)),
+                          "stitched": int(m.get("stitched", 0)),
+                          "seam_gap_max": res.report.seam_gap_max,
+                          "seam_normal_jump_mean": res.report.seam_normal_jump_mean,
+                          "seam_normal_jump_max": res.report.seam_normal_jump_max}
     return None, {"attempts": attempts, "problem": problem}
 
 
@@ -422,7 +430,7 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
     from geotex.tiles.fill import ExemplarPixels, fill_gaps
 
     pixels = ExemplarPixels(src.V, src.F, src.labels, src.lo, src.hi)
-    tiles, coverage, fallbacks, merges, filled = [], [], 0, 0, 0
+    tiles, coverage, fallbacks, merges, filled, seams = [], [], 0, 0, 0, []
     for t, ((a, b), c) in enumerate(zip(groups.tolist(), cols.tolist())):
         report(progress, f"tile {t + 1}/{len(groups)}")
         frame, boxes = frame_of((strips[a], strips[b]), c)
@@ -430,6 +438,9 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
         if interior == "quilt":
             tile, stats = interior_quilt(src, frame, boxes, rng, lattice=grid)
             merges += stats.get("merges", 0)
+            if stats.get("stitched", 0):
+                seams.append((stats["stitched"], stats["seam_gap_max"],
+                              stats["seam_normal_jump_mean"], stats["seam_normal_jump_max"]))
             if tile is not None:
                 added, count = fill_gaps(tile[0], tile[1], pixels, src.size, rng,
                                          lattice=grid)
@@ -454,6 +465,13 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
     if interior == "quilt":
         meta.update(paste_fallbacks=int(fallbacks), merged_elements=int(merges),
                     gap_fill_elements=int(filled))
+        if seams:
+            S = np.asarray(seams, dtype=np.float64)
+            meta.update(stitched_seams=int(S[:, 0].sum()),
+                        seam_gap_max=round(float(np.nanmax(S[:, 1])), 6),
+                        seam_normal_jump_mean=round(float(np.nansum(S[:, 0] * S[:, 2])
+                                                          / S[:, 0].sum()), 3),
+                        seam_normal_jump_max=round(float(np.nanmax(S[:, 3])), 3))
     return TileSet.from_tiles(tiles, groups, cols, n_colors=n_colors, height=height,
                               depth=depth, name=name or recipe["name"] or "tileset",
                               metadata=meta)
