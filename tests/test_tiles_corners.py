@@ -75,12 +75,20 @@ def test_strip_ends_never_collide_at_corners():
     for x in picked:
         for y in picked:
             assert not corner_conflicts(x.corners, y.corners).any()
-    # an element and itself rotated a quarter collide when it sits at the corner
-    fake = {k: np.zeros((1, 80, 80), bool) for k in
-            ("above_start", "below_start", "above_far", "below_far")}
-    fake["above_start"][0, 2:20, 0:10] = True
-    fake["below_start"][0, 2:20, 0:10] = True
-    assert corner_conflicts(fake, fake)[0, 0]
+    # an element and itself turned a quarter collide when it sits at the corner,
+    # unless one lies above the other (overlapping scales)
+    def fake(z0, z1):
+        img = {k: (np.full((1, 80, 80), np.inf), np.full((1, 80, 80), -np.inf)) for k in
+               ("above_start", "below_start", "above_far", "below_far")}
+        for k in ("above_start", "below_start"):
+            img[k][0][0, 2:20, 0:10] = z0
+            img[k][1][0, 2:20, 0:10] = z1
+        return img
+
+    assert corner_conflicts(fake(0.0, 0.2), fake(0.0, 0.2))[0, 0]
+    assert not corner_conflicts(fake(0.0, 0.2), fake(0.3, 0.4))[0, 0]
+    assert not corner_conflicts(fake(0.0, 0.2), {k: (v[0][:, ::-1], v[1][:, ::-1]) for k, v
+                                                 in fake(0.0, 0.2).items()})[0, 0]
 
 
 def test_lattice_corner_moves_tile_corners_off_the_sites():

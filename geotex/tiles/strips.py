@@ -167,11 +167,13 @@ def corner_footprints(Vs: np.ndarray, Fs: np.ndarray, labels: np.ndarray, k: int
     Returns
     -------
     dict
-        ``above_start``, ``below_start``, ``above_far``, ``below_far``: bool
-        arrays ``(k, n, n)`` over ``[0, CORNER_WINDOW]^2`` with axes
-        (distance from the strip end along ``t``, distance from the cut line);
-        the vertical cut makes a half's footprint the element's footprint on
-        its side of the line.
+        ``above_start``, ``below_start``, ``above_far``, ``below_far``: pairs
+        ``(low, high)`` of float arrays ``(k, n, n)`` over
+        ``[0, CORNER_WINDOW]^2`` with axes (distance from the strip end along
+        ``t``, distance from the cut line): the lowest and highest height of
+        the faces of each element over each pixel (``+inf`` / ``-inf`` where
+        the element is absent). The vertical cut makes a half's footprint the
+        element's footprint on its side of the line.
     """
     from geotex.tiles.fill import PIXEL, footprint_pixels
 
@@ -179,29 +181,41 @@ def corner_footprints(Vs: np.ndarray, Fs: np.ndarray, labels: np.ndarray, k: int
     t, s = Vs[:, 0], Vs[:, 1]
     maps = {"above_start": (t, s), "below_start": (t, -s),
             "above_far": (1.0 - t, s), "below_far": (1.0 - t, -s)}
+    zf = Vs[Fs][:, :, 2] if len(Fs) else np.zeros((0, 3))
     out = {}
     for key, (a, b) in maps.items():
-        img = np.zeros((k, n, n), dtype=bool)
+        low = np.full((k, n, n), np.inf)
+        high = np.full((k, n, n), -np.inf)
         if len(Fs):
             ii, jj, f = footprint_pixels(np.c_[a, b, Vs[:, 2]], Fs, pixel=PIXEL, shape=(n, n))
-            img[labels[f], ii, jj] = True
-        out[key] = img
+            np.minimum.at(low, (labels[f], ii, jj), zf[f].min(axis=1))
+            np.maximum.at(high, (labels[f], ii, jj), zf[f].max(axis=1))
+        out[key] = (low, high)
     return out
 
 
-def _grown(img: np.ndarray) -> np.ndarray:
-    """Images grown by one pixel (8-neighbourhood)."""
-    g = img.copy()
-    g[:, 1:] |= img[:, :-1]
-    g[:, :-1] |= img[:, 1:]
-    h = g.copy()
-    h[:, :, 1:] |= g[:, :, :-1]
-    h[:, :, :-1] |= g[:, :, 1:]
-    return h
+def _grown(low: np.ndarray, high: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Height images grown by one pixel (8-neighbourhood): min of lows, max of highs."""
+    lo, hi = low.copy(), high.copy()
+    for axis in (1, 2):
+        a, b = lo.copy(), hi.copy()
+        sl = [slice(None)] * 3
+        sr = [slice(None)] * 3
+        sl[axis], sr[axis] = slice(1, None), slice(None, -1)
+        lo[tuple(sl)] = np.minimum(lo[tuple(sl)], a[tuple(sr)])
+        lo[tuple(sr)] = np.minimum(lo[tuple(sr)], a[tuple(sl)])
+        hi[tuple(sl)] = np.maximum(hi[tuple(sl)], b[tuple(sr)])
+        hi[tuple(sr)] = np.maximum(hi[tuple(sr)], b[tuple(sl)])
+    return lo, hi
 
 
 def corner_conflicts(x: dict, y: dict) -> np.ndarray:
     """Element pairs of strip ``x`` (horizontal side) and ``y`` (vertical side) that collide.
+
+    Two halves collide when, at some pixel of a corner quadrant (``x``'s
+    images grown by a pixel), both are present and their height ranges
+    overlap or come closer than :data:`CLEAR`; elements that only overlap in
+    projection, one above the other (overlapping scales), do not.
 
     Parameters
     ----------
@@ -211,18 +225,24 @@ def corner_conflicts(x: dict, y: dict) -> np.ndarray:
     Returns
     -------
     numpy.ndarray, (kx, ky) bool
-        True when the two elements' halves overlap (or touch) in a quadrant
-        of a corner where ``x`` runs along the horizontal side and ``y``
-        along the vertical one.
+        True when the two elements' halves may touch in a quadrant of a
+        corner where ``x`` runs along the horizontal side and ``y`` along the
+        vertical one.
     """
-    kx, ky = len(x["above_start"]), len(y["above_start"])
+    kx, ky = len(x["above_start"][0]), len(y["above_start"][0])
     out = np.zeros((kx, ky), dtype=bool)
     if kx == 0 or ky == 0:
         return out
     for kx_key, ky_key in QUADRANTS:
-        a = _grown(x[kx_key]).reshape(kx, -1).astype(np.float32)
-        b = y[ky_key].transpose(0, 2, 1).reshape(ky, -1).astype(np.float32)
-        out |= (a @ b.T) > 0
+        xl, xh = _grown(*x[kx_key])
+        yl = y[ky_key][0].transpose(0, 2, 1)
+        yh = y[ky_key][1].transpose(0, 2, 1)
+        both = np.isfinite(xl).any(axis=0) & np.isfinite(yl).any(axis=0)
+        if not both.any():
+            continue
+        xl, xh, yl, yh = xl[:, both], xh[:, both], yl[:, both], yh[:, both]
+        touch = (np.maximum(xl[:, None], yl[None]) <= np.minimum(xh[:, None], yh[None]) + CLEAR)
+        out |= touch.any(axis=2)
     return out
 
 
@@ -373,7 +393,7 @@ def _without_corner_conflicts(V, F, labels, members, origin, along, others):
     imgs = corner_footprints(Vs, F[keep], face_el, len(members))
     alive = np.ones(len(members), dtype=bool)
     while alive.any():
-        mine = {k: v[alive] for k, v in imgs.items()}
+        mine = {k: (v[0][alive], v[1][alive]) for k, v in imgs.items()}
         hits = np.zeros(int(alive.sum()))
         own = corner_conflicts(mine, mine)
         hits += own.sum(axis=1) + own.sum(axis=0)
