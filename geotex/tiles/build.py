@@ -280,15 +280,18 @@ def _accepted(res, want, frame_elements, max_foot):
         cut[vert_el[fv[V[fv, axis] == value]], s] = True
     # merges of two elements that did not coincide look like two fused elements
     # (or a frame half cut back): undo them, frame elements go back to their
-    # frame half (its footprint box moved by more than OVERSIZE of the largest
-    # element), interior ones larger than the largest element by as much go
+    # frame half (any merge changed them: vertex count or footprint box),
+    # interior ones larger than the largest element by OVERSIZE go
     n_pre = int(pre.sum())
     if n_pre != len(frame_elements):
         return None, "frame elements were lost or split", {}
-    grown = np.zeros(k, dtype=bool)             # frame elements changed too much by a merge
+    grown = np.zeros(k, dtype=bool)             # frame elements changed by a merge
+    n_vert = np.bincount(eids[np.unique(F.ravel(), return_index=True)[1] // 3],
+                         minlength=k) if len(F) else np.zeros(k, dtype=np.int64)
     for i, (Ve, _) in enumerate(frame_elements):
         change = np.r_[Ve[:, :2].min(axis=0) - lo[i], hi[i] - Ve[:, :2].max(axis=0)]
-        grown[i] = np.abs(change).max() > OVERSIZE * max_foot
+        grown[i] = (np.abs(change).max() > OVERSIZE * max_foot
+                    or n_vert[i] != len(Ve))
     oversized = ~pre & ((hi - lo).max(axis=1) > (1.0 + OVERSIZE) * max_foot)
     near = (dist < CLEAR) & ~cut
     if (near.any(axis=1) & pre & ~grown).any():
