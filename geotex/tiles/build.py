@@ -24,7 +24,8 @@ from geotex.errors import GeotexError, InputError
 from geotex.progress import report
 from geotex.tiles.colors import COMPLETE_GROUPS, PLANAR_GROUPS, parse_colors, tile_keys
 from geotex.tiles.frame import concatenated, frame_of
-from geotex.tiles.strips import GAP, corner_margin, element_boxes, lattice_phase, pick_strips
+from geotex.tiles.strips import (GAP, element_boxes, largest_footprint, lattice_corner,
+                                 lattice_phase, pick_strips)
 from geotex.tiles.tileset import TileSet
 from geotex.tiles.verify import side_boundaries
 
@@ -184,8 +185,12 @@ def interior_quilt(src: Source, frame, frame_boxes: np.ndarray, rng: np.random.G
         The whole tile (frame, possibly merged with copies, plus the interior),
         or None when no attempt was accepted.
     stats : dict
-        ``elements``, ``attempts``, ``merges`` (stitched + union) and, on
-        failure, the last ``problem``.
+        ``elements``, ``attempts``, ``merges`` (stitched + union),
+        ``stitched`` and the quilting report's seam figures
+        (``seam_gap_max`` relative to the cell, ``seam_normal_jump_mean``,
+        ``seam_normal_jump_max`` in degrees; ``nan`` without stitches, and
+        counting merges that were undone afterwards) and, on failure, the last
+        ``problem``.
     """
     from geotex.quilting import quilt_texture
 
@@ -223,7 +228,11 @@ def interior_quilt(src: Source, frame, frame_boxes: np.ndarray, rng: np.random.G
             return tile, {"elements": res.report.elements - changes["dropped"],
                           "attempts": attempt, "reverted": changes["reverted"],
                           "dropped": changes["dropped"],
-                          "merges": int(m.get("stitched", 0) + m.get("union", 0))}
+                          "merges": int(m.get("stitched", 0) + m.get("union", 0)),
+                          "stitched": int(m.get("stitched", 0)),
+                          "seam_gap_max": res.report.seam_gap_max,
+                          "seam_normal_jump_mean": res.report.seam_normal_jump_mean,
+                          "seam_normal_jump_max": res.report.seam_normal_jump_max}
     return None, {"attempts": attempts, "problem": problem}
 
 
@@ -271,15 +280,18 @@ def _accepted(res, want, frame_elements, max_foot):
         cut[vert_el[fv[V[fv, axis] == value]], s] = True
     # merges of two elements that did not coincide look like two fused elements
     # (or a frame half cut back): undo them, frame elements go back to their
-    # frame half (its footprint box moved by more than OVERSIZE of the largest
-    # element), interior ones larger than the largest element by as much go
+    # frame half (any merge changed them: vertex count or footprint box),
+    # interior ones larger than the largest element by OVERSIZE go
     n_pre = int(pre.sum())
     if n_pre != len(frame_elements):
         return None, "frame elements were lost or split", {}
-    grown = np.zeros(k, dtype=bool)             # frame elements changed too much by a merge
+    grown = np.zeros(k, dtype=bool)             # frame elements changed by a merge
+    n_vert = np.bincount(eids[np.unique(F.ravel(), return_index=True)[1] // 3],
+                         minlength=k) if len(F) else np.zeros(k, dtype=np.int64)
     for i, (Ve, _) in enumerate(frame_elements):
         change = np.r_[Ve[:, :2].min(axis=0) - lo[i], hi[i] - Ve[:, :2].max(axis=0)]
-        grown[i] = np.abs(change).max() > OVERSIZE * max_foot
+        grown[i] = (np.abs(change).max() > OVERSIZE * max_foot
+                    or n_vert[i] != len(Ve))
     oversized = ~pre & ((hi - lo).max(axis=1) > (1.0 + OVERSIZE) * max_foot)
     near = (dist < CLEAR) & ~cut
     if (near.any(axis=1) & pre & ~grown).any():
@@ -322,7 +334,8 @@ def _lattice(src: Source) -> tuple[float, float, float]:
     if not isinstance(p, (int, float)) or not p > 0 or abs(1 / p - round(1 / p)) > 1e-9:
         raise InputError(f"lattice: needs an exemplar whose pitch divides the tile "
                          f"(1 / pitch a whole number), got pitch {p!r}")
-    return (float(p),) + lattice_phase(src.lo, src.hi, float(p))
+    phase = lattice_phase(src.lo, src.hi, float(p))
+    return (float(p),) + lattice_corner(src.lo, src.hi, float(p), phase)
 
 
 def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool = False,
@@ -354,10 +367,11 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
     lattice : bool
         For exemplars laid out on a lattice of period ``params["pitch"]``
         (``1 / pitch`` a whole number): strips and quilting windows start
-        only on lattice points (phase from :func:`~geotex.tiles.strips.lattice_phase`),
-        so every tile holds the lattice in the same phase and neighbouring
-        elements do not collide across the tiles. Tile corners then sit on a
-        lattice point that no element may cross: one gap per tile corner.
+        only on lattice points (phase from :func:`~geotex.tiles.strips.lattice_phase`,
+        moved by half a pitch where that puts the tile corners between
+        elements, :func:`~geotex.tiles.strips.lattice_corner`), so every tile
+        holds the lattice in the same phase, neighbouring elements do not
+        collide across the tiles and no lattice site is left empty.
     seed : int
         Random seed; same inputs and seed give the same set, byte for byte.
     interior : {"quilt", "paste"}
@@ -402,14 +416,15 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
                          f"{colors!r}")
     rng = np.random.default_rng(seed)
     report(progress, "strips")
-    margin = corner_margin(src.lo, src.hi)
+    largest_footprint(src.lo, src.hi)
     grid = _lattice(src) if lattice else None
     strips, taken = {}, set()
     for cls in ((0,) if isotropic else range(3)):
         if n_colors[cls]:
+            before = [st for c in strips for st in strips[c]]
             strips[cls], taken = pick_strips(src.V, src.F, src.size, count=n_colors[cls],
-                                             along=STRIP_AXIS[cls], rng=rng, margin=margin,
-                                             taken=taken, lattice=grid)
+                                             along=STRIP_AXIS[cls], rng=rng, taken=taken,
+                                             lattice=grid, chosen_before=before)
     if isotropic:
         strips[1] = strips[2] = strips[0]
     groups, cols = tile_keys(n_colors, PLANAR_GROUPS if planar or isotropic
@@ -418,7 +433,7 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
     from geotex.tiles.fill import ExemplarPixels, fill_gaps
 
     pixels = ExemplarPixels(src.V, src.F, src.labels, src.lo, src.hi)
-    tiles, coverage, fallbacks, merges, filled = [], [], 0, 0, 0
+    tiles, coverage, fallbacks, merges, filled, seams = [], [], 0, 0, 0, []
     for t, ((a, b), c) in enumerate(zip(groups.tolist(), cols.tolist())):
         report(progress, f"tile {t + 1}/{len(groups)}")
         frame, boxes = frame_of((strips[a], strips[b]), c)
@@ -426,6 +441,9 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
         if interior == "quilt":
             tile, stats = interior_quilt(src, frame, boxes, rng, lattice=grid)
             merges += stats.get("merges", 0)
+            if stats.get("stitched", 0):
+                seams.append((stats["stitched"], stats["seam_gap_max"],
+                              stats["seam_normal_jump_mean"], stats["seam_normal_jump_max"]))
             if tile is not None:
                 added, count = fill_gaps(tile[0], tile[1], pixels, src.size, rng,
                                          lattice=grid)
@@ -443,13 +461,20 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
                    "isotropic": bool(isotropic), "lattice": bool(lattice), "seed": int(seed),
                    "interior": interior},
         "isotropic": bool(isotropic),
-        "corner_margin": margin,
+        "corner_clearance": CLEAR,
         "lattice": None if grid is None else [round(float(g), 9) for g in grid],
         "coverage_mean": round(float(np.mean(coverage)), 6),
     }
     if interior == "quilt":
         meta.update(paste_fallbacks=int(fallbacks), merged_elements=int(merges),
                     gap_fill_elements=int(filled))
+        if seams:
+            S = np.asarray(seams, dtype=np.float64)
+            meta.update(stitched_seams=int(S[:, 0].sum()),
+                        seam_gap_max=round(float(np.nanmax(S[:, 1])), 6),
+                        seam_normal_jump_mean=round(float(np.nansum(S[:, 0] * S[:, 2])
+                                                          / S[:, 0].sum()), 3),
+                        seam_normal_jump_max=round(float(np.nanmax(S[:, 3])), 3))
     return TileSet.from_tiles(tiles, groups, cols, n_colors=n_colors, height=height,
                               depth=depth, name=name or recipe["name"] or "tileset",
                               metadata=meta)

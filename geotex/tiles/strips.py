@@ -1,12 +1,30 @@
 """Edge strips: the elements that cross a tile side, cut in two.
 
 For every colour of every axis class one strip is taken from the exemplar: the
-elements that cross a unit-length line segment, kept clear of the segment's
-ends (the tile corners). A strip lives in its own coordinates ``(t, s, w)``:
-``t`` runs along the segment (``0..1``), ``s`` across it, ``w`` is the height.
-It is cut once at ``s = 0``; the tile on one side of an edge of that colour
-receives the ``s >= 0`` half, its neighbour the ``s <= 0`` half, and the two
-share their cut vertices bit for bit.
+elements that cross a unit-length line segment and stay :data:`CLEAR` inside
+the perpendicular lines through its ends (no element straddles a tile
+corner). A strip lives in its own coordinates ``(t, s, w)``: ``t`` runs along
+the segment (``0..1``), ``s`` across it, ``w`` is the height. It is cut once
+at ``s = 0``; the tile on one side of an edge of that colour receives the
+``s >= 0`` half, its neighbour the ``s <= 0`` half, and the two share their
+cut vertices bit for bit.
+
+Corners. Elements may cross a side right up to the tile corner. Around a
+corner point the four quadrants each hold the ends of two strips (one per
+side through the corner); every strip can meet every other strip (and
+itself) there, in any tiling. The strips are chosen so that those overlaps
+hold no colliding elements: every strip end's half-footprints are rasterized
+in the corner's quadrant coordinates (:func:`corner_footprints`) and the
+element sets are pruned, strip by strip, until the footprints of every
+possible pair of strip ends at every quadrant are disjoint (one pixel apart,
+:func:`corner_conflicts`). The quadrants are (``X`` the strip along the
+horizontal side, ``Y`` the one along the vertical side, ``^T`` swapping the
+quadrant axes)::
+
+    NE: X.above_start & Y.below_start^T     SE: X.below_start & Y.below_far^T
+    SW: X.below_far   & Y.above_far^T       NW: X.above_far   & Y.above_start^T
+
+which follows from the placements of :func:`geotex.tiles.frame.placed_half`.
 """
 
 from __future__ import annotations
@@ -19,10 +37,14 @@ from geotex.errors import InputError
 from geotex.mesh.topology import face_components
 from geotex.tiles.clip import split_by_plane
 
-__all__ = ["Strip", "element_boxes", "pick_strips", "corner_margin", "lattice_phase"]
+__all__ = ["Strip", "element_boxes", "pick_strips", "largest_footprint", "lattice_phase",
+           "lattice_corner", "corner_footprints", "corner_conflicts"]
 
-GAP = 0.02          # clearance between elements and tile corners / other elements
+GAP = 0.02          # clearance between elements (gap filling, interior)
+CLEAR = 0.5 * GAP   # clearance of strip elements from the perpendicular tile sides
 CANDIDATES = 96     # random segment positions tried per colour
+SHORTLIST = 24      # best candidates (by covered length) pruned and compared
+END = 0.3           # length near a segment end whose coverage counts twice
 
 
 @dataclass(frozen=True)
@@ -39,6 +61,8 @@ class Strip:
         Exemplar axis (0 = x, 1 = y) the segment runs along.
     boxes : numpy.ndarray, (k, 4) float64
         Footprints ``(t0, s0, t1, s1)`` of the strip's elements.
+    corners : dict
+        :func:`corner_footprints` of the strip's elements.
     """
 
     below: tuple
@@ -46,6 +70,7 @@ class Strip:
     origin: tuple
     along: int
     boxes: np.ndarray
+    corners: dict
 
 
 def element_boxes(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -65,23 +90,20 @@ def element_boxes(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray,
     return labels, lo, hi
 
 
-def corner_margin(lo: np.ndarray, hi: np.ndarray) -> float:
-    """Distance from a tile corner that edge-strip elements keep clear of.
-
-    Half the largest element footprint plus a gap, so that strips of two sides
-    meeting at a corner never overlap.
+def largest_footprint(lo: np.ndarray, hi: np.ndarray) -> float:
+    """Width of the widest element footprint, checked against the tile size.
 
     Raises
     ------
     InputError
-        Elements too large for a unit tile.
+        Elements too large for a unit tile (an element crossing a side must
+        fit between the tile corners with room to spare).
     """
-    half = 0.5 * float(np.max(hi[:, :2] - lo[:, :2]))
-    margin = half + GAP
-    if margin > 0.4:
-        raise InputError(f"exemplar elements are {2 * half:.2f} wide; a tile is 1 x 1, so "
+    width = float(np.max(hi[:, :2] - lo[:, :2]))
+    if 0.5 * width + GAP > 0.4:
+        raise InputError(f"exemplar elements are {width:.2f} wide; a tile is 1 x 1, so "
                          "elements must be under 0.76 wide (scale the exemplar down)")
-    return margin
+    return width
 
 
 def lattice_phase(lo: np.ndarray, hi: np.ndarray, pitch: float) -> tuple[float, float]:
@@ -123,10 +145,144 @@ def _to_strip(P: np.ndarray, origin, along: int) -> np.ndarray:
     return out
 
 
+CORNER_WINDOW = 0.5   # extent (tile units) of the corner quadrant images
+QUADRANTS = (("above_start", "below_start"), ("below_start", "below_far"),
+             ("below_far", "above_far"), ("above_far", "above_start"))
+
+
+def corner_footprints(Vs: np.ndarray, Fs: np.ndarray, labels: np.ndarray, k: int
+                      ) -> dict:
+    """Half-footprints of a strip's elements near its two ends, as quadrant images.
+
+    Parameters
+    ----------
+    Vs : numpy.ndarray, (n, 3) float64
+        Strip elements in strip coordinates ``(t, s, w)``.
+    Fs : numpy.ndarray, (m, 3) int64
+    labels : numpy.ndarray, (m,) int64
+        Element (``0..k-1``) of every face.
+    k : int
+        Number of elements.
+
+    Returns
+    -------
+    dict
+        ``above_start``, ``below_start``, ``above_far``, ``below_far``: pairs
+        ``(low, high)`` of float arrays ``(k, n, n)`` over
+        ``[0, CORNER_WINDOW]^2`` with axes (distance from the strip end along
+        ``t``, distance from the cut line): the lowest and highest height of
+        the faces of each element over each pixel (``+inf`` / ``-inf`` where
+        the element is absent). The vertical cut makes a half's footprint the
+        element's footprint on its side of the line.
+    """
+    from geotex.tiles.fill import PIXEL, footprint_pixels
+
+    n = int(round(CORNER_WINDOW / PIXEL))
+    t, s = Vs[:, 0], Vs[:, 1]
+    maps = {"above_start": (t, s), "below_start": (t, -s),
+            "above_far": (1.0 - t, s), "below_far": (1.0 - t, -s)}
+    zf = Vs[Fs][:, :, 2] if len(Fs) else np.zeros((0, 3))
+    out = {}
+    for key, (a, b) in maps.items():
+        low = np.full((k, n, n), np.inf)
+        high = np.full((k, n, n), -np.inf)
+        if len(Fs):
+            ii, jj, f = footprint_pixels(np.c_[a, b, Vs[:, 2]], Fs, pixel=PIXEL, shape=(n, n))
+            np.minimum.at(low, (labels[f], ii, jj), zf[f].min(axis=1))
+            np.maximum.at(high, (labels[f], ii, jj), zf[f].max(axis=1))
+        out[key] = (low, high)
+    return out
+
+
+def _grown(low: np.ndarray, high: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Height images grown by one pixel (8-neighbourhood): min of lows, max of highs."""
+    lo, hi = low.copy(), high.copy()
+    for axis in (1, 2):
+        a, b = lo.copy(), hi.copy()
+        sl = [slice(None)] * 3
+        sr = [slice(None)] * 3
+        sl[axis], sr[axis] = slice(1, None), slice(None, -1)
+        lo[tuple(sl)] = np.minimum(lo[tuple(sl)], a[tuple(sr)])
+        lo[tuple(sr)] = np.minimum(lo[tuple(sr)], a[tuple(sl)])
+        hi[tuple(sl)] = np.maximum(hi[tuple(sl)], b[tuple(sr)])
+        hi[tuple(sr)] = np.maximum(hi[tuple(sr)], b[tuple(sl)])
+    return lo, hi
+
+
+def corner_conflicts(x: dict, y: dict) -> np.ndarray:
+    """Element pairs of strip ``x`` (horizontal side) and ``y`` (vertical side) that collide.
+
+    Two halves collide when, at some pixel of a corner quadrant (``x``'s
+    images grown by a pixel), both are present and their height ranges
+    overlap or come closer than :data:`CLEAR`; elements that only overlap in
+    projection, one above the other (overlapping scales), do not.
+
+    Parameters
+    ----------
+    x, y : dict
+        :func:`corner_footprints` of the two strips.
+
+    Returns
+    -------
+    numpy.ndarray, (kx, ky) bool
+        True when the two elements' halves may touch in a quadrant of a
+        corner where ``x`` runs along the horizontal side and ``y`` along the
+        vertical one.
+    """
+    kx, ky = len(x["above_start"][0]), len(y["above_start"][0])
+    out = np.zeros((kx, ky), dtype=bool)
+    if kx == 0 or ky == 0:
+        return out
+    for kx_key, ky_key in QUADRANTS:
+        xl, xh = _grown(*x[kx_key])
+        yl = y[ky_key][0].transpose(0, 2, 1)
+        yh = y[ky_key][1].transpose(0, 2, 1)
+        both = np.isfinite(xl).any(axis=0) & np.isfinite(yl).any(axis=0)
+        if not both.any():
+            continue
+        xl, xh, yl, yh = xl[:, both], xh[:, both], yl[:, both], yh[:, both]
+        touch = (np.maximum(xl[:, None], yl[None]) <= np.minimum(xh[:, None], yh[None]) + CLEAR)
+        out |= touch.any(axis=2)
+    return out
+
+
+def lattice_corner(lo: np.ndarray, hi: np.ndarray, pitch: float, phase) -> tuple[float, float]:
+    """Lattice phase moved so that tile corners straddle the fewest elements.
+
+    Of the phase and its shifts by half a pitch in x, y or both, the one whose
+    lattice points lie inside the fewest element boxes (ties: most elements
+    crossing the lines through those points, then this order).
+
+    Returns
+    -------
+    tuple of 2 float
+    """
+    best = None
+    for k, (dx, dy) in enumerate(((0.5, 0.0), (0.0, 0.5), (0.0, 0.0), (0.5, 0.5))):
+        px = (phase[0] + dx * pitch) % pitch
+        py = (phase[1] + dy * pitch) % pitch
+        # offsets of the box corners from the nearest lattice line below them
+        bx = np.floor((hi[:, 0] - px) / pitch) > np.floor((lo[:, 0] - px) / pitch)
+        by = np.floor((hi[:, 1] - py) / pitch) > np.floor((lo[:, 1] - py) / pitch)
+        key = (int((bx & by).sum()), -int((bx | by).sum()), k)
+        if best is None or key < best[0]:
+            best = (key, (float(px), float(py)))
+    return best[1]
+
+
 def pick_strips(V: np.ndarray, F: np.ndarray, size, *, count: int, along: int,
-                rng: np.random.Generator, margin: float, taken=(),
-                lattice=None) -> tuple[list[Strip], set]:
+                rng: np.random.Generator, taken=(), lattice=None,
+                chosen_before=()) -> tuple[list[Strip], set]:
     """Choose ``count`` distinct edge strips from an exemplar.
+
+    Every candidate segment keeps its crossing elements that stay
+    :data:`CLEAR` inside the segment's end lines, minus those that would
+    collide at a tile corner with themselves or with any strip chosen before
+    (:func:`corner_conflicts`, both ways round; the element with most
+    collisions goes first). Of the :data:`SHORTLIST` candidates covering
+    most of the segment, the one whose kept elements cover most (the
+    :data:`END` parts near the tile corners counted twice) is taken, then the
+    next colour is picked the same way against all strips so far.
 
     Parameters
     ----------
@@ -139,20 +295,26 @@ def pick_strips(V: np.ndarray, F: np.ndarray, size, *, count: int, along: int,
     along : int
         Exemplar axis the segments run along (0 = x, 1 = y).
     rng : numpy.random.Generator
-    margin : float
-        Corner clearance from :func:`corner_margin`.
     taken : iterable of frozenset
         Element sets already used by other strips; not reused.
     lattice : tuple (pitch, phase_x, phase_y), optional
         Segments start only on the exemplar's lattice points
-        ``phase + (i, j) pitch``, so that the strip elements sit on the lattice
-        of the tile (see :func:`lattice_phase`); otherwise anywhere.
+        ``phase + (i, j) pitch`` (see :func:`lattice_phase`,
+        :func:`lattice_corner`); otherwise anywhere.
+    chosen_before : sequence of Strip
+        Strips of other classes; the new strips must not collide with them at
+        any corner.
 
     Returns
     -------
     strips : list of Strip
     used : set of frozenset
         ``taken`` plus the element sets of the new strips.
+
+    Raises
+    ------
+    InputError
+        Exemplar shorter than a tile along ``along``, or too few distinct strips.
     """
     labels, lo, hi = element_boxes(V, F)
     lx, ly = size
@@ -160,16 +322,16 @@ def pick_strips(V: np.ndarray, F: np.ndarray, size, *, count: int, along: int,
     if span < 1.0:
         raise InputError(f"exemplar is {span:g} long along {'xy'[along]}; an edge strip "
                          "needs at least one tile length (1.0)")
-    # element boxes in candidate strip coordinates, vectorized over candidates
     width = (ly, lx)[along]
+    half = 0.5 * float(np.max(hi[:, :2] - lo[:, :2]))
     if lattice is None:
         a0 = rng.uniform(0.0, span - 1.0, CANDIDATES)
-        a1 = rng.uniform(margin, width - margin, CANDIDATES)
+        a1 = rng.uniform(half, width - half, CANDIDATES)
     else:
         p, ph_along, ph_across = lattice[0], lattice[1 + along], lattice[2 - along]
         k = np.arange(np.ceil(-ph_along / p), np.floor((span - 1.0 - ph_along) / p) + 1)
-        j = np.arange(np.ceil((margin - ph_across) / p),
-                      np.floor((width - margin - ph_across) / p) + 1)
+        j = np.arange(np.ceil((half - ph_across) / p),
+                      np.floor((width - half - ph_across) / p) + 1)
         K, J = np.meshgrid(k, j, indexing="ij")
         pick = rng.permutation(K.size)[:CANDIDATES]
         a0 = ph_along + K.ravel()[pick] * p
@@ -185,27 +347,63 @@ def pick_strips(V: np.ndarray, F: np.ndarray, size, *, count: int, along: int,
         t1 = hi[None, :, 1] - origin[:, 1:2]
         s0 = origin[:, 0:1] - hi[None, :, 0]
         s1 = origin[:, 0:1] - lo[None, :, 0]
-    chosen = (s0 < -GAP / 4) & (s1 > GAP / 4) & (t0 >= margin) & (t1 <= 1.0 - margin)
-    # other elements crossing the segment's ends are cut away by the corner rule;
-    # score by the covered length of the segment
-    cover = np.where(chosen, t1 - t0, 0.0).sum(axis=1)
-    order = np.argsort(-cover, kind="stable")
+    crossing = (s0 < -GAP / 4) & (s1 > GAP / 4) & (t0 >= CLEAR) & (t1 <= 1.0 - CLEAR)
+    cover = np.where(crossing, t1 - t0, 0.0).sum(axis=1)
+    order = [int(c) for c in np.argsort(-cover, kind="stable") if cover[c] > 0]
     strips: list[Strip] = []
     used = set(taken)
-    for c in order:
-        if len(strips) == count:
+    before = list(chosen_before)
+    while len(strips) < count:
+        # the best SHORTLIST candidates after pruning, by covered length with
+        # the parts near the segment ends counted twice
+        best = None
+        for c in order[:SHORTLIST]:
+            members = _without_corner_conflicts(V, F, labels, np.flatnonzero(crossing[c]),
+                                                tuple(origin[c]), along, before + strips)
+            key = frozenset(members.tolist())
+            if not key or key in used:
+                continue
+            a, b = t0[c, members], t1[c, members]
+            ends = (np.clip(np.minimum(b, END), 0, None) - np.clip(np.minimum(a, END), 0, None)
+                    + np.clip(np.maximum(b, 1 - END), None, 1) - np.clip(np.maximum(a, 1 - END),
+                                                                       None, 1))
+            score = float((b - a).sum() + ends.sum())
+            if best is None or score > best[0]:
+                best = (score, c, key)
+        if best is None:
             break
-        members = frozenset(np.flatnonzero(chosen[c]).tolist())
-        if not members or members in used:
-            continue
-        used.add(members)
-        strips.append(_make_strip(V, F, labels, sorted(members), tuple(origin[c]), along,
-                                  np.stack([t0[c], s0[c], t1[c], s1[c]], 1)[sorted(members)]))
+        _, c, key = best
+        order.remove(c)
+        used.add(key)
+        boxes = np.stack([t0[c], s0[c], t1[c], s1[c]], 1)
+        strips.append(_make_strip(V, F, labels, sorted(key), tuple(origin[c]), along,
+                                  boxes[sorted(key)]))
     if len(strips) < count:
         raise InputError(f"the exemplar has only {len(strips)} distinct edge strips along "
                          f"{'xy'[along]} for {count} colours; use fewer colours or a larger "
                          "exemplar")
     return strips, used
+
+
+def _without_corner_conflicts(V, F, labels, members, origin, along, others):
+    """Drop elements from ``members`` until the strip collides at no corner."""
+    keep = np.isin(labels, members)
+    face_el = np.searchsorted(members, labels[keep])
+    Vs = _to_strip(V, origin, along)
+    imgs = corner_footprints(Vs, F[keep], face_el, len(members))
+    alive = np.ones(len(members), dtype=bool)
+    while alive.any():
+        mine = {k: (v[0][alive], v[1][alive]) for k, v in imgs.items()}
+        hits = np.zeros(int(alive.sum()))
+        own = corner_conflicts(mine, mine)
+        hits += own.sum(axis=1) + own.sum(axis=0)
+        for other in others:
+            hits += corner_conflicts(mine, other.corners).sum(axis=1)
+            hits += corner_conflicts(other.corners, mine).sum(axis=0)
+        if not hits.any():
+            break
+        alive[np.flatnonzero(alive)[int(np.argmax(hits))]] = False
+    return members[alive]
 
 
 def _make_strip(V, F, labels, members, origin, along, boxes) -> Strip:
@@ -215,5 +413,7 @@ def _make_strip(V, F, labels, members, origin, along, boxes) -> Strip:
     remap = np.full(len(V), -1, dtype=np.int64)
     remap[used] = np.arange(len(used))
     Vs = _to_strip(V[used], origin, along)
+    corners = corner_footprints(Vs, remap[Fs], np.searchsorted(members, labels[keep]),
+                                len(members))
     below, above = split_by_plane(Vs, remap[Fs], axis=1, value=0.0, snap=1e-4)
-    return Strip(below, above, tuple(float(o) for o in origin), along, boxes)
+    return Strip(below, above, tuple(float(o) for o in origin), along, boxes, corners)

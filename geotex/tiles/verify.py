@@ -20,7 +20,7 @@ from geotex.mesh.topology import edge_topology
 from geotex.tiles.colors import side_classes
 from geotex.tiles.tileset import TileSet
 
-__all__ = ["SeamReport", "check_seams", "side_boundaries"]
+__all__ = ["SeamReport", "check_seams", "side_boundaries", "CornerDensity", "corner_density"]
 
 _SIDE_NAMES = ("south", "east", "north", "west")
 
@@ -119,3 +119,80 @@ def check_seams(tiles: TileSet) -> SeamReport:
     _, counts = np.unique(np.array(keys).reshape(-1, 2), axis=0, return_counts=True)
     pairs = int((counts * (counts - 1)).sum())
     return SeamReport(not problems, pairs, problems)
+
+
+@dataclass(frozen=True)
+class CornerDensity:
+    """Outcome of :func:`corner_density`.
+
+    Attributes
+    ----------
+    corner : float
+        Fraction of the corner squares covered by relief (projected area of the
+        faces above the tile plane).
+    elsewhere : float
+        The same fraction over the rest of the tiling.
+    ratio : float
+        ``corner / elsewhere`` (the issue #14 target is at least 0.85).
+    """
+
+    corner: float
+    elsewhere: float
+    ratio: float
+
+
+def corner_density(V: np.ndarray, F: np.ndarray, grid, *, quarter: float = 0.25,
+                   pixel: float = 1.0 / 40.0) -> CornerDensity:
+    """Relief density in the squares around tile corners against the rest.
+
+    The faces above the tile plane (``w > 0`` at their centroid; what stands
+    above the slab of a printed tiling) are rasterized by their projection on
+    the plane; a pixel belongs to a *corner square* when it lies within
+    ``quarter`` (in tile units, along both axes) of a grid point of the
+    tiling, the tiling's outer corners included.
+
+    Parameters
+    ----------
+    V : numpy.ndarray, (n, 3) float64
+        A planar tiling in tile units (:func:`geotex.tiles.tiling.planar_tiling`).
+    F : numpy.ndarray, (m, 3) int64
+    grid : tuple of 2 int
+        Tiling size ``(W, H)``; the tiling covers ``[0, W] x [0, H]``.
+    quarter : float
+        Half side of a corner square (a quarter tile by default).
+    pixel : float
+        Raster pixel size in tile units.
+
+    Returns
+    -------
+    CornerDensity
+
+    Raises
+    ------
+    InputError
+        Grid smaller than 1 x 1, or ``quarter`` outside ``(0, 0.5)``.
+    """
+    from geotex.errors import InputError
+    from geotex.tiles.fill import footprint_pixels
+
+    w, h = (int(g) for g in grid)
+    if w < 1 or h < 1:
+        raise InputError(f"grid must be at least 1 x 1, got {grid!r}")
+    if not 0.0 < quarter < 0.5:
+        raise InputError(f"quarter must lie in (0, 0.5), got {quarter!r}")
+    V = np.asarray(V, dtype=np.float64)
+    F = np.asarray(F, dtype=np.int64)
+    up = F[V[F][:, :, 2].mean(axis=1) > 0.0]
+    nx, ny = int(round(w / pixel)), int(round(h / pixel))
+    covered = np.zeros((nx, ny), dtype=bool)
+    if len(up):
+        ii, jj, _ = footprint_pixels(V, up, pixel=pixel, shape=(nx, ny))
+        covered[ii, jj] = True
+    cx = (np.arange(nx) + 0.5) * pixel
+    cy = (np.arange(ny) + 0.5) * pixel
+    near_x = np.abs(cx - np.round(cx)) < quarter
+    near_y = np.abs(cy - np.round(cy)) < quarter
+    corner = near_x[:, None] & near_y[None, :]
+    c = float(covered[corner].mean())
+    e = float(covered[~corner].mean())
+    return CornerDensity(c, e, c / e if e > 0 else float("nan"))
