@@ -15,7 +15,7 @@ kept beside the map, unchanged.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -153,22 +153,25 @@ def _pinched_faces(Y, F, D, h) -> np.ndarray:
     return np.unique(np.concatenate([np.flatnonzero(flipped), pairs.ravel() % m]))
 
 
-def _unpinched(pc: PolyCube, D: np.ndarray, *, rounds: int = 4) -> tuple[PolyCube, np.ndarray]:
+def _unpinched(pc: PolyCube, D: np.ndarray, *, rounds: int = 4) -> tuple[np.ndarray, np.ndarray]:
     """Offset directions smoothed further where the offset cannot rise :data:`PINCH_PROBE` tiles.
 
     The safe height is one number for the whole shell, so a single face whose
     offset flips or crosses the surface right away (a fitted face spanning a
     crest thinner than itself, its corners' directions on both flanks) would
     cap the texture everywhere at almost nothing. Around such faces the
-    directions are smoothed more (a wider neighbourhood each round); quads
-    still pinched after the best of ``rounds`` carry no texture (``quad_folded`` is set).
+    directions are smoothed more (a wider neighbourhood each round); the
+    quads of the faces still pinched after the best of ``rounds`` do not
+    limit the safe height. They keep their tiles: an element that the map folds there
+    is shrunk in place or left out by the mapping, one element rather than a
+    bare quad.
 
     Returns
     -------
-    PolyCube
-        ``pc``, with the quads still pinched marked folded.
-    numpy.ndarray, (n, 3) float64
+    D : numpy.ndarray, (n, 3) float64
         The directions.
+    pinched : numpy.ndarray, (k,) int64
+        Faces of ``pc.F`` still pinched.
     """
     used = np.flatnonzero(~pc.quad_folded[pc.face_quad])
     F, h = pc.F[used], PINCH_PROBE * pc.tile_size
@@ -179,7 +182,7 @@ def _unpinched(pc: PolyCube, D: np.ndarray, *, rounds: int = 4) -> tuple[PolyCub
     best = (bad, D)
     for rnd in range(rounds):
         if bad.size == 0:
-            return pc, D
+            break
         sel = np.zeros(n, dtype=bool)
         sel[F[bad].ravel()] = True
         for _ in range(2 + rnd):
@@ -192,11 +195,7 @@ def _unpinched(pc: PolyCube, D: np.ndarray, *, rounds: int = 4) -> tuple[PolyCub
         if bad.size < best[0].size:
             best = (bad, D)
     bad, D = best
-    if bad.size == 0:
-        return pc, D
-    folded = pc.quad_folded.copy()
-    folded[pc.face_quad[used[bad]]] = True
-    return replace(pc, quad_folded=folded), D
+    return D, used[bad]
 
 
 def build_shell(V, F, *, tile_size: float | None = None, name: str = "shell", source: str = "",
@@ -240,19 +239,22 @@ def build_shell(V, F, *, tile_size: float | None = None, name: str = "shell", so
     # Smoothing the directions over about a tile lets the shell rise higher in
     # concave creases; too much makes them lean, so a lighter smoothing is
     # tried as well when the first one does not reach half a tile.
-    h, D, upper, fitted = -1.0, None, 2.0 * pc.tile_size, pc
+    h, D, upper = -1.0, None, 2.0 * pc.tile_size
+    textured = ~pc.quad_folded[pc.face_quad]
     for steps in (8 * pc.res, 2 * pc.res):
-        pck, Dk = _unpinched(fitted, offset_directions(fitted.Y, fitted.F, smoothing=steps))
-        used = pck.F[~pck.quad_folded[pck.face_quad]]
+        Dk, pinched = _unpinched(pc, offset_directions(pc.Y, pc.F, smoothing=steps))
+        pinched_quad = np.zeros(pc.n_quads, dtype=bool)
+        pinched_quad[pc.face_quad[pinched]] = True
+        used = pc.F[textured & ~pinched_quad[pc.face_quad]]
         if D is None:
             report(progress, "height")
-        elif not _offset_ok(pck.Y, used, Dk, h + upper / 64, face_cross(pck.Y, used)):
+        elif not _offset_ok(pc.Y, used, Dk, h + upper / 64, face_cross(pc.Y, used)):
             break          # the lighter smoothing cannot beat the first by a step: done
         # a texture taller than two tiles is never wanted: that bounds the search;
-        # quads left bare carry no texture and do not limit it
-        hk = max_offset_height(pck.Y, used, Dk, upper=upper, steps=6)
+        # quads left bare, and quads still pinched, do not limit it
+        hk = max_offset_height(pc.Y, used, Dk, upper=upper, steps=6)
         if hk > h:
-            h, D, pc = hk, Dk, pck
+            h, D = hk, Dk
         if h >= 0.5 * pc.tile_size:
             break
     return Shell(name=name, polycube=pc, D=D, max_height=float(h),
