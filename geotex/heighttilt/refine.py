@@ -15,6 +15,7 @@ import numpy as np
 from geotex.errors import InputError
 from geotex.fields.directions import projected_direction_field, smooth_direction_field
 from geotex.heighttilt.base import check_base_mesh
+from geotex.mesh.geometry import mean_edge_length
 from geotex.mesh.topology import edge_topology
 
 __all__ = ["refine_base", "refine_field", "REFINE_METHODS"]
@@ -24,11 +25,6 @@ REFINE_METHODS = ("remesh", "subdivide", "none")
 REMESH_ITERATIONS = 6
 #: Refuse to build meshes larger than this many faces.
 MAX_FACES = 4_000_000
-
-
-def _mean_edge(V, F) -> float:
-    E = edge_topology(F, V.shape[0]).edges
-    return float(np.linalg.norm(V[E[:, 1]] - V[E[:, 0]], axis=1).mean())
 
 
 def _area(V, F) -> float:
@@ -78,7 +74,7 @@ def refine_base(V, F, edge_length, *, method: str = "remesh") -> tuple[np.ndarra
         raise InputError(f"edge_length must be a positive number, got {edge_length!r}")
     if method == "none":
         return V.copy(), F.copy()
-    mean = _mean_edge(V, F)
+    mean = mean_edge_length(V, F)
     expected = _area(V, F) / (0.433 * L * L)          # equilateral triangles of side L
     if mean <= 1.2 * L:
         return V.copy(), F.copy()

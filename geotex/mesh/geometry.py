@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from geotex.mesh.topology import edge_topology
+
 __all__ = [
     "face_cross",
     "face_areas",
@@ -13,6 +15,7 @@ __all__ = [
     "component_volumes",
     "bounding_box",
     "degenerate_faces",
+    "mean_edge_length",
 ]
 
 
@@ -102,3 +105,27 @@ def degenerate_faces(V: np.ndarray, F: np.ndarray, *, rel_tol: float = 1e-12) ->
         cross = np.linalg.norm(np.cross(e0, -e2), axis=1)
         flat = ~(cross > rel_tol * lmax2)
     return np.flatnonzero(repeated | flat)
+
+
+def mean_edge_length(V: np.ndarray, F: np.ndarray, *, per_face: bool = False) -> float:
+    """Return the mean edge length (0.0 for a mesh without faces).
+
+    Parameters
+    ----------
+    V : numpy.ndarray, (n, 3) float64
+    F : numpy.ndarray, (m, 3) int64
+    per_face : bool, optional
+        Average over the three edges of every face (an interior edge counts
+        twice, a boundary edge once) instead of over the unique edges.
+
+    Returns
+    -------
+    float
+    """
+    if len(F) == 0:
+        return 0.0
+    if per_face:
+        E = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+    else:
+        E = edge_topology(F, V.shape[0]).edges
+    return float(np.linalg.norm(V[E[:, 1]] - V[E[:, 0]], axis=1).mean())

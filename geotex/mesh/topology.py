@@ -168,24 +168,38 @@ def edge_topology(F: np.ndarray, n_vertices: int | None = None) -> EdgeTopology:
                         forward_count=forward, half_order=order)
 
 
-def compacted(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Drop unreferenced vertices.
+def compacted(V: np.ndarray, F: np.ndarray, *, return_index: bool = False):
+    """Drop unreferenced vertices: the submesh of the faces ``F``.
 
     Parameters
     ----------
-    V : numpy.ndarray, (n, 3) float64
+    V : numpy.ndarray, (n, k) float64
+        Vertex positions (or any per-vertex rows).
     F : numpy.ndarray, (m, 3) int64
+        Faces, for example a subset of a mesh's faces.
+    return_index : bool, optional
+        Also return the kept vertices' indices in ``V``.
 
     Returns
     -------
-    V2 : numpy.ndarray, (k, 3) float64
-        The referenced vertices in their original order.
+    V2 : numpy.ndarray, (p, k) float64
+        The referenced vertices in their original order (a copy).
     F2 : numpy.ndarray, (m, 3) int64
+    kept : numpy.ndarray, (p,) int64
+        Only with ``return_index``: ``V2 == V[kept]``, for carrying other
+        per-vertex data along.
     """
-    used = np.zeros(len(V), dtype=bool)
-    used[np.asarray(F).ravel()] = True
-    new_index = np.cumsum(used) - 1
-    return V[used], new_index[F].astype(np.int64)
+    F = np.asarray(F)
+    if 8 * F.size < len(V):          # a small part of a large mesh: no O(n) pass
+        kept = np.unique(F)
+        F2 = np.searchsorted(kept, F).astype(np.int64)
+    else:
+        used = np.zeros(len(V), dtype=bool)
+        used[F.ravel()] = True
+        kept = np.flatnonzero(used)
+        F2 = (np.cumsum(used) - 1)[F].astype(np.int64)
+    V2 = V[kept]
+    return (V2, F2, kept) if return_index else (V2, F2)
 
 
 def neighbour_mean(F: np.ndarray, n_vertices: int) -> sp.csr_matrix:

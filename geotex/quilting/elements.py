@@ -16,7 +16,8 @@ from geotex.errors import InputError
 from geotex.mesh.arrays import as_faces, as_mesh_arrays
 from geotex.check.intersections import self_intersecting_pairs
 from geotex.mesh.geometry import degenerate_faces, face_areas, face_normals, signed_volume
-from geotex.mesh.topology import edge_topology, face_components, non_manifold_vertices
+from geotex.mesh.topology import (compacted, edge_topology, face_components,
+                                  non_manifold_vertices)
 
 __all__ = ["Element", "texture_arrays", "split_elements", "concatenate_elements",
            "closed_element_ok", "capped", "caps_like"]
@@ -158,11 +159,8 @@ def split_elements(V, F, *, fixed=None, element_ids=None, prefilled=False) -> li
     groups.sort(key=lambda g: int(g[0]))
     out = []
     for faces in groups:
-        Fe = F[faces]
-        used = np.unique(Fe)
-        remap = np.full(n, -1, dtype=np.int64)
-        remap[used] = np.arange(used.size)
-        out.append(Element(V[used].copy(), remap[Fe], fix[used].copy(), prefilled))
+        Ve, Fe, used = compacted(V, F[faces], return_index=True)
+        out.append(Element(Ve, Fe, fix[used].copy(), prefilled))
     return out
 
 

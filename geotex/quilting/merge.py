@@ -69,6 +69,7 @@ from scipy.spatial import cKDTree
 from geotex.check.intersections import self_intersecting_pairs
 from geotex.errors import InputError
 from geotex.mesh.arrays import as_mesh_arrays
+from geotex.mesh.geometry import mean_edge_length
 from geotex.mesh.solid import arrays_of_manifold, manifold_of
 from geotex.mesh.topology import edge_topology
 from geotex.quilting.deform import laplacian_deformed
@@ -192,7 +193,8 @@ def _corresponding_cut(VA, FA, VB, FB, NA, NB, fixA, out_b, eps, band_rings):
     pieces do not overlap.  Returns ``None`` when the elements do not
     coincide anywhere (the general path then applies).
     """
-    h = float(np.mean([_mean_edge(VA, FA), _mean_edge(VB, FB)]))
+    h = float(np.mean([mean_edge_length(VA, FA, per_face=True) or 1.0,
+                       mean_edge_length(VB, FB, per_face=True) or 1.0]))
     tau = 0.25 * h
     dA2, fA, _ = ClosestPoints(VB, FB).query(VA)
     dB2, fB, _ = ClosestPoints(VA, FA).query(VB)
@@ -224,7 +226,7 @@ def _corresponding_cut(VA, FA, VB, FB, NA, NB, fixA, out_b, eps, band_rings):
     seam = VA[on_kept & on_gone]
     if seam.shape[0] == 0:
         return None
-    hB = _mean_edge(VB, FB)
+    hB = mean_edge_length(VB, FB, per_face=True) or 1.0
     near_seam = cKDTree(seam).query(VB)[0] <= band_rings * hB
     sink_v = (~nearB & covB) | (nearB & keep_a[fB]) | out_b
     free_v = nearB & near_seam & ~sink_v
@@ -233,11 +235,6 @@ def _corresponding_cut(VA, FA, VB, FB, NA, NB, fixA, out_b, eps, band_rings):
     sourceB = source_v[FB].all(axis=1) & ~sinkB
     keep_b = _dual_cut(VB, FB, dB, sourceB, sinkB)
     return keep_a, keep_b
-
-
-def _mean_edge(V, F):
-    E = np.r_[F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]
-    return float(np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1).mean()) or 1.0
 
 
 def _outside_domain(V, domain):

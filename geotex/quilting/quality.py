@@ -14,7 +14,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from geotex.check.intersections import self_intersecting_pairs
-from geotex.mesh.topology import edge_topology, face_components
+from geotex.mesh.topology import compacted, edge_topology, face_components
 
 __all__ = ["QuiltReport", "quilt_report", "element_stats", "coverage_fraction", "nested_pairs"]
 
@@ -266,11 +266,8 @@ def quilt_report(V, F, element_ids, *, exemplar, domain, merges, dropped, seams,
         order = np.argsort(element_ids, kind="stable")
         bounds = np.searchsorted(element_ids[order], np.arange(k + 1))
         for e in range(k):
-            Fe = F[order[bounds[e]:bounds[e + 1]]]
-            used = np.unique(Fe)
-            remap = np.zeros(V.shape[0], np.int64)
-            remap[used] = np.arange(used.size)
-            if closed_element_ok(V[used], remap[Fe], intersections=False):
+            if closed_element_ok(*compacted(V, F[order[bounds[e]:bounds[e + 1]]]),
+                                 intersections=False):
                 bad += 1
     rep.bad_elements = bad
     pairs = self_intersecting_pairs(V, F) if F.shape[0] else np.zeros((0, 2), np.int64)

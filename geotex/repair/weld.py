@@ -7,6 +7,8 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
+from geotex.mesh.topology import compacted
+
 __all__ = ["welded", "without_unreferenced_vertices", "default_weld_tolerance"]
 
 
@@ -73,7 +75,5 @@ def without_unreferenced_vertices(V: np.ndarray, F: np.ndarray
     F : numpy.ndarray, (m, 3) int64
     removed : int
     """
-    used = np.zeros(V.shape[0], dtype=bool)
-    used[F.ravel()] = True
-    new_id = np.cumsum(used) - 1
-    return V[used].copy(), new_id[F], int(V.shape[0] - used.sum())
+    V2, F2 = compacted(V, F)
+    return V2, F2, int(V.shape[0] - V2.shape[0])

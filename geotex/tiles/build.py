@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from geotex.errors import GeotexError, InputError
+from geotex.mesh.topology import compacted
 from geotex.progress import report
 from geotex.tiles.colors import COMPLETE_GROUPS, PLANAR_GROUPS, parse_colors, tile_keys
 from geotex.tiles.frame import concatenated, frame_of
@@ -82,12 +83,8 @@ class Source:
 
 
 def _subset(V, F, keep_faces, shift=None):
-    Fk = F[keep_faces]
-    used = np.unique(Fk)
-    remap = np.full(len(V), -1, dtype=np.int64)
-    remap[used] = np.arange(len(used))
-    Vk = V[used] if shift is None else V[used] - shift
-    return Vk, remap[Fk]
+    Vk, Fk = compacted(V, F[keep_faces])
+    return (Vk, Fk) if shift is None else (Vk - shift, Fk)
 
 
 def _exemplar_arrays(exemplar):

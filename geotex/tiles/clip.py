@@ -15,9 +15,8 @@ from geotex.mesh.topology import compacted
 
 from geotex.mesh.topology import edge_topology
 
-__all__ = ["split_by_plane", "compact"]
+__all__ = ["split_by_plane"]
 
-compact = compacted   # re-exported: the tile modules drop unreferenced vertices with it
 
 
 def split_by_plane(V: np.ndarray, F: np.ndarray, *, axis: int, value: float,
@@ -83,4 +82,4 @@ def split_by_plane(V: np.ndarray, F: np.ndarray, *, axis: int, value: float,
     pair_pos = np.concatenate([~lone_is_pos, ~lone_is_pos])
     above = np.vstack([whole_pos, lone_tri[lone_is_pos], pair[pair_pos]])
     below = np.vstack([whole_neg, lone_tri[~lone_is_pos], pair[~pair_pos]])
-    return compact(W, below), compact(W, above)
+    return compacted(W, below), compacted(W, above)

@@ -15,6 +15,8 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
+from geotex.mesh.topology import compacted
+
 from geotex.tiles.strips import GAP
 
 __all__ = ["PIXEL", "CLEAR", "footprint_pixels", "ExemplarPixels", "fill_gaps"]
@@ -109,11 +111,8 @@ class ExemplarPixels:
 
     def element(self, k: int, shift) -> tuple[np.ndarray, np.ndarray]:
         """Element ``k`` moved by ``-shift`` (a 2-vector)."""
-        Fk = self.F[self._faces[k]]
-        used = np.unique(Fk)
-        remap = np.full(len(self.V), -1, dtype=np.int64)
-        remap[used] = np.arange(len(used))
-        return self.V[used] - np.r_[shift, 0.0], remap[Fk]
+        Vk, Fk = compacted(self.V, self.F[self._faces[k]])
+        return Vk - np.r_[shift, 0.0], Fk
 
 
 def fill_gaps(V: np.ndarray, F: np.ndarray, ex: ExemplarPixels, size,

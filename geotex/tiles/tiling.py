@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from geotex.errors import InputError
+from geotex.mesh.topology import compacted
 from geotex.tiles.tileset import TileSet
 
 __all__ = ["random_arrangement", "planar_tiling", "welded", "closed_elements", "on_slab"]
@@ -82,7 +83,6 @@ def closed_elements(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarra
         Compacted.
     """
     from geotex.mesh.topology import edge_topology, face_components
-    from geotex.tiles.clip import compact
 
     topo = edge_topology(F, len(V))
     _, labels = face_components(F, len(V))
@@ -90,7 +90,7 @@ def closed_elements(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarra
     edge_open = topo.face_count[topo.half_to_edge] == 1
     open_faces[edge_open.reshape(-1, 3).any(axis=1)] = True
     bad = np.unique(labels[open_faces])
-    return compact(V, F[~np.isin(labels, bad)])
+    return compacted(V, F[~np.isin(labels, bad)])
 
 
 def planar_tiling(tiles: TileSet, arrangement: np.ndarray, *, border: str = "drop"
