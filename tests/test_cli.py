@@ -82,6 +82,7 @@ def test_render_and_convert(capsys, good, tmp_path):
     assert code == 0 and m.n_faces == read_mesh(good).n_faces
 
 
+@pytest.mark.slow
 def test_demo_writes_real_files(capsys, tmp_path):
     out = tmp_path / "demo"
     code, text, _ = run(capsys, "demo", "-o", str(out))

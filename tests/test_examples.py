@@ -11,6 +11,7 @@ from PIL import Image
 EXAMPLES = sorted((Path(__file__).parents[1] / "examples").glob("*.py"))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("script", EXAMPLES, ids=[p.stem for p in EXAMPLES])
 def test_example_writes_pictures(script, tmp_path):
     env = dict(os.environ, GEOTEX_EXAMPLES_QUICK="1")   # heavy examples draw less

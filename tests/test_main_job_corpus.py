@@ -37,6 +37,7 @@ def _judges_available() -> bool:
     return bool(have)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name,base,tiles", list(_bases()), ids=[b[0] for b in _bases()])
 def test_texture_with_defaults_writes_a_file_every_judge_accepts(tmp_path, capsys, name,
                                                                   base, tiles):

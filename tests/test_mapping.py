@@ -200,6 +200,7 @@ def _catalog_shells():
     return [r["name"] for r in list_shells()]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("shell_name", _catalog_shells())
 def test_every_catalog_set_on_every_catalog_shell_writes_a_printable_file(tmp_path, shell_name):
     from geotex.printing import export_printable
@@ -226,6 +227,7 @@ def test_catalog_has_closed_sets_and_shells():
     assert {"spot", "bob", "blub", "torus"} <= set(_catalog_shells())
 
 
+@pytest.mark.slow
 def test_folded_elements_are_shrunk_in_place_rather_than_dropped():
     from geotex.mapping import element_contacts
     from geotex.shells import load_named as load_shell
