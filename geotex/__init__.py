@@ -3,8 +3,7 @@
 from geotex.errors import (GeotexError, InputError, MeshFileError, MissingFileError,
                            NotPrintableError, UnsupportedFormatError)
 from geotex.mesh import Mesh
-
-__version__ = "0.1.0"
+from geotex.version import VERSION as __version__
 
 __all__ = [
     "Mesh",

@@ -42,11 +42,10 @@ from __future__ import annotations
 import base64
 import json
 import struct
-from pathlib import Path
 
 import numpy as np
 
-import geotex
+from geotex.version import VERSION
 from geotex.errors import MeshFileError
 from geotex.io._common import build_mesh
 from geotex.io.images import load_texture_image, texture_to_png_bytes
@@ -124,7 +123,7 @@ def glb_document(mesh, *, path="GLB output") -> tuple[dict, bytes]:
     if positions.shape[0] > np.iinfo(np.uint32).max:
         raise MeshFileError(path, "too many vertices for 32-bit glTF indices")
     doc = {
-        "asset": {"version": "2.0", "generator": f"geotex {geotex.__version__}"},
+        "asset": {"version": "2.0", "generator": f"geotex {VERSION}"},
         "scene": 0,
         "scenes": [{"nodes": [0]}],
         "nodes": [{"name": name}],

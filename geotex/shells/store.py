@@ -22,6 +22,7 @@ from geotex.param.polycube import PolyCube
 from geotex.param.polycube_quads import quad_edges
 from geotex.param.polycube_surface import subdivided_quads
 from geotex.shells.build import Shell
+from geotex.version import VERSION
 
 __all__ = ["save_shell", "load_shell", "shell_metadata", "FORMAT"]
 
@@ -46,7 +47,6 @@ def _arrays_of(shell: Shell) -> dict:
 
 def shell_metadata(shell: Shell) -> dict:
     """The JSON metadata stored with a shell."""
-    from geotex import __version__
 
     pc = shell.polycube
     return {
@@ -58,7 +58,8 @@ def shell_metadata(shell: Shell) -> dict:
         "max_height": shell.max_height,
         "distortion": {k: float(v) for k, v in pc.distortion.items()},
         "coverage": {k: float(v) for k, v in pc.coverage.items()},
-        "voxels": pc.voxels, "tile_search": pc.tile_search, "source": shell.source, "geotex_version": __version__,
+        "voxels": pc.voxels, "tile_search": pc.tile_search, "source": shell.source,
+        "geotex_version": VERSION,
         "recipe": shell.recipe,
     }
 
