@@ -91,7 +91,7 @@ def refine_base(V, F, edge_length, *, method: str = "remesh") -> tuple[np.ndarra
                          f"(limit {MAX_FACES}); use a larger scale")
     import pymeshlab
 
-    from geotex.repair.holes import arrays_of, meshset_of
+    from geotex.mesh.meshlab import arrays_of, meshset_of
     ms = meshset_of(V, F)
     try:
         ms.meshing_isotropic_explicit_remeshing(iterations=REMESH_ITERATIONS,

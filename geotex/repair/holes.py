@@ -6,23 +6,10 @@ import igl
 import numpy as np
 import pymeshlab
 
+from geotex.mesh.meshlab import arrays_of, meshset_of
 from geotex.mesh.topology import edge_topology, non_manifold_vertices
 
-__all__ = ["filled_holes", "split_non_manifold", "meshset_of", "arrays_of"]
-
-
-def meshset_of(V: np.ndarray, F: np.ndarray) -> pymeshlab.MeshSet:
-    """Return a pymeshlab ``MeshSet`` holding one copy of ``(V, F)``."""
-    ms = pymeshlab.MeshSet()
-    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=V, face_matrix=F.astype(np.int32)))
-    return ms
-
-
-def arrays_of(ms: pymeshlab.MeshSet) -> tuple[np.ndarray, np.ndarray]:
-    """Return ``(V, F)`` of the current mesh of ``ms`` as float64 / int64."""
-    cm = ms.current_mesh()
-    return (np.ascontiguousarray(cm.vertex_matrix(), dtype=np.float64),
-            np.ascontiguousarray(cm.face_matrix(), dtype=np.int64))
+__all__ = ["filled_holes", "split_non_manifold"]
 
 
 def split_non_manifold(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:

@@ -7,9 +7,10 @@ import numpy as np
 import pymeshlab
 
 from geotex.check.intersections import self_intersecting_pairs
+from geotex.mesh.meshlab import arrays_of, meshset_of
 from geotex.mesh.solid import arrays_of_manifold, manifold_of
 from geotex.mesh.topology import face_components
-from geotex.repair.holes import arrays_of, filled_holes, meshset_of
+from geotex.repair.holes import filled_holes
 
 __all__ = ["union_of_shells", "without_intersecting_faces"]
 
