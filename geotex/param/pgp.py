@@ -1,0 +1,472 @@
+"""Periodic global parameterization (PGP) steered by a cross field and a scale field.
+
+Ray et al. 2006, in the simplified form of the material-space textures paper
+(§2.3, eqs. 1-4), with the coordinate swaps of a 4-direction field kept.
+
+Unknowns
+--------
+Every vertex ``v`` carries two periodic functions as one real 4-vector
+``X_v = (cos 2 pi u, sin 2 pi u, cos 2 pi v, sin 2 pi v)`` (tile units: one
+period per tile).  ``(u, v)`` are measured along the vertex's *own* axes: the
+cross-field arms of a reference face of its fan.
+
+Corner rotations
+----------------
+The cross field is combed (:func:`geotex.fields.combing.comb_direction_field`);
+across every interior edge the combed arms of the two faces differ by a
+rotation of ``j * 90`` degrees (``j`` = the matching).  Walking each vertex fan
+from its reference corner and adding the matchings gives ``k_(f,v)`` in
+``0..3``: at face ``f`` the vertex's ``u`` axis is ``f``'s combed arm ``k``.
+The canonical coordinates of the corner in ``f``'s frame are then
+``U + i V = i^k (u + i v)`` - a rotation by ``k * 90`` degrees, which on
+``X_v`` is a signed permutation with conjugation (``P_k``, 4x4, orthogonal).
+
+Energy (eq. 3, per face instead of per edge)
+--------------------------------------------
+Inside face ``f`` the field predicts the change of ``(U, V)`` along
+``x_i -> x_j``: ``omega = (<a_f, x_j - x_i>, <b_f, x_j - x_i>) / S_f`` with
+``(a_f, b_f)`` the combed arms and ``S_f`` the mean of the vertex scales
+(eq. 1).  PGP minimises, over the three directed edges of every face,
+``sum_f A_f |P_kj X_j - R(2 pi omega) P_ki X_i|^2`` (``R`` rotates each of
+the two cos/sin pairs), against the mass ``M = diag(vertex area) x I_4``.  Each
+interior edge gets ``A_T + A_T'``, as in the paper's ``F_PGP``; the paper
+averages ``omega`` over the two faces instead of summing two terms.  The
+minimiser is the smallest eigenvector of the real symmetric ``A X = l M X``
+(shift-invert ARPACK with one sparse factorization).  The ``u`` and ``v``
+halves of the unknowns couple only through odd corner rotations; the
+system is split into its connected blocks (on a flat patch with a constant
+field: two, one per coordinate) and each is solved on its own.
+
+Extraction (eq. 4)
+------------------
+Per corner the raw canonical coordinate is ``i^k (arg X_v / 2 pi)``; inside a
+face, corners 1 and 2 are unwrapped against corner 0 by adding the integer
+that brings them closest to corner 0 plus ``omega``.  The winding
+``sum wrap(raw_b - raw_a - omega_ab)`` over the face's three edges is an
+integer: non-zero means the periodic function has a zero inside the face (a
+*dislocation* of the grid).  Singular faces are those with a non-zero winding,
+a vertex where the cross field is singular (a cone, index ``k / 4``), a corner
+whose fan matching does not close (at cones of fractional index), or a vertex
+whose periodic function vanishes.  Everywhere else, the corner coordinates on
+the two sides of an edge differ exactly by a rotation by a multiple of 90
+degrees and an integer translation; :attr:`PeriodicParameterization.seam_residual`
+measures the largest deviation.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from numbers import Real
+
+import numpy as np
+import scipy.linalg
+import scipy.sparse as sp
+from scipy.sparse.csgraph import breadth_first_order, connected_components
+from scipy.sparse.linalg import ArpackNoConvergence, LinearOperator, eigsh
+
+from geotex.errors import InputError
+from geotex.fields.combing import comb_direction_field
+from geotex.fields.directions import DirectionField
+from geotex.fields.frames import face_connection, tangent_angles
+from geotex.fields.singularities import vertex_indices
+from geotex.fields.sparse import factor_hpd
+from geotex.mesh.topology import edge_topology, non_manifold_vertices
+
+__all__ = ["PeriodicParameterization", "periodic_parameterization"]
+
+#: a vertex whose periodic function has a modulus below this fraction of the
+#: RMS modulus has no reliable phase (its faces are marked singular)
+VANISHING_MODULUS = 1e-6
+
+# P_k as (source index, sign) per output slot: the canonical 4-vector of a
+# vertex seen in a face whose arm k is the vertex's u axis
+_PERM = np.array([[0, 1, 2, 3], [2, 3, 0, 1], [0, 1, 2, 3], [2, 3, 0, 1]])
+_SIGN = np.array([[1, 1, 1, 1], [1, -1, 1, 1], [1, -1, 1, -1], [1, 1, 1, -1]], dtype=np.float64)
+
+
+def _rotation_blocks() -> np.ndarray:
+    """``P_k`` as dense (4, 4, 4) matrices."""
+    P = np.zeros((4, 4, 4))
+    for k in range(4):
+        P[k, np.arange(4), _PERM[k]] = _SIGN[k]
+    return P
+
+
+_P = _rotation_blocks()
+
+
+@dataclass(frozen=True, eq=False)
+class PeriodicParameterization:
+    """Result of :func:`periodic_parameterization`.
+
+    Attributes
+    ----------
+    coords : numpy.ndarray, (m, 3, 2) float64
+        ``(s, t)`` per face corner, in tile units (one tile per unit),
+        continuous inside every face.  ``s`` runs along the face's combed
+        cross-field arm, ``t`` along the arm turned by +90 degrees.
+    singular : numpy.ndarray, (m,) bool
+        Faces where the coordinates cannot agree (see the module docstring).
+    cones : tuple of (int, float)
+        ``(vertex, index)`` of the cross field's singular vertices.
+    dislocations : tuple of (int, int, int)
+        ``(face, winding of s, winding of t)`` of faces inside which a
+        periodic function winds (grid dislocations; index 0 each).
+    index_sum : float
+        Sum of the cone indices: the Euler characteristic on closed meshes
+        (dislocations do not change it).
+    seam_residual : float
+        Largest deviation, over interior edges with no singular face, of the
+        corner coordinates across the edge from an exact grid symmetry
+        (rotation by a multiple of 90 degrees plus an integer translation),
+        in tile units; 0.0 when there is no such edge.
+    gradient_error : float
+        Area-weighted mean, over non-singular faces, of
+        ``|grad s - a/S| + |grad t - b/S|`` relative to ``1/S``: how far the
+        tiles are from the field's orientation and size.
+    scale : numpy.ndarray, (n,) float64
+        Tile size per vertex (surface units) that was used.
+    eigenvalues : tuple of float
+        Smallest eigenvalue of each solved block (0 for an exact solution).
+    """
+
+    coords: np.ndarray
+    singular: np.ndarray
+    cones: tuple
+    dislocations: tuple
+    index_sum: float
+    seam_residual: float
+    gradient_error: float
+    scale: np.ndarray
+    eigenvalues: tuple
+
+
+def _scale_per_vertex(scale, n: int) -> np.ndarray:
+    if isinstance(scale, Real) and not isinstance(scale, bool):
+        value = float(scale)
+        if not (np.isfinite(value) and value > 0):
+            raise InputError(f"scale must be a positive finite number (tile size in surface "
+                             f"units), got {scale!r}")
+        return np.full(n, value)
+    try:
+        arr = np.asarray(scale, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InputError("scale must be a positive number or an (n,) array of them") from None
+    if arr.shape != (n,):
+        raise InputError(f"scale must be a positive number or have shape ({n},), "
+                         f"got shape {arr.shape}")
+    if not (np.isfinite(arr).all() and (arr > 0).all()):
+        raise InputError("scale must be positive and finite at every vertex")
+    return arr.copy()
+
+
+def _field_vectors(field, m: int) -> np.ndarray:
+    if isinstance(field, DirectionField):
+        if field.symmetry not in (1, 2, 4):
+            raise InputError(f"field must have symmetry 1, 2 or 4 (its arms are used as a "
+                             f"cross), got {field.symmetry}")
+        vec = np.asarray(field.vectors, dtype=np.float64)
+    else:
+        try:
+            vec = np.asarray(field, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise InputError("field must be a DirectionField or an (m, 3) array of "
+                             "vectors") from None
+    if vec.shape != (m, 3):
+        raise InputError(f"field must have one vector per face, shape ({m}, 3), "
+                         f"got {vec.shape}")
+    if not np.isfinite(vec).all():
+        raise InputError("field has non-finite vectors")
+    return vec
+
+
+def _corner_rotations(F: np.ndarray, n: int, conn, jump: np.ndarray
+                      ) -> tuple[np.ndarray, np.ndarray]:
+    """``k`` per corner (m, 3) from fan walks, and a per-dual-edge 'does not close' mask."""
+    m = F.shape[0]
+    f, g = conn.faces[:, 0], conn.faces[:, 1]
+    a, b = [], []
+    steps = []
+    for vert in (conn.vertices[:, 0], conn.vertices[:, 1]):
+        ca = 3 * f + np.argmax(F[f] == vert[:, None], axis=1)
+        cb = 3 * g + np.argmax(F[g] == vert[:, None], axis=1)
+        a.append(ca)
+        b.append(cb)
+        steps.append(jump)
+    a, b, st = np.concatenate(a), np.concatenate(b), np.concatenate(steps)
+    root = 3 * m
+    _, ref = np.unique(F.ravel(), return_index=True)
+    rows = np.concatenate([a, b, np.full(ref.size, root)])
+    cols = np.concatenate([b, a, ref])
+    # k_b - k_a = j along a -> b; stored as value + 1 so that 0 survives
+    vals = np.concatenate([np.mod(st, 4), np.mod(-st, 4), np.zeros(ref.size, np.int64)]) + 1
+    G = sp.csr_matrix((vals, (rows, cols)), shape=(root + 1, root + 1))
+    G.sum_duplicates()
+    _, pred = breadth_first_order(G, root, directed=True, return_predecessors=True)
+    pred = pred.astype(np.int64)
+    child = np.flatnonzero(pred[:root] >= 0)
+    step = np.zeros(root + 1, dtype=np.int64)
+    step[child] = np.asarray(G[pred[child], child]).ravel().astype(np.int64) - 1
+    anc = np.where(pred >= 0, pred, root)
+    anc[root] = root
+    acc = step.copy()
+    while np.any(anc[:root] != root):
+        acc = np.mod(acc + acc[anc], 4)
+        anc = anc[anc]
+    k = np.mod(acc[:root], 4)
+    bad = np.mod(k[b] - k[a] - st, 4) != 0
+    half = a.size // 2
+    return k.reshape(m, 3), bad[:half] | bad[half:]
+
+
+def _energy(V, F, k, arms, S_face, weight, n):
+    """Assemble the 4n x 4n symmetric energy matrix (COO parts)."""
+    m = F.shape[0]
+    rows, cols, vals = [], [], []
+    blk_r, blk_c = np.meshgrid(np.arange(4), np.arange(4), indexing="ij")
+    diag = np.zeros(n)
+    for ca, cb in ((0, 1), (1, 2), (2, 0)):
+        i, j = F[:, ca], F[:, cb]
+        d = V[j] - V[i]
+        om = 2.0 * np.pi * np.einsum("fij,fj->fi", arms, d) / S_face[:, None]   # (m, 2)
+        c, s = np.cos(om), np.sin(om)
+        D = np.zeros((m, 4, 4))
+        D[:, 0, 0], D[:, 0, 1], D[:, 1, 0], D[:, 1, 1] = c[:, 0], -s[:, 0], s[:, 0], c[:, 0]
+        D[:, 2, 2], D[:, 2, 3], D[:, 3, 2], D[:, 3, 3] = c[:, 1], -s[:, 1], s[:, 1], c[:, 1]
+        Pi, Pj = _P[k[:, ca]], _P[k[:, cb]]
+        # off-diagonal block (i, j): -w Pi^T D^T Pj
+        B = -weight[:, None, None] * np.einsum("fba,fcb,fcd->fad", Pi, D, Pj)
+        rows.append((4 * i[:, None, None] + blk_r).ravel())
+        cols.append((4 * j[:, None, None] + blk_c).ravel())
+        vals.append(B.ravel())
+        rows.append((4 * j[:, None, None] + blk_r).ravel())
+        cols.append((4 * i[:, None, None] + blk_c).ravel())
+        vals.append(np.transpose(B, (0, 2, 1)).ravel())
+        diag += np.bincount(i, weights=weight, minlength=n) + np.bincount(j, weights=weight,
+                                                                          minlength=n)
+    idx = np.arange(4 * n)
+    rows.append(idx)
+    cols.append(idx)
+    vals.append(np.repeat(diag, 4))
+    A = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                      shape=(4 * n, 4 * n))
+    A.sum_duplicates()
+    A.eliminate_zeros()          # exact zeros: u and v blocks that do not couple
+    return A
+
+
+def _smallest(A: sp.csr_matrix, mass: np.ndarray, rng: np.random.Generator
+              ) -> tuple[np.ndarray, float]:
+    """Smallest generalized eigenpair of ``A x = l diag(mass) x`` (A symmetric PSD)."""
+    size = A.shape[0]
+    if size <= 64:
+        w, vecs = scipy.linalg.eigh(A.toarray(), np.diag(mass), subset_by_index=[0, 0])
+        return vecs[:, 0], float(w[0])
+    diag_mean = float(A.diagonal().mean())
+    eps = 1e-8 * diag_mean / float(mass.mean())
+    M = sp.diags(mass).tocsc()
+    lu = factor_hpd((A + eps * M).tocsc())
+    op = LinearOperator((size, size), dtype=np.float64,
+                        matvec=lambda x: lu.solve(np.asarray(x, np.float64).ravel()))
+    v0 = rng.standard_normal(size)
+    try:
+        w, vecs = eigsh(A.tocsc(), k=1, M=M, sigma=-eps, OPinv=op, v0=v0, which="LM",
+                        ncv=min(8, size - 1), tol=1e-10)
+        x, lam = vecs[:, 0], float(w[0])
+    except ArpackNoConvergence:
+        x = v0
+        for _ in range(100):
+            x = lu.solve(mass * x)
+            x /= np.sqrt(float(np.dot(x, mass * x)))
+        lam = float(x @ (A @ x))
+    return x, lam
+
+
+def _solve(A: sp.csr_matrix, vmass: np.ndarray, n: int, rng) -> tuple[np.ndarray, tuple]:
+    """Solve every connected block of half-nodes (vertex, u or v part) separately."""
+    coo = A.tocoo()
+    hr, hc = coo.row // 2, coo.col // 2
+    H = sp.csr_matrix((np.ones(hr.size, np.int8), (hr, hc)), shape=(2 * n, 2 * n))
+    ncomp, label = connected_components(H, directed=False)
+    live = np.zeros(2 * n, dtype=bool)
+    live[hr[coo.data != 0]] = True
+    X = np.zeros(4 * n)
+    lams = []
+    order = np.argsort(label, kind="stable")
+    starts = np.searchsorted(label[order], np.arange(ncomp + 1))
+    for c in range(ncomp):
+        halves = order[starts[c]:starts[c + 1]]
+        if not live[halves[0]]:
+            continue
+        idx = np.stack([2 * halves, 2 * halves + 1], axis=1).ravel()
+        mass = np.repeat(vmass[halves // 2], 2)
+        x, lam = _smallest(A[idx][:, idx], mass, rng)
+        X[idx] = x
+        lams.append(max(lam, 0.0))
+    return X.reshape(n, 4), tuple(lams)
+
+
+def _rotate(coords: np.ndarray, k: np.ndarray) -> np.ndarray:
+    """Apply ``U + i V = i^k (u + i v)`` to (..., 2) coordinates."""
+    u, v = coords[..., 0], coords[..., 1]
+    U = np.choose(k, [u, -v, -u, v])
+    W = np.choose(k, [v, u, -v, -u])
+    return np.stack([U, W], axis=-1)
+
+
+def _shared_edge_prediction(F, conn, k, pred):
+    """Average the two faces' predicted steps of every interior edge (eq. 3's alpha_ij).
+
+    ``pred[f, c]`` is the step from corner ``c`` to ``c + 1`` in ``f``'s
+    canonical frame.  Both predictions are taken to the frame of the edge's
+    first vertex, averaged and taken back, so that the two faces round the
+    edge's phase difference to the same integer.
+    """
+    out = pred.copy()
+    f, g = conn.faces[:, 0], conn.faces[:, 1]
+    lo, hi = conn.vertices[:, 0], conn.vertices[:, 1]
+    cf = np.argmax(F[f] == lo[:, None], axis=1)          # f holds lo -> hi at slot cf
+    cg = np.argmax(F[g] == hi[:, None], axis=1)          # g holds hi -> lo at slot cg
+    kf = k[f, cf]
+    kg = k[g, (cg + 1) % 3]                              # corner of lo in g
+    back_f = _rotate(pred[f, cf], (4 - kf) % 4)
+    back_g = _rotate(-pred[g, cg], (4 - kg) % 4)
+    mean = 0.5 * (back_f + back_g)
+    out[f, cf] = _rotate(mean, kf)
+    out[g, cg] = -_rotate(mean, kg)
+    return out
+
+
+def _seam_residual(coords, F, conn, ok_edge) -> float:
+    f, g = conn.faces[ok_edge, 0], conn.faces[ok_edge, 1]
+    if f.size == 0:
+        return 0.0
+    lohi = conn.vertices[ok_edge]
+    cf = np.stack([coords[f, np.argmax(F[f] == lohi[:, [s]], axis=1)] for s in (0, 1)], 1)
+    cg = np.stack([coords[g, np.argmax(F[g] == lohi[:, [s]], axis=1)] for s in (0, 1)], 1)
+    best = np.full(f.size, np.inf)
+    for r in range(4):
+        d = cg - _rotate(cf, np.full(cf.shape[:2], r))          # (e, 2, 2)
+        t = np.rint(0.5 * (d[:, 0] + d[:, 1]))
+        res = np.abs(d - t[:, None, :]).max(axis=(1, 2))
+        best = np.minimum(best, res)
+    return float(best.max())
+
+
+def periodic_parameterization(V, F, field, *, scale, seed=None) -> PeriodicParameterization:
+    """Return per-corner tile coordinates that agree across edges up to grid symmetries.
+
+    See the module docstring for the method (Ray et al. 2006; material-space
+    textures §2.3, eqs. 1-4).
+
+    Parameters
+    ----------
+    V : array_like, (n, 3) float64
+    F : array_like, (m, 3) int64
+        Consistently oriented, edge- and vertex-manifold (boundaries allowed).
+    field : DirectionField or array_like, (m, 3)
+        Orientation: a direction field of symmetry 1, 2 or 4, or one tangent
+        vector per face; its four arms (the vector turned by multiples of 90
+        degrees) orient the tiles.
+    scale : float or array_like, (n,)
+        Tile size in surface units (one period of ``s`` and ``t``), for the
+        whole mesh or per vertex (e.g. :func:`geotex.fields.scalar.scale_field`).
+    seed : int, optional
+        Start vector of the eigen solver; ``None`` means 0 (reproducible).
+
+    Returns
+    -------
+    PeriodicParameterization
+
+    Raises
+    ------
+    InputError
+        On malformed, degenerate, inconsistently oriented or non-manifold
+        meshes, a field of the wrong shape or symmetry, or a non-positive
+        scale.
+
+    Examples
+    --------
+    >>> from geotex.mesh.primitives import grid_plane
+    >>> V, F = grid_plane(4, 4)
+    >>> p = periodic_parameterization(V, F, np.tile([1.0, 0, 0], (len(F), 1)), scale=0.5)
+    >>> bool(p.seam_residual < 1e-9), bool(p.singular.any())
+    (True, False)
+    """
+    conn = face_connection(V, F)                      # validates the mesh and orientation
+    V = np.asarray(V, dtype=np.float64)
+    F = np.asarray(F, dtype=np.int64)
+    n, m = V.shape[0], F.shape[0]
+    topo = edge_topology(F, n)
+    if (topo.face_count > 2).any():
+        raise InputError("F has non-manifold edges (more than two faces); repair the mesh "
+                         "first, e.g. with geotex repair")
+    bow = non_manifold_vertices(F, n, topo)
+    if bow.size:
+        raise InputError(f"F has {bow.size} non-manifold vertex(es), first {int(bow[0])}; "
+                         "repair the mesh first, e.g. with geotex repair")
+    S = _scale_per_vertex(scale, n)
+    vectors = _field_vectors(field, m)
+    combed = comb_direction_field(V, F, vectors, symmetry=4)
+    jump = np.zeros(conn.edges.size, dtype=np.int64)
+    jump[np.searchsorted(conn.edges, combed.cut_edges)] = combed.jumps
+    theta = tangent_angles(conn.T1, conn.T2, combed.vectors)
+    a = np.cos(theta)[:, None] * conn.T1 + np.sin(theta)[:, None] * conn.T2
+    b = np.cross(conn.N, a)
+    arms = np.stack([a, b], axis=1)                                          # (m, 2, 3)
+    S_face = S[F].mean(axis=1)
+    k, open_fan = _corner_rotations(F, n, conn, jump)
+
+    weight = conn.areas / conn.areas.mean()
+    vmass = np.bincount(F.ravel(), weights=np.repeat(weight / 3.0, 3), minlength=n)
+    A = _energy(V, F, k, arms, S_face, weight, n)
+    rng = np.random.default_rng(0 if seed is None else seed)
+    X, lams = _solve(A, vmass, n, rng)
+
+    # extraction (eq. 4)
+    zu, zv = X[:, 0] + 1j * X[:, 1], X[:, 2] + 1j * X[:, 3]
+    raw_v = np.stack([np.angle(zu), np.angle(zv)], axis=1) / (2.0 * np.pi)      # (n, 2)
+    raw = _rotate(raw_v[F], k)                                                  # (m, 3, 2)
+    P = V[F]
+    pred = np.einsum("fij,fcj->fci", arms, P - P[:, [0]]) / S_face[:, None, None]  # (m, 3, 2)
+    omega = _shared_edge_prediction(F, conn, k, np.roll(pred, -1, axis=1) - pred)
+    step = np.rint(np.roll(raw, -1, axis=1) - raw - omega)          # slot c: corner c -> c+1
+    coords = raw.copy()
+    coords[:, 1] = raw[:, 1] - step[:, 0]
+    coords[:, 2] = raw[:, 2] + step[:, 2]
+    wind = step.sum(axis=1).astype(np.int64)                          # (m, 2)
+
+    mod = np.minimum(np.abs(zu), np.abs(zv))
+    rms = np.sqrt(np.sum(vmass * (np.abs(zu) ** 2 + np.abs(zv) ** 2)) / max(2 * vmass.sum(),
+                                                                         1e-300))
+    vanish = mod < VANISHING_MODULUS * rms
+    index = vertex_indices(V, F, combed.vectors, symmetry=4)
+    cone = np.nan_to_num(index) != 0
+    singular = (wind != 0).any(axis=1) | cone[F].any(axis=1) | vanish[F].any(axis=1)
+    fo, go = conn.faces[open_fan, 0], conn.faces[open_fan, 1]
+    singular[fo] = True
+    singular[go] = True
+
+    ok_edge = ~(singular[conn.faces[:, 0]] | singular[conn.faces[:, 1]])
+    residual = _seam_residual(coords, F, conn, ok_edge)
+
+    # gradient error against the field's prediction, per face in its own frame
+    e1, e2 = P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]
+    E = np.stack([np.einsum("fj,fj->f", e, t) for e in (e1, e2) for t in (conn.T1, conn.T2)],
+                 axis=1).reshape(m, 2, 2)                     # rows: edges, cols: frame axes
+    dC = coords[:, 1:] - coords[:, [0]]                       # (m, 2 edges, 2 coords)
+    grad = np.linalg.solve(E, dC)                             # (m, 2 axes, 2 coords)
+    want = np.stack([np.einsum("fij,fj->fi", arms, t) for t in (conn.T1, conn.T2)],
+                    axis=1) / S_face[:, None, None]           # (m, 2 axes, 2 coords)
+    err = np.linalg.norm(grad - want, axis=1).sum(axis=1) * S_face
+    good = ~singular
+    gerr = float(np.average(err[good], weights=conn.areas[good])) if good.any() else 0.0
+
+    cv = np.flatnonzero(cone)
+    disl = np.flatnonzero((wind != 0).any(axis=1))
+    return PeriodicParameterization(
+        coords=np.ascontiguousarray(coords), singular=singular,
+        cones=tuple((int(v), float(index[v])) for v in cv),
+        dislocations=tuple((int(f), int(wind[f, 0]), int(wind[f, 1])) for f in disl),
+        index_sum=float(np.sum(index[cv])) if cv.size else 0.0,
+        seam_residual=residual, gradient_error=gerr, scale=S, eigenvalues=lams)
