@@ -223,37 +223,37 @@ def _corner_rotations(F: np.ndarray, n: int, conn, jump: np.ndarray
     return k.reshape(m, 3), bad[:half] | bad[half:]
 
 
-def _energy(V, F, k, arms, S_face, weight, n):
-    """Assemble the 4n x 4n symmetric energy matrix (COO parts)."""
+def _transfers(V, F, k, arms, S_face):
+    """Per directed face edge ``i -> j``: ``(i, j, T)`` with ``X_j ~ T X_i`` (T orthogonal 4x4)."""
     m = F.shape[0]
-    rows, cols, vals = [], [], []
-    blk_r, blk_c = np.meshgrid(np.arange(4), np.arange(4), indexing="ij")
-    diag = np.zeros(n)
+    I, J, T = [], [], []
     for ca, cb in ((0, 1), (1, 2), (2, 0)):
         i, j = F[:, ca], F[:, cb]
-        d = V[j] - V[i]
-        om = 2.0 * np.pi * np.einsum("fij,fj->fi", arms, d) / S_face[:, None]   # (m, 2)
+        om = 2.0 * np.pi * np.einsum("fij,fj->fi", arms, V[j] - V[i]) / S_face[:, None]
         c, s = np.cos(om), np.sin(om)
         D = np.zeros((m, 4, 4))
         D[:, 0, 0], D[:, 0, 1], D[:, 1, 0], D[:, 1, 1] = c[:, 0], -s[:, 0], s[:, 0], c[:, 0]
         D[:, 2, 2], D[:, 2, 3], D[:, 3, 2], D[:, 3, 3] = c[:, 1], -s[:, 1], s[:, 1], c[:, 1]
-        Pi, Pj = _P[k[:, ca]], _P[k[:, cb]]
-        # off-diagonal block (i, j): -w Pi^T D^T Pj
-        B = -weight[:, None, None] * np.einsum("fba,fcb,fcd->fad", Pi, D, Pj)
-        rows.append((4 * i[:, None, None] + blk_r).ravel())
-        cols.append((4 * j[:, None, None] + blk_c).ravel())
-        vals.append(B.ravel())
-        rows.append((4 * j[:, None, None] + blk_r).ravel())
-        cols.append((4 * i[:, None, None] + blk_c).ravel())
-        vals.append(np.transpose(B, (0, 2, 1)).ravel())
-        diag += np.bincount(i, weights=weight, minlength=n) + np.bincount(j, weights=weight,
-                                                                          minlength=n)
+        # canonical_j = D canonical_i, canonical = P_k X  =>  X_j = Pj^T D Pi X_i
+        T.append(np.einsum("fba,fbc,fcd->fad", _P[k[:, cb]], D, _P[k[:, ca]]))
+        I.append(i)
+        J.append(j)
+    return np.concatenate(I), np.concatenate(J), np.concatenate(T)
+
+
+def _energy(I, J, T, weight, n):
+    """The 4n x 4n symmetric energy: sum w |X_j - T X_i|^2 over directed face edges."""
+    w = np.tile(weight, 3)
+    blk_r, blk_c = np.meshgrid(np.arange(4), np.arange(4), indexing="ij")
+    B = -w[:, None, None] * np.transpose(T, (0, 2, 1))          # block (i, j): -w T^T
+    diag = np.bincount(I, weights=w, minlength=n) + np.bincount(J, weights=w, minlength=n)
     idx = np.arange(4 * n)
-    rows.append(idx)
-    cols.append(idx)
-    vals.append(np.repeat(diag, 4))
-    A = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                      shape=(4 * n, 4 * n))
+    rows = np.concatenate([(4 * I[:, None, None] + blk_r).ravel(),
+                           (4 * J[:, None, None] + blk_r).ravel(), idx])
+    cols = np.concatenate([(4 * J[:, None, None] + blk_c).ravel(),
+                           (4 * I[:, None, None] + blk_c).ravel(), idx])
+    vals = np.concatenate([B.ravel(), T.ravel() * -w.repeat(16), np.repeat(diag, 4)])
+    A = sp.csr_matrix((vals, (rows, cols)), shape=(4 * n, 4 * n))
     A.sum_duplicates()
     A.eliminate_zeros()          # exact zeros: u and v blocks that do not couple
     return A
@@ -422,7 +422,8 @@ def periodic_parameterization(V, F, field, *, scale, seed=None) -> PeriodicParam
 
     weight = conn.areas / conn.areas.mean()
     vmass = np.bincount(F.ravel(), weights=np.repeat(weight / 3.0, 3), minlength=n)
-    A = _energy(V, F, k, arms, S_face, weight, n)
+    I, J, T = _transfers(V, F, k, arms, S_face)
+    A = _energy(I, J, T, weight, n)
     rng = np.random.default_rng(0 if seed is None else seed)
     X, lams = _solve(A, vmass, n, rng)
 
