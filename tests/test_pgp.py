@@ -52,10 +52,12 @@ def test_flat_grid_constant_field_is_an_exact_affine_grid():
     assert p.seam_residual < 1e-9 and p.gradient_error < 1e-9
 
 
-def test_rotated_field_and_per_vertex_scale_on_flat_grid():
-    V, F = grid_plane(10, 10)
+@pytest.mark.parametrize("solver", ["direct", "multilevel"])
+def test_rotated_field_and_per_vertex_scale_on_flat_grid(solver):
+    V, F = grid_plane(20, 20)
     a = np.array([1.0, 1.0, 0.0]) / np.sqrt(2)
-    p = periodic_parameterization(V, F, np.tile(a, (len(F), 1)), scale=np.full(len(V), 0.25))
+    p = periodic_parameterization(V, F, np.tile(a, (len(F), 1)), scale=np.full(len(V), 0.25),
+                                  solver=solver)
     b = np.array([-a[1], a[0], 0.0])
     want = np.stack([V[F] @ a, V[F] @ b], axis=-1) / 0.25
     d = (p.coords - want).reshape(-1, 2)
@@ -63,15 +65,16 @@ def test_rotated_field_and_per_vertex_scale_on_flat_grid():
     assert np.abs(d - np.rint(d)).max() < 1e-9
 
 
+@pytest.mark.parametrize("solver", ["direct", "multilevel"])
 @pytest.mark.parametrize("name, mesh, chi", [
     ("sphere", lambda: icosphere(3), 2),
     ("torus", lambda: torus(n_major=40, n_minor=20), 0),
     ("genus2", lambda: plate_with_holes(2, cell=0.15), -2),
 ])
-def test_curved_closed_meshes(name, mesh, chi):
+def test_curved_closed_meshes(name, mesh, chi, solver):
     V, F = mesh()
     field = smooth_direction_field(V, F, symmetry=4)
-    p = periodic_parameterization(V, F, field, scale=0.3)
+    p = periodic_parameterization(V, F, field, scale=0.3, solver=solver)
     assert p.index_sum == pytest.approx(chi) == field.index_sum
     assert p.seam_residual <= 1e-6
     res = _edge_residuals(p, V, F)
@@ -94,10 +97,11 @@ def test_singular_faces_are_needed():
 def test_deterministic():
     V, F = torus(n_major=30, n_minor=14)
     field = smooth_direction_field(V, F, symmetry=4)
-    a = periodic_parameterization(V, F, field, scale=0.3)
-    b = periodic_parameterization(V, F, field, scale=0.3)
-    assert a.coords.tobytes() == b.coords.tobytes()
-    assert a.singular.tobytes() == b.singular.tobytes() and a.cones == b.cones
+    for solver in ("direct", "multilevel"):
+        a = periodic_parameterization(V, F, field, scale=0.3, solver=solver)
+        b = periodic_parameterization(V, F, field, scale=0.3, solver=solver)
+        assert a.coords.tobytes() == b.coords.tobytes()
+        assert a.singular.tobytes() == b.singular.tobytes() and a.cones == b.cones
 
 
 def test_inputs_not_modified():
@@ -114,6 +118,7 @@ def test_inputs_not_modified():
     (dict(scale=float("nan")), "scale must be a positive"),
     (dict(scale=np.ones(3)), "scale must be a positive number or have shape"),
     (dict(scale=1.0, field=np.ones((2, 3))), "field must have one vector per face"),
+    (dict(scale=1.0, solver="cg"), "solver must be"),
 ])
 def test_bad_inputs(kwargs, message):
     V, F = icosphere(1)

@@ -82,6 +82,13 @@ VANISHING_MODULUS = 1e-6
 #: inverse-iteration steps of the eigen solve (see ``_smallest``)
 INVERSE_ITERATIONS = 8
 
+#: ``solver="auto"`` switches to the multilevel solve from this many vertices
+MULTILEVEL_VERTICES = 20000
+#: cluster size of the multilevel solve, in mean edge lengths (grid cell)
+CLUSTER_EDGES = 4.0
+#: damped Jacobi sweeps after the coarse solve
+SMOOTHING_SWEEPS = 30
+
 # P_k as (source index, sign) per output slot: the canonical 4-vector of a
 # vertex seen in a face whose arm k is the vertex's u axis
 _PERM = np.array([[0, 1, 2, 3], [2, 3, 0, 1], [0, 1, 2, 3], [2, 3, 0, 1]])
@@ -285,7 +292,7 @@ def _smallest(A: sp.csr_matrix, mass: np.ndarray, rng: np.random.Generator
     return x, float(x @ (A @ x))
 
 
-def _solve(A: sp.csr_matrix, vmass: np.ndarray, n: int, rng) -> tuple[np.ndarray, tuple]:
+def _solve_direct(A: sp.csr_matrix, vmass: np.ndarray, n: int, rng) -> tuple[np.ndarray, tuple]:
     """Solve every connected block of half-nodes (vertex, u or v part) separately."""
     coo = A.tocoo()
     hr, hc = coo.row // 2, coo.col // 2
@@ -307,6 +314,72 @@ def _solve(A: sp.csr_matrix, vmass: np.ndarray, n: int, rng) -> tuple[np.ndarray
         X[idx] = x
         lams.append(max(lam, 0.0))
     return X.reshape(n, 4), tuple(lams)
+
+
+def _clusters(V, I, J, n, size):
+    """Vertex clusters: cells of a grid of step ``size``, split into edge-connected parts."""
+    cell = np.floor((V - V.min(axis=0)) / size).astype(np.int64)
+    _, key = np.unique(cell, axis=0, return_inverse=True)
+    key = key.ravel()
+    same = key[I] == key[J]
+    G = sp.csr_matrix((np.ones(int(same.sum()), np.int8), (I[same], J[same])), shape=(n, n))
+    return connected_components(G, directed=False)
+
+
+def _prolongation(I, J, T, n, label, count):
+    """``P`` (4n x 4 count): each vertex = its cluster's 4-vector carried along a BFS tree."""
+    root = n
+    first = np.full(count, n, dtype=np.int64)
+    np.minimum.at(first, label, np.arange(n))
+    same = label[I] == label[J]
+    e = np.flatnonzero(same)
+    rows = np.concatenate([I[e], J[e], np.full(count, root)])
+    cols = np.concatenate([J[e], I[e], first])
+    code = np.concatenate([2 * e + 1, 2 * e + 2, np.zeros(count, np.int64)])   # >0 stored
+    G = sp.csr_matrix((code + 1, (rows, cols)), shape=(n + 1, n + 1))   # structure only
+    _, pred = breadth_first_order(G, root, directed=True, return_predecessors=True)
+    pred = pred.astype(np.int64)
+    child = np.flatnonzero(pred[:n] >= 0)
+    Q = np.broadcast_to(np.eye(4), (n + 1, 4, 4)).copy()
+    # the code of the tree edge parent -> child (one directed face edge, either way)
+    lookup = sp.coo_matrix((code + 1, (rows, cols)), shape=(n + 1, n + 1))
+    _, keep = np.unique(lookup.row * (n + 1) + lookup.col, return_index=True)
+    kr, kc, kv = lookup.row[keep], lookup.col[keep], lookup.data[keep] - 1
+    pos = np.searchsorted(kr * (n + 1) + kc, pred[child] * (n + 1) + child)
+    cval = kv[pos]
+    tree = pred[child] != root
+    cc, cv = child[tree], cval[tree]
+    fwd = cv % 2 == 1
+    eidx = (cv - 1 - (~fwd)) // 2
+    step = T[eidx]
+    step[~fwd] = np.transpose(step[~fwd], (0, 2, 1))            # inverse = transpose
+    Q[cc] = step
+    anc = np.where(pred >= 0, pred, root)
+    anc[root] = root
+    while np.any(anc[:n] != root):
+        Q = np.einsum("vab,vbc->vac", Q, Q[anc])
+        anc = anc[anc]
+    Q = Q[:n]
+    r = (4 * np.arange(n)[:, None, None] + np.arange(4)[None, :, None]).repeat(4, axis=2)
+    c = (4 * label[:, None, None] + np.arange(4)[None, None, :]).repeat(4, axis=1)
+    return sp.csr_matrix((Q.ravel(), (r.ravel(), c.ravel())), shape=(4 * n, 4 * count))
+
+
+def _solve_multilevel(A, vmass, V, I, J, T, n, rng, cell, sweeps):
+    """Coarse eigenvector on field-transported clusters, then damped Jacobi sweeps."""
+    count, label = _clusters(V, I, J, n, cell)
+    P = _prolongation(I, J, T, n, label, count)
+    Ac = (P.T @ A @ P).tocsr()
+    Ac.data[np.abs(Ac.data) < 1e-14 * np.abs(Ac.data).max()] = 0.0
+    cmass = np.bincount(label, weights=vmass, minlength=count)
+    Y, lams = _solve_direct(Ac, cmass, count, rng)
+    x = P @ Y.ravel()
+    dinv = 1.0 / np.maximum(A.diagonal(), 1e-300)
+    mass = np.repeat(vmass, 4)
+    for _ in range(sweeps):
+        x = x - 0.5 * dinv * (A @ x)
+    x /= np.sqrt(max(float(np.dot(x, mass * x)), 1e-300))
+    return x.reshape(n, 4), (float(x @ (A @ x)),)
 
 
 def _rotate(coords: np.ndarray, k: np.ndarray) -> np.ndarray:
@@ -356,7 +429,8 @@ def _seam_residual(coords, F, conn, ok_edge) -> float:
     return float(best.max())
 
 
-def periodic_parameterization(V, F, field, *, scale, seed=None) -> PeriodicParameterization:
+def periodic_parameterization(V, F, field, *, scale, solver: str = "auto",
+                              seed=None) -> PeriodicParameterization:
     """Return per-corner tile coordinates that agree across edges up to grid symmetries.
 
     See the module docstring for the method (Ray et al. 2006; material-space
@@ -374,6 +448,14 @@ def periodic_parameterization(V, F, field, *, scale, seed=None) -> PeriodicParam
     scale : float or array_like, (n,)
         Tile size in surface units (one period of ``s`` and ``t``), for the
         whole mesh or per vertex (e.g. :func:`geotex.fields.scalar.scale_field`).
+    solver : {"auto", "direct", "multilevel"}, optional
+        ``"direct"``: inverse iteration with one sparse factorization of the
+        whole system.  ``"multilevel"``: the same on clusters of about
+        ``CLUSTER_EDGES`` edge lengths, whose vertices follow the cluster's
+        4-vector carried along the field's predicted phases, then
+        ``SMOOTHING_SWEEPS`` damped Jacobi sweeps on the full system (a
+        slightly higher energy; the seams stay exact either way).
+        ``"auto"``: multilevel from ``MULTILEVEL_VERTICES`` vertices on.
     seed : int, optional
         Start vector of the eigen solver; ``None`` means 0 (reproducible).
 
@@ -385,8 +467,8 @@ def periodic_parameterization(V, F, field, *, scale, seed=None) -> PeriodicParam
     ------
     InputError
         On malformed, degenerate, inconsistently oriented or non-manifold
-        meshes, a field of the wrong shape or symmetry, or a non-positive
-        scale.
+        meshes, a field of the wrong shape or symmetry, a non-positive
+        scale or an unknown solver.
 
     Examples
     --------
@@ -408,6 +490,8 @@ def periodic_parameterization(V, F, field, *, scale, seed=None) -> PeriodicParam
     if bow.size:
         raise InputError(f"F has {bow.size} non-manifold vertex(es), first {int(bow[0])}; "
                          "repair the mesh first, e.g. with geotex repair")
+    if solver not in ("auto", "direct", "multilevel"):
+        raise InputError(f"solver must be 'auto', 'direct' or 'multilevel', got {solver!r}")
     S = _scale_per_vertex(scale, n)
     vectors = _field_vectors(field, m)
     combed = comb_direction_field(V, F, vectors, symmetry=4)
@@ -425,7 +509,12 @@ def periodic_parameterization(V, F, field, *, scale, seed=None) -> PeriodicParam
     I, J, T = _transfers(V, F, k, arms, S_face)
     A = _energy(I, J, T, weight, n)
     rng = np.random.default_rng(0 if seed is None else seed)
-    X, lams = _solve(A, vmass, n, rng)
+    if solver == "direct" or (solver == "auto" and n < MULTILEVEL_VERTICES):
+        X, lams = _solve_direct(A, vmass, n, rng)
+    else:
+        edge = float(np.linalg.norm(V[J] - V[I], axis=1).mean())
+        X, lams = _solve_multilevel(A, vmass, V, I, J, T, n, rng, CLUSTER_EDGES * edge,
+                                    SMOOTHING_SWEEPS)
 
     # extraction (eq. 4)
     zu, zv = X[:, 0] + 1j * X[:, 1], X[:, 2] + 1j * X[:, 3]
