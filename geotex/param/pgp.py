@@ -104,6 +104,7 @@ def _rotation_blocks() -> np.ndarray:
 
 
 _P = _rotation_blocks()
+_PT = np.ascontiguousarray(np.transpose(_P, (0, 2, 1)))
 
 
 @dataclass(frozen=True, eq=False)
@@ -242,26 +243,33 @@ def _transfers(V, F, k, arms, S_face):
         D[:, 0, 0], D[:, 0, 1], D[:, 1, 0], D[:, 1, 1] = c[:, 0], -s[:, 0], s[:, 0], c[:, 0]
         D[:, 2, 2], D[:, 2, 3], D[:, 3, 2], D[:, 3, 3] = c[:, 1], -s[:, 1], s[:, 1], c[:, 1]
         # canonical_j = D canonical_i, canonical = P_k X  =>  X_j = Pj^T D Pi X_i
-        T.append(np.einsum("fba,fbc,fcd->fad", _P[k[:, cb]], D, _P[k[:, ca]]))
+        T.append(np.matmul(np.matmul(_PT[k[:, cb]], D), _P[k[:, ca]]))
         I.append(i)
         J.append(j)
     return np.concatenate(I), np.concatenate(J), np.concatenate(T)
 
 
 def _energy(I, J, T, weight, n):
-    """The 4n x 4n symmetric energy: sum w |X_j - T X_i|^2 over directed face edges."""
+    """The 4n x 4n symmetric energy: sum w |X_j - T X_i|^2 over directed face edges.
+
+    Assembled block-wise (4x4 blocks, duplicates summed after one sort of the
+    block keys) and returned as CSR without stored zeros.
+    """
     w = np.tile(weight, 3)
-    blk_r, blk_c = np.meshgrid(np.arange(4), np.arange(4), indexing="ij")
-    B = -w[:, None, None] * np.transpose(T, (0, 2, 1))          # block (i, j): -w T^T
     diag = np.bincount(I, weights=w, minlength=n) + np.bincount(J, weights=w, minlength=n)
-    idx = np.arange(4 * n)
-    rows = np.concatenate([(4 * I[:, None, None] + blk_r).ravel(),
-                           (4 * J[:, None, None] + blk_r).ravel(), idx])
-    cols = np.concatenate([(4 * J[:, None, None] + blk_c).ravel(),
-                           (4 * I[:, None, None] + blk_c).ravel(), idx])
-    vals = np.concatenate([B.ravel(), T.ravel() * -w.repeat(16), np.repeat(diag, 4)])
-    A = sp.csr_matrix((vals, (rows, cols)), shape=(4 * n, 4 * n))
-    A.sum_duplicates()
+    Tt = np.transpose(T, (0, 2, 1))
+    verts = np.arange(n)
+    br = np.concatenate([I, J, verts])
+    bc = np.concatenate([J, I, verts])
+    data = np.concatenate([-w[:, None, None] * Tt, -w[:, None, None] * T,
+                           diag[:, None, None] * np.eye(4)[None]])
+    ukey, inv = np.unique(br * n + bc, return_inverse=True)
+    flat = (inv.ravel()[:, None] * 16 + np.arange(16)).ravel()
+    blocks = np.bincount(flat, weights=data.ravel(), minlength=ukey.size * 16)
+    blocks = blocks.reshape(-1, 4, 4)
+    rows, cols = ukey // n, ukey % n
+    indptr = np.searchsorted(rows, np.arange(n + 1))
+    A = sp.bsr_matrix((blocks, cols, indptr), shape=(4 * n, 4 * n), blocksize=(4, 4)).tocsr()
     A.eliminate_zeros()          # exact zeros: u and v blocks that do not couple
     return A
 
@@ -494,7 +502,7 @@ def periodic_parameterization(V, F, field, *, scale, solver: str = "auto",
         raise InputError(f"solver must be 'auto', 'direct' or 'multilevel', got {solver!r}")
     S = _scale_per_vertex(scale, n)
     vectors = _field_vectors(field, m)
-    combed = comb_direction_field(V, F, vectors, symmetry=4)
+    combed = comb_direction_field(V, F, vectors, symmetry=4, connection=conn)
     jump = np.zeros(conn.edges.size, dtype=np.int64)
     jump[np.searchsorted(conn.edges, combed.cut_edges)] = combed.jumps
     theta = tangent_angles(conn.T1, conn.T2, combed.vectors)
@@ -533,7 +541,7 @@ def periodic_parameterization(V, F, field, *, scale, solver: str = "auto",
     rms = np.sqrt(np.sum(vmass * (np.abs(zu) ** 2 + np.abs(zv) ** 2)) / max(2 * vmass.sum(),
                                                                          1e-300))
     vanish = mod < VANISHING_MODULUS * rms
-    index = vertex_indices(V, F, combed.vectors, symmetry=4)
+    index = vertex_indices(V, F, combed.vectors, symmetry=4, connection=conn)
     cone = np.nan_to_num(index) != 0
     singular = (wind != 0).any(axis=1) | cone[F].any(axis=1) | vanish[F].any(axis=1)
     fo, go = conn.faces[open_fan, 0], conn.faces[open_fan, 1]
