@@ -1,7 +1,8 @@
-"""A checkerboard through the periodic global parameterization (PGP) on three shapes.
+"""A checkerboard through the periodic global parameterization (PGP) on four shapes.
 
 Panels: Spot (the bundled low-resolution cow, one Loop subdivision) with the
-smoothest cross field; a torus with its principal-curvature cross field (no
+smoothest cross field; the bundled Bob (genus 1) with the smoothest cross
+field; a torus with its principal-curvature cross field (no
 cones: the Euler characteristic is 0); a genus-2 plate with two holes and the
 smoothest cross field.  The texture is one periodic tile of 2 x 2 checks whose
 cells are centred on the tile corners, so that it is unchanged by the
@@ -50,8 +51,8 @@ def pgp_panel(V, F, field, *, tiles_across: float, title: str) -> tuple[Panel, s
             f"{len(p.dislocations)} dislocations, {int(p.singular.sum())} singular faces, "
             f"seam residual {p.seam_residual:.1e}, gradient error {p.gradient_error:.3f}")
     panel = Panel(Vc, Fc, uv=p.coords.reshape(-1, 2), texture=checker_tile(),
-                  title=f"{title}\n{len(p.cones)} cones, index sum {p.index_sum:g}; "
-                        f"seam residual {p.seam_residual:.0e}",
+                  title=f"{title}\n{len(p.cones)} cones, sum {p.index_sum:g}; "
+                        f"residual {p.seam_residual:.0e}",
                   markers={"cone index > 0": (pos, "#e4202a"),
                            "cone index < 0": (neg, "#1f6fd6"),
                            "dislocation": (dis, "#ff8c00")})
@@ -66,20 +67,26 @@ def main(out: Path) -> None:
     V, F = np.asarray(V, np.float64), np.asarray(F, np.int64)
     panels, lines = [], []
     panel, line = pgp_panel(V, F, smooth_direction_field(V, F, symmetry=4, seed=0),
-                            tiles_across=14, title="Spot, smoothest cross field")
+                            tiles_across=14, title="Spot, smoothest field")
+    panels.append(panel)
+    lines.append(line)
+    bob = read_mesh(sample_path("bob"))
+    Vb, Fb = bob.vertices[:, [0, 2, 1]] * [-1, 1, 1], bob.faces
+    panel, line = pgp_panel(Vb, Fb, smooth_direction_field(Vb, Fb, symmetry=4, seed=0),
+                            tiles_across=14, title="Bob, smoothest field")
     panels.append(panel)
     lines.append(line)
     Vt, Ft = torus(1.0, 0.4, n_major=120, n_minor=48)
     panel, line = pgp_panel(Vt, Ft, principal_direction_field(Vt, Ft).directions,
-                            tiles_across=14, title="torus, curvature cross field")
+                            tiles_across=14, title="torus, curvature field")
     panels.append(panel)
     lines.append(line)
     Vg, Fg = plate_with_holes(2, cell=0.07)
     panel, line = pgp_panel(Vg, Fg, smooth_direction_field(Vg, Fg, symmetry=4, seed=0),
-                            tiles_across=14, title="genus 2, smoothest cross field")
+                            tiles_across=14, title="genus 2, smoothest field")
     panels.append(panel)
     lines.append(line)
-    render_panels(panels, out / "pgp_checkerboard.png", size=(760, 700))
+    render_panels(panels, out / "pgp_checkerboard.png", size=(640, 640))
     print("\n".join(lines))
     print(f"wrote {out / 'pgp_checkerboard.png'}")
 
