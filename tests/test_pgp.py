@@ -174,3 +174,32 @@ def test_cli_pgp_errors(capsys, tmp_path, argv, message):
     code, out, err = _run(capsys, "pgp", mesh, *argv, "-o", tmp_path / "p.npz")
     assert code == 2 and message in err and err.count("\n") == 1
     assert not (tmp_path / "p.npz").exists()
+
+
+@pytest.mark.parametrize("solver", ["direct", "multilevel"])
+def test_two_components_and_an_unreferenced_vertex(solver):
+    V1, F1 = icosphere(2)
+    V2, F2 = torus(n_major=24, n_minor=12)
+    V = np.vstack([V1, V2 + [4.0, 0.0, 0.0], [[9.0, 9.0, 9.0]]])
+    F = np.vstack([F1, F2 + len(V1)])
+    field = smooth_direction_field(V, F, symmetry=4)
+    p = periodic_parameterization(V, F, field, scale=0.4, solver=solver)
+    assert p.index_sum == pytest.approx(2.0) and p.seam_residual <= 1e-6
+    assert np.isfinite(p.coords).all()
+    # both components got a periodic function (not one left at zero)
+    assert (~p.singular[:len(F1)]).sum() > len(F1) // 2
+    assert (~p.singular[len(F1):]).sum() > len(F2) // 2
+
+
+def test_cli_constraint_scales_override_scale(capsys, tmp_path):
+    mesh = write_mesh(tmp_path / "t.ply", Mesh(*torus(n_major=30, n_minor=14)))
+    cons = tmp_path / "c.json"
+    V, F = torus(n_major=30, n_minor=14)
+    C = V[F].mean(axis=1)
+    f0, f1 = int(np.argmax(C[:, 0])), int(np.argmin(C[:, 0]))      # outer equator: normal ~x
+    cons.write_text(json.dumps([{"face": f0, "direction": [0, 1, 0], "scale": 0.2},
+                                {"face": f1, "direction": [0, 0, 1], "scale": 0.4}]))
+    code, text, err = _run(capsys, "pgp", mesh, "--constraints", cons, "--scale", "9",
+                           "-o", tmp_path / "p.npz", "--json")
+    assert code == 0, err
+    assert json.loads(text)["scale_range"] == pytest.approx([0.2, 0.4])
