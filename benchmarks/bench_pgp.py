@@ -84,7 +84,8 @@ def main() -> None:
                         "dislocations": len(p.dislocations),
                         "singular_faces": int(p.singular.sum()),
                         "seam_residual": p.seam_residual,
-                        "gradient_error": round(p.gradient_error, 4)}
+                        "gradient_error": round(p.gradient_error, 4),
+                        "distortion": {k: round(v, 4) for k, v in p.distortion.items()}}
         rows.append(best)
         print(json.dumps(best), flush=True)
     meta = {"date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
@@ -102,13 +103,15 @@ def main() -> None:
              "(input) is timed apart.", "",
              "| mesh | faces | field s | PGP s | PGP cpu s | of which factorization s | load | "
              "cones | index sum | dislocations | singular faces | seam residual | "
-             "gradient error |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "gradient error | scale error mean / p95 | angle mean / p95 (deg) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         lines.append(f"| {r['mesh']} | {r['faces']} | {r['field_s']} | {r['pgp_s']} | "
                      f"{r['pgp_cpu_s']} | {r['factor_s']} | {r['load_1min']} | {r['cones']} | "
                      f"{r['index_sum']:g} | {r['dislocations']} | {r['singular_faces']} | "
-                     f"{r['seam_residual']:.1e} | {r['gradient_error']} |")
+                     f"{r['seam_residual']:.1e} | {r['gradient_error']} | "
+                     f"{r['distortion']['scale_error_mean']} / {r['distortion']['scale_error_p95']} | "
+                     f"{r['distortion']['angle_mean_deg']} / {r['distortion']['angle_p95_deg']} |")
     (out / "pgp.md").write_text("\n".join(lines) + "\n")
     print(f"wrote {out / 'pgp.md'}")
 

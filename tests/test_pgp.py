@@ -50,6 +50,7 @@ def test_flat_grid_constant_field_is_an_exact_affine_grid():
     within = p.coords - p.coords[:, [0]] - (V[F][:, :, :2] - V[F][:, [0], :2]) / scale
     assert np.abs(within).max() < 1e-9                    # affine inside every face
     assert p.seam_residual < 1e-9 and p.gradient_error < 1e-9
+    assert max(p.distortion.values()) < 1e-6
 
 
 @pytest.mark.parametrize("solver", ["direct", "multilevel"])
@@ -83,6 +84,9 @@ def test_curved_closed_meshes(name, mesh, chi, solver):
     cone_faces = np.isin(F, [v for v, _ in p.cones]).any(axis=1)
     assert p.singular[cone_faces].all()
     assert p.gradient_error < 0.3
+    d = p.distortion
+    assert 0 < d["scale_error_mean"] <= d["scale_error_p95"] < 1.0
+    assert 0 < d["angle_mean_deg"] <= d["angle_p95_deg"] < 45.0
 
 
 def test_singular_faces_are_needed():

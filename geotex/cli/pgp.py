@@ -86,7 +86,7 @@ def run(args) -> int:
                "dislocations": [{"face": f, "winding": [a, b]} for f, a, b in p.dislocations],
                "singular_faces": int(p.singular.sum()),
                "index_sum": p.index_sum, "seam_residual": p.seam_residual,
-               "gradient_error": p.gradient_error,
+               "gradient_error": p.gradient_error, "distortion": p.distortion,
                "timings": {"field_s": round(t1 - t0, 4), "pgp_s": round(t2 - t1, 4)}}
     if args.json:
         print(json.dumps(summary))

@@ -136,6 +136,11 @@ class PeriodicParameterization:
         Area-weighted mean, over non-singular faces, of
         ``|grad s - a/S| + |grad t - b/S|`` relative to ``1/S``: how far the
         tiles are from the field's orientation and size.
+    distortion : dict
+        Area-weighted over non-singular faces: ``scale_error_mean`` and
+        ``scale_error_p95`` (largest of ``| |grad s| S - 1 |`` and the same
+        for ``t``), ``angle_mean_deg`` and ``angle_p95_deg`` (angle between
+        ``grad s`` and the field's arm).
     scale : numpy.ndarray, (n,) float64
         Tile size per vertex (surface units) that was used.
     eigenvalues : tuple of float
@@ -149,6 +154,7 @@ class PeriodicParameterization:
     index_sum: float
     seam_residual: float
     gradient_error: float
+    distortion: dict
     scale: np.ndarray
     eigenvalues: tuple
 
@@ -398,6 +404,22 @@ def _rotate(coords: np.ndarray, k: np.ndarray) -> np.ndarray:
     return np.stack([U, W], axis=-1)
 
 
+def _weighted_quantile(x: np.ndarray, w: np.ndarray, q: float) -> float:
+    order = np.argsort(x, kind="stable")
+    cum = np.cumsum(w[order])
+    return float(x[order][min(int(np.searchsorted(cum, q * cum[-1])), x.size - 1)])
+
+
+def _distortion(size_err: np.ndarray, angle: np.ndarray, area: np.ndarray) -> dict:
+    if size_err.size == 0:
+        return {"scale_error_mean": 0.0, "scale_error_p95": 0.0,
+                "angle_mean_deg": 0.0, "angle_p95_deg": 0.0}
+    return {"scale_error_mean": float(np.average(size_err, weights=area)),
+            "scale_error_p95": _weighted_quantile(size_err, area, 0.95),
+            "angle_mean_deg": float(np.average(angle, weights=area)),
+            "angle_p95_deg": _weighted_quantile(angle, area, 0.95)}
+
+
 def _shared_edge_prediction(F, conn, k, pred):
     """Average the two faces' predicted steps of every interior edge (eq. 3's alpha_ij).
 
@@ -562,6 +584,12 @@ def periodic_parameterization(V, F, field, *, scale, solver: str = "auto",
     err = np.linalg.norm(grad - want, axis=1).sum(axis=1) * S_face
     good = ~singular
     gerr = float(np.average(err[good], weights=conn.areas[good])) if good.any() else 0.0
+    # distortion: tile size along s and t relative to S, angle of grad s to the field
+    size_err = np.abs(np.linalg.norm(grad, axis=1) * S_face[:, None] - 1.0).max(axis=1)
+    gs, ws = grad[:, :, 0], want[:, :, 0]
+    cross = gs[:, 0] * ws[:, 1] - gs[:, 1] * ws[:, 0]
+    angle = np.degrees(np.abs(np.arctan2(cross, np.einsum("fi,fi->f", gs, ws))))
+    dist = _distortion(size_err[good], angle[good], conn.areas[good])
 
     cv = np.flatnonzero(cone)
     disl = np.flatnonzero((wind != 0).any(axis=1))
@@ -570,4 +598,5 @@ def periodic_parameterization(V, F, field, *, scale, solver: str = "auto",
         cones=tuple((int(v), float(index[v])) for v in cv),
         dislocations=tuple((int(f), int(wind[f, 0]), int(wind[f, 1])) for f in disl),
         index_sum=float(np.sum(index[cv])) if cv.size else 0.0,
-        seam_residual=residual, gradient_error=gerr, scale=S, eigenvalues=lams)
+        seam_residual=residual, gradient_error=gerr, distortion=dist, scale=S,
+        eigenvalues=lams)
