@@ -106,12 +106,13 @@ def main() -> None:
              "gradient error | scale error mean / p95 | angle mean / p95 (deg) |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
+        d = r["distortion"]
         lines.append(f"| {r['mesh']} | {r['faces']} | {r['field_s']} | {r['pgp_s']} | "
                      f"{r['pgp_cpu_s']} | {r['factor_s']} | {r['load_1min']} | {r['cones']} | "
                      f"{r['index_sum']:g} | {r['dislocations']} | {r['singular_faces']} | "
                      f"{r['seam_residual']:.1e} | {r['gradient_error']} | "
-                     f"{r['distortion']['scale_error_mean']} / {r['distortion']['scale_error_p95']} | "
-                     f"{r['distortion']['angle_mean_deg']} / {r['distortion']['angle_p95_deg']} |")
+                     f"{d['scale_error_mean']} / {d['scale_error_p95']} | "
+                     f"{d['angle_mean_deg']} / {d['angle_p95_deg']} |")
     (out / "pgp.md").write_text("\n".join(lines) + "\n")
     print(f"wrote {out / 'pgp.md'}")
 

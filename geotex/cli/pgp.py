@@ -1,4 +1,4 @@
-"""``geotex pgp MESH (--up|--curvature|--constraints) --scale S -o P.npz``: periodic tile coordinates."""
+"""``geotex pgp MESH (--up|--curvature|--constraints) --scale S -o P.npz``: tile coordinates."""
 
 from __future__ import annotations
 
