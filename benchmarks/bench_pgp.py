@@ -115,7 +115,8 @@ def main() -> None:
              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         d = r["distortion"]
-        lines.append(f"| {r['mesh']} | {r['solver']} | {r['faces']} | {r['field_s']} | {r['pgp_s']} | "
+        lines.append(f"| {r['mesh']} | {r['solver']} | {r['faces']} | {r['field_s']} | "
+                     f"{r['pgp_s']} | "
                      f"{r['pgp_cpu_s']} | {r['factor_s']} | {r['load_1min']} | {r['cones']} | "
                      f"{r['index_sum']:g} | {r['dislocations']} | {r['singular_faces']} | "
                      f"{r['seam_residual']:.1e} | {r['gradient_error']} | "
