@@ -85,7 +85,8 @@ def main() -> None:
             p = pgp_module.periodic_parameterization(V, F, field, scale=scale, solver=solver)
             wall, cpu = time.perf_counter() - w0, time.process_time() - c0
             if best is None or wall < best["pgp_s"]:
-                best = {"mesh": name, "solver": solver, "faces": int(len(F)), "vertices": int(len(V)),
+                best = {"mesh": name, "solver": solver, "faces": int(len(F)),
+                        "vertices": int(len(V)),
                         "field_s": round(t_field, 3), "pgp_s": round(wall, 3),
                         "pgp_cpu_s": round(cpu, 3), "factor_s": round(sum(factor_time), 3),
                         "load_1min": load, "cones": len(p.cones), "index_sum": p.index_sum,
@@ -109,7 +110,8 @@ def main() -> None:
              f"OMP_NUM_THREADS={meta['threads']}, best of {args.repeat}, scale = diagonal / "
              f"{args.tiles:g}. Targets: <= 1 s at 50k faces, <= 3 s at 200k. The 4-field "
              "(input) is timed apart.", "",
-             "| mesh | solver | faces | field s | PGP s | PGP cpu s | of which factorization s | load | "
+             "| mesh | solver | faces | field s | PGP s | PGP cpu s | of which factorization s | "
+             "load | "
              "cones | index sum | dislocations | singular faces | seam residual | "
              "gradient error | scale error mean / p95 | angle mean / p95 (deg) |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
