@@ -163,7 +163,7 @@ def test_cli_pgp_json_and_file(capsys, tmp_path):
         assert z["coords"].shape == (d["faces"], 3, 2) and z["singular"].dtype == bool
         assert json.loads(str(z["metadata"]))["format"] == "geotex-pgp/1"
     code, text, err = _run(capsys, "pgp", mesh, "--up", "0,0,1", "--scale", "0.3",
-                           "-o", tmp_path / "q.npz")
+                           "--solver", "multilevel", "-o", tmp_path / "q.npz")
     assert code == 0 and "seam residual" in text
 
 
@@ -172,6 +172,7 @@ def test_cli_pgp_json_and_file(capsys, tmp_path):
     (["--up", "0,0,1", "--scale", "abc"], "--scale"),
     (["--up", "1,2", "--scale", "1"], "--up"),
     (["--scale", "1"], "--up"),
+    (["--up", "0,0,1", "--scale", "1", "--solver", "cg"], "--solver"),
 ])
 def test_cli_pgp_errors(capsys, tmp_path, argv, message):
     mesh = write_mesh(tmp_path / "s.ply", Mesh(*icosphere(1)))

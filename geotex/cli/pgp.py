@@ -27,6 +27,9 @@ def register(sub):
                    help="tile size in surface units (mesh units, e.g. mm); constraint "
                         "scales, when given, override it")
     p.add_argument("-o", "--output", required=True, help="parameterization file to write (.npz)")
+    p.add_argument("--solver", choices=("auto", "direct", "multilevel"), default="auto",
+                   help="eigen solve: one factorization of the whole system, or two-level "
+                        "(clusters + smoothing); auto: two-level from 20000 vertices on")
     p.add_argument("--seed", type=int, default=0, help="seed of the eigen solvers (default 0)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(run=run)
@@ -63,7 +66,7 @@ def run(args) -> int:
     field, scale_field, method = field_from_args(args, V, F, 4)
     t1 = time.perf_counter()
     try:
-        p = periodic_parameterization(V, F, field, seed=args.seed,
+        p = periodic_parameterization(V, F, field, seed=args.seed, solver=args.solver,
                                       scale=scale if scale_field is None else scale_field)
     except InputError as exc:            # rephrased when it is about the scale
         raise flag_error(exc, {"scale": "--scale"}) from None
@@ -71,7 +74,7 @@ def run(args) -> int:
     cones = [{"vertex": v, "index": k} for v, k in p.cones]
     meta = {"format": PGP_FORMAT, "mesh": str(args.mesh), "method": method,
             "scale": scale if scale_field is None else "constraints",
-            "index_sum": p.index_sum, "seam_residual": p.seam_residual}
+            "solver": args.solver, "index_sum": p.index_sum, "seam_residual": p.seam_residual}
     buf = io.BytesIO()
     np.savez_compressed(buf, coords=p.coords, singular=p.singular, scale=p.scale,
                         cone_vertices=np.array([v for v, _ in p.cones], dtype=np.int64),
