@@ -32,10 +32,17 @@ the two cos/sin pairs), against the mass ``M = diag(vertex area) x I_4``.  Each
 interior edge gets ``A_T + A_T'``, as in the paper's ``F_PGP``; the paper
 averages ``omega`` over the two faces instead of summing two terms.  The
 minimiser is the smallest eigenvector of the real symmetric ``A X = l M X``
-(a few steps of inverse iteration with one sparse factorization).  The ``u`` and ``v``
-halves of the unknowns couple only through odd corner rotations; the
-system is split into its connected blocks (on a flat patch with a constant
-field: two, one per coordinate) and each is solved on its own.
+(a few steps of inverse iteration with one sparse factorization).  The ``u``
+and ``v`` halves of the unknowns couple only through odd corner rotations;
+the system is split into its connected blocks (on a flat patch with a
+constant field: two, one per coordinate) and each is solved on its own.
+
+Large meshes use a two-level solve instead: vertices are grouped in
+clusters (grid cells of a few edge lengths, split into connected parts);
+every vertex follows its cluster's 4-vector carried along a spanning tree by
+the per-edge transfers ``T_ij = P_kj^T R(2 pi omega) P_ki`` (``X_j ~ T_ij
+X_i``); the coarse problem ``P^T A P`` is solved directly and the prolonged
+vector is smoothed by damped Jacobi sweeps.
 
 Extraction (eq. 4)
 ------------------
