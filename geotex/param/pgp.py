@@ -364,8 +364,9 @@ def _prolongation(I, J, T, n, label, count):
     Q = np.broadcast_to(np.eye(4), (n + 1, 4, 4)).copy()
     # the code of the tree edge parent -> child (one directed face edge, either way)
     lookup = sp.coo_matrix((code + 1, (rows, cols)), shape=(n + 1, n + 1))
-    _, keep = np.unique(lookup.row * (n + 1) + lookup.col, return_index=True)
-    kr, kc, kv = lookup.row[keep], lookup.col[keep], lookup.data[keep] - 1
+    lr, lc = lookup.row.astype(np.int64), lookup.col.astype(np.int64)   # int32 overflows
+    _, keep = np.unique(lr * (n + 1) + lc, return_index=True)
+    kr, kc, kv = lr[keep], lc[keep], lookup.data[keep] - 1
     pos = np.searchsorted(kr * (n + 1) + kc, pred[child] * (n + 1) + child)
     cval = kv[pos]
     tree = pred[child] != root
