@@ -111,7 +111,9 @@ def _rotation_blocks() -> np.ndarray:
 
 
 _P = _rotation_blocks()
-_PT = np.ascontiguousarray(np.transpose(_P, (0, 2, 1)))
+# inverse permutation and the sign of the entry it hits: P_k[_PINV[k, d], d] = _PSIGN[k, d]
+_PINV = np.argsort(_PERM, axis=1)
+_PSIGN = np.take_along_axis(_SIGN, _PINV, axis=1)
 
 
 @dataclass(frozen=True, eq=False)
@@ -256,7 +258,11 @@ def _transfers(V, F, k, arms, S_face):
         D[:, 0, 0], D[:, 0, 1], D[:, 1, 0], D[:, 1, 1] = c[:, 0], -s[:, 0], s[:, 0], c[:, 0]
         D[:, 2, 2], D[:, 2, 3], D[:, 3, 2], D[:, 3, 3] = c[:, 1], -s[:, 1], s[:, 1], c[:, 1]
         # canonical_j = D canonical_i, canonical = P_k X  =>  X_j = Pj^T D Pi X_i
-        T.append(np.matmul(np.matmul(_PT[k[:, cb]], D), _P[k[:, ca]]))
+        # P are signed permutations: T[a, d] = s_j(a) s_i(d) D[r_j(a), r_i(d)]
+        kj, ki = k[:, cb], k[:, ca]
+        rows, cols = _PINV[kj], _PINV[ki]
+        sign = _PSIGN[kj][:, :, None] * _PSIGN[ki][:, None, :]
+        T.append(D[np.arange(m)[:, None, None], rows[:, :, None], cols[:, None, :]] * sign)
         I.append(i)
         J.append(j)
     return np.concatenate(I), np.concatenate(J), np.concatenate(T)
