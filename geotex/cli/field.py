@@ -15,6 +15,17 @@ def register(sub):
                        "(see geotex.fields.store) and reports every singular vertex with its "
                        "index; on a closed mesh the indices sum to the Euler characteristic.")
     p.add_argument("mesh", help="mesh file")
+    add_field_source_arguments(p)
+    p.add_argument("--symmetry", type=int, default=None, choices=(1, 2, 4),
+                   help="N-direction symmetry (default 1; 2 for --curvature)")
+    p.add_argument("-o", "--output", required=True, help="field file to write (.npz)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the eigen solver (default 0)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(run=run)
+
+
+def add_field_source_arguments(p) -> None:
+    """Add the field source flags (``--up | --curvature | --constraints``) to a parser."""
     src = p.add_mutually_exclusive_group(required=True)
     src.add_argument("--up", metavar="X,Y,Z",
                      help="project this global direction onto the surface")
@@ -25,12 +36,44 @@ def register(sub):
                           '{"face": i | "point": [x,y,z], "direction": [x,y,z], "weight": w, '
                           '"scale": s}; an empty list gives the globally smoothest field; '
                           "scales are interpolated into a per-vertex scale field")
-    p.add_argument("--symmetry", type=int, default=None, choices=(1, 2, 4),
-                   help="N-direction symmetry (default 1; 2 for --curvature)")
-    p.add_argument("-o", "--output", required=True, help="field file to write (.npz)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the eigen solver (default 0)")
-    p.add_argument("--json", action="store_true", help="print one JSON object")
-    p.set_defaults(run=run)
+
+
+def field_from_args(args, V, F, N: int):
+    """Build the direction field the source flags ask for.
+
+    Returns
+    -------
+    field : DirectionField
+    scale : numpy.ndarray, (n,), or None
+        The per-vertex scale field interpolated from constraint scales.
+    method : str
+        ``"smooth"``, ``"up"`` or ``"curvature"``.
+    """
+    import numpy as np
+
+    from geotex.fields.directions import (DirectionField, constraint_scale_field,
+                                          principal_direction_field, projected_direction_field,
+                                          smooth_direction_field)
+    from geotex.fields.frames import face_frames, tangent_angles
+    from geotex.fields.singularities import singularities
+
+    if args.constraints is not None:
+        constraints = _constraints(args.constraints)
+        field = smooth_direction_field(V, F, symmetry=N, constraints=constraints, seed=args.seed)
+        return field, constraint_scale_field(V, F, constraints), "smooth"
+    if args.up is not None:
+        method = "up"
+        vectors, _ = projected_direction_field(V, F, _vector(args.up))
+    else:
+        method = "curvature"
+        vectors = principal_direction_field(V, F).directions
+    T1, T2, normals = face_frames(V, F)
+    theta = tangent_angles(T1, T2, vectors)
+    sing = tuple(singularities(V, F, vectors, symmetry=N))
+    field = DirectionField(vectors=vectors, symmetry=N, values=np.exp(1j * N * theta),
+                           singularities=sing, normals=normals,
+                           constrained=np.zeros(0, dtype=np.int64))
+    return field, None, method
 
 
 def _vector(text: str) -> list[float]:
@@ -61,11 +104,6 @@ def _constraints(path: str) -> list:
 def run(args) -> int:
     import numpy as np
 
-    from geotex.fields.directions import (DirectionField, constraint_scale_field,
-                                          principal_direction_field, projected_direction_field,
-                                          smooth_direction_field)
-    from geotex.fields.frames import face_frames, tangent_angles
-    from geotex.fields.singularities import singularities
     from geotex.fields.store import save_direction_field
     from geotex.io import read_mesh
     from geotex.mesh.topology import edge_topology
@@ -80,26 +118,7 @@ def run(args) -> int:
     N = args.symmetry or (2 if args.curvature else 1)
     if args.curvature and N == 1:
         raise UsageError("--curvature gives lines, not arrows: use --symmetry 2 or 4")
-
-    scale = None
-    if args.constraints is not None:
-        method = "smooth"
-        constraints = _constraints(args.constraints)
-        field = smooth_direction_field(V, F, symmetry=N, constraints=constraints, seed=args.seed)
-        scale = constraint_scale_field(V, F, constraints)
-    else:
-        if args.up is not None:
-            method = "up"
-            vectors, _ = projected_direction_field(V, F, _vector(args.up))
-        else:
-            method = "curvature"
-            vectors = principal_direction_field(V, F).directions
-        T1, T2, normals = face_frames(V, F)
-        theta = tangent_angles(T1, T2, vectors)
-        sing = tuple(singularities(V, F, vectors, symmetry=N))
-        field = DirectionField(vectors=vectors, symmetry=N, values=np.exp(1j * N * theta),
-                               singularities=sing, normals=normals,
-                               constrained=np.zeros(0, dtype=np.int64))
+    field, scale, method = field_from_args(args, V, F, N)
 
     topo = edge_topology(F, mesh.n_vertices)
     chi = int(np.unique(F).size - topo.edges.shape[0] + F.shape[0])

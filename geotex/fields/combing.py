@@ -110,7 +110,19 @@ def _comb(conn: FaceConnection, theta: np.ndarray, N: int):
     return np.mod(acc[:m], N), parent
 
 
-def comb_direction_field(V, F, field, *, symmetry: int | None = None) -> CombedField:
+def _mesh_and_connection(V, F, connection):
+    if connection is None:
+        V, F = _checked_arrays(V, F)
+        return V, F, _connection(V, F)
+    F = np.asarray(F, dtype=np.int64)
+    if not isinstance(connection, FaceConnection) or connection.n_faces != F.shape[0]:
+        raise InputError("connection must be the FaceConnection of this mesh "
+                         "(geotex.fields.frames.face_connection(V, F))")
+    return np.asarray(V, dtype=np.float64), F, connection
+
+
+def comb_direction_field(V, F, field, *, symmetry: int | None = None,
+                         connection: FaceConnection | None = None) -> CombedField:
     """Comb an N-direction field along a spanning tree of the dual graph.
 
     Parameters
@@ -121,6 +133,9 @@ def comb_direction_field(V, F, field, *, symmetry: int | None = None) -> CombedF
         The field, or one representative vector per face.
     symmetry : int, optional
         ``N`` for array input (default 1); must match for a DirectionField.
+    connection : FaceConnection, optional
+        :func:`geotex.fields.frames.face_connection` of this mesh, when the
+        caller has it already (skips recomputing and re-checking the mesh).
 
     Returns
     -------
@@ -142,8 +157,7 @@ def comb_direction_field(V, F, field, *, symmetry: int | None = None) -> CombedF
     >>> bool(np.allclose(combed.vectors, combed.vectors[0])), combed.cut_edges.size
     (True, 0)
     """
-    V, F = _checked_arrays(V, F)
-    conn = _connection(V, F)
+    V, F, conn = _mesh_and_connection(V, F, connection)
     if isinstance(field, DirectionField):
         _field_phases(conn, field, symmetry)          # validates shape and symmetry
         N = field.symmetry

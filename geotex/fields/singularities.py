@@ -101,7 +101,8 @@ def _index_numerators(V: np.ndarray, F: np.ndarray, conn: FaceConnection, phi: n
     return k
 
 
-def vertex_indices(V, F, field, *, symmetry: int | None = None) -> np.ndarray:
+def vertex_indices(V, F, field, *, symmetry: int | None = None,
+                   connection: FaceConnection | None = None) -> np.ndarray:
     """Return the index of the field at every vertex.
 
     Parameters
@@ -114,6 +115,9 @@ def vertex_indices(V, F, field, *, symmetry: int | None = None) -> np.ndarray:
         values ``exp(i N theta)`` in the face frames.
     symmetry : int, optional
         ``N`` for array input (default 1); must match for a DirectionField.
+    connection : FaceConnection, optional
+        :func:`geotex.fields.frames.face_connection` of this mesh, when the
+        caller has it already (skips recomputing and re-checking the mesh).
 
     Returns
     -------
@@ -127,8 +131,15 @@ def vertex_indices(V, F, field, *, symmetry: int | None = None) -> np.ndarray:
         On malformed arrays, degenerate or inconsistently oriented faces, or a
         field of the wrong shape.
     """
-    V, F = _checked_arrays(V, F)
-    conn = _connection(V, F)
+    if connection is None:
+        V, F = _checked_arrays(V, F)
+        conn = _connection(V, F)
+    else:
+        V, F = np.asarray(V, dtype=np.float64), np.asarray(F, dtype=np.int64)
+        if not isinstance(connection, FaceConnection) or connection.n_faces != F.shape[0]:
+            raise InputError("connection must be the FaceConnection of this mesh "
+                             "(geotex.fields.frames.face_connection(V, F))")
+        conn = connection
     phi, N = _field_phases(conn, field, symmetry)
     k = _index_numerators(V, F, conn, phi, N)
     out = k / N

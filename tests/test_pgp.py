@@ -1,0 +1,210 @@
+"""Periodic global parameterization (geotex.param.pgp) and ``geotex pgp``."""
+
+import json
+
+import numpy as np
+import pytest
+
+from geotex.cli import main
+from geotex.errors import InputError
+from geotex.fields.directions import smooth_direction_field
+from geotex.fields.frames import face_connection
+from geotex.io import write_mesh
+from geotex.mesh import Mesh
+from geotex.mesh.primitives import grid_plane, icosphere, plate_with_holes, torus
+from geotex.param.pgp import periodic_parameterization
+
+
+def _rot(c, r):
+    u, v = c[..., 0], c[..., 1]
+    return np.stack([[u, -v, -u, v][r], [v, u, -v, -u][r]], axis=-1)
+
+
+def _edge_residuals(p, V, F):
+    """Independent check: per interior edge, min over rotations of the deviation."""
+    conn = face_connection(V, F)
+    out = []
+    for (f, g), (lo, hi) in zip(conn.faces, conn.vertices):
+        if p.singular[f] or p.singular[g]:
+            continue
+        cf = np.array([p.coords[f, list(F[f]).index(x)] for x in (lo, hi)])
+        cg = np.array([p.coords[g, list(F[g]).index(x)] for x in (lo, hi)])
+        best = np.inf
+        for r in range(4):
+            d = cg - _rot(cf, r)
+            best = min(best, np.abs(d - np.rint(d[0])).max())
+        out.append(best)
+    return np.array(out)
+
+
+def test_flat_grid_constant_field_is_an_exact_affine_grid():
+    V, F = grid_plane(12, 9, size=(2.0, 1.5))
+    V = V + [0.3, -0.2, 0.0]
+    scale = 0.37
+    p = periodic_parameterization(V, F, np.tile([1.0, 0.0, 0.0], (len(F), 1)), scale=scale)
+    assert p.coords.shape == (len(F), 3, 2) and p.coords.dtype == np.float64
+    assert not p.singular.any() and p.cones == () and p.dislocations == ()
+    d = (p.coords - V[F][:, :, :2] / scale).reshape(-1, 2)
+    d = d - d[0]
+    assert np.abs(d - np.rint(d)).max() < 1e-9           # one global shift, modulo tiles
+    within = p.coords - p.coords[:, [0]] - (V[F][:, :, :2] - V[F][:, [0], :2]) / scale
+    assert np.abs(within).max() < 1e-9                    # affine inside every face
+    assert p.seam_residual < 1e-9 and p.gradient_error < 1e-9
+    assert max(p.distortion.values()) < 1e-6
+
+
+@pytest.mark.parametrize("solver", ["direct", "multilevel"])
+def test_rotated_field_and_per_vertex_scale_on_flat_grid(solver):
+    V, F = grid_plane(20, 20)
+    a = np.array([1.0, 1.0, 0.0]) / np.sqrt(2)
+    p = periodic_parameterization(V, F, np.tile(a, (len(F), 1)), scale=np.full(len(V), 0.25),
+                                  solver=solver)
+    b = np.array([-a[1], a[0], 0.0])
+    want = np.stack([V[F] @ a, V[F] @ b], axis=-1) / 0.25
+    d = (p.coords - want).reshape(-1, 2)
+    d = d - d[0]
+    assert np.abs(d - np.rint(d)).max() < 1e-9
+
+
+@pytest.mark.parametrize("solver", ["direct", "multilevel"])
+@pytest.mark.parametrize("name, mesh, chi", [
+    ("sphere", lambda: icosphere(3), 2),
+    ("torus", lambda: torus(n_major=40, n_minor=20), 0),
+    ("genus2", lambda: plate_with_holes(2, cell=0.15), -2),
+])
+def test_curved_closed_meshes(name, mesh, chi, solver):
+    V, F = mesh()
+    field = smooth_direction_field(V, F, symmetry=4)
+    p = periodic_parameterization(V, F, field, scale=0.3, solver=solver)
+    assert p.index_sum == pytest.approx(chi) == field.index_sum
+    assert p.seam_residual <= 1e-6
+    res = _edge_residuals(p, V, F)
+    assert res.size > 0.8 * (1.5 * len(F)) and res.max() <= 1e-6
+    assert 0 < p.singular.sum() < 0.25 * len(F)
+    cone_faces = np.isin(F, [v for v, _ in p.cones]).any(axis=1)
+    assert p.singular[cone_faces].all()
+    assert p.gradient_error < 0.3
+    d = p.distortion
+    assert 0 < d["scale_error_mean"] <= d["scale_error_p95"] < 1.0
+    assert 0 < d["angle_mean_deg"] <= d["angle_p95_deg"] < 45.0
+
+
+def test_singular_faces_are_needed():
+    """The check is honest: unmarking the singular faces breaks the seam measure."""
+    V, F = icosphere(3)
+    p = periodic_parameterization(V, F, smooth_direction_field(V, F, symmetry=4), scale=0.3)
+    from dataclasses import replace
+    q = replace(p, singular=np.zeros_like(p.singular))
+    assert _edge_residuals(q, V, F).max() > 1e-3
+
+
+def test_deterministic():
+    V, F = torus(n_major=30, n_minor=14)
+    field = smooth_direction_field(V, F, symmetry=4)
+    for solver in ("direct", "multilevel"):
+        a = periodic_parameterization(V, F, field, scale=0.3, solver=solver)
+        b = periodic_parameterization(V, F, field, scale=0.3, solver=solver)
+        assert a.coords.tobytes() == b.coords.tobytes()
+        assert a.singular.tobytes() == b.singular.tobytes() and a.cones == b.cones
+
+
+def test_inputs_not_modified():
+    V, F = icosphere(2)
+    V0, F0 = V.copy(), F.copy()
+    vec = np.tile([0.0, 0.0, 1.0], (len(F), 1))
+    periodic_parameterization(V, F, vec, scale=0.5)
+    assert np.array_equal(V, V0) and np.array_equal(F, F0)
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    (dict(scale=0.0), "scale must be a positive"),
+    (dict(scale=-1.0), "scale must be a positive"),
+    (dict(scale=float("nan")), "scale must be a positive"),
+    (dict(scale=np.ones(3)), "scale must be a positive number or have shape"),
+    (dict(scale=1.0, field=np.ones((2, 3))), "field must have one vector per face"),
+    (dict(scale=1.0, solver="cg"), "solver must be"),
+])
+def test_bad_inputs(kwargs, message):
+    V, F = icosphere(1)
+    kwargs.setdefault("field", np.tile([1.0, 0.0, 0.0], (len(F), 1)))
+    with pytest.raises(InputError, match=message) as err:
+        periodic_parameterization(V, F, **kwargs)
+    assert "\n" not in str(err.value)
+
+
+def test_non_manifold_mesh_refused():
+    V, F = grid_plane(2, 1)
+    V = np.vstack([V, [[0.5, 0.5, 1.0]]])
+    F = np.vstack([F, [[0, 4, len(V) - 1]]])        # third face on edge (0, 4)
+    with pytest.raises(InputError, match="non-manifold"):
+        periodic_parameterization(V, F, np.tile([1.0, 0.0, 0.0], (len(F), 1)), scale=1.0)
+
+
+# ---- command line -------------------------------------------------------------------------
+
+def _run(capsys, *argv):
+    code = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_cli_pgp_json_and_file(capsys, tmp_path):
+    mesh = write_mesh(tmp_path / "t.ply", Mesh(*torus(n_major=30, n_minor=14)))
+    cons = tmp_path / "c.json"
+    cons.write_text("[]")
+    out = tmp_path / "p.npz"
+    code, text, err = _run(capsys, "pgp", mesh, "--constraints", cons, "--scale", "0.3",
+                           "-o", out, "--json")
+    assert code == 0, err
+    d = json.loads(text)
+    assert d["index_sum"] == pytest.approx(0.0) and d["seam_residual"] <= 1e-6
+    assert {"singularities", "timings", "gradient_error"} <= set(d)
+    with np.load(out) as z:
+        assert z["coords"].shape == (d["faces"], 3, 2) and z["singular"].dtype == bool
+        assert json.loads(str(z["metadata"]))["format"] == "geotex-pgp/1"
+    code, text, err = _run(capsys, "pgp", mesh, "--up", "0,0,1", "--scale", "0.3",
+                           "--solver", "multilevel", "-o", tmp_path / "q.npz")
+    assert code == 0 and "seam residual" in text
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--up", "0,0,1", "--scale", "0"], "--scale"),
+    (["--up", "0,0,1", "--scale", "abc"], "--scale"),
+    (["--up", "1,2", "--scale", "1"], "--up"),
+    (["--scale", "1"], "--up"),
+    (["--up", "0,0,1", "--scale", "1", "--solver", "cg"], "--solver"),
+])
+def test_cli_pgp_errors(capsys, tmp_path, argv, message):
+    mesh = write_mesh(tmp_path / "s.ply", Mesh(*icosphere(1)))
+    code, out, err = _run(capsys, "pgp", mesh, *argv, "-o", tmp_path / "p.npz")
+    assert code == 2 and message in err and err.count("\n") == 1
+    assert not (tmp_path / "p.npz").exists()
+
+
+@pytest.mark.parametrize("solver", ["direct", "multilevel"])
+def test_two_components_and_an_unreferenced_vertex(solver):
+    V1, F1 = icosphere(2)
+    V2, F2 = torus(n_major=24, n_minor=12)
+    V = np.vstack([V1, V2 + [4.0, 0.0, 0.0], [[9.0, 9.0, 9.0]]])
+    F = np.vstack([F1, F2 + len(V1)])
+    field = smooth_direction_field(V, F, symmetry=4)
+    p = periodic_parameterization(V, F, field, scale=0.4, solver=solver)
+    assert p.index_sum == pytest.approx(2.0) and p.seam_residual <= 1e-6
+    assert np.isfinite(p.coords).all()
+    # both components got a periodic function (not one left at zero)
+    assert (~p.singular[:len(F1)]).sum() > len(F1) // 2
+    assert (~p.singular[len(F1):]).sum() > len(F2) // 2
+
+
+def test_cli_constraint_scales_override_scale(capsys, tmp_path):
+    mesh = write_mesh(tmp_path / "t.ply", Mesh(*torus(n_major=30, n_minor=14)))
+    cons = tmp_path / "c.json"
+    V, F = torus(n_major=30, n_minor=14)
+    C = V[F].mean(axis=1)
+    f0, f1 = int(np.argmax(C[:, 0])), int(np.argmin(C[:, 0]))      # outer equator: normal ~x
+    cons.write_text(json.dumps([{"face": f0, "direction": [0, 1, 0], "scale": 0.2},
+                                {"face": f1, "direction": [0, 0, 1], "scale": 0.4}]))
+    code, text, err = _run(capsys, "pgp", mesh, "--constraints", cons, "--scale", "9",
+                           "-o", tmp_path / "p.npz", "--json")
+    assert code == 0, err
+    assert json.loads(text)["scale_range"] == pytest.approx([0.2, 0.4])
