@@ -103,3 +103,25 @@ def test_float32_overflow_is_a_clear_error(tmp_path):
     with pytest.raises(InputError, match="float32 range"):
         export_printable(tmp_path / "huge.stl", V * 1e39, F)
     assert not (tmp_path / "huge.stl").exists()
+
+
+@pytest.mark.parametrize("ext", [".stl", ".3mf"])
+def test_a_report_of_the_stored_arrays_is_reused_and_the_file_matches_it(tmp_path, ext):
+    solid = printable_stored_solid(*icosphere(2), precision=np.float32)
+    path = tmp_path / f"part{ext}"
+    rep = export_printable(path, solid.vertices, solid.faces, report=solid.report)
+    assert rep is solid.report
+    assert rep.digest == check_mesh(*written_form(path)).digest
+
+
+def test_judged_arrays_that_are_not_in_stored_form_are_judged_again(tmp_path):
+    # two vertices at one position: judged unwelded the report would describe
+    # other arrays than the file holds, so it must not be reused as it is
+    V, F = icosphere(1)
+    V = np.vstack([V, V[:1]]).astype(np.float32).astype(np.float64)
+    F = F.copy()
+    F[F[:, 0] == 0, 0] = V.shape[0] - 1
+    rep = check_mesh(V, F)
+    out = export_printable(tmp_path / "part.stl", V, F, report=rep)
+    assert out.digest != rep.digest and out.printable
+    assert out.digest == check_mesh(*written_form(tmp_path / "part.stl")).digest

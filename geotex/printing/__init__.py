@@ -39,17 +39,28 @@ def written_form(path) -> tuple[np.ndarray, np.ndarray]:
     return stored_form(mesh.vertices, mesh.faces, precision=np.float64)
 
 
-def _verified_write(path: Path, V, F, name: str) -> None:
-    """Write, read the file back, and give it its final name only if it matches."""
+def _same(A, B) -> bool:
+    return A[0].shape == B[0].shape and np.array_equal(A[0], B[0]) and np.array_equal(A[1], B[1])
+
+
+def _verified_write(path: Path, V, F, name: str) -> bool:
+    """Write, read the file back, and give it its final name only if it matches.
+
+    The file is read back as it is; only when that differs from ``(V, F)``
+    (a reader that numbers vertices differently) is it compared in the
+    canonical stored form. Returns whether it matched (if not, nothing is
+    left on disk).
+    """
     tmp = path.with_name(f".{path.stem}.{os.getpid()}.verify{path.suffix}")
     try:
         write_mesh(tmp, Mesh(V, F, name=name, metadata={"unit": "millimeter"}))
-        back = written_form(tmp)
-        if back[0].shape != V.shape or not (np.array_equal(back[0], V)
-                                            and np.array_equal(back[1], F)):
-            raise GeotexError(f"{path}: the written file does not read back as the solid "
-                              "that was checked (a bug: please report it); nothing written")
+        mesh = read_mesh(tmp)
+        back = (mesh.vertices, mesh.faces)
+        if not _same(back, (V, F)) and not _same(stored_form(*back, precision=np.float64),
+                                                 (V, F)):
+            return False
         os.replace(tmp, path)
+        return True
     finally:
         if tmp.exists():
             tmp.unlink()
@@ -104,6 +115,10 @@ def export_printable(path, V, F, *, force: bool = False, name: str = "geotex",
                          f"use one of {', '.join(PRINT_FORMATS)}")
     V, F = as_mesh_arrays(V, F)
     precision = stored_precision(path.suffix)
+    if (report is not None and (report.printable or force)
+            and np.array_equal(V.astype(precision), V) and report.digest == mesh_digest(V, F)
+            and _verified_write(path, V, F, name)):
+        return report           # judged exactly as given, and the file reads back as that
     Vs, Fs = stored_form(V, F, precision=precision)
     if report is None or report.digest != mesh_digest(Vs, Fs):
         solid = printable_stored_solid(V, F, precision=precision)
@@ -112,5 +127,7 @@ def export_printable(path, V, F, *, force: bool = False, name: str = "geotex",
         raise NotPrintableError(
             f"refusing to write {path}: not printable as stored "
             f"({'; '.join(report.reasons)}); repair the mesh first", report)
-    _verified_write(path, Vs, Fs, name)
+    if not _verified_write(path, Vs, Fs, name):
+        raise GeotexError(f"{path}: the written file does not read back as the solid "
+                          "that was checked (a bug: please report it); nothing written")
     return report
