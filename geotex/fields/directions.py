@@ -48,7 +48,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.sparse.linalg import ArpackNoConvergence, LinearOperator, eigsh
 
 from geotex.errors import InputError
-from geotex.fields.sparse import factor_hpd, single_threaded_blas
+from geotex.linalg import factor_hpd, single_threaded_blas
 from geotex.fields.frames import (FaceConnection, _checked_arrays, _connection, _frames,
                                   tangent_angles, vectors_from_angles)
 from geotex.fields.singularities import _index_numerators, _singularity_list

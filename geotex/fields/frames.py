@@ -198,7 +198,7 @@ def face_connection(V, F) -> FaceConnection:
 
 
 def _connection(V: np.ndarray, F: np.ndarray) -> FaceConnection:
-    n, m = V.shape[0], F.shape[0]
+    n = V.shape[0]
     T1, T2, N = _frames(V, F)
     topo = edge_topology(F, n)
     bad = topo.inconsistent

@@ -23,7 +23,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from geotex.errors import InputError
-from geotex.fields.sparse import factor_hpd
+from geotex.linalg import factor_hpd
 from geotex.mesh.arrays import as_faces, as_mesh_arrays
 from geotex.mesh.topology import edge_topology, vertex_components
 

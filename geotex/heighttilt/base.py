@@ -26,7 +26,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from geotex.errors import InputError
-from geotex.fields.sparse import single_threaded_blas
+from geotex.linalg import single_threaded_blas
 from geotex.fields.oneforms import projected_decoder
 from geotex.heighttilt._kernels import BaseGeometry, axis_frames, dot, edge_encode, lsq_encode
 from geotex.heighttilt.smoothing import smoothed_base

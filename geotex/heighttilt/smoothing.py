@@ -5,10 +5,10 @@ from __future__ import annotations
 import igl
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from geotex.errors import InputError, SolverError
-from geotex.mesh.topology import edge_topology
+from geotex.linalg import factor_lu
+from geotex.mesh.geometry import mean_edge_length
 
 __all__ = ["smoothed_base"]
 
@@ -72,17 +72,14 @@ def smoothed_base(V, F, *, steps: int = 3, time_step: float | None = None) -> np
         raise InputError(f"time_step must be a positive number, got {time_step!r}") from None
     if not (np.isfinite(ts) and ts > 0):
         raise InputError(f"time_step must be a positive number, got {time_step!r}")
-    topo = edge_topology(F, V.shape[0])
-    E = topo.edges
-    mean_len = float(np.linalg.norm(V[E[:, 1]] - V[E[:, 0]], axis=1).mean())
-    dt = ts * mean_len * mean_len
+    dt = ts * mean_edge_length(V, F) ** 2
     L = sp.csc_matrix(igl.cotmatrix(V, F))
     Vk = V.copy()
     for _ in range(int(steps)):
         M = sp.csc_matrix(igl.massmatrix(Vk, F, igl.MASSMATRIX_TYPE_VORONOI))
-        solve = spla.factorized(sp.csc_matrix(M - dt * L))
+        lu = factor_lu(M - dt * L, what="smoothed_base")
         rhs = M @ Vk
-        Vk = np.column_stack([solve(np.ascontiguousarray(rhs[:, d])) for d in range(3)])
+        Vk = np.column_stack([lu.solve(rhs[:, d]) for d in range(3)])
         if not np.isfinite(Vk).all():
             raise SolverError("smoothed_base diverged (non-finite positions); "
                               "use a smaller time_step or fewer steps")
