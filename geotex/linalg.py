@@ -20,9 +20,9 @@ from threadpoolctl import threadpool_limits
 
 from geotex.errors import SolverError
 
-__all__ = ["factor_hpd", "factor_lu", "SparseFactor", "single_threaded_blas"]
+__all__ = ["factor", "SparseFactor", "single_threaded_blas"]
 
-#: SuperLU options for Hermitian positive definite matrices (see :func:`factor_hpd`).
+#: SuperLU options for Hermitian positive definite matrices (see :func:`factor`).
 _HPD_OPTIONS = dict(permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, relax=1, panel_size=10,
                     options={"SymmetricMode": True})
 
@@ -37,7 +37,7 @@ def single_threaded_blas():
 class SparseFactor:
     """A SuperLU factorization whose solves run with one BLAS thread.
 
-    Made by :func:`factor_hpd` or :func:`factor_lu`.
+    Made by :func:`factor`.
     """
 
     def __init__(self, A, what: str, **options):
@@ -65,17 +65,21 @@ class SparseFactor:
         return x
 
 
-def factor_hpd(A, *, what: str = "solve") -> SparseFactor:
-    """Factor a Hermitian positive definite sparse matrix with SuperLU.
+def factor(A, *, hpd: bool = False, what: str = "solve") -> SparseFactor:
+    """Factor a square sparse matrix with SuperLU.
 
-    The matrix is structurally symmetric and needs no pivoting, so SuperLU runs
-    in symmetric mode (minimum-degree ordering of ``A + A^T``, diagonal
-    pivots).  ``relax=1`` avoids a SuperLU pathology where the default
-    supernode relaxation made some factorizations hundreds of times slower.
+    With ``hpd`` the matrix is Hermitian positive definite: structurally
+    symmetric and needing no pivoting, so SuperLU runs in symmetric mode
+    (minimum-degree ordering of ``A + A^T``, diagonal pivots), and
+    ``relax=1`` avoids a SuperLU pathology where the default supernode
+    relaxation made some factorizations hundreds of times slower.  Otherwise
+    SuperLU's defaults (COLAMD ordering, partial pivoting).
 
     Parameters
     ----------
     A : scipy.sparse matrix, (n, n)
+    hpd : bool, optional
+        ``A`` is Hermitian positive definite.
     what : str, optional
         What is being solved, for the error message.
 
@@ -89,26 +93,4 @@ def factor_hpd(A, *, what: str = "solve") -> SparseFactor:
     SolverError
         If the matrix is singular.
     """
-    return SparseFactor(A, what, **_HPD_OPTIONS)
-
-
-def factor_lu(A, *, what: str = "solve") -> SparseFactor:
-    """Factor a general square sparse matrix with SuperLU's defaults (COLAMD, pivoting).
-
-    Parameters
-    ----------
-    A : scipy.sparse matrix, (n, n)
-    what : str, optional
-        What is being solved, for the error message.
-
-    Returns
-    -------
-    SparseFactor
-        Use ``.solve(b)``.
-
-    Raises
-    ------
-    SolverError
-        If the matrix is singular.
-    """
-    return SparseFactor(A, what)
+    return SparseFactor(A, what, **(_HPD_OPTIONS if hpd else {}))

@@ -48,7 +48,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.sparse.linalg import ArpackNoConvergence, LinearOperator, eigsh
 
 from geotex.errors import InputError
-from geotex.linalg import factor_hpd, single_threaded_blas
+from geotex.linalg import factor, single_threaded_blas
 from geotex.fields.frames import (FaceConnection, _checked_arrays, _connection, _frames,
                                   tangent_angles, vectors_from_angles)
 from geotex.fields.singularities import _index_numerators, _singularity_list
@@ -305,7 +305,7 @@ def _smoothest(A: sp.csc_matrix, mass: np.ndarray, rng: np.random.Generator) -> 
         x = vecs[:, 0]
     else:
         eps = 1e-10 * diag_mean / float(mass.mean())
-        lu = factor_hpd(A + sp.diags((eps * mass).astype(np.complex128)))
+        lu = factor(A + sp.diags((eps * mass).astype(np.complex128)), hpd=True, what="direction field")
         op = LinearOperator((k, k), dtype=np.complex128,
                             matvec=lambda b: lu.solve(np.asarray(b, np.complex128).ravel()))
         v0 = rng.standard_normal(k) + 1j * rng.standard_normal(k)
@@ -364,7 +364,7 @@ def _solve_components(conn, N, rng, hard_faces, hard_values, soft_faces, soft_va
         if hard_faces.size:
             rhs = rhs - A[S][:, hard_faces] @ hard_values
         K = A[S][:, S] + sp.diags(pen_w[S].astype(np.complex128))
-        z[S] = factor_hpd(K).solve(rhs)
+        z[S] = factor(K, hpd=True, what="direction field").solve(rhs)
     free = np.flatnonzero(~anchored)
     if free.size:
         order = np.argsort(label, kind="stable")

@@ -23,7 +23,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from geotex.errors import InputError
-from geotex.linalg import factor_hpd
+from geotex.linalg import factor
 from geotex.mesh.arrays import as_faces, as_mesh_arrays
 from geotex.mesh.topology import edge_topology, vertex_components
 
@@ -198,7 +198,7 @@ def interpolate_scalar(V, F, locked_vertices, locked_values, *, laplacian: str =
         A = Qf[:, free].tocsc()
         rhs = -(Qf[:, locked] @ values)
         try:
-            x = np.asarray(factor_hpd(A).solve(rhs), dtype=np.float64)
+            x = np.asarray(factor(A, hpd=True, what="scalar field").solve(rhs), dtype=np.float64)
         except RuntimeError:                              # exactly singular factor
             x = np.full(free.size, np.nan)
         if not np.isfinite(x).all():

@@ -7,7 +7,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from geotex.errors import InputError, SolverError
-from geotex.linalg import factor_lu
+from geotex.linalg import factor
 from geotex.mesh.geometry import mean_edge_length
 
 __all__ = ["smoothed_base"]
@@ -77,7 +77,7 @@ def smoothed_base(V, F, *, steps: int = 3, time_step: float | None = None) -> np
     Vk = V.copy()
     for _ in range(int(steps)):
         M = sp.csc_matrix(igl.massmatrix(Vk, F, igl.MASSMATRIX_TYPE_VORONOI))
-        lu = factor_lu(M - dt * L, what="smoothed_base")
+        lu = factor(M - dt * L, what="smoothed_base")
         rhs = M @ Vk
         Vk = np.column_stack([lu.solve(rhs[:, d]) for d in range(3)])
         if not np.isfinite(Vk).all():

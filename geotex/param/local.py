@@ -45,7 +45,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from geotex.errors import InputError
-from geotex.linalg import factor_lu
+from geotex.linalg import factor
 from geotex.mesh.arrays import as_mesh_arrays
 from geotex.mesh.topology import edge_topology, vertex_components
 from geotex.patches.grow import check_triangles, boundary_loops, disc_problem
@@ -228,7 +228,7 @@ def field_aligned_parameterization(V, F, patch_faces, field, *, scale=1.0, cente
     if p > 1:
         idx = np.flatnonzero(free)
         Lff = L[idx][:, idx].tocsc()
-        uv[idx] = factor_lu(Lff, what="field-aligned parameterization").solve(rhs[idx])
+        uv[idx] = factor(Lff, what="field-aligned parameterization").solve(rhs[idx])
     centroid = uv[Fl[where[0]]].mean(axis=0)
     uv += cuv - centroid
     return uv, verts
@@ -352,7 +352,7 @@ def harmonic_parameterization(V, F, *, boundary: str = "circle",
         uv[loop] = bc
         if idx.size:
             rhs = -(L[idx][:, loop] @ bc)
-            uv[idx] = factor_lu(L[idx][:, idx], what="harmonic parameterization").solve(rhs)
+            uv[idx] = factor(L[idx][:, idx], what="harmonic parameterization").solve(rhs)
     if _signed_area(uv, F) < 0:
         uv[:, 1] = (1.0 if boundary == "square" else 0.0) - uv[:, 1]
     return np.ascontiguousarray(uv)

@@ -77,7 +77,7 @@ from geotex.fields.combing import comb_direction_field
 from geotex.fields.directions import DirectionField
 from geotex.fields.frames import face_connection, tangent_angles
 from geotex.fields.singularities import vertex_indices
-from geotex.linalg import factor_hpd
+from geotex.linalg import factor
 from geotex.mesh.topology import edge_topology, non_manifold_vertices
 
 __all__ = ["PeriodicParameterization", "periodic_parameterization"]
@@ -311,7 +311,7 @@ def _smallest(A: sp.csr_matrix, mass: np.ndarray, rng: np.random.Generator
         w, vecs = scipy.linalg.eigh(A.toarray(), np.diag(mass), subset_by_index=[0, 0])
         return vecs[:, 0], float(w[0])
     eps = 1e-8 * float(A.diagonal().mean()) / float(mass.mean())
-    lu = factor_hpd((A + eps * sp.diags(mass)).tocsc(), what="periodic_parameterization")
+    lu = factor((A + eps * sp.diags(mass)).tocsc(), hpd=True, what="periodic_parameterization")
     x = rng.standard_normal(size)
     for _ in range(INVERSE_ITERATIONS):
         x = lu.solve(mass * x)

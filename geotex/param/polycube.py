@@ -437,7 +437,7 @@ def polycube(V, F, *, tile_size: float | None = None, tiles_per_cell: int = 1, r
     else:
         a, search = _search(V, F, extent=extent, genus=genus, opts=opts)
     c, fit, folded_quads = a["best"]
-    ts, Vt = a["ts"], a["Vt"]
+    ts = a["ts"]
     report(progress, "distortion")
     corners, labels, Fq = c["corners"], c["labels"], c["F"]
     qe, qf, eax, eq, es = quad_edges(corners)

@@ -34,7 +34,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from geotex.errors import InputError
-from geotex.linalg import factor_lu
+from geotex.linalg import factor
 from geotex.mesh.arrays import as_mesh_arrays
 from geotex.mesh.geometry import face_areas, signed_volume
 from geotex.mesh.topology import edge_topology, vertex_components
@@ -168,7 +168,7 @@ def _planar_map(V, F, pole: int) -> np.ndarray:
     keep[iC] = False                      # pin: the translation is free
     idx = np.flatnonzero(keep)
     uv = np.zeros((n, 2))
-    uv[idx] = factor_lu(L[idx][:, idx], what="sphere map").solve(rhs[idx])
+    uv[idx] = factor(L[idx][:, idx], what="sphere map").solve(rhs[idx])
     return uv
 
 

@@ -17,7 +17,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from geotex.errors import InputError
-from geotex.linalg import factor_lu
+from geotex.linalg import factor
 from geotex.mesh.arrays import as_mesh_arrays
 
 __all__ = ["laplacian_deformed", "uniform_laplacian"]
@@ -132,5 +132,5 @@ def laplacian_deformed(V, F, targets=None, *, mu: float = 10.0, fixed=None,
     A = (Lf.T @ Lf + mu * scale * (S.T @ S)
          + _REGULARIZATION * scale * sp.identity(free.size)).tocsc()
     b = Lf.T @ rhs_lap + mu * scale * (S.T @ pos) + _REGULARIZATION * scale * V[free]
-    W[free] = factor_lu(A, what="Laplacian deformation").solve(b)
+    W[free] = factor(A, what="Laplacian deformation").solve(b)
     return W
