@@ -207,51 +207,48 @@ class BaseGeometry:
             E = self.topo.edges
             e = E.shape[0]
             X1, X2 = axis_frames(self.normals)
-            # Gs[3 f + k] = G_k of face f = N x e_k / |N|^2
-            Gs = np.empty((m, 3, 3))
+            # G_k of face f = N x e_k / |N|^2, coordinate by coordinate
             inv = 1.0 / self.N2
+            G = []
             for k in range(3):
                 (n0, n1, n2), (x0, x1, x2) = self.N, self.e[k]
-                Gs[:, k, 0] = (n1 * x2 - n2 * x1) * inv
-                Gs[:, k, 1] = (n2 * x0 - n0 * x2) * inv
-                Gs[:, k, 2] = (n0 * x1 - n1 * x0) * inv
-            Gs = Gs.reshape(3 * m, 3)
+                G.append(((n1 * x2 - n2 * x1) * inv, (n2 * x0 - n0 * x2) * inv,
+                          (n0 * x1 - n1 * x0) * inv))
             # half-edge h = 3 f + k runs F_k -> F_{k+1}; the edge's first vertex gets
             # +G_{k+1} if h runs along the edge (a -> b), else +G_k; the second -G_k,
-            # else -G_{k+1}: sum over the edge's half-edges, then project on the frames
-            topo = self.topo
-            order = topo.grouped_half_edges()
-            start = topo.edge_starts()
-            Fr = self.F.ravel()
-            last = 3 * m - 1
-            a_vec = b_vec = None
-            for which in (0, 1):
-                h = order[np.minimum(start + which, last)]
-                f3 = h - h % 3
-                k1 = f3 + (h + 1) % 3
-                fwd = Fr[h] < Fr[k1]
-                ga = np.take(Gs, np.where(fwd, k1, h), axis=0)
-                gb = np.take(Gs, np.where(fwd, h, k1), axis=0)
-                if which == 0:
-                    a_vec, b_vec = ga, -gb
-                else:
-                    two = (topo.face_count == 2)[:, None]
-                    a_vec += np.where(two, ga, 0.0)
-                    b_vec -= np.where(two, gb, 0.0)
+            # else -G_{k+1}: summed over the edge's half-edges (in half-edge order)
+            FT = self.FT
+            fwd = [FT[k] < FT[(k + 1) % 3] for k in range(3)]
+            h2e = self.topo.half_to_edge
+            ea, eb = np.ascontiguousarray(E[:, 0]), np.ascontiguousarray(E[:, 1])
             iv = 1.0 / self.valence
-            data = np.empty((e, 4))
-            wa, wb = iv[E[:, 0]], iv[E[:, 1]]
-            data[:, 0] = dot(a_vec, X1[E[:, 0]]) * wa
-            data[:, 1] = dot(a_vec, X2[E[:, 0]]) * wa
-            data[:, 2] = dot(b_vec, X1[E[:, 1]]) * wb
-            data[:, 3] = dot(b_vec, X2[E[:, 1]]) * wb
-            cols = np.empty((e, 4), dtype=np.int64)
-            cols[:, 0] = 2 * E[:, 0]
+            wa, wb = iv[ea], iv[eb]
+            # data row e: a_e . X1(a), a_e . X2(a), b_e . X1(b), b_e . X2(b), scaled by
+            # 1 / valence; accumulated coordinate by coordinate on contiguous columns
+            data = np.zeros((4, e))
+            w = np.empty((m, 3))
+            for d in range(3):
+                for k in range(3):
+                    np.copyto(w[:, k], np.where(fwd[k], G[(k + 1) % 3][d], G[k][d]))
+                a_d = np.bincount(h2e, weights=w.ravel(), minlength=e)
+                for k in range(3):
+                    np.copyto(w[:, k], np.where(fwd[k], G[k][d], G[(k + 1) % 3][d]))
+                b_d = np.bincount(h2e, weights=w.ravel(), minlength=e)
+                x1, x2 = np.ascontiguousarray(X1[:, d]), np.ascontiguousarray(X2[:, d])
+                data[0] += a_d * x1[ea]
+                data[1] += a_d * x2[ea]
+                data[2] -= b_d * x1[eb]
+                data[3] -= b_d * x2[eb]
+            data[:2] *= wa
+            data[2:] *= wb
+            index = np.int32 if 2 * n < 2 ** 31 else np.int64
+            cols = np.empty((e, 4), dtype=index)
+            cols[:, 0] = 2 * ea
             cols[:, 1] = cols[:, 0] + 1
-            cols[:, 2] = 2 * E[:, 1]
+            cols[:, 2] = 2 * eb
             cols[:, 3] = cols[:, 2] + 1
-            AT = sp.csr_matrix((data.ravel(), cols.ravel(), 4 * np.arange(e + 1, dtype=np.int64)),
-                               shape=(e, 2 * n))
+            AT = sp.csr_matrix((data.T.ravel(), cols.ravel(),
+                                4 * np.arange(e + 1, dtype=index)), shape=(e, 2 * n))
             self._transpose = (AT, X1, X2)
         return self._transpose
 
