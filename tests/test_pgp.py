@@ -208,3 +208,72 @@ def test_cli_constraint_scales_override_scale(capsys, tmp_path):
                            "-o", tmp_path / "p.npz", "--json")
     assert code == 0, err
     assert json.loads(text)["scale_range"] == pytest.approx([0.2, 0.4])
+
+
+def test_singular_faces_carry_the_fields_local_map():
+    """Baked singular faces show one correctly sized, oriented piece of the tile."""
+    V, F = icosphere(3)
+    field = smooth_direction_field(V, F, symmetry=4)
+    p = periodic_parameterization(V, F, field, scale=0.3)
+    conn = face_connection(V, F)
+    s = np.flatnonzero(p.singular)
+    P = V[F[s]]
+    E = np.stack([P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]], axis=1)          # (k, 2, 3)
+    dC = p.coords[s, 1:] - p.coords[s, :1]                                 # (k, 2, 2)
+    # the corner steps have the length the scale asks for (0.3 surface units per tile)
+    surface = np.linalg.norm(E, axis=2)
+    tile = np.linalg.norm(dC, axis=2)
+    assert np.allclose(tile * 0.3, surface, rtol=1e-9)
+    assert conn.areas[s].sum() < 0.25 * conn.areas.sum()
+
+
+def test_pgp_file_round_trip_and_tile_image(capsys, tmp_path):
+    from PIL import Image
+
+    from geotex.io import read_mesh
+    from geotex.param.pgp_store import load_parameterization
+
+    mesh = write_mesh(tmp_path / "s.obj", Mesh(*icosphere(2)))
+    pgp = tmp_path / "p.npz"
+    code, _, err = _run(capsys, "pgp", mesh, "--up", "0,0,1", "--scale", "0.4", "-o", pgp)
+    assert code == 0, err
+    back = load_parameterization(pgp)
+    assert back.coords.shape == (320, 3, 2) and back.metadata["scale"] == 0.4
+    img = np.zeros((8, 8, 3), np.uint8)
+    img[:4] = 200
+    Image.fromarray(img).save(tmp_path / "stripes.png")
+    for ext in (".glb", ".obj"):
+        out = tmp_path / f"t{ext}"
+        code, text, err = _run(capsys, "tile-image", mesh, "--image", tmp_path / "stripes.png",
+                               "--param", pgp, "-o", out)
+        assert code == 0, err
+        m = read_mesh(out)
+        assert m.texture is not None and m.texture.shape[:2] == (8, 8)
+        uv = m.uv[m.uv_faces]
+        assert np.allclose(np.sort(uv.reshape(-1, 2), axis=0),
+                           np.sort(back.coords.reshape(-1, 2), axis=0), atol=1e-6)
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--param", "{other}"], "made for a mesh of"),
+    (["--param", "{junk}"], "not a geotex PGP file"),
+    (["--image", "{junk}"], "--image"),
+])
+def test_tile_image_errors_name_the_flag(capsys, tmp_path, argv, message):
+    from PIL import Image
+
+    mesh = write_mesh(tmp_path / "s.obj", Mesh(*icosphere(1)))
+    other = write_mesh(tmp_path / "o.obj", Mesh(*icosphere(2)))
+    pgp, opgp = tmp_path / "p.npz", tmp_path / "op.npz"
+    assert _run(capsys, "pgp", mesh, "--up", "0,0,1", "--scale", "0.5", "-o", pgp)[0] == 0
+    assert _run(capsys, "pgp", other, "--up", "0,0,1", "--scale", "0.5", "-o", opgp)[0] == 0
+    junk = tmp_path / "junk.npz"
+    np.savez(junk, x=np.zeros(3))
+    Image.fromarray(np.zeros((4, 4, 3), np.uint8)).save(tmp_path / "i.png")
+    args = {"--param": str(pgp), "--image": str(tmp_path / "i.png")}
+    for flag, value in zip(argv[::2], argv[1::2]):
+        args[flag] = value.format(other=opgp, junk=junk)
+    code, _, err = _run(capsys, "tile-image", mesh, *sum(args.items(), ()),
+                        "-o", tmp_path / "out.glb")
+    assert code == 2 and message in err and err.count("\n") == 1
+    assert not (tmp_path / "out.glb").exists()

@@ -11,10 +11,6 @@ from geotex.errors import InputError
 
 HELP = "periodic global parameterization: seamless tile coordinates steered by a cross field"
 
-#: format tag stored in every PGP file
-PGP_FORMAT = "geotex-pgp/1"
-
-
 def register(sub):
     p = sub.add_parser("pgp", help=HELP, description=HELP + ". Builds a 4-direction field "
                        "like 'geotex field' and writes per-corner (s, t) tile coordinates "
@@ -46,13 +42,9 @@ def _scale(text: str) -> float:
 
 
 def run(args) -> int:
-    import io
-
-    import numpy as np
-
     from geotex.io import read_mesh
-    from geotex.io.atomic import atomic_output
     from geotex.param.pgp import periodic_parameterization
+    from geotex.param.pgp_store import save_parameterization
 
     out = guard_output(args.output, args.mesh)
     if out.suffix.lower() != ".npz":
@@ -72,16 +64,10 @@ def run(args) -> int:
         raise flag_error(exc, {"scale": "--scale"}) from None
     t2 = time.perf_counter()
     cones = [{"vertex": v, "index": k} for v, k in p.cones]
-    meta = {"format": PGP_FORMAT, "mesh": str(args.mesh), "method": method,
-            "scale": scale if scale_field is None else "constraints",
-            "solver": args.solver, "index_sum": p.index_sum, "seam_residual": p.seam_residual}
-    buf = io.BytesIO()
-    np.savez_compressed(buf, coords=p.coords, singular=p.singular, scale=p.scale,
-                        cone_vertices=np.array([v for v, _ in p.cones], dtype=np.int64),
-                        cone_indices=np.array([k for _, k in p.cones], dtype=np.float64),
-                        metadata=np.array(json.dumps(meta)))
-    with atomic_output(out, "wb") as fh:
-        fh.write(buf.getvalue())
+    save_parameterization(out, p, metadata={
+        "mesh": str(args.mesh), "method": method,
+        "scale": scale if scale_field is None else "constraints", "solver": args.solver,
+        "index_sum": p.index_sum, "seam_residual": p.seam_residual})
     summary = {"mesh": str(args.mesh), "output": str(out), "method": method,
                "faces": int(F.shape[0]),
                "scale_range": [float(p.scale.min()), float(p.scale.max())],

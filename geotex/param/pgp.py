@@ -125,7 +125,11 @@ class PeriodicParameterization:
     coords : numpy.ndarray, (m, 3, 2) float64
         ``(s, t)`` per face corner, in tile units (one tile per unit),
         continuous inside every face.  ``s`` runs along the face's combed
-        cross-field arm, ``t`` along the arm turned by +90 degrees.
+        cross-field arm, ``t`` along the arm turned by +90 degrees.  On
+        ``singular`` faces the corners follow the field's local map from
+        corner 0 (the face's own predicted steps) instead of the periodic
+        functions, so baked textures show a correctly sized piece of the
+        tile there, with a small jump at the face's edges.
     singular : numpy.ndarray, (m,) bool
         Faces where the coordinates cannot agree (see the module docstring).
     cones : tuple of (int, float)
@@ -586,6 +590,11 @@ def periodic_parameterization(V, F, field, *, scale, solver: str = "auto",
 
     ok_edge = ~(singular[conn.faces[:, 0]] | singular[conn.faces[:, 1]])
     residual = _seam_residual(coords, F, conn, ok_edge)
+    # singular faces: the periodic functions cannot be followed there (a full
+    # period can wind inside the face); lay the field's own local map instead,
+    # anchored at corner 0, so the face shows one correctly sized, oriented
+    # piece of the tile (a small jump at its edges) rather than a squeezed period
+    coords[singular] = raw[singular, :1] + pred[singular]
 
     # gradient error against the field's prediction, per face in its own frame
     e1, e2 = P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]

@@ -1,0 +1,53 @@
+"""``geotex tile-image BASE --image IMG --param P.npz -o OUT.glb|.obj``: a tileable image over a PGP."""
+
+from __future__ import annotations
+
+from geotex.cli._common import EXIT_OK, UsageError, guard_output
+
+HELP = "lay a tileable image over a mesh through its periodic parameterization (geotex pgp)"
+TEXTURED = (".glb", ".obj")
+
+
+def register(sub):
+    p = sub.add_parser("tile-image", help=HELP, description=HELP + ". The per-corner tile "
+                       "coordinates of the PGP file become the texture coordinates (one "
+                       "image period per tile, repeated): no atlas, no seams except at the "
+                       "field's singularities. Writes OUT.glb, or OUT.obj + OUT.mtl + OUT.png.")
+    p.add_argument("base", metavar="BASE", help="the mesh the PGP file was computed on")
+    p.add_argument("--image", required=True, metavar="IMG",
+                   help="tileable image (PNG, JPEG): one period per tile")
+    p.add_argument("--param", required=True, metavar="P.npz",
+                   help="periodic parameterization written by 'geotex pgp' for BASE")
+    p.add_argument("-o", "--output", required=True, help="OUT.glb or OUT.obj (textured)")
+    p.set_defaults(run=run)
+
+
+def run(args) -> int:
+    from geotex.errors import InputError
+    from geotex.image.patches import load_image
+    from geotex.image.tiled import tiled_texture_mesh
+    from geotex.io import read_mesh, write_mesh
+    from geotex.param.pgp_store import load_parameterization
+
+    out = guard_output(args.output, args.base, args.image, args.param)
+    if out.suffix.lower() not in TEXTURED:
+        raise UsageError(f"{out}: a tiled image is written as .glb or .obj (+ .mtl + .png); "
+                         f"got '{out.suffix}'")
+    mesh = read_mesh(args.base)
+    try:
+        pgp = load_parameterization(args.param)
+    except InputError as exc:
+        raise UsageError(f"--param {exc}") from None
+    if pgp.coords.shape[0] != mesh.n_faces:
+        raise UsageError(f"--param {args.param}: made for a mesh of {pgp.coords.shape[0]} faces, "
+                         f"but {args.base} has {mesh.n_faces}; run 'geotex pgp' on this mesh")
+    try:
+        image = load_image(args.image)
+    except InputError as exc:
+        raise UsageError(f"--image {exc}") from None
+    textured = tiled_texture_mesh(mesh.vertices, mesh.faces, pgp.coords, image,
+                                  name=mesh.name or "geotex")
+    write_mesh(out, textured)
+    print(f"wrote {out}: {mesh.n_faces} faces, {int(pgp.singular.sum())} singular, "
+          f"image {image.shape[1]}x{image.shape[0]} per tile")
+    return EXIT_OK

@@ -1,0 +1,117 @@
+"""PGP files: the per-corner tile coordinates of :func:`geotex.param.pgp.periodic_parameterization`.
+
+An ``.npz`` archive (written by ``geotex pgp``) with ``coords`` (m, 3, 2),
+``singular`` (m,), ``scale`` (n,), ``cone_vertices``, ``cone_indices`` and a
+JSON ``metadata`` string whose ``format`` is :data:`PGP_FORMAT`.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import zipfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from geotex.errors import MeshFileError, MissingFileError
+from geotex.io.atomic import atomic_output
+from geotex.io.limits import RefusedInput, check_archive
+
+__all__ = ["PGP_FORMAT", "PgpFile", "save_parameterization", "load_parameterization"]
+
+#: Format tag stored in every PGP file.
+PGP_FORMAT = "geotex-pgp/1"
+
+
+@dataclass(frozen=True)
+class PgpFile:
+    """The contents of a PGP file.
+
+    Attributes
+    ----------
+    coords : numpy.ndarray, (m, 3, 2) float64
+        ``(s, t)`` per face corner in tile units.
+    singular : numpy.ndarray, (m,) bool
+    scale : numpy.ndarray, (n,) float64
+        Tile size per vertex in surface units.
+    cones : tuple of (int, float)
+        ``(vertex, index)`` of the cross field's singular vertices.
+    metadata : dict
+    """
+
+    coords: np.ndarray
+    singular: np.ndarray
+    scale: np.ndarray
+    cones: tuple = ()
+    metadata: dict = field(default_factory=dict)
+
+
+def save_parameterization(path, p, *, metadata: dict | None = None) -> Path:
+    """Write a :class:`~geotex.param.pgp.PeriodicParameterization` (atomically).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        ``.npz`` file.
+    p : PeriodicParameterization
+    metadata : dict, optional
+        JSON-serialisable; ``format`` is set to :data:`PGP_FORMAT`.
+
+    Returns
+    -------
+    pathlib.Path
+    """
+    meta = dict(metadata or {}, format=PGP_FORMAT)
+    buf = io.BytesIO()
+    np.savez_compressed(buf, coords=p.coords, singular=p.singular, scale=p.scale,
+                        cone_vertices=np.array([v for v, _ in p.cones], dtype=np.int64),
+                        cone_indices=np.array([k for _, k in p.cones], dtype=np.float64),
+                        metadata=np.array(json.dumps(meta)))
+    path = Path(path)
+    with atomic_output(path, "wb") as fh:
+        fh.write(buf.getvalue())
+    return path
+
+
+def load_parameterization(path) -> PgpFile:
+    """Read a file written by :func:`save_parameterization` (or ``geotex pgp``).
+
+    Returns
+    -------
+    PgpFile
+
+    Raises
+    ------
+    MissingFileError
+        If the file does not exist.
+    MeshFileError
+        If it is not a geotex PGP file, is damaged, or its arrays disagree.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise MissingFileError(f"{path}: no such file")
+    try:
+        check_archive(path)
+    except RefusedInput as exc:
+        raise MeshFileError(path, str(exc)) from None
+    try:
+        with np.load(path, allow_pickle=False) as d:
+            meta = json.loads(str(d["metadata"])) if "metadata" in d.files else None
+            if not isinstance(meta, dict) or meta.get("format") != PGP_FORMAT:
+                raise MeshFileError(path, "not a geotex PGP file (make one with 'geotex pgp')")
+            coords, singular, scale = d["coords"], d["singular"], d["scale"]
+            cones = tuple((int(v), float(k)) for v, k in zip(d["cone_vertices"],
+                                                              d["cone_indices"]))
+    except MeshFileError:
+        raise
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile,
+            json.JSONDecodeError) as exc:
+        raise MeshFileError(path, f"damaged or not a PGP file ({type(exc).__name__})") from None
+    m = coords.shape[0] if coords.ndim == 3 else -1
+    if (coords.shape != (m, 3, 2) or singular.shape != (m,) or scale.ndim != 1
+            or not np.isfinite(coords).all()):
+        raise MeshFileError(path, "inconsistent PGP file (array shapes do not match)")
+    return PgpFile(np.asarray(coords, np.float64), np.asarray(singular, bool),
+                   np.asarray(scale, np.float64), cones, meta)
