@@ -9,8 +9,9 @@ cells are centred on the tile corners, so that it is unchanged by the
 90-degree rotations and integer shifts that PGP leaves across edges: away
 from the singular faces the checks run on without a seam.  Red / blue balls:
 cones of the cross field (index > 0 / < 0); orange balls: faces where a
-periodic function winds (grid dislocations).  Singular faces are left as PGP
-gives them (no blend yet), so the texture is scrambled there.
+periodic function winds (grid dislocations).  Singular faces carry the
+field's local map (one correctly sized piece of the tile, a small jump at
+their edges).
 
 Run:  python examples/pgp_checkerboard.py [OUT_DIR]     (default docs/gallery)
 """
