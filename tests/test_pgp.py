@@ -277,3 +277,78 @@ def test_tile_image_errors_name_the_flag(capsys, tmp_path, argv, message):
                         "-o", tmp_path / "out.glb")
     assert code == 2 and message in err and err.count("\n") == 1
     assert not (tmp_path / "out.glb").exists()
+
+
+def test_local_update_keeps_the_outside_and_follows_the_new_field_inside():
+    from geotex.param.pgp_update import updated_parameterization
+    from geotex.patches.effect import effect_area
+
+    V, F = torus(n_major=60, n_minor=24)
+    field = smooth_direction_field(V, F, symmetry=4)
+    p = periodic_parameterization(V, F, field, scale=0.2)
+    # same field: the update reproduces the previous parameterization
+    area = effect_area(V, F, [0], max_distance=0.8)
+    q = updated_parameterization(V, F, p, field, scale=0.2, faces=area)
+    outside = np.ones(len(F), bool)
+    outside[area] = False
+    assert np.array_equal(q.coords[outside], p.coords[outside])
+    assert q.seam_residual <= 1e-6
+    assert np.abs(q.coords - p.coords).max() < 0.05
+    # a turned field inside the area: the outside keeps its coordinates exactly,
+    # the seams stay exact and the inside follows the new orientation
+    vec = field.vectors.copy()
+    N = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    N /= np.linalg.norm(N, axis=1, keepdims=True)
+    c, s = np.cos(np.radians(30)), np.sin(np.radians(30))
+    vec[area] = c * vec[area] + s * np.cross(N[area], vec[area])
+    r = updated_parameterization(V, F, p, vec, scale=0.2, faces=area)
+    # outside: the same coordinates up to the grid symmetry the new combing picks
+    keep = outside & ~p.singular & ~r.singular
+    assert keep.sum() > 0.9 * outside.sum()
+    best = np.full(len(F), np.inf)
+    for turn in range(4):
+        d = r.coords - _rot(p.coords, turn)
+        best = np.minimum(best, np.abs(d - np.rint(d[:, :1])).max(axis=(1, 2)))
+    assert best[keep].max() < 1e-9
+    assert r.seam_residual <= 1e-6
+    full = periodic_parameterization(V, F, vec, scale=0.2)
+    assert r.gradient_error < max(2 * full.gradient_error, 0.3)
+
+
+def test_local_update_errors():
+    from geotex.param.pgp_update import updated_parameterization
+
+    V, F = grid_plane(6, 6)
+    f = np.tile([1.0, 0, 0], (len(F), 1))
+    p = periodic_parameterization(V, F, f, scale=0.5)
+    with pytest.raises(InputError, match="nothing to update"):
+        updated_parameterization(V, F, p, f, scale=0.5, faces=[])
+    V2, F2 = grid_plane(5, 5)
+    with pytest.raises(InputError, match="another mesh"):
+        updated_parameterization(V2, F2, p, np.tile([1.0, 0, 0], (len(F2), 1)), scale=0.5,
+                                 faces=[0])
+
+
+def test_cli_local_update(capsys, tmp_path):
+    from geotex.param.pgp_store import load_parameterization
+
+    mesh = write_mesh(tmp_path / "t.ply", Mesh(*torus(n_major=40, n_minor=16)))
+    old, new = tmp_path / "old.npz", tmp_path / "new.npz"
+    assert _run(capsys, "pgp", mesh, "--up", "0,0,1", "--scale", "0.3", "-o", old)[0] == 0
+    code, text, err = _run(capsys, "pgp", mesh, "--up", "1,0,0", "--scale", "0.3",
+                           "--update", old, "--around", "1.35,0,0", "--radius", "0.4",
+                           "-o", new, "--json")
+    assert code == 0, err
+    d = json.loads(text)
+    a, b = load_parameterization(old), load_parameterization(new)
+    area = d["update"]["area_faces"]
+    assert 0 < area < 0.5 * d["faces"] and d["seam_residual"] <= 1e-6
+    dev = np.full(len(a.coords), np.inf)
+    for turn in range(4):                       # equal up to a grid symmetry per face
+        diff = b.coords - _rot(a.coords, turn)
+        dev = np.minimum(dev, np.abs(diff - np.rint(diff[:, :1])).max(axis=(1, 2)))
+    changed = (dev > 1e-9) & ~a.singular & ~b.singular
+    assert 0 < changed.sum() <= area
+    code, _, err = _run(capsys, "pgp", mesh, "--up", "1,0,0", "--scale", "0.3",
+                        "--update", old, "-o", tmp_path / "x.npz")
+    assert code == 2 and "--around" in err

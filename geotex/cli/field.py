@@ -76,13 +76,15 @@ def field_from_args(args, V, F, N: int):
     return field, None, method
 
 
-def _vector(text: str) -> list[float]:
+def _vector(text: str, *, flag: str = "--up") -> list[float]:
+    import math
+
     try:
         values = [float(x) for x in text.split(",")]
     except ValueError:
         values = []
-    if len(values) != 3:
-        raise UsageError(f"--up {text!r}: give three comma-separated numbers, e.g. 0,0,1")
+    if len(values) != 3 or not all(math.isfinite(v) for v in values):
+        raise UsageError(f"{flag} {text!r}: give three comma-separated numbers, e.g. 0,0,1")
     return values
 
 

@@ -27,18 +27,68 @@ def register(sub):
                    help="eigen solve: one factorization of the whole system, or two-level "
                         "(clusters + smoothing); auto: two-level from 20000 vertices on")
     p.add_argument("--seed", type=int, default=0, help="seed of the eigen solvers (default 0)")
+    p.add_argument("--update", metavar="OLD.npz", default=None,
+                   help="local update: keep OLD.npz (a PGP file of this mesh) everywhere but "
+                        "in the effect area around --around, which is re-solved with the new "
+                        "field with its border locked (the field outside stays OLD's)")
+    p.add_argument("--around", metavar="X,Y,Z", default=None,
+                   help="with --update: the point where the constraints changed")
+    p.add_argument("--radius", metavar="R", default=None,
+                   help="with --update: effect area radius in surface units (distance over "
+                        "the surface; default 3 tiles)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(run=run)
 
 
-def _scale(text: str) -> float:
+def _scale(text: str, *, flag: str = "--scale") -> float:
     try:
         value = float(text)
     except ValueError:
         value = float("nan")
     if not (value > 0 and value < float("inf")):
-        raise UsageError(f"--scale {text!r}: give a positive tile size in surface units")
+        raise UsageError(f"{flag} {text!r}: give a positive length in surface units")
     return value
+
+
+def _previous(args, m: int, n: int):
+    """The PGP file to update (``--update``), checked against the mesh; None without it."""
+    from geotex.param.pgp_store import load_parameterization
+
+    if args.update is None:
+        if args.around is not None or args.radius is not None:
+            raise UsageError("--around and --radius go with --update OLD.npz")
+        return None
+    if args.around is None:
+        raise UsageError("--update needs --around X,Y,Z: the point where the constraints "
+                         "changed")
+    try:
+        old = load_parameterization(args.update)
+    except InputError as exc:
+        raise UsageError(f"--update {exc}") from None
+    if old.coords.shape[0] != m or old.functions.shape[0] != n:
+        raise UsageError(f"--update {args.update}: made for a mesh of {old.coords.shape[0]} "
+                         f"faces, but {args.mesh} has {m}")
+    return old
+
+
+def _updated(args, V, F, old, field, scale, scale_field):
+    """Re-solve the effect area around ``--around``; the field outside stays ``old``'s."""
+    import numpy as np
+
+    from geotex.cli.field import _vector
+    from geotex.param.pgp_update import updated_parameterization
+    from geotex.patches.effect import effect_area
+
+    point = np.asarray(_vector(args.around, flag="--around"), dtype=np.float64)
+    radius = 3.0 * scale if args.radius is None else _scale(args.radius, flag="--radius")
+    seed = int(np.argmin(np.linalg.norm(V[F].mean(axis=1) - point, axis=1)))
+    area = effect_area(V, F, [seed], max_distance=radius)
+    inside = np.zeros(F.shape[0], dtype=bool)
+    inside[area] = True
+    vectors = np.where(inside[:, None], field.vectors, old.axes)
+    sizes = np.where(np.isin(np.arange(V.shape[0]), F[area]),
+                     scale if scale_field is None else scale_field, old.scale)
+    return updated_parameterization(V, F, old, vectors, scale=sizes, faces=inside), area.size
 
 
 def run(args) -> int:
@@ -54,12 +104,17 @@ def run(args) -> int:
     V, F = mesh.vertices, mesh.faces
     if mesh.n_faces == 0:
         raise UsageError(f"{args.mesh}: the mesh has no faces")
+    old = _previous(args, F.shape[0], V.shape[0])
     t0 = time.perf_counter()
     field, scale_field, method = field_from_args(args, V, F, 4)
     t1 = time.perf_counter()
+    area = None
     try:
-        p = periodic_parameterization(V, F, field, seed=args.seed, solver=args.solver,
-                                      scale=scale if scale_field is None else scale_field)
+        if old is None:
+            p = periodic_parameterization(V, F, field, seed=args.seed, solver=args.solver,
+                                          scale=scale if scale_field is None else scale_field)
+        else:
+            p, area = _updated(args, V, F, old, field, scale, scale_field)
     except InputError as exc:            # rephrased when it is about the scale
         raise flag_error(exc, {"scale": "--scale"}) from None
     t2 = time.perf_counter()
@@ -77,11 +132,15 @@ def run(args) -> int:
                "index_sum": p.index_sum, "seam_residual": p.seam_residual,
                "gradient_error": p.gradient_error, "distortion": p.distortion,
                "timings": {"field_s": round(t1 - t0, 4), "pgp_s": round(t2 - t1, 4)}}
+    if area is not None:
+        summary["update"] = {"from": str(args.update), "area_faces": area}
     if args.json:
         print(json.dumps(summary))
     else:
         print(f"{args.mesh}: PGP on {F.shape[0]} faces ({method} field), "
               f"tile size {p.scale.min():g}..{p.scale.max():g}")
+        if area is not None:
+            print(f"local update of {args.update}: {area} faces re-solved, the rest kept")
         print(f"cones: {len(cones)}, index sum {p.index_sum:g}; dislocations: "
               f"{len(p.dislocations)}; singular faces: {int(p.singular.sum())}")
         print(f"seam residual {p.seam_residual:.3g} tile units, gradient error "

@@ -158,6 +158,13 @@ class PeriodicParameterization:
         Tile size per vertex (surface units) that was used.
     eigenvalues : tuple of float
         Smallest eigenvalue of each solved block (0 for an exact solution).
+    functions : numpy.ndarray, (n, 4) float64
+        The solved periodic functions ``X_v`` (module docstring), in each
+        vertex's own axes.
+    axes : numpy.ndarray, (m, 3) float64
+        The combed cross-field arm ``a_f`` of every face (its ``s`` axis); a
+        vertex's own ``u`` axis is the arm of the face of its first corner.
+        With ``functions``, what :func:`updated_parameterization` starts from.
     """
 
     coords: np.ndarray
@@ -170,6 +177,8 @@ class PeriodicParameterization:
     distortion: dict
     scale: np.ndarray
     eigenvalues: tuple
+    functions: np.ndarray
+    axes: np.ndarray
 
 
 def _scale_per_vertex(scale, n: int) -> np.ndarray:
@@ -526,6 +535,41 @@ def periodic_parameterization(V, F, field, *, scale, solver: str = "auto",
     >>> bool(p.seam_residual < 1e-9), bool(p.singular.any())
     (True, False)
     """
+    st = _setup(V, F, field, scale)
+    if solver not in ("auto", "direct", "multilevel"):
+        raise InputError(f"solver must be 'auto', 'direct' or 'multilevel', got {solver!r}")
+    n = st.V.shape[0]
+    I, J, T = _transfers(st.V, st.F, st.k, st.arms, st.S_face)
+    A = _energy(I, J, T, st.weight, n)
+    rng = np.random.default_rng(0 if seed is None else seed)
+    if solver == "direct" or (solver == "auto" and n < MULTILEVEL_VERTICES):
+        X, lams = _solve_direct(A, st.vmass, n, rng)
+    else:
+        edge = float(np.linalg.norm(st.V[J] - st.V[I], axis=1).mean())
+        X, lams = _solve_multilevel(A, st.vmass, st.V, I, J, T, n, rng, CLUSTER_EDGES * edge,
+                                    SMOOTHING_SWEEPS)
+    return _extracted(st, X, lams)
+
+
+@dataclass(frozen=True, eq=False)
+class _Setup:
+    """Everything the solve and the extraction need besides the functions."""
+
+    V: np.ndarray
+    F: np.ndarray
+    conn: object
+    combed: object
+    arms: np.ndarray          # (m, 2, 3) combed arms a, b
+    S: np.ndarray             # (n,) tile size per vertex
+    S_face: np.ndarray        # (m,)
+    k: np.ndarray             # (m, 3) corner rotations
+    open_fan: np.ndarray      # dual edges whose fan matching does not close
+    weight: np.ndarray        # (m,) relative face areas
+    vmass: np.ndarray         # (n,)
+
+
+def _setup(V, F, field, scale) -> _Setup:
+    """Validate the mesh, comb the field, and find the corner rotations."""
     conn = face_connection(V, F)                      # validates the mesh and orientation
     V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F, dtype=np.int64)
@@ -538,8 +582,6 @@ def periodic_parameterization(V, F, field, *, scale, solver: str = "auto",
     if bow.size:
         raise InputError(f"F has {bow.size} non-manifold vertex(es), first {int(bow[0])}; "
                          "repair the mesh first, e.g. with geotex repair")
-    if solver not in ("auto", "direct", "multilevel"):
-        raise InputError(f"solver must be 'auto', 'direct' or 'multilevel', got {solver!r}")
     S = _scale_per_vertex(scale, n)
     vectors = _field_vectors(field, m)
     combed = comb_direction_field(V, F, vectors, symmetry=4, connection=conn)
@@ -548,22 +590,18 @@ def periodic_parameterization(V, F, field, *, scale, solver: str = "auto",
     theta = tangent_angles(conn.T1, conn.T2, combed.vectors)
     a = np.cos(theta)[:, None] * conn.T1 + np.sin(theta)[:, None] * conn.T2
     b = np.cross(conn.N, a)
-    arms = np.stack([a, b], axis=1)                                          # (m, 2, 3)
-    S_face = S[F].mean(axis=1)
     k, open_fan = _corner_rotations(F, n, conn, jump)
-
     weight = conn.areas / conn.areas.mean()
     vmass = np.bincount(F.ravel(), weights=np.repeat(weight / 3.0, 3), minlength=n)
-    I, J, T = _transfers(V, F, k, arms, S_face)
-    A = _energy(I, J, T, weight, n)
-    rng = np.random.default_rng(0 if seed is None else seed)
-    if solver == "direct" or (solver == "auto" and n < MULTILEVEL_VERTICES):
-        X, lams = _solve_direct(A, vmass, n, rng)
-    else:
-        edge = float(np.linalg.norm(V[J] - V[I], axis=1).mean())
-        X, lams = _solve_multilevel(A, vmass, V, I, J, T, n, rng, CLUSTER_EDGES * edge,
-                                    SMOOTHING_SWEEPS)
+    return _Setup(V, F, conn, combed, np.stack([a, b], axis=1), S, S[F].mean(axis=1), k,
+                  open_fan, weight, vmass)
 
+
+def _extracted(st: _Setup, X: np.ndarray, lams) -> PeriodicParameterization:
+    """Per-corner coordinates, singular faces and the measures (eq. 4)."""
+    V, F, conn, k, arms, S_face = st.V, st.F, st.conn, st.k, st.arms, st.S_face
+    m = F.shape[0]
+    vmass = st.vmass
     # extraction (eq. 4)
     zu, zv = X[:, 0] + 1j * X[:, 1], X[:, 2] + 1j * X[:, 3]
     raw_v = np.stack([np.angle(zu), np.angle(zv)], axis=1) / (2.0 * np.pi)      # (n, 2)
@@ -581,10 +619,10 @@ def periodic_parameterization(V, F, field, *, scale, solver: str = "auto",
     rms = np.sqrt(np.sum(vmass * (np.abs(zu) ** 2 + np.abs(zv) ** 2)) / max(2 * vmass.sum(),
                                                                          1e-300))
     vanish = mod < VANISHING_MODULUS * rms
-    index = vertex_indices(V, F, combed.vectors, symmetry=4, connection=conn)
+    index = vertex_indices(V, F, st.combed.vectors, symmetry=4, connection=conn)
     cone = np.nan_to_num(index) != 0
     singular = (wind != 0).any(axis=1) | cone[F].any(axis=1) | vanish[F].any(axis=1)
-    fo, go = conn.faces[open_fan, 0], conn.faces[open_fan, 1]
+    fo, go = conn.faces[st.open_fan, 0], conn.faces[st.open_fan, 1]
     singular[fo] = True
     singular[go] = True
 
@@ -621,5 +659,9 @@ def periodic_parameterization(V, F, field, *, scale, solver: str = "auto",
         cones=tuple((int(v), float(index[v])) for v in cv),
         dislocations=tuple((int(f), int(wind[f, 0]), int(wind[f, 1])) for f in disl),
         index_sum=float(np.sum(index[cv])) if cv.size else 0.0,
-        seam_residual=residual, gradient_error=gerr, distortion=dist, scale=S,
-        eigenvalues=lams)
+        seam_residual=residual, gradient_error=gerr, distortion=dist, scale=st.S,
+        eigenvalues=tuple(lams), functions=np.ascontiguousarray(X),
+        axes=np.ascontiguousarray(arms[:, 0]))
+
+
+

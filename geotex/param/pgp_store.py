@@ -1,8 +1,9 @@
 """PGP files: the per-corner tile coordinates of :func:`geotex.param.pgp.periodic_parameterization`.
 
 An ``.npz`` archive (written by ``geotex pgp``) with ``coords`` (m, 3, 2),
-``singular`` (m,), ``scale`` (n,), ``cone_vertices``, ``cone_indices`` and a
-JSON ``metadata`` string whose ``format`` is :data:`PGP_FORMAT`.
+``singular`` (m,), ``scale`` (n,), ``cone_vertices``, ``cone_indices``,
+``functions`` (n, 4) and ``axes`` (m, 3) (what a local update starts from)
+and a JSON ``metadata`` string whose ``format`` is :data:`PGP_FORMAT`.
 """
 
 from __future__ import annotations
@@ -38,14 +39,25 @@ class PgpFile:
         Tile size per vertex in surface units.
     cones : tuple of (int, float)
         ``(vertex, index)`` of the cross field's singular vertices.
+    functions : numpy.ndarray, (n, 4) float64
+        The periodic functions (see :class:`~geotex.param.pgp.PeriodicParameterization`).
+    axes : numpy.ndarray, (m, 3) float64
+        The combed cross-field arm of every face.
     metadata : dict
     """
 
     coords: np.ndarray
     singular: np.ndarray
     scale: np.ndarray
-    cones: tuple = ()
+    cones: tuple
+    functions: np.ndarray
+    axes: np.ndarray
     metadata: dict = field(default_factory=dict)
+
+    @property
+    def eigenvalues(self) -> tuple:
+        """Not stored in files (a local update reports none)."""
+        return ()
 
 
 def save_parameterization(path, p, *, metadata: dict | None = None) -> Path:
@@ -68,7 +80,7 @@ def save_parameterization(path, p, *, metadata: dict | None = None) -> Path:
     np.savez_compressed(buf, coords=p.coords, singular=p.singular, scale=p.scale,
                         cone_vertices=np.array([v for v, _ in p.cones], dtype=np.int64),
                         cone_indices=np.array([k for _, k in p.cones], dtype=np.float64),
-                        metadata=np.array(json.dumps(meta)))
+                        functions=p.functions, axes=p.axes, metadata=np.array(json.dumps(meta)))
     path = Path(path)
     with atomic_output(path, "wb") as fh:
         fh.write(buf.getvalue())
@@ -102,6 +114,7 @@ def load_parameterization(path) -> PgpFile:
             if not isinstance(meta, dict) or meta.get("format") != PGP_FORMAT:
                 raise MeshFileError(path, "not a geotex PGP file (make one with 'geotex pgp')")
             coords, singular, scale = d["coords"], d["singular"], d["scale"]
+            functions, axes = d["functions"], d["axes"]
             cones = tuple((int(v), float(k)) for v, k in zip(d["cone_vertices"],
                                                               d["cone_indices"]))
     except MeshFileError:
@@ -110,8 +123,10 @@ def load_parameterization(path) -> PgpFile:
             json.JSONDecodeError) as exc:
         raise MeshFileError(path, f"damaged or not a PGP file ({type(exc).__name__})") from None
     m = coords.shape[0] if coords.ndim == 3 else -1
-    if (coords.shape != (m, 3, 2) or singular.shape != (m,) or scale.ndim != 1
-            or not np.isfinite(coords).all()):
+    n = scale.shape[0] if scale.ndim == 1 else -1
+    if (coords.shape != (m, 3, 2) or singular.shape != (m,) or functions.shape != (n, 4)
+            or axes.shape != (m, 3) or not np.isfinite(coords).all()):
         raise MeshFileError(path, "inconsistent PGP file (array shapes do not match)")
     return PgpFile(np.asarray(coords, np.float64), np.asarray(singular, bool),
-                   np.asarray(scale, np.float64), cones, meta)
+                   np.asarray(scale, np.float64), cones, np.asarray(functions, np.float64),
+                   np.asarray(axes, np.float64), meta)
