@@ -9,22 +9,20 @@ sub-grid and the quad edges) is not stored.
 
 from __future__ import annotations
 
-import io
 import json
-import zipfile
 from pathlib import Path
 
 import numpy as np
 
-from geotex.errors import GeotexError, InputError, MeshFileError, MissingFileError
-from geotex.io.limits import check_archive
+from geotex.errors import GeotexError, InputError, MeshFileError
+from geotex.io.records import read_record, write_record
 from geotex.param.polycube import PolyCube
 from geotex.param.polycube_quads import quad_edges
 from geotex.param.polycube_surface import subdivided_quads
 from geotex.shells.build import Shell
 from geotex.version import VERSION
 
-__all__ = ["save_shell", "load_shell", "shell_metadata", "FORMAT"]
+__all__ = ["save_shell", "load_shell", "shell_metadata", "shell_file_metadata", "FORMAT"]
 
 FORMAT = "geotex-shell-2"
 
@@ -36,6 +34,7 @@ _ARRAYS = {
     "base_faces": np.int32,
 }
 _DATE = (2020, 1, 1, 0, 0, 0)
+_HINT = "rebuild it with 'geotex shell build'"
 
 
 def _arrays_of(shell: Shell) -> dict:
@@ -74,29 +73,11 @@ def save_shell(path, shell: Shell) -> Path:
     MeshFileError
         If the file cannot be written.
     """
-    from geotex.io.atomic import atomic_output
-
-    path = Path(path)
-    if path.suffix.lower() != ".npz":
-        raise InputError(f"{path}: shell files are .npz; use a .npz file name")
-    buf = io.BytesIO()
-    with zipfile.ZipFile(buf, "w", compression=zipfile.ZIP_DEFLATED) as zf:
-        for key, arr in _arrays_of(shell).items():
-            _member(zf, key, np.ascontiguousarray(np.asarray(arr).astype(_ARRAYS[key])))
-        meta = json.dumps(shell_metadata(shell), sort_keys=True)
-        _member(zf, "metadata", np.frombuffer(meta.encode("utf-8"), dtype=np.uint8))
-    with atomic_output(path, "wb") as fh:
-        fh.write(buf.getvalue())
-    return path
-
-
-def _member(zf: zipfile.ZipFile, key: str, arr: np.ndarray) -> None:
-    data = io.BytesIO()
-    np.lib.format.write_array(data, arr, allow_pickle=False)
-    info = zipfile.ZipInfo(f"{key}.npy", date_time=_DATE)
-    info.compress_type = zipfile.ZIP_DEFLATED
-    info.external_attr = 0o644 << 16
-    zf.writestr(info, data.getvalue(), compresslevel=9)
+    arrays = {key: np.ascontiguousarray(np.asarray(arr).astype(_ARRAYS[key]))
+              for key, arr in _arrays_of(shell).items()}
+    meta = json.dumps(shell_metadata(shell), sort_keys=True)
+    arrays["metadata"] = np.frombuffer(meta.encode("utf-8"), dtype=np.uint8)
+    return write_record(path, arrays, compressed=True, date_time=_DATE, kind="shell")
 
 
 def load_shell(path) -> Shell:
@@ -110,33 +91,24 @@ def load_shell(path) -> Shell:
         If it is not a geotex shell file, or is truncated or corrupted.
     """
     path = Path(path)
-    if not path.is_file():
-        raise MissingFileError(f"{path}: shell file not found")
-    try:
-        check_archive(path)
-        with np.load(path, allow_pickle=False) as z:
-            if "metadata" in z.files:
-                meta = json.loads(bytes(z["metadata"]).decode("utf-8"))
-                if not isinstance(meta, dict) or meta.get("format") != FORMAT:
-                    fmt = meta.get("format") if isinstance(meta, dict) else None
-                    raise MeshFileError(path, f"unknown shell format {fmt!r} (expected "
-                                        f"{FORMAT}); rebuild it with 'geotex shell build'")
-            missing = [k for k in list(_ARRAYS) + ["metadata"] if k not in z.files]
-            if missing:
-                raise MeshFileError(path, "not a geotex shell file (missing "
-                                    + ", ".join(missing) + "); build one with 'geotex shell build'")
-            arrays = {k: z[k] for k in _ARRAYS}
-    except MeshFileError:
-        raise
-    except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile, UnicodeDecodeError,
-            json.JSONDecodeError) as exc:
-        raise MeshFileError(path, f"cannot read the shell file (truncated or corrupted?): "
-                            f"{exc}") from None
+    arrays, meta = read_record(path, kind="shell", format=FORMAT, arrays=list(_ARRAYS),
+                               hint=_HINT)
     try:
         return _shell_of(arrays, meta, path)
     except (KeyError, TypeError, ValueError, IndexError, GeotexError):
         raise MeshFileError(path, "inconsistent shell file (array shapes, indices or metadata "
-                            "do not match); rebuild it with 'geotex shell build'") from None
+                            "do not match); " + _HINT) from None
+
+
+def shell_file_metadata(path) -> dict:
+    """The JSON metadata of a shell file, without reading its arrays.
+
+    Raises
+    ------
+    MissingFileError, MeshFileError
+        As :func:`load_shell`.
+    """
+    return read_record(path, kind="shell", format=FORMAT, arrays=(), hint=_HINT)[1]
 
 
 def _shell_of(a: dict, meta: dict, path) -> Shell:
