@@ -144,8 +144,8 @@ def main() -> None:
             res, total, per = _timed(job)
             st = res.stats
             stages = " / ".join(f"{per.get(s, 0.0):.2f}" for s in SHELL_STAGES + MAP_STAGES)
-            job_rows.append(f"| {name} | {F.shape[0]} | {tile:g} | {st['quads']} | "
-                            f"{st['elements']} | {st['faces']:,} | "
+            job_rows.append(f"| {name} | {F.shape[0]} | {tile:g} | {st.quads} | "
+                            f"{st.elements} | {st.faces:,} | "
                             f"{'yes' if res.report.printable else 'NO'} | **{total:.2f}** | "
                             f"{stages} |")
             print(name, tile, f"one-shot {total:.2f}s printable={res.report.printable}")

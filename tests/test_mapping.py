@@ -70,20 +70,36 @@ def test_flat_tile_on_flat_quad_is_the_identity_up_to_scale(studs):
 def test_welded_elements_are_closed_and_the_union_printable(torus_shell, studs):
     res = textured_solid(torus_shell, studs, seed=3)
     s = res.stats
-    assert s["welded"] > 0 and s["open_faces_dropped"] == 0 and s["bare_quads"] == 0
+    assert s.welded > 0 and s.open_faces_dropped == 0 and s.bare_quads == 0
     # every mapped element is closed: no boundary edge after welding
     pc = torus_shell.polycube
     colors = edge_colors(pc.edge_axis, studs.n_colors, seed=3)
     m = mapped_tiles(torus_shell, studs, tiles_for_quads(studs, pc.quad_axes, pc.quad_edge,
-                                                         colors), scale=s["height"] / studs.height)
+                                                         colors), scale=s.height / studs.height)
     topo = edge_topology(m.faces, m.vertices.shape[0])
     assert np.all(topo.face_count == 2)
-    assert m.faces.shape[0] == s["mapped_faces"]
+    assert m.faces.shape[0] == s.mapped_faces
     assert res.report.printable, res.report.reasons
     assert res.report.self_intersecting_pairs == 0
     # the texture sits on the base: the solid is larger than the torus alone
     V0 = torus_shell.base_vertices
     assert np.ptp(res.vertices, axis=0).max() > np.ptp(V0, axis=0).max()
+
+
+def test_stats_are_a_frozen_record_whose_dict_is_the_json_report(torus_shell, studs):
+    res = textured_solid(torus_shell, studs, seed=3, check=False)
+    s = res.stats
+    with pytest.raises(AttributeError):
+        s.faces = 0
+    d = s.to_dict()
+    # an unchecked run has no check-only counts; the keys keep the report's order
+    assert list(d) == ["quads", "bare_quads", "height", "seed", "mapped_vertices",
+                       "mapped_faces", "welded", "open_faces_dropped", "elements",
+                       "union_operands", "elements_floating", "elements_folded",
+                       "elements_reseated", "union_retries", "vertices", "faces", "seconds"]
+    assert d["faces"] == res.faces.shape[0] and d["quads"] == torus_shell.n_quads
+    assert set(d["seconds"]) == {"assign", "map", "union"}
+    json.dumps(d)
 
 
 def test_isotropic_set_covers_a_closed_shape(torus_shell, iso_studs):
@@ -226,7 +242,7 @@ def test_every_catalog_set_on_every_catalog_shell_writes_a_printable_file(tmp_pa
     for set_name in _closed_sets():
         res = _catalog_result(shell_name, set_name)
         assert res.report.printable, (set_name, shell_name, res.report.reasons)
-        assert res.stats["elements"] > 0.5 * res.stats["quads"]
+        assert res.stats.elements > 0.5 * res.stats.quads
         # judged on the written file: float32 coordinates, corners welded on reading
         out = tmp_path / f"{set_name}.stl"
         export_printable(out, res.vertices, res.faces, report=res.report)
@@ -253,7 +269,7 @@ def test_folded_elements_are_shrunk_in_place_rather_than_dropped():
     s = res.stats
     assert res.report.printable, res.report.reasons
     # Blub's fins fold some studs; most of those are re-seated, smaller
-    assert s["elements_reseated"] > s["elements_folded"] / 2 > 0
+    assert s.elements_reseated > s.elements_folded / 2 > 0
     # the re-seated elements are free of self-crossings (only the rest are left out)
     pc = shell.polycube
     colors = edge_colors(pc.edge_axis, tiles.n_colors, seed=0)
@@ -261,4 +277,4 @@ def test_folded_elements_are_shrunk_in_place_rather_than_dropped():
     h = texture_height(shell, tiles)
     m = mapped_tiles(shell, tiles, tq, scale=h / tiles.height, anchor=0.2 * shell.tile_size)
     folded = element_contacts(m.vertices, m.faces).folded
-    assert folded.size == s["elements_folded"] + s["elements_reseated"]
+    assert folded.size == s.elements_folded + s.elements_reseated
