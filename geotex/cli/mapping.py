@@ -155,7 +155,7 @@ def _finish(args, shell, tiles, out, extra, *, label: str, seconds=None) -> int:
         doc = {"unit": "mm", "stats": s.to_dict(), "seconds": seconds,
                "tile_size": shell.tile_size, "shell": shell.name,
                "tiles": tiles.name, "distortion": shell.distortion,
-               "coverage": shell.polycube.coverage, "check": rep.to_dict()}
+               "coverage": shell.polycube.diagnostics.coverage, "check": rep.to_dict()}
         with atomic_output(extra["report"], "w") as fh:
             json.dump(doc, fh, indent=2, sort_keys=True)
         print(f"wrote {extra['report']}")
@@ -203,7 +203,7 @@ def run_texture(args) -> int:
     seconds = {"read+shell": round(time.perf_counter() - t, 3)}
     ts = shell.tile_size
     d = shell.distortion
-    search = shell.polycube.tile_search
+    search = shell.polycube.diagnostics.tile_search
     auto = (f" (chosen after {len(search.get('attempts', []))} attempts)"
             if search.get("automatic") else "")
     print(f"{args.base}: {shell.n_quads} tiles of {ts:.4g} mm{auto}, safe height "

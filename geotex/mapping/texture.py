@@ -240,8 +240,8 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
     times = {}
     t0 = time.perf_counter()
     report(progress, "assign")
-    colors = edge_colors(pc.edge_axis, tiles.n_colors, seed=int(seed))
-    tile_of_quad = tiles_for_quads(tiles, pc.quad_axes, pc.quad_edge, colors,
+    colors = edge_colors(pc.layout.edge_axis, tiles.n_colors, seed=int(seed))
+    tile_of_quad = tiles_for_quads(tiles, pc.layout.quad_axes, pc.layout.quad_edge, colors,
                                    bare=pc.quad_folded)
     times["assign"] = time.perf_counter() - t0
     report(progress, "map")
@@ -298,7 +298,7 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
                    else 0}
         times["validate"] = time.perf_counter() - t
     stats = TextureStats(
-        quads=pc.n_quads, bare_quads=int((tile_of_quad < 0).sum()), height=h, seed=int(seed),
+        quads=pc.layout.n_quads, bare_quads=int((tile_of_quad < 0).sum()), height=h, seed=int(seed),
         mapped_vertices=int(mapped.vertices.shape[0]), mapped_faces=int(mapped.faces.shape[0]),
         welded=mapped.welded, open_faces_dropped=mapped.dropped_faces,
         elements=union.elements, union_operands=union.groups,

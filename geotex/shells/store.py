@@ -16,8 +16,8 @@ import numpy as np
 
 from geotex.errors import GeotexError, InputError, MeshFileError
 from geotex.io.records import read_record, write_record
-from geotex.param.polycube import PolyCube
-from geotex.param.polycube_quads import quad_edges
+from geotex.param.polycube import PolyCube, PolyCubeDiagnostics
+from geotex.param.polycube_quads import QuadLayout
 from geotex.param.polycube_surface import subdivided_quads
 from geotex.shells.build import Shell
 from geotex.version import VERSION
@@ -39,7 +39,8 @@ _HINT = "rebuild it with 'geotex shell build'"
 
 def _arrays_of(shell: Shell) -> dict:
     pc = shell.polycube
-    return {"origin": pc.origin, "quad_corners": pc.quad_corners, "quad_label": pc.quad_label,
+    return {"origin": pc.origin, "quad_corners": pc.layout.quad_corners,
+            "quad_label": pc.layout.quad_label,
             "Y": pc.Y, "D": shell.D, "quad_folded": pc.quad_folded,
             "base_vertices": shell.base_vertices, "base_faces": shell.base_faces}
 
@@ -47,17 +48,17 @@ def _arrays_of(shell: Shell) -> dict:
 def shell_metadata(shell: Shell) -> dict:
     """The JSON metadata stored with a shell."""
 
-    pc = shell.polycube
+    pc, diag = shell.polycube, shell.polycube.diagnostics
     return {
         "format": FORMAT, "name": shell.name, "tile_size": pc.tile_size, "res": pc.res,
         "vertices": int(pc.Y.shape[0]), "faces": int(pc.F.shape[0]),
         "base_vertices": int(shell.base_vertices.shape[0]),
-        "base_faces": int(shell.base_faces.shape[0]), "quads": pc.n_quads,
-        "folded_quads": int(pc.quad_folded.sum()), "edges": int(pc.edge_axis.size),
+        "base_faces": int(shell.base_faces.shape[0]), "quads": pc.layout.n_quads,
+        "folded_quads": int(pc.quad_folded.sum()), "edges": pc.layout.n_edges,
         "max_height": shell.max_height,
-        "distortion": {k: float(v) for k, v in pc.distortion.items()},
-        "coverage": {k: float(v) for k, v in pc.coverage.items()},
-        "voxels": pc.voxels, "tile_search": pc.tile_search, "source": shell.source,
+        "distortion": {k: float(v) for k, v in diag.distortion.items()},
+        "coverage": {k: float(v) for k, v in diag.coverage.items()},
+        "voxels": diag.voxels, "tile_search": diag.tile_search, "source": shell.source,
         "geotex_version": VERSION,
         "recipe": shell.recipe,
     }
@@ -126,15 +127,12 @@ def _shell_of(a: dict, meta: dict, path) -> Shell:
             or bv.ndim != 2 or bv.shape[1] != 3 or bf.ndim != 2 or bf.shape[1] != 3
             or bf.shape[0] == 0 or bf.min() < 0 or bf.max() >= bv.shape[0]):
         raise InputError("arrays")
-    qe, qf, eax, eq, es = quad_edges(corners)
+    diagnostics = PolyCubeDiagnostics(**{k: dict(meta.get(k, {})) for k in (
+        "distortion", "coverage", "voxels", "tile_search")})
     pc = PolyCube(tile_size=float(meta["tile_size"]), res=res,
                   origin=a["origin"].astype(np.float64), P=P, Y=a["Y"].astype(np.float64),
-                  F=F, quad_grid=grid, quad_label=labels, quad_corners=corners, quad_edge=qe,
-                  quad_edge_forward=qf, edge_axis=eax, edge_quads=eq, edge_sides=es,
-                  quad_folded=a["quad_folded"].astype(bool),
-                  distortion=dict(meta.get("distortion", {})),
-                  coverage=dict(meta.get("coverage", {})), voxels=dict(meta.get("voxels", {})),
-                  tile_search=dict(meta.get("tile_search", {})))
+                  F=F, quad_folded=a["quad_folded"].astype(bool),
+                  layout=QuadLayout.of_quads(corners, labels, grid), diagnostics=diagnostics)
     return Shell(name=str(meta.get("name", Path(path).stem)), polycube=pc,
                  D=a["D"].astype(np.float64), max_height=float(meta["max_height"]),
                  base_vertices=bv.astype(np.float64), base_faces=bf,
