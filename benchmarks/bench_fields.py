@@ -154,7 +154,7 @@ def main():
         "which dominates it.",
         "",
         "The field solvers factor with SuperLU (scipy) in symmetric mode and run with "
-        "BLAS limited to one thread (`geotex/fields/sparse.py`). Without that limit "
+        "BLAS limited to one thread (`geotex/linalg.py`). Without that limit "
         "the same 100k-face factorization took 10-40 s instead of 0.4 s on this "
         "machine whenever other jobs were running: multi-threaded OpenBLAS spins on "
         "SuperLU's many tiny BLAS calls.",

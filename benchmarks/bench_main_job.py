@@ -84,8 +84,9 @@ def _union_peer(report_json: Path, base: Path) -> float | None:
     shell = build_shell(V, mesh.faces, tile_size=doc["tile_size"])
     tiles = load_named("studs")
     pc = shell.polycube
-    tq = tiles_for_quads(tiles, pc.quad_axes, pc.quad_edge,
-                         edge_colors(pc.edge_axis, tiles.n_colors, seed=0), bare=pc.quad_folded)
+    lay = pc.layout
+    tq = tiles_for_quads(tiles, lay.quad_axes, lay.quad_edge,
+                         edge_colors(lay.edge_axis, tiles.n_colors, seed=0), bare=pc.quad_folded)
     h = texture_height(shell, tiles)
     m = mapped_tiles(shell, tiles, tq, scale=h / tiles.height, anchor=0.2 * shell.tile_size)
     label, group = element_groups(m.vertices, m.faces)

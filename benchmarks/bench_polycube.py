@@ -101,7 +101,7 @@ def main() -> None:
     shell_rows, map_rows, job_rows = [], [], []
     for name, (V, F), ts in _bases():
         shell, total, per = _timed(lambda p: build_shell(V, F, tile_size=ts, progress=p))
-        d, c = shell.distortion, shell.polycube.coverage
+        d, c = shell.distortion, shell.polycube.diagnostics.coverage
         stages = " / ".join(f"{per.get(s, 0.0):.2f}" for s in SHELL_STAGES)
         shell_rows.append(
             f"| {name} | {F.shape[0]} | {ts} | {shell.n_quads} ({int(shell.polycube.quad_folded.sum())}"
@@ -111,8 +111,9 @@ def main() -> None:
         print(name, f"shell {total:.2f}s", {k: round(v, 2) for k, v in per.items()})
         # 2. mapping throughput beside a numpy affine transform of as many vertices
         pc = shell.polycube
-        colors = edge_colors(pc.edge_axis, tiles.n_colors, seed=0)
-        tq = tiles_for_quads(tiles, pc.quad_axes, pc.quad_edge, colors, bare=pc.quad_folded)
+        lay = pc.layout
+        colors = edge_colors(lay.edge_axis, tiles.n_colors, seed=0)
+        tq = tiles_for_quads(tiles, lay.quad_axes, lay.quad_edge, colors, bare=pc.quad_folded)
         scale = 0.2 * ts / tiles.height
         mapped_tiles(shell, tiles, tq, scale=scale)            # warm up
         best = np.inf
@@ -144,8 +145,8 @@ def main() -> None:
             res, total, per = _timed(job)
             st = res.stats
             stages = " / ".join(f"{per.get(s, 0.0):.2f}" for s in SHELL_STAGES + MAP_STAGES)
-            job_rows.append(f"| {name} | {F.shape[0]} | {tile:g} | {st['quads']} | "
-                            f"{st['elements']} | {st['faces']:,} | "
+            job_rows.append(f"| {name} | {F.shape[0]} | {tile:g} | {st.quads} | "
+                            f"{st.elements} | {st.faces:,} | "
                             f"{'yes' if res.report.printable else 'NO'} | **{total:.2f}** | "
                             f"{stages} |")
             print(name, tile, f"one-shot {total:.2f}s printable={res.report.printable}")

@@ -57,21 +57,12 @@ def run_peer(cases, *, batch: int = 25, workers: int = 2):
     """trimesh on every case; list of (case, outcome, seconds, maxrss)."""
     from concurrent.futures import ThreadPoolExecutor
 
-    from geotex.fuzzing import limited_env, run_limited   # the limits of the geotex runs
+    from geotex.fuzzing import limited_env, run_batch, run_limited   # the geotex runs' limits
 
     env = limited_env()
 
     def job(group):
-        code, out, err, sec, rss = run_limited([sys.executable, "-c", _PEER]
-                                               + [str(c.path) for c in group],
-                                               TIME_LIMIT * len(group), env)
-        rows = {}
-        for line in out.splitlines():
-            try:
-                row = json.loads(line)
-            except ValueError:
-                continue
-            rows[row["file"]] = row
+        _, _, rss, rows = run_batch([sys.executable, "-c", _PEER], group, env)
         results = []
         for c in group:
             row = rows.get(str(c.path))

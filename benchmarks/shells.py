@@ -103,13 +103,14 @@ def main() -> None:
         _, again, _ = _timed(lambda p: build_shell(V, F, tile_size=pc.tile_size, progress=p))
         cpu = time.process_time() - cpu
         chi = V.shape[0] - 3 * F.shape[0] // 2 + F.shape[0]
-        d, c = pc.distortion, pc.coverage
-        attempts = pc.tile_search["attempts"]
+        d, c = pc.diagnostics.distortion, pc.diagnostics.coverage
+        attempts = pc.diagnostics.tile_search["attempts"]
         fitted = sum(1 for a in attempts if "quads" in a)
         stages = " / ".join(f"{per.get(s, 0.0):.2f}" for s in SHELL_STAGES)
         rows.append(
             f"| {name} | {F.shape[0]} | {(2 - chi) // 2} | 1/{ext / pc.tile_size:.1f} | "
-            f"{len(attempts)} ({fitted} fitted) | {pc.n_quads} | {int(pc.quad_folded.sum())} | "
+            f"{len(attempts)} ({fitted} fitted) | {pc.layout.n_quads} | "
+            f"{int(pc.quad_folded.sum())} | "
             f"{c['within_tile']:.4f} | {c['within_quarter_tile']:.4f} | "
             f"{d['area_mean']:.3f} / {d['angle_mean']:.3f} | {shell.max_height / pc.tile_size:.2f} | "
             f"**{total:.2f}** | {again:.2f} ({cpu:.2f}) | {stages} | {os.getloadavg()[0]:.1f} |")

@@ -28,7 +28,7 @@ def main(out: Path) -> None:
     rows = []
     for name, up in SHELLS.items():
         shell = load_named(name)
-        d, c = shell.distortion, shell.polycube.coverage
+        d, c = shell.distortion, shell.polycube.diagnostics.coverage
         print(f"{name}: {shell.n_quads} quads of {shell.tile_size:g}, "
               f"{int(shell.polycube.quad_folded.sum())} folded, max height "
               f"{shell.max_height:.3g}, distortion area {d['area_mean']:.3f} "

@@ -53,14 +53,14 @@ def main(out: Path) -> None:
             res = textured_solid(shell, tiles, seed=0)
             dt = time.perf_counter() - t
             s = res.stats
-            print(f"{name} on {shell_name}: {s['quads']} tiles, {s['elements']} elements, "
-                  f"{s['faces']} faces, printable {res.report.printable}, {dt:.1f} s")
+            print(f"{name} on {shell_name}: {s.quads} tiles, {s.elements} elements, "
+                  f"{s.faces} faces, printable {res.report.printable}, {dt:.1f} s")
             if res.report.printable:
                 export_printable(out / f"texture_gallery_{name}_{shell_name}.stl",
                                  res.vertices, res.faces, report=res.report)
             shown = res.vertices[:, [0, 2, 1]] * [-1.0, 1.0, 1.0] if up == "y" else res.vertices
             panels.append(Panel(shown, res.faces, color=COLOURS[k % len(COLOURS)],
-                                title=f"{name} on {shell_name}, {s['elements']} elements"
+                                title=f"{name} on {shell_name}, {s.elements} elements"
                                 + ("" if res.report.printable else " (NOT printable)")))
         path = out / f"texture_gallery_{name}.png"
         render_panels(panels, path, size=(640, 600), up="z")

@@ -38,7 +38,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 __all__ = ["FuzzCase", "Outcome", "make_cases", "run_cases", "verdict", "seed_files",
-           "TIME_LIMIT", "MEMORY_LIMIT", "ADDRESS_LIMIT"]
+           "TIME_LIMIT", "MEMORY_LIMIT", "ADDRESS_LIMIT", "run_batch"]
 
 TIME_LIMIT = 10.0                 # seconds per case
 MEMORY_LIMIT = 1 << 30            # peak resident bytes per case (or batch)
@@ -434,6 +434,34 @@ def limited_env():
     return env
 
 
+def run_batch(command, cases, env) -> tuple:
+    """Run ``command`` on the files of ``cases`` in one limited process.
+
+    The process gets :data:`TIME_LIMIT` seconds per case and prints one JSON
+    object with a ``"file"`` key per line for every file it finished.
+
+    Returns
+    -------
+    code : int or None
+        Exit status (None or -9 when killed at the time limit).
+    stderr : str
+    maxrss : int
+        Peak resident size of the process, bytes.
+    rows : dict
+        The JSON rows by ``file``; a file without a row was not finished.
+    """
+    code, out, err, _, rss = run_limited(list(command) + [str(c.path) for c in cases],
+                                         TIME_LIMIT * len(cases), env)
+    rows = {}
+    for line in out.splitlines():
+        try:
+            row = json.loads(line)
+        except ValueError:
+            continue
+        rows[row["file"]] = row
+    return code, err, rss, rows
+
+
 def run_cases(cases, *, batch: int = 40, workers: int = 2) -> list[Outcome]:
     """Run ``geotex check`` on every case (see the module notes); outcomes in order."""
     from concurrent.futures import ThreadPoolExecutor
@@ -453,16 +481,7 @@ def run_cases(cases, *, batch: int = 40, workers: int = 2) -> list[Outcome]:
             code, out, err, sec, rss = run_limited([sys.executable, "-m", "geotex", "check",
                                                    str(c.path)], TIME_LIMIT, env)
             return [Outcome(c, code, out, err, sec, rss)]
-        code, out, err, sec, rss = run_limited([sys.executable, "-m", "geotex.fuzzing"]
-                                               + [str(c.path) for c in group],
-                                               TIME_LIMIT * len(group), env)
-        rows = {}
-        for line in out.splitlines():
-            try:
-                row = json.loads(line)
-            except ValueError:
-                continue
-            rows[row["file"]] = row
+        code, err, rss, rows = run_batch([sys.executable, "-m", "geotex.fuzzing"], group, env)
         results = []
         for c in group:
             row = rows.get(str(c.path))

@@ -268,6 +268,7 @@ def render_mesh(V, F, path, *, size=(1200, 900), up="z", title: str = "",
     >>> import numpy as np
     >>> V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
     >>> F = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    >>> # skipped in doctests: writes tet.png and needs an OpenGL context
     >>> render_mesh(V, F, "tet.png")  # doctest: +SKIP
     """
     panel = Panel(V, F, title=title, color=color, scalars=scalars, cmap=cmap,

@@ -10,7 +10,8 @@ Examples
 >>> from geotex.testing import assert_printable
 >>> V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
 >>> F = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
->>> assert_printable(V, F)
+>>> assert_printable(V, F).printable          # passes, returning the report
+True
 """
 
 from __future__ import annotations

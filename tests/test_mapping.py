@@ -47,17 +47,17 @@ def test_flat_tile_on_flat_quad_is_the_identity_up_to_scale(studs):
     V, F = box((0, 0, 0), (6, 6, 1), divisions=6)
     shell = build_shell(V, F, tile_size=0.25)
     pc = shell.polycube
-    colors = edge_colors(pc.edge_axis, studs.n_colors, seed=0)
-    tiles = tiles_for_quads(studs, pc.quad_axes, pc.quad_edge, colors)
-    centre = pc.origin + pc.quad_corners[:, 0] * 0.25
-    top = np.flatnonzero((pc.quad_label == 4) & (np.abs(centre[:, 0] - 2.9) < 0.2)
+    colors = edge_colors(pc.layout.edge_axis, studs.n_colors, seed=0)
+    tiles = tiles_for_quads(studs, pc.layout.quad_axes, pc.layout.quad_edge, colors)
+    centre = pc.origin + pc.layout.quad_corners[:, 0] * 0.25
+    top = np.flatnonzero((pc.layout.quad_label == 4) & (np.abs(centre[:, 0] - 2.9) < 0.2)
                          & (np.abs(centre[:, 1] - 2.9) < 0.2))
     assert top.size >= 1
-    only = np.full(pc.n_quads, -1)
+    only = np.full(pc.layout.n_quads, -1)
     only[top] = tiles[top]
     uvw, quad, _, _ = gathered_tiles(studs, only)
     got = quad_points_to_shell(shell, quad, uvw, height=0.25)
-    c0 = pc.origin + pc.quad_corners[quad, 0] * 0.25
+    c0 = pc.origin + pc.layout.quad_corners[quad, 0] * 0.25
     # the tile moved rigidly into the +X, +Y, +Z frame of the top face and scaled
     assert np.abs(got - (c0 + uvw * 0.25)).max() < 1e-12
     # and the elements that lie wholly inside these quads come out of the full map the same
@@ -70,20 +70,37 @@ def test_flat_tile_on_flat_quad_is_the_identity_up_to_scale(studs):
 def test_welded_elements_are_closed_and_the_union_printable(torus_shell, studs):
     res = textured_solid(torus_shell, studs, seed=3)
     s = res.stats
-    assert s["welded"] > 0 and s["open_faces_dropped"] == 0 and s["bare_quads"] == 0
+    assert s.welded > 0 and s.open_faces_dropped == 0 and s.bare_quads == 0
     # every mapped element is closed: no boundary edge after welding
     pc = torus_shell.polycube
-    colors = edge_colors(pc.edge_axis, studs.n_colors, seed=3)
-    m = mapped_tiles(torus_shell, studs, tiles_for_quads(studs, pc.quad_axes, pc.quad_edge,
-                                                         colors), scale=s["height"] / studs.height)
+    colors = edge_colors(pc.layout.edge_axis, studs.n_colors, seed=3)
+    m = mapped_tiles(torus_shell, studs, tiles_for_quads(studs, pc.layout.quad_axes,
+                                                         pc.layout.quad_edge,
+                                                         colors), scale=s.height / studs.height)
     topo = edge_topology(m.faces, m.vertices.shape[0])
     assert np.all(topo.face_count == 2)
-    assert m.faces.shape[0] == s["mapped_faces"]
+    assert m.faces.shape[0] == s.mapped_faces
     assert res.report.printable, res.report.reasons
     assert res.report.self_intersecting_pairs == 0
     # the texture sits on the base: the solid is larger than the torus alone
     V0 = torus_shell.base_vertices
     assert np.ptp(res.vertices, axis=0).max() > np.ptp(V0, axis=0).max()
+
+
+def test_stats_are_a_frozen_record_whose_dict_is_the_json_report(torus_shell, studs):
+    res = textured_solid(torus_shell, studs, seed=3, check=False)
+    s = res.stats
+    with pytest.raises(AttributeError):
+        s.faces = 0
+    d = s.to_dict()
+    # an unchecked run has no check-only counts; the keys keep the report's order
+    assert list(d) == ["quads", "bare_quads", "height", "seed", "mapped_vertices",
+                       "mapped_faces", "welded", "open_faces_dropped", "elements",
+                       "union_operands", "elements_floating", "elements_folded",
+                       "elements_reseated", "union_retries", "vertices", "faces", "seconds"]
+    assert d["faces"] == res.faces.shape[0] and d["quads"] == torus_shell.n_quads
+    assert set(d["seconds"]) == {"assign", "map", "union"}
+    json.dumps(d)
 
 
 def test_isotropic_set_covers_a_closed_shape(torus_shell, iso_studs):
@@ -107,11 +124,11 @@ def test_same_seed_same_bytes_other_seed_other_layout(tmp_path, torus_shell, stu
 
 def test_neighbouring_quads_agree_on_their_edge_colours(torus_shell, studs):
     pc = torus_shell.polycube
-    colors = edge_colors(pc.edge_axis, (2, 2, 2), seed=1)
+    colors = edge_colors(pc.layout.edge_axis, (2, 2, 2), seed=1)
     assert set(np.unique(colors)) == {0, 1}
-    side = colors[pc.quad_edge]
-    qa, qb = pc.edge_quads[:, 0], pc.edge_quads[:, 1]
-    sa, sb = pc.edge_sides[:, 0], pc.edge_sides[:, 1]
+    side = colors[pc.layout.quad_edge]
+    qa, qb = pc.layout.edge_quads[:, 0], pc.layout.edge_quads[:, 1]
+    sa, sb = pc.layout.edge_sides[:, 0], pc.layout.edge_sides[:, 1]
     assert np.array_equal(side[qa, sa], side[qb, sb])
 
 
@@ -240,7 +257,7 @@ def test_catalog_sets_on_catalog_shells_write_printable_files(tmp_path, shell_na
 
     res = _catalog_result(shell_name, set_name)
     assert res.report.printable, (set_name, shell_name, res.report.reasons)
-    assert res.stats["elements"] > 0.5 * res.stats["quads"]
+    assert res.stats.elements > 0.5 * res.stats.quads
     # judged on the written file: float32 coordinates, corners welded on reading
     out = tmp_path / f"{set_name}.stl"
     export_printable(out, res.vertices, res.faces, report=res.report)
@@ -267,12 +284,13 @@ def test_folded_elements_are_shrunk_in_place_rather_than_dropped():
     s = res.stats
     assert res.report.printable, res.report.reasons
     # Blub's fins fold some studs; most of those are re-seated, smaller
-    assert s["elements_reseated"] > s["elements_folded"] / 2 > 0
+    assert s.elements_reseated > s.elements_folded / 2 > 0
     # the re-seated elements are free of self-crossings (only the rest are left out)
     pc = shell.polycube
-    colors = edge_colors(pc.edge_axis, tiles.n_colors, seed=0)
-    tq = tiles_for_quads(tiles, pc.quad_axes, pc.quad_edge, colors, bare=pc.quad_folded)
+    colors = edge_colors(pc.layout.edge_axis, tiles.n_colors, seed=0)
+    tq = tiles_for_quads(tiles, pc.layout.quad_axes, pc.layout.quad_edge, colors,
+                         bare=pc.quad_folded)
     h = texture_height(shell, tiles)
     m = mapped_tiles(shell, tiles, tq, scale=h / tiles.height, anchor=0.2 * shell.tile_size)
     folded = element_contacts(m.vertices, m.faces).folded
-    assert folded.size == s["elements_folded"] + s["elements_reseated"]
+    assert folded.size == s.elements_folded + s.elements_reseated

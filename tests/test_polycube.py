@@ -29,49 +29,49 @@ def _double_torus():
 
 def _assert_valid(pc, V, F):
     r = pc.res
-    c = pc.quad_corners
-    a, a1, a2 = chart_axes(pc.quad_label)
-    q = np.arange(pc.n_quads)
+    c = pc.layout.quad_corners
+    a, a1, a2 = chart_axes(pc.layout.quad_label)
+    q = np.arange(pc.layout.n_quads)
     # quads: unit squares on the integer grid, right-handed about their outward normal
     e1 = c[:, 1] - c[:, 0]
     e2 = c[:, 3] - c[:, 0]
     assert np.array_equal(e1, np.eye(3, dtype=np.int64)[a1])
     assert np.array_equal(e2, np.eye(3, dtype=np.int64)[a2])
     assert np.array_equal(c[:, 2], c[:, 0] + e1 + e2)
-    sign = np.where(pc.quad_label % 2 == 0, 1, -1)
+    sign = np.where(pc.layout.quad_label % 2 == 0, 1, -1)
     assert np.all(np.cross(e1, e2)[q, a] == sign)
     # every global edge in exactly two quads, traversed in opposite directions
-    assert np.all(np.bincount(pc.quad_edge.ravel(), minlength=pc.edge_axis.size) == 2)
-    fw = pc.quad_edge_forward
-    qa, qb = pc.edge_quads[:, 0], pc.edge_quads[:, 1]
-    sa, sb = pc.edge_sides[:, 0], pc.edge_sides[:, 1]
+    assert np.all(np.bincount(pc.layout.quad_edge.ravel(), minlength=pc.layout.edge_axis.size) == 2)
+    fw = pc.layout.quad_edge_forward
+    qa, qb = pc.layout.edge_quads[:, 0], pc.layout.edge_quads[:, 1]
+    sa, sb = pc.layout.edge_sides[:, 0], pc.layout.edge_sides[:, 1]
     assert np.all(fw[qa, sa] != fw[qb, sb])
-    assert np.array_equal(pc.quad_edge[qa, sa], np.arange(pc.edge_axis.size))
+    assert np.array_equal(pc.layout.quad_edge[qa, sa], np.arange(pc.layout.edge_axis.size))
     # the sub-grid: grid vertex (i, j) of quad q sits at c0 + (i e1 + j e2) / res exactly
     i, j = np.meshgrid(np.arange(r + 1), np.arange(r + 1), indexing="ij")
     want = (c[:, 0, None, None, :] + (i[None, :, :, None] * e1[:, None, None, :]
                                       + j[None, :, :, None] * e2[:, None, None, :]) / r)
-    assert np.array_equal(pc.P[pc.quad_grid], want)
+    assert np.array_equal(pc.P[pc.layout.quad_grid], want)
     # ... and forms one closed, consistently oriented surface of area = number of quads
     rep = check_mesh(pc.positions, pc.F, self_intersections=False)
     assert rep.boundary_edges == 0 and rep.non_manifold_edges == 0
     assert rep.orientation_consistent and rep.outward
     cross = np.cross(pc.P[pc.F[:, 1]] - pc.P[pc.F[:, 0]], pc.P[pc.F[:, 2]] - pc.P[pc.F[:, 0]])
-    assert 0.5 * np.linalg.norm(cross, axis=1).sum() == pytest.approx(pc.n_quads, rel=1e-12)
+    assert 0.5 * np.linalg.norm(cross, axis=1).sum() == pytest.approx(pc.layout.n_quads, rel=1e-12)
     # same topology as the input
     assert rep.euler_characteristic == check_mesh(V, F).euler_characteristic
     # the fitted surface lies on the base and does not fold
     C, _ = SurfaceProjector(V, F).closest(pc.Y)
     diag = float(np.linalg.norm(np.ptp(V, axis=0)))
     assert np.abs(C - pc.Y).max() < 1e-9 * diag
-    assert not pc.quad_folded.any() and pc.distortion["folded_faces"] == 0
+    assert not pc.quad_folded.any() and pc.diagnostics.distortion["folded_faces"] == 0
     # tile points locate in their own quad's sub-grid, at the right polycube point
     rng = np.random.default_rng(0)
-    qq = rng.integers(0, pc.n_quads, 3000)
+    qq = rng.integers(0, pc.layout.n_quads, 3000)
     uv = rng.random((3000, 2))
     uv[:8] = [[0, 0], [1, 0], [1, 1], [0, 1], [0.5, 0], [1, 0.5], [0.5, 1], [0, 0.5]]
     f, b = pc.locate(qq, uv)
-    assert np.all(pc.face_quad[f] == qq)
+    assert np.all(pc.layout.face_quad[f] == qq)
     assert np.all(b >= -1e-15) and np.allclose(b.sum(axis=1), 1.0)
     p = np.einsum("ki,kij->kj", b, pc.P[pc.F[f]])
     cq = c[qq].astype(float)
@@ -104,28 +104,29 @@ def test_manifold_repair_removes_edge_and_corner_contacts(strategy):
 def test_box_is_exact():
     V, F = box((0, 0, 0), (2, 1, 1), divisions=4)
     pc = polycube(V, F, tile_size=0.25)
-    assert pc.n_quads == 2 * (2 * 1 + 2 * 1 + 1 * 1) / 0.25 ** 2
+    assert pc.layout.n_quads == 2 * (2 * 1 + 2 * 1 + 1 * 1) / 0.25 ** 2
     assert np.abs(pc.Y - pc.positions).max() < 1e-12
-    assert pc.distortion["area_mean"] < 1e-9 and pc.distortion["angle_mean"] < 1e-9
+    d = pc.diagnostics.distortion
+    assert d["area_mean"] < 1e-9 and d["angle_mean"] < 1e-9
     _assert_valid(pc, V, F)
 
 
 def test_icosphere_valid():
     V, F = icosphere(3)
     pc = polycube(V, F, tile_size=0.25)
-    assert sorted(set(pc.quad_label.tolist())) == [0, 1, 2, 3, 4, 5]
+    assert sorted(set(pc.layout.quad_label.tolist())) == [0, 1, 2, 3, 4, 5]
     _assert_valid(pc, V, F)
-    d = pc.distortion
+    d = pc.diagnostics.distortion
     assert d["angle_mean"] < 0.2 and d["area_mean"] < 0.4
-    assert pc.coverage["within_quarter_tile"] > 0.999
+    assert pc.diagnostics.coverage["within_quarter_tile"] > 0.999
 
 
 def test_torus_genus_one():
     V, F = torus(n_major=64, n_minor=32)
     pc = polycube(V, F, tile_size=0.2)
     _assert_valid(pc, V, F)
-    qv = np.unique(pc.quad_corners.reshape(-1, 3), axis=0).shape[0]
-    assert qv - pc.edge_axis.size + pc.n_quads == 0
+    qv = np.unique(pc.layout.quad_corners.reshape(-1, 3), axis=0).shape[0]
+    assert qv - pc.layout.edge_axis.size + pc.layout.n_quads == 0
 
 
 def test_double_torus_genus_two():
@@ -141,8 +142,8 @@ def test_rigid_translation_and_scaling():
     b = polycube(V * 1e3 + [7.0, -3.0, 2.0], F, tile_size=500.0)
     c = polycube(V * 0.25, F, tile_size=0.125)
     for other in (b, c):
-        assert np.array_equal(a.quad_corners, other.quad_corners)
-        assert np.array_equal(a.quad_label, other.quad_label)
+        assert np.array_equal(a.layout.quad_corners, other.layout.quad_corners)
+        assert np.array_equal(a.layout.quad_label, other.layout.quad_label)
     # a power-of-two scale changes no bit of the computation
     assert np.array_equal(c.Y * 4, a.Y)
     # otherwise the closest-point map from inside a faceted surface is discontinuous
@@ -203,7 +204,7 @@ def test_tile_too_large_for_the_hole_says_why():
     # the size it names does resolve the hole
     works = float(re.search(r"tile size ([0-9.]+) resolves it", str(err.value)).group(1))
     assert works < 1.2
-    assert polycube(V, F, tile_size=works).n_quads > 0         # raises if it did not
+    assert polycube(V, F, tile_size=works).layout.n_quads > 0        # raises if it did not
 
 
 def _tilted_plate(genus, **kw):
@@ -242,13 +243,13 @@ def test_automatic_tile_size_resolves_the_genus():
     with pytest.raises(GeotexError, match="genus 3.*resolves it"):
         polycube(V, F, tile_size=extent / 12)                  # the old default fails
     pc = polycube(V, F)
-    search = pc.tile_search
+    search = pc.diagnostics.tile_search
     assert search["automatic"] and search["chosen"] == pc.tile_size < extent / 12
     assert search["attempts"][0]["tile_size"] == pytest.approx(extent / 12)
     assert search["attempts"][0]["result"].startswith("voxel polycube has genus")
     assert search["attempts"][-1]["result"] == "ok"
     assert not pc.quad_folded.any()
-    assert pc.coverage["within_tile"] >= 0.99
+    assert pc.diagnostics.coverage["within_tile"] >= 0.99
     # the chosen size given explicitly builds the same polycube
     again = polycube(V, F, tile_size=pc.tile_size)
     assert np.array_equal(again.Y, pc.Y)
@@ -259,8 +260,8 @@ def test_coverage_within_one_tile_on_a_generated_shape():
 
     V, F = plate_with_holes(2, cell=0.1)
     pc = polycube(V, F)
-    assert pc.coverage["within_tile"] >= 0.99
-    assert pc.coverage["within_quarter_tile"] <= pc.coverage["within_tile"]
+    assert pc.diagnostics.coverage["within_tile"] >= 0.99
+    assert pc.diagnostics.coverage["within_quarter_tile"] <= pc.diagnostics.coverage["within_tile"]
     assert not pc.quad_folded.any()
 
 

@@ -33,7 +33,7 @@ def test_box_shell_corners_exact():
     q = np.repeat(np.arange(s.n_quads), 4)
     uv = np.tile([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]], (s.n_quads, 1))
     x, d = quad_points_to_base(s, q, uv)
-    corners = s.polycube.origin + s.polycube.quad_corners.reshape(-1, 3) * 0.25
+    corners = s.polycube.origin + s.polycube.layout.quad_corners.reshape(-1, 3) * 0.25
     assert np.allclose(x, corners, atol=1e-12)
     assert np.allclose(np.linalg.norm(d, axis=1), 1.0)
     assert np.array_equal(s.base_vertices, V) and np.array_equal(s.base_faces, F)
@@ -49,9 +49,9 @@ def test_locate_matches_polycube_point(torus_shell):
     uv[:50] = 0.0  # quad corners
     f, b = locate_on_quads(s, q, uv)
     assert np.all(b >= 0) and np.allclose(b.sum(axis=1), 1.0)
-    assert np.all(pc.face_quad[f] == q)
+    assert np.all(pc.layout.face_quad[f] == q)
     p = np.einsum("ki,kij->kj", b, pc.P[pc.F[f]])
-    c = pc.quad_corners[q].astype(float)
+    c = pc.layout.quad_corners[q].astype(float)
     expected = c[:, 0] + uv[:, :1] * (c[:, 1] - c[:, 0]) + uv[:, 1:] * (c[:, 3] - c[:, 0])
     assert np.abs(p - expected).max() < 1e-12
 
@@ -60,15 +60,15 @@ def test_shared_edges_agree(torus_shell):
     s = torus_shell
     pc = s.polycube
     t = np.linspace(0.0, 1.0, 7)
-    E = pc.edge_axis.size
-    qa, qb = pc.edge_quads[:, 0], pc.edge_quads[:, 1]
-    sa, sb = pc.edge_sides[:, 0], pc.edge_sides[:, 1]
+    E = pc.layout.edge_axis.size
+    qa, qb = pc.layout.edge_quads[:, 0], pc.layout.edge_quads[:, 1]
+    sa, sb = pc.layout.edge_sides[:, 0], pc.layout.edge_sides[:, 1]
     uva = _edge_uv(sa, t).reshape(-1, 2)
     uvb = _edge_uv(sb, 1.0 - t).reshape(-1, 2)  # the neighbour runs the other way
     xa, _ = quad_points_to_base(s, np.repeat(qa, t.size), uva)
     xb, _ = quad_points_to_base(s, np.repeat(qb, t.size), uvb)
     assert np.abs(xa - xb).max() < 1e-12
-    assert E == pc.quad_edge.max() + 1
+    assert E == pc.layout.quad_edge.max() + 1
 
 
 def test_max_height_is_safe(torus_shell):
@@ -93,12 +93,14 @@ def test_file_round_trip_and_reproducible(tmp_path, torus_shell):
     a = tmp_path / "a.npz"
     save_shell(a, torus_shell)
     s2 = load_shell(a)
-    for k in ("Y", "F", "P", "quad_grid", "quad_label", "quad_corners", "quad_edge",
-              "quad_edge_forward", "edge_axis", "edge_quads", "edge_sides", "quad_folded",
-              "origin"):
+    for k in ("Y", "F", "P", "quad_folded", "origin"):
         assert np.array_equal(getattr(s2.polycube, k), getattr(torus_shell.polycube, k))
+    for k in ("quad_grid", "quad_label", "quad_corners", "quad_edge", "quad_edge_forward",
+              "edge_axis", "edge_quads", "edge_sides"):
+        assert np.array_equal(getattr(s2.polycube.layout, k),
+                              getattr(torus_shell.polycube.layout, k))
     assert np.array_equal(s2.base_vertices, torus_shell.base_vertices)
-    assert s2.polycube.distortion == torus_shell.polycube.distortion
+    assert s2.polycube.diagnostics.distortion == torus_shell.polycube.diagnostics.distortion
     assert np.array_equal(s2.D, torus_shell.D) and s2.max_height == torus_shell.max_height
     # same input -> byte-identical file
     V, F = torus(n_major=48, n_minor=24)
@@ -196,10 +198,10 @@ def test_side_coordinate_runs_the_same_way_in_both_quads(torus_shell):
                           np.stack([z, t], -1)])
         return table[side].reshape(-1, 2)
 
-    qa, qb = pc.edge_quads[:, 0], pc.edge_quads[:, 1]
-    uva, uvb = side_uv(pc.edge_sides[:, 0]), side_uv(pc.edge_sides[:, 1])
-    ca = pc.quad_corners[np.repeat(qa, t.size)].astype(float)
-    cb = pc.quad_corners[np.repeat(qb, t.size)].astype(float)
+    qa, qb = pc.layout.edge_quads[:, 0], pc.layout.edge_quads[:, 1]
+    uva, uvb = side_uv(pc.layout.edge_sides[:, 0]), side_uv(pc.layout.edge_sides[:, 1])
+    ca = pc.layout.quad_corners[np.repeat(qa, t.size)].astype(float)
+    cb = pc.layout.quad_corners[np.repeat(qb, t.size)].astype(float)
     pa = ca[:, 0] + uva[:, :1] * (ca[:, 1] - ca[:, 0]) + uva[:, 1:] * (ca[:, 3] - ca[:, 0])
     pb = cb[:, 0] + uvb[:, :1] * (cb[:, 1] - cb[:, 0]) + uvb[:, 1:] * (cb[:, 3] - cb[:, 0])
     assert np.array_equal(pa, pb)
@@ -224,7 +226,7 @@ def test_cli_automatic_tile_size_and_too_large_error(tmp_path, capsys):
     shell = load_shell(out)
     assert shell.tile_size == pytest.approx(1 / 12)
     assert shell.recipe["tile_size"] == shell.tile_size and shell.recipe["tile_size_automatic"]
-    assert shell.polycube.tile_search["attempts"][0]["result"] == "ok"
+    assert shell.polycube.diagnostics.tile_search["attempts"][0]["result"] == "ok"
     # an explicit size too large for the holes: one line naming a size that works
     V, F = plate_with_holes(3, hole=0.2, bar=0.6, thickness=0.4, cell=0.06)
     V = V @ Rotation.from_euler("zx", [30, 20], degrees=True).as_matrix().T

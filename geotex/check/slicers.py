@@ -42,6 +42,7 @@ Both programs run without a shell, with a timeout, in a temporary ``HOME``
 Examples
 --------
 >>> from geotex.check.slicers import slicer_verdicts
+>>> # skipped in doctests: needs PrusaSlicer, admesh and a mesh file
 >>> v = slicer_verdicts("part.stl")                          # doctest: +SKIP
 >>> v["prusaslicer"]["ok"], v["admesh"]["ok"]                 # doctest: +SKIP
 (True, True)

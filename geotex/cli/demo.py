@@ -92,19 +92,20 @@ def run(args) -> int:
     render_panels([
         Panel(V, base.faces, color="#d9c7a3", title=f"{DEMO_BASE}: {base.n_faces} faces, "
               f"{args.size_mm:g} mm"),
-        Panel(shell.polycube.Y, shell.polycube.F, scalars=shell.polycube.quad_label[
-            shell.polycube.face_quad], cmap="Set2",
+        Panel(shell.polycube.Y, shell.polycube.F, scalars=shell.polycube.layout.quad_label[
+            shell.polycube.layout.face_quad], cmap="Set2",
             title=f"polycube map: {shell.n_quads} tiles of {tile_mm:.3g} mm"),
         Panel(result.vertices, result.faces, color="#c9b38f",
-              title=f"{tiles.name}: {s['elements']} elements, printable"),
+              title=f"{tiles.name}: {s.elements} elements, printable"),
     ], out / f"{name}.png", size=(700, 700))
     files.append(f"{name}.png")
     elapsed = time.perf_counter() - start
     summary = {"base": DEMO_BASE, "tiles": tiles.name, "size_mm": args.size_mm,
                "tile_mm": tile_mm, "seconds": round(elapsed, 2), "files": files,
                "shell": {"quads": shell.n_quads, "max_height_mm": shell.max_height,
-                         "distortion": shell.distortion, "coverage": shell.polycube.coverage},
-               "map": s, "check": rep.to_dict()}
+                         "distortion": shell.distortion,
+                         "coverage": shell.polycube.diagnostics.coverage},
+               "map": s.to_dict(), "check": rep.to_dict()}
     with atomic_output(out / "report.json", "w") as fh:
         json.dump(summary, fh, indent=2, sort_keys=True)
     files.append("report.json")
@@ -112,8 +113,8 @@ def run(args) -> int:
     print(f"{DEMO_BASE}: {base.n_faces} faces scaled to {args.size_mm:g} mm; polycube of "
           f"{shell.n_quads} tiles of {tile_mm:.3g} mm (distortion area {d['area_mean']:.2f}, "
           f"angle {d['angle_mean']:.2f})")
-    print(f"{tiles.name}: {s['elements']} elements, {s['height']:.3g} mm high, united with "
-          f"the body: {s['faces']} faces, printable: {'yes' if rep.printable else 'no'} "
+    print(f"{tiles.name}: {s.elements} elements, {s.height:.3g} mm high, united with "
+          f"the body: {s.faces} faces, printable: {'yes' if rep.printable else 'no'} "
           f"({elapsed:.1f} s)")
     print(f"results in {out}/:")
     for f in files:

@@ -130,13 +130,13 @@ def _finish(args, shell, tiles, out, extra, *, label: str, seconds=None) -> int:
         raise flag_error(exc, flags) from None
     V, F, rep = result.vertices, result.faces, result.report
     s = result.stats
-    print(f"{label}: {s['quads']} tiles of {shell.tile_size:.3g} mm ({s['bare_quads']} bare), "
-          f"{s['elements']} elements {s['height']:.3g} mm high, {s['faces']} faces")
-    if s["elements_floating"] or s["elements_folded"]:
-        print(f"  left out: {s['elements_folded']} elements folded by the shell map, "
-              f"{s['elements_floating']} that do not reach the base")
+    print(f"{label}: {s.quads} tiles of {shell.tile_size:.3g} mm ({s.bare_quads} bare), "
+          f"{s.elements} elements {s.height:.3g} mm high, {s.faces} faces")
+    if s.elements_floating or s.elements_folded:
+        print(f"  left out: {s.elements_folded} elements folded by the shell map, "
+              f"{s.elements_floating} that do not reach the base")
     status = EXIT_OK
-    seconds = dict(seconds or {}, **s["seconds"])
+    seconds = dict(seconds or {}, **s.seconds)
     t = time.perf_counter()
     try:
         rep = export_printable(out, V, F, name=label, report=rep)
@@ -152,10 +152,10 @@ def _finish(args, shell, tiles, out, extra, *, label: str, seconds=None) -> int:
         rep = export_printable(kept, V, F, name=label, report=exc.report, force=True)
         print(f"wrote {kept} for inspection (NOT printable)")
     if "report" in extra:
-        doc = {"unit": "mm", "stats": s, "seconds": seconds, "tile_size": shell.tile_size,
-               "shell": shell.name,
+        doc = {"unit": "mm", "stats": s.to_dict(), "seconds": seconds,
+               "tile_size": shell.tile_size, "shell": shell.name,
                "tiles": tiles.name, "distortion": shell.distortion,
-               "coverage": shell.polycube.coverage, "check": rep.to_dict()}
+               "coverage": shell.polycube.diagnostics.coverage, "check": rep.to_dict()}
         with atomic_output(extra["report"], "w") as fh:
             json.dump(doc, fh, indent=2, sort_keys=True)
         print(f"wrote {extra['report']}")
@@ -203,7 +203,7 @@ def run_texture(args) -> int:
     seconds = {"read+shell": round(time.perf_counter() - t, 3)}
     ts = shell.tile_size
     d = shell.distortion
-    search = shell.polycube.tile_search
+    search = shell.polycube.diagnostics.tile_search
     auto = (f" (chosen after {len(search.get('attempts', []))} attempts)"
             if search.get("automatic") else "")
     print(f"{args.base}: {shell.n_quads} tiles of {ts:.4g} mm{auto}, safe height "

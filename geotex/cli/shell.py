@@ -40,7 +40,7 @@ def _describe(shell) -> str:
     d = shell.distortion
     pc = shell.polycube
     folded = int(pc.quad_folded.sum())
-    search = pc.tile_search
+    search, cover = pc.diagnostics.tile_search, pc.diagnostics.coverage
     chosen = (f" (chosen after {len(search.get('attempts', []))} attempts)"
               if search.get("automatic") else "")
     return (f"{shell.n_quads} quads of {shell.tile_size:.4g}{chosen}"
@@ -48,8 +48,8 @@ def _describe(shell) -> str:
             + f", max height {shell.max_height:.4g}; "
             f"distortion area {d['area_mean']:.3f} (p95 {d['area_p95']:.3f}), "
             f"angle {d['angle_mean']:.3f} (p95 {d['angle_p95']:.3f}); "
-            f"{100 * pc.coverage.get('within_tile', 1.0):.1f}% of the base within a tile, "
-            f"{100 * pc.coverage.get('within_quarter_tile', 1.0):.1f}% within a quarter tile")
+            f"{100 * cover.get('within_tile', 1.0):.1f}% of the base within a tile, "
+            f"{100 * cover.get('within_quarter_tile', 1.0):.1f}% within a quarter tile")
 
 
 def shell_of_file(base, tile_size, *, name: str, size_mm=None):

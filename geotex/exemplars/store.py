@@ -2,17 +2,14 @@
 
 from __future__ import annotations
 
-import io
 import json
-import zipfile
 from pathlib import Path
 
 import numpy as np
 
 from geotex.errors import InputError, MeshFileError, MissingFileError
 from geotex.exemplars.record import Exemplar
-from geotex.io.atomic import atomic_output
-from geotex.io.limits import check_archive
+from geotex.io.records import read_record, write_record
 from geotex.mesh.topology import edge_topology
 
 __all__ = ["save_exemplar", "load_exemplar", "FORMAT_TAG"]
@@ -58,28 +55,17 @@ def save_exemplar(path, ex: Exemplar) -> Path:
                           sort_keys=True)
     except (TypeError, ValueError) as exc:
         raise InputError(f"ex.params is not JSON serialisable: {exc}") from None
-    buf = io.BytesIO()
-    np.savez(buf, vertices=ex.vertices, faces=ex.faces, metadata=np.array(meta))
-    with atomic_output(path, "wb") as fh:
-        fh.write(buf.getvalue())
-    return path
+    return write_record(path, dict(vertices=ex.vertices, faces=ex.faces,
+                                   metadata=np.array(meta)), compressed=False)
 
 
 def _load_npz(path: Path) -> Exemplar:
+    z, m = read_record(path, kind="exemplar", format=FORMAT_TAG, arrays=("vertices", "faces"),
+                       hint="save one with 'geotex exemplar' or load a mesh file")
     try:
-        check_archive(path)
-        with np.load(path, allow_pickle=False) as z:
-            V, F, meta = z["vertices"], z["faces"], str(z["metadata"])
-    except KeyError as exc:
-        raise MeshFileError(path, f"not an exemplar file: missing array {exc}") from None
-    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
-        raise MeshFileError(path, f"not a readable .npz exemplar file: {exc}") from None
-    try:
-        m = json.loads(meta)
-        if m.get("format") != FORMAT_TAG:
-            raise InputError(f"format tag {m.get('format')!r}, expected {FORMAT_TAG!r}")
-        return Exemplar(V, F, size=tuple(m["size"]), height=m["height"], depth=m["depth"],
-                        name=m["name"], params=m["params"], period=m.get("period"))
+        return Exemplar(z["vertices"], z["faces"], size=tuple(m["size"]), height=m["height"],
+                        depth=m["depth"], name=m["name"], params=m["params"],
+                        period=m.get("period"))
     except (ValueError, KeyError, TypeError, InputError) as exc:
         raise MeshFileError(path, f"bad exemplar metadata: {exc}") from None
 

@@ -2,16 +2,14 @@
 
 from __future__ import annotations
 
-import io
 import json
-import zipfile
 from dataclasses import dataclass, field as dc_field
 from pathlib import Path
 
 import numpy as np
 
-from geotex.errors import InputError, MeshFileError, MissingFileError
-from geotex.io.limits import RefusedInput, check_archive
+from geotex.errors import MeshFileError
+from geotex.io.records import read_record, write_record
 
 __all__ = ["save_direction_field", "load_direction_field", "FieldFile", "FIELD_FORMAT"]
 
@@ -49,11 +47,6 @@ def save_direction_field(path, field, *, scale=None, metadata: dict | None = Non
     -------
     pathlib.Path
     """
-    from geotex.io.atomic import atomic_output
-
-    path = Path(path)
-    if path.suffix.lower() != ".npz":
-        raise InputError(f"{path}: field files are .npz; use a .npz file name")
     sing = np.asarray(field.singularities, dtype=np.float64).reshape(-1, 2)
     meta = {"format": FIELD_FORMAT, "symmetry": int(field.symmetry), **(metadata or {})}
     arrays = dict(vectors=field.vectors, values=field.values, normals=field.normals,
@@ -61,11 +54,7 @@ def save_direction_field(path, field, *, scale=None, metadata: dict | None = Non
                   singular_indices=sing[:, 1], metadata=np.array(json.dumps(meta)))
     if scale is not None:
         arrays["scale"] = np.asarray(scale, dtype=np.float64)
-    buf = io.BytesIO()
-    np.savez_compressed(buf, **arrays)
-    with atomic_output(path, "wb") as fh:
-        fh.write(buf.getvalue())
-    return path
+    return write_record(path, arrays, compressed=True, kind="field")
 
 
 def load_direction_field(path) -> FieldFile:
@@ -85,26 +74,18 @@ def load_direction_field(path) -> FieldFile:
     from geotex.fields.directions import DirectionField
 
     path = Path(path)
-    if not path.is_file():
-        raise MissingFileError(f"{path}: no such file")
+    data, meta = read_record(path, kind="field", record="geotex direction field",
+                             format=FIELD_FORMAT, optional=("scale",),
+                             arrays=("vectors", "values", "normals", "constrained",
+                                     "singular_vertices", "singular_indices"),
+                             hint="write one with 'geotex field'")
     try:
-        check_archive(path)
-    except RefusedInput as exc:
-        raise MeshFileError(path, str(exc)) from None
-    try:
-        with np.load(path, allow_pickle=False) as data:
-            meta = json.loads(str(data["metadata"]))
-            if meta.get("format") != FIELD_FORMAT:
-                raise MeshFileError(path, f"not a geotex direction field (format "
-                                          f"{meta.get('format')!r})")
-            sing = tuple((int(v), float(k)) for v, k in
-                         zip(data["singular_vertices"], data["singular_indices"]))
-            field = DirectionField(vectors=data["vectors"], symmetry=int(meta["symmetry"]),
-                                   values=data["values"], singularities=sing,
-                                   normals=data["normals"], constrained=data["constrained"])
-            scale = data["scale"] if "scale" in data.files else None
-    except MeshFileError:
-        raise
-    except (OSError, ValueError, KeyError, zipfile.BadZipFile, json.JSONDecodeError) as exc:
-        raise MeshFileError(path, f"damaged or not a field file ({type(exc).__name__})") from None
-    return FieldFile(field=field, scale=scale, metadata=meta)
+        sing = tuple((int(v), float(k)) for v, k in
+                     zip(data["singular_vertices"], data["singular_indices"]))
+        field = DirectionField(vectors=data["vectors"], symmetry=int(meta["symmetry"]),
+                               values=data["values"], singularities=sing,
+                               normals=data["normals"], constrained=data["constrained"])
+    except (ValueError, KeyError, TypeError) as exc:
+        raise MeshFileError(path, f"damaged or not a field file ({type(exc).__name__}: "
+                                  f"inconsistent arrays or metadata)") from None
+    return FieldFile(field=field, scale=data.get("scale"), metadata=meta)

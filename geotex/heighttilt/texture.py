@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import io
 import json
 import os
 import zipfile
@@ -11,8 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from geotex.errors import InputError, MeshFileError
-from geotex.io.atomic import atomic_output
-from geotex.io.limits import check_archive
+from geotex.io.records import read_record, write_record
 from geotex.mesh.arrays import as_faces
 from geotex.mesh.topology import edge_topology
 
@@ -148,11 +146,8 @@ def save_texture(path, tex: HeightTiltTexture) -> None:
                              "metadata": tex.metadata}, sort_keys=True)
     except (TypeError, ValueError) as exc:
         raise InputError(f"tex.metadata is not JSON serialisable: {exc}") from None
-    buf = io.BytesIO()
-    np.savez(buf, height=tex.height, tilt=tex.tilt, faces=tex.faces, residual=tex.residual,
-             header=np.array(header))
-    with atomic_output(path, "wb") as fh:
-        fh.write(buf.getvalue())
+    write_record(path, dict(height=tex.height, tilt=tex.tilt, faces=tex.faces,
+                            residual=tex.residual, header=np.array(header)), compressed=False)
 
 
 def load_texture(path) -> HeightTiltTexture:
@@ -173,26 +168,16 @@ def load_texture(path) -> HeightTiltTexture:
         wrong format tag, or its arrays disagree with the header counts or
         with each other.
     """
-    if os.path.isfile(path) and not zipfile.is_zipfile(path):
+    if not os.path.isfile(path):
+        raise MeshFileError(path, "no such texture file")
+    if not zipfile.is_zipfile(path):
         raise MeshFileError(path, "not a readable .npz texture file: not a zip archive "
                             "(truncated, or another kind of file; textures are written "
                             "by 'geotex heighttilt extract')")
-    try:
-        check_archive(path)
-        with np.load(path, allow_pickle=False) as z:
-            arrays = {k: z[k] for k in ("height", "tilt", "faces", "residual", "header")}
-    except FileNotFoundError:
-        raise MeshFileError(path, "no such texture file") from None
-    except KeyError as exc:
-        raise MeshFileError(path, f"not a height-and-tilt texture: missing array {exc}") from None
-    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
-        raise MeshFileError(path, f"not a readable .npz texture file: {exc}") from None
-    try:
-        header = json.loads(str(arrays["header"]))
-    except ValueError as exc:
-        raise MeshFileError(path, f"corrupted texture header: {exc}") from None
-    if not isinstance(header, dict) or header.get("format") != FORMAT_TAG:
-        raise MeshFileError(path, f"not a height-and-tilt texture (format tag is not {FORMAT_TAG})")
+    arrays, header = read_record(path, kind="texture", record="height-and-tilt texture",
+                                 format=FORMAT_TAG, metadata_key="header",
+                                 arrays=("height", "tilt", "faces", "residual"),
+                                 hint="textures are written by 'geotex heighttilt extract'")
     counts = (arrays["height"].shape, arrays["faces"].shape[:1], arrays["tilt"].shape)
     if counts != ((header.get("vertices"),), (header.get("faces"),), (header.get("edges"),)):
         raise MeshFileError(path, "array sizes do not match the header counts "

@@ -37,8 +37,8 @@ def sample_lattice(resolution: int) -> np.ndarray:
 
     Examples
     --------
-    >>> sample_lattice(1).tolist()
-    [[0.3333333333333333, 0.3333333333333333, 0.3333333333333333]]
+    >>> sample_lattice(1).round(12).tolist()       # the centroid
+    [[0.333333333333, 0.333333333333, 0.333333333333]]
     >>> sample_lattice(4).shape
     (16, 3)
     """

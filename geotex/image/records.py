@@ -9,16 +9,14 @@ needs, and it is saved as one ``.npz`` (:func:`save_lapped`).
 
 from __future__ import annotations
 
-import io
 import json
-import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from geotex.errors import InputError, MeshFileError, MissingFileError
-from geotex.io.limits import RefusedInput, check_archive
+from geotex.errors import MeshFileError
+from geotex.io.records import read_record, write_record
 
 __all__ = ["Paste", "LappedTexture", "save_lapped", "load_lapped", "LAPPED_FORMAT"]
 
@@ -134,11 +132,6 @@ def save_lapped(path, lapped: LappedTexture) -> Path:
     -------
     pathlib.Path
     """
-    from geotex.io.atomic import atomic_output
-
-    path = Path(path)
-    if path.suffix.lower() != ".npz":
-        raise InputError(f"{path}: paste records are written as .npz; use a .npz file name")
     face, paste, _, uv = lapped.layers()
     arrays = dict(face=face, paste=paste, corner_uv=uv,
                   directions=(np.concatenate([p.directions for p in lapped.pastes])
@@ -154,11 +147,7 @@ def save_lapped(path, lapped: LappedTexture) -> Path:
     meta = {"format": LAPPED_FORMAT, "n_vertices": lapped.n_vertices,
             "n_faces": lapped.n_faces, "n_patches": len(lapped.patches), **lapped.metadata}
     arrays["metadata"] = np.array(json.dumps(meta, sort_keys=True))
-    buf = io.BytesIO()
-    np.savez_compressed(buf, **arrays)
-    with atomic_output(path, "wb") as fh:
-        fh.write(buf.getvalue())
-    return path
+    return write_record(path, arrays, compressed=True, kind="paste record")
 
 
 def load_lapped(path) -> LappedTexture:
@@ -174,41 +163,38 @@ def load_lapped(path) -> LappedTexture:
     from geotex.image.patches import TexturePatch
 
     path = Path(path)
-    if not path.is_file():
-        raise MissingFileError(f"{path}: no such file")
+    d, meta = read_record(path, kind="lapped-texture", format=LAPPED_FORMAT,
+                          arrays=_lapped_arrays, hint="write one with 'geotex lapped'")
     try:
-        check_archive(path)
-    except RefusedInput as exc:
-        raise MeshFileError(path, str(exc)) from None
-    try:
-        with np.load(path, allow_pickle=False) as d:
-            meta = json.loads(str(d["metadata"]))
-            if meta.get("format") != LAPPED_FORMAT:
-                raise MeshFileError(path, f"not a geotex lapped texture (format "
-                                          f"{meta.get('format')!r})")
-            patches = []
-            for i in range(int(meta["n_patches"])):
-                rgba = d[f"patch_{i}_rgba"]
-                L = float(max(rgba.shape[:2]))
-                patches.append(TexturePatch(
-                    rgba=rgba, size=np.array([rgba.shape[1] / L, rgba.shape[0] / L]),
-                    center=d[f"patch_{i}_center"], hull=d[f"patch_{i}_hull"]))
-            face, paste, uv, dirs = d["face"], d["paste"], d["corner_uv"], d["directions"]
-            starts = np.searchsorted(paste, np.arange(d["patch"].shape[0] + 1))
-            pastes = tuple(
-                Paste(patch=int(d["patch"][i]), faces=face[starts[i]:starts[i + 1]],
-                      corner_uv=uv[starts[i]:starts[i + 1]],
-                      directions=dirs[starts[i]:starts[i + 1]], seed_point=d["seed_point"][i],
-                      rounds=int(d["rounds"][i]))
-                for i in range(d["patch"].shape[0]))
-            coverage = d["coverage"]
-    except MeshFileError:
-        raise
-    except (OSError, ValueError, KeyError, zipfile.BadZipFile, json.JSONDecodeError) as exc:
+        patches = []
+        for i in range(int(meta["n_patches"])):
+            rgba = d[f"patch_{i}_rgba"]
+            L = float(max(rgba.shape[:2]))
+            patches.append(TexturePatch(
+                rgba=rgba, size=np.array([rgba.shape[1] / L, rgba.shape[0] / L]),
+                center=d[f"patch_{i}_center"], hull=d[f"patch_{i}_hull"]))
+        face, paste, uv, dirs = d["face"], d["paste"], d["corner_uv"], d["directions"]
+        starts = np.searchsorted(paste, np.arange(d["patch"].shape[0] + 1))
+        pastes = tuple(
+            Paste(patch=int(d["patch"][i]), faces=face[starts[i]:starts[i + 1]],
+                  corner_uv=uv[starts[i]:starts[i + 1]],
+                  directions=dirs[starts[i]:starts[i + 1]], seed_point=d["seed_point"][i],
+                  rounds=int(d["rounds"][i]))
+            for i in range(d["patch"].shape[0]))
+        n_vertices, n_faces = int(meta["n_vertices"]), int(meta["n_faces"])
+    except (ValueError, KeyError, TypeError, IndexError) as exc:
         raise MeshFileError(path, f"damaged or not a lapped-texture file "
-                                  f"({type(exc).__name__})") from None
+                                  f"({type(exc).__name__}: inconsistent arrays or "
+                                  "metadata)") from None
     extra = {k: v for k, v in meta.items()
              if k not in ("format", "n_vertices", "n_faces", "n_patches")}
-    return LappedTexture(pastes=pastes, patches=tuple(patches),
-                         n_vertices=int(meta["n_vertices"]), n_faces=int(meta["n_faces"]),
-                         coverage=coverage, metadata=extra)
+    return LappedTexture(pastes=pastes, patches=tuple(patches), n_vertices=n_vertices,
+                         n_faces=n_faces, coverage=d["coverage"], metadata=extra)
+
+
+def _lapped_arrays(meta: dict) -> list[str]:
+    """Names of the arrays a lapped-texture file with this metadata holds."""
+    return (["face", "paste", "corner_uv", "directions", "patch", "seed_point", "rounds",
+             "coverage"]
+            + [f"patch_{i}_{part}" for i in range(int(meta["n_patches"]))
+               for part in ("rgba", "center", "hull")])

@@ -1,8 +1,14 @@
 """Mesh file reading and writing: STL, OBJ, PLY, OFF, 3MF and GLB.
 
->>> from geotex.io import read_mesh, write_mesh      # doctest: +SKIP
->>> mesh = read_mesh("part.stl")                      # doctest: +SKIP
->>> write_mesh("part.3mf", mesh)                      # doctest: +SKIP
+>>> import pathlib, tempfile
+>>> from geotex.data import sample_path
+>>> from geotex.io import read_mesh, write_mesh
+>>> mesh = read_mesh(sample_path("spot"))              # a bundled OBJ
+>>> tmp = tempfile.TemporaryDirectory()
+>>> out = write_mesh(pathlib.Path(tmp.name) / "spot.3mf", mesh)
+>>> read_mesh(out).n_faces == mesh.n_faces
+True
+>>> tmp.cleanup()
 
 The format comes from the file extension (case-insensitive) or the
 ``format=`` argument; a file is never silently parsed as another format.
@@ -131,9 +137,10 @@ def read_mesh(path, *, format: str | None = None) -> Mesh:
 
     Examples
     --------
-    >>> mesh = read_mesh("part.stl")                  # doctest: +SKIP
-    >>> mesh.n_vertices, mesh.n_faces                 # doctest: +SKIP
-    (1442, 2880)
+    >>> from geotex.data import sample_path
+    >>> mesh = read_mesh(sample_path("spot"))
+    >>> mesh.n_vertices, mesh.n_faces
+    (829, 1654)
     """
     path = Path(path)
     if not path.exists():
@@ -223,8 +230,13 @@ def write_mesh(path, mesh, *, format: str | None = None, binary: bool = True) ->
 
     Examples
     --------
-    >>> write_mesh("part.3mf", mesh)                  # doctest: +SKIP
-    PosixPath('part.3mf')
+    >>> import pathlib, tempfile
+    >>> from geotex.mesh import Mesh
+    >>> from geotex.mesh.primitives import icosphere
+    >>> tmp = tempfile.TemporaryDirectory()
+    >>> write_mesh(pathlib.Path(tmp.name) / "ball.3mf", Mesh(*icosphere(2))).name
+    'ball.3mf'
+    >>> tmp.cleanup()
     """
     if not isinstance(mesh, Mesh):
         raise InputError(f"mesh must be a geotex.mesh.Mesh, got {type(mesh).__name__}")

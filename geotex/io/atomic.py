@@ -132,8 +132,14 @@ def atomic_output(path, mode: str = "wb", *, encoding: str | None = None,
 
     Examples
     --------
-    >>> with atomic_output("out.json", "w") as fh:      # doctest: +SKIP
-    ...     fh.write("{}")
+    >>> import pathlib, tempfile
+    >>> tmp = tempfile.TemporaryDirectory()
+    >>> out = pathlib.Path(tmp.name) / "out.json"
+    >>> with atomic_output(out, "w") as fh:
+    ...     n = fh.write("{}")
+    >>> out.read_text()
+    '{}'
+    >>> tmp.cleanup()
     """
     if mode not in ("w", "wb", "wt"):
         raise InputError(f"atomic_output mode must be 'w' or 'wb', got {mode!r}")
@@ -208,9 +214,15 @@ def atomic_group(*, fsync: bool = False):
 
     Examples
     --------
-    >>> with atomic_group() as group:                   # doctest: +SKIP
-    ...     group.open("a.obj", "w").write("...")
-    ...     group.open("a.mtl", "w").write("...")
+    >>> import pathlib, tempfile
+    >>> tmp = tempfile.TemporaryDirectory()
+    >>> folder = pathlib.Path(tmp.name)
+    >>> with atomic_group() as group:
+    ...     n = group.open(folder / "a.obj", "w").write("mtllib a.mtl")
+    ...     n = group.open(folder / "a.mtl", "w").write("newmtl m")
+    >>> sorted(p.name for p in folder.iterdir())
+    ['a.mtl', 'a.obj']
+    >>> tmp.cleanup()
     """
     group = AtomicGroup(fsync=fsync)
     try:

@@ -9,11 +9,11 @@ helps) and :func:`united_with_base` (one solid).
 
 from geotex.mapping.assign import edge_colors, tiles_for_quads
 from geotex.mapping.place import MappedTiles, mapped_tiles, reseated_elements, shell_positions
-from geotex.mapping.texture import (MAP_PROGRESS, MAP_STAGES, TexturedSolid, texture_height,
-                                    textured_solid)
+from geotex.mapping.texture import (MAP_PROGRESS, MAP_STAGES, TexturedSolid, TextureStats,
+                                    texture_height, textured_solid)
 from geotex.mapping.union import ElementContacts, UnionStats, element_contacts, united_with_base
 
-__all__ = ["textured_solid", "TexturedSolid", "MAP_STAGES", "MAP_PROGRESS", "texture_height",
+__all__ = ["textured_solid", "TexturedSolid", "TextureStats", "MAP_STAGES", "MAP_PROGRESS", "texture_height",
            "edge_colors", "tiles_for_quads", "mapped_tiles", "MappedTiles", "shell_positions",
            "element_contacts", "ElementContacts",
            "reseated_elements", "united_with_base", "UnionStats"]

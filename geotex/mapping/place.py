@@ -169,7 +169,7 @@ def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: floa
     element = element[source] + (np.cumsum(per_copy) - per_copy)[copy]
     n_elements = int(per_copy.sum())
     # weld side vertices with their twins across quad edges
-    on, keys = side_keys(uvw, quad_of_vertex, pc.quad_edge)
+    on, keys = side_keys(uvw, quad_of_vertex, pc.layout.quad_edge)
     side_idx = np.flatnonzero(on)
     order = np.lexsort((keys[:, 1], keys[:, 0]))
     ks = keys[order]

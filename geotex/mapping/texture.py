@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -23,7 +23,8 @@ from geotex.mapping.union import UNION_STAGES, element_contacts, united_with_bas
 from geotex.printing.stored import printable_stored_solid
 from geotex.progress import report
 
-__all__ = ["TexturedSolid", "textured_solid", "MAP_STAGES", "MAP_PROGRESS", "texture_height"]
+__all__ = ["TexturedSolid", "TextureStats", "textured_solid", "MAP_STAGES", "MAP_PROGRESS",
+           "texture_height"]
 
 MAP_STAGES = ("assign", "map", "union", "validate")
 
@@ -43,6 +44,72 @@ RETRIES = 2
 ALL_DEFECTS = 1 << 40
 
 
+@dataclass(frozen=True, kw_only=True)
+class TextureStats:
+    """Counts and timings of one :func:`textured_solid` run.
+
+    Attributes
+    ----------
+    quads, bare_quads : int
+        Quads of the shell, and those left bare (their map folds).
+    height : float
+        World height of the texture, mm.
+    seed : int
+        Seed of the edge colouring.
+    mapped_vertices, mapped_faces : int
+        Size of the tile geometry mapped into the shell.
+    welded : int
+        Vertices welded across tile sides.
+    open_faces_dropped : int
+        Faces of open pieces dropped after the map.
+    elements, union_operands : int
+        Closed elements united with the base, and the union's operand groups.
+    elements_floating, elements_folded : int
+        Elements left out: not reaching the base, folded by the shell map.
+    elements_reseated : int
+        Folded elements shrunk in place that then fit.
+    union_retries : int
+        Unions redone without the elements next to defects.
+    float32_collapsed_faces, elements_left_out_at_defects : int or None
+        Faces collapsed by the float32 rounding, and elements left out at
+        defects (None when the result was not checked).
+    vertices, faces : int
+        Size of the result.
+    seconds : dict of str -> float
+        Seconds per stage of :data:`MAP_STAGES` that ran (rounded to 1 ms).
+    """
+
+    quads: int
+    bare_quads: int
+    height: float
+    seed: int
+    mapped_vertices: int
+    mapped_faces: int
+    welded: int
+    open_faces_dropped: int
+    elements: int
+    union_operands: int
+    elements_floating: int
+    elements_folded: int
+    elements_reseated: int
+    union_retries: int
+    float32_collapsed_faces: int | None = None
+    elements_left_out_at_defects: int | None = None
+    vertices: int
+    faces: int
+    seconds: dict
+
+    def to_dict(self) -> dict:
+        """The stats as a JSON-ready dict, in field order (unchecked runs lack the
+        two check-only counts)."""
+        out = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+        for k in ("float32_collapsed_faces", "elements_left_out_at_defects"):
+            if out[k] is None:
+                del out[k]
+        out["seconds"] = dict(self.seconds)
+        return out
+
+
 @dataclass(frozen=True)
 class TexturedSolid:
     """A base with a geometric texture, as one solid.
@@ -57,7 +124,7 @@ class TexturedSolid:
         Validity report of the solid as a file stores it (None when not
         checked): the vertices are then float32 values, so STL and 3MF store
         exactly the judged coordinates.
-    stats : dict
+    stats : TextureStats
         Counts and timings of every stage.
     """
 
@@ -65,7 +132,7 @@ class TexturedSolid:
     faces: np.ndarray
     tile_of_quad: np.ndarray
     report: CheckReport | None
-    stats: dict = field(default_factory=dict)
+    stats: TextureStats
 
 
 def texture_height(shell, tiles, height=None) -> float:
@@ -153,7 +220,7 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
         the rounding breaks and run the full validity check on it.
     progress : callable, optional
         Called with each stage and step of :data:`MAP_PROGRESS` (the times in
-        ``stats["seconds"]`` are per stage of :data:`MAP_STAGES`).
+        ``stats.seconds`` are per stage of :data:`MAP_STAGES`).
 
     Returns
     -------
@@ -173,8 +240,8 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
     times = {}
     t0 = time.perf_counter()
     report(progress, "assign")
-    colors = edge_colors(pc.edge_axis, tiles.n_colors, seed=int(seed))
-    tile_of_quad = tiles_for_quads(tiles, pc.quad_axes, pc.quad_edge, colors,
+    colors = edge_colors(pc.layout.edge_axis, tiles.n_colors, seed=int(seed))
+    tile_of_quad = tiles_for_quads(tiles, pc.layout.quad_axes, pc.layout.quad_edge, colors,
                                    bare=pc.quad_folded)
     times["assign"] = time.perf_counter() - t0
     report(progress, "map")
@@ -230,14 +297,13 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
                    "elements_left_out_at_defects": int(exclude.sum()) if exclude is not None
                    else 0}
         times["validate"] = time.perf_counter() - t
-    stats = {"quads": pc.n_quads, "bare_quads": int((tile_of_quad < 0).sum()),
-             "height": h, "seed": int(seed), "mapped_vertices": int(mapped.vertices.shape[0]),
-             "mapped_faces": int(mapped.faces.shape[0]), "welded": mapped.welded,
-             "open_faces_dropped": mapped.dropped_faces, "elements": union.elements,
-             "union_operands": union.groups, "elements_floating": union.floating,
-             "elements_folded": union.folded,
-             "elements_reseated": int(folded.size - still.size),
-             "union_retries": retried, **cleanup,
-             "vertices": int(V.shape[0]), "faces": int(F.shape[0]),
-             "seconds": {k: round(v, 3) for k, v in times.items()}}
+    stats = TextureStats(
+        quads=pc.layout.n_quads, bare_quads=int((tile_of_quad < 0).sum()), height=h, seed=int(seed),
+        mapped_vertices=int(mapped.vertices.shape[0]), mapped_faces=int(mapped.faces.shape[0]),
+        welded=mapped.welded, open_faces_dropped=mapped.dropped_faces,
+        elements=union.elements, union_operands=union.groups,
+        elements_floating=union.floating, elements_folded=union.folded,
+        elements_reseated=int(folded.size - still.size), union_retries=retried, **cleanup,
+        vertices=int(V.shape[0]), faces=int(F.shape[0]),
+        seconds={k: round(v, 3) for k, v in times.items()})
     return TexturedSolid(V, F, tile_of_quad, rep, stats)

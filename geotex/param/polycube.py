@@ -13,7 +13,8 @@ module per step:
    shifts and two repair strategies are tried and the first candidate whose
    boundary has the Euler characteristic of the mesh is used;
 3. tile quads and their triangle sub-grid (:mod:`~geotex.param.polycube_surface`),
-   global quad edges (:func:`~geotex.param.polycube_quads.quad_edges`);
+   their connectivity and global quad edges
+   (:class:`~geotex.param.polycube_quads.QuadLayout`);
 4. the sub-grid fitted onto the base (:mod:`~geotex.param.polycube_fit`): the
    fitted positions ``Y`` are the inverse map polycube -> base;
 5. distortion of the map and how well the fitted surface covers the base.
@@ -21,11 +22,11 @@ module per step:
 With ``tile_size=None`` steps 2-5 run for a schedule of sizes, largest first,
 until one resolves the genus, leaves no quad bare and covers the base
 (:mod:`~geotex.param.polycube_size`); the attempts are recorded in
-:attr:`PolyCube.tile_search`.
+:attr:`PolyCubeDiagnostics.tile_search`.
 
 Unlike a deformation of the input, the map is defined on the polycube's own
 triangulation: the tile point ``(u, v)`` of quad ``q`` lies in sub-cell
-``(floor(u res), floor(v res))`` of ``quad_grid[q]`` and its base point is
+``(floor(u res), floor(v res))`` of ``layout.quad_grid[q]`` and its base point is
 interpolated from the fitted positions there (:meth:`PolyCube.locate`).
 """
 
@@ -43,7 +44,7 @@ from geotex.mesh.geometry import face_areas, vertex_normals
 from geotex.mesh.topology import edge_topology, faces_within_rings, vertex_components
 from geotex.param.distortion import distortion_summary
 from geotex.param.polycube_fit import SurfaceProjector, fitted_surface
-from geotex.param.polycube_quads import chart_axes, quad_edges
+from geotex.param.polycube_quads import QuadLayout, chart_axes
 from geotex.param.polycube_size import (AUTO_FLOOR, AUTO_START, AUTO_STEP, EXTRA_FITTED,
                                         MAX_FITTED, MAX_QUADS, MIN_COVERAGE, SKIP_BELOW,
                                         size_schedule, thin_spot)
@@ -52,12 +53,38 @@ from geotex.param.voxels import (largest_component, manifold_solid, occupancy,
                                  voxel_grid)
 from geotex.progress import report
 
-__all__ = ["PolyCube", "polycube", "POLYCUBE_STAGES", "validate_input", "GRID_SHIFTS"]
+__all__ = ["PolyCube", "PolyCubeDiagnostics", "polycube", "POLYCUBE_STAGES", "validate_input",
+           "GRID_SHIFTS"]
 
 POLYCUBE_STAGES = ("check", "voxels", "fit", "distortion")
 
 #: Grid offsets (in cells) tried in turn when a grid does not resolve the topology.
 GRID_SHIFTS = ((0.0, 0.0, 0.0), (0.5, 0.5, 0.5), (0.25, 0.25, 0.25), (0.5, 0.0, 0.25))
+
+
+@dataclass(frozen=True)
+class PolyCubeDiagnostics:
+    """How a polycube was found and how good its map is (JSON-ready dicts).
+
+    Attributes
+    ----------
+    distortion : dict
+        Area and angle distortion (mean, p95), folds, area ratio.
+    coverage : dict
+        How close the base is to the fitted surface (in tiles).
+    voxels : dict
+        The voxel candidate that was used (cell, shift, repair strategy, ...).
+    tile_search : dict
+        How the tile size was found: ``automatic``, and every ``attempts``
+        entry (``tile_size``, ``result``; ``quads``, ``bare`` and
+        ``within_tile`` when fitted); automatic searches add ``start``,
+        ``floor`` and ``chosen``.
+    """
+
+    distortion: dict = field(default_factory=dict)
+    coverage: dict = field(default_factory=dict)
+    voxels: dict = field(default_factory=dict)
+    tile_search: dict = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -78,35 +105,15 @@ class PolyCube:
         The same vertices fitted onto the base mesh (world units): the map.
     F : (m, 3) int64
         Sub-grid triangles, ``2 res^2`` per quad, quad by quad.
-    quad_grid : (q, res + 1, res + 1) int64
-        Vertex at tile point ``(i / res, j / res)`` of every quad.
-    quad_label : (q,) int64
-        Outward normal of every quad (``0 +X, 1 -X, 2 +Y, 3 -Y, 4 +Z, 5 -Z``).
-    quad_corners : (q, 4, 3) int64
-        Corners in tile units, counter-clockwise about the outward normal (see
-        :mod:`geotex.param.polycube_quads` for the frame).
-    quad_edge : (q, 4) int64
-        Global edge of sides south, east, north, west.
-    quad_edge_forward : (q, 4) bool
-    edge_axis : (E,) int64
-        Axis class of every global edge (0 X, 1 Y, 2 Z).
-    edge_quads, edge_sides : (E, 2) int64
-        The two quads of every edge and the side index in each.
     quad_folded : (q,) bool
         Quads whose fitted image folds over or crosses another part of the
         fitted surface (where the voxels bridge a gap narrower than a tile);
         they are left bare by mapping.
-    distortion : dict
-        Area and angle distortion (mean, p95), folds, area ratio.
-    coverage : dict
-        How close the base is to the fitted surface (in tiles).
-    voxels : dict
-        The voxel candidate that was used (cell, shift, repair strategy, ...).
-    tile_search : dict
-        How the tile size was found: ``automatic``, and every ``attempts``
-        entry (``tile_size``, ``result``; ``quads``, ``bare`` and
-        ``within_tile`` when fitted); automatic searches add ``start``,
-        ``floor`` and ``chosen``.
+    layout : QuadLayout
+        The quads' connectivity: labels, corners, sub-grid, global edges
+        (:class:`~geotex.param.polycube_quads.QuadLayout`).
+    diagnostics : PolyCubeDiagnostics
+        Distortion, coverage, the voxel candidate and the tile-size search.
     """
 
     tile_size: float
@@ -115,34 +122,9 @@ class PolyCube:
     P: np.ndarray
     Y: np.ndarray
     F: np.ndarray
-    quad_grid: np.ndarray
-    quad_label: np.ndarray
-    quad_corners: np.ndarray
-    quad_edge: np.ndarray
-    quad_edge_forward: np.ndarray
-    edge_axis: np.ndarray
-    edge_quads: np.ndarray
-    edge_sides: np.ndarray
     quad_folded: np.ndarray
-    distortion: dict = field(default_factory=dict)
-    coverage: dict = field(default_factory=dict)
-    voxels: dict = field(default_factory=dict)
-    tile_search: dict = field(default_factory=dict)
-
-    @property
-    def n_quads(self) -> int:
-        return int(self.quad_label.size)
-
-    @property
-    def quad_axes(self) -> np.ndarray:
-        """In-plane axes ``(a1, a2)`` of every quad's frame, ``(q, 2)`` int64."""
-        _, a1, a2 = chart_axes(self.quad_label)
-        return np.stack([a1, a2], axis=1)
-
-    @property
-    def face_quad(self) -> np.ndarray:
-        """Quad of every sub-grid face, ``(m,)`` int64."""
-        return np.arange(self.F.shape[0], dtype=np.int64) // (2 * self.res ** 2)
+    layout: QuadLayout
+    diagnostics: PolyCubeDiagnostics = field(default_factory=PolyCubeDiagnostics)
 
     @property
     def positions(self) -> np.ndarray:
@@ -365,7 +347,7 @@ def polycube(V, F, *, tile_size: float | None = None, tiles_per_cell: int = 1, r
         base area within one tile of the fitted surface; when no size
         qualifies (at most 6 sizes are fitted, 2 after the first that covers
         the base), the fitted size that covers the base with the fewest bare
-        quads. The attempts are in :attr:`PolyCube.tile_search`.
+        quads. The attempts are in :attr:`PolyCubeDiagnostics.tile_search`.
     tiles_per_cell : int, optional
         Tiles along the side of a voxel: larger gives larger, flatter charts
         but resolves less of the shape.
@@ -397,7 +379,7 @@ def polycube(V, F, *, tile_size: float | None = None, tiles_per_cell: int = 1, r
     >>> from geotex.mesh.primitives import icosphere
     >>> V, F = icosphere(3)
     >>> pc = polycube(V, F, tile_size=0.5)
-    >>> pc.n_quads > 0, bool(pc.quad_folded.any())
+    >>> pc.layout.n_quads > 0, bool(pc.quad_folded.any())
     (True, False)
     """
     report(progress, "check")
@@ -440,18 +422,15 @@ def polycube(V, F, *, tile_size: float | None = None, tiles_per_cell: int = 1, r
     ts = a["ts"]
     report(progress, "distortion")
     corners, labels, Fq = c["corners"], c["labels"], c["F"]
-    qe, qf, eax, eq, es = quad_edges(corners)
-    face_quad = np.arange(Fq.shape[0]) // (2 * r * r)
+    layout = QuadLayout.of_quads(corners, labels, c["grid"])
+    diagnostics = PolyCubeDiagnostics(
+        distortion=_distortion(c["P"], fit.Y, Fq, labels, layout.face_quad, fit),
+        coverage=a["coverage"],
+        voxels=dict(c["info"], cell=k * ts, candidates=len(a["seen"]), fitted=a["fitted"]),
+        tile_search=search)
     return PolyCube(tile_size=ts, res=r, origin=lo + c["origin"] * ts, P=c["P"],
-                    Y=lo + fit.Y * ts, F=Fq,
-                    quad_grid=c["grid"], quad_label=labels, quad_corners=corners,
-                    quad_edge=qe, quad_edge_forward=qf, edge_axis=eax, edge_quads=eq,
-                    edge_sides=es, quad_folded=folded_quads,
-                    distortion=_distortion(c["P"], fit.Y, Fq, labels, face_quad, fit),
-                    coverage=a["coverage"],
-                    voxels=dict(c["info"], cell=k * ts, candidates=len(a["seen"]),
-                                fitted=a["fitted"]),
-                    tile_search=search)
+                    Y=lo + fit.Y * ts, F=Fq, quad_folded=folded_quads, layout=layout,
+                    diagnostics=diagnostics)
 
 
 def _search(V, F, *, extent, genus, opts):

@@ -25,11 +25,89 @@ reverse a side.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from geotex.errors import GeotexError
 
-__all__ = ["chart_axes", "quad_edges"]
+__all__ = ["QuadLayout", "chart_axes", "quad_edges"]
+
+
+@dataclass(frozen=True)
+class QuadLayout:
+    """Connectivity of a polycube's tile quads: no world geometry.
+
+    What the mapping needs to colour edges and choose tiles, and what a shell
+    file stores; the positions live on :class:`~geotex.param.polycube.PolyCube`.
+
+    Attributes
+    ----------
+    quad_grid : (q, res + 1, res + 1) int64
+        Sub-grid vertex at tile point ``(i / res, j / res)`` of every quad.
+    quad_label : (q,) int64
+        Outward normal of every quad (``0 +X, 1 -X, 2 +Y, 3 -Y, 4 +Z, 5 -Z``).
+    quad_corners : (q, 4, 3) int64
+        Corners in integer tile units, counter-clockwise about the outward
+        normal (the frame of this module's docstring).
+    quad_edge : (q, 4) int64
+        Global edge of sides south, east, north, west.
+    quad_edge_forward : (q, 4) bool
+        True when the quad runs along its edge toward increasing coordinate.
+    edge_axis : (E,) int64
+        Axis class of every global edge (0 X, 1 Y, 2 Z).
+    edge_quads, edge_sides : (E, 2) int64
+        The two quads of every edge and the side index in each.
+    """
+
+    quad_grid: np.ndarray
+    quad_label: np.ndarray
+    quad_corners: np.ndarray
+    quad_edge: np.ndarray
+    quad_edge_forward: np.ndarray
+    edge_axis: np.ndarray
+    edge_quads: np.ndarray
+    edge_sides: np.ndarray
+
+    @classmethod
+    def of_quads(cls, corners: np.ndarray, labels: np.ndarray, grid: np.ndarray
+                 ) -> "QuadLayout":
+        """The layout of quads given by their corners, labels and sub-grid.
+
+        Raises
+        ------
+        GeotexError
+            If the quads do not form a closed manifold surface (see :func:`quad_edges`).
+        """
+        qe, qf, eax, eq, es = quad_edges(corners)
+        return cls(quad_grid=grid, quad_label=labels, quad_corners=corners, quad_edge=qe,
+                   quad_edge_forward=qf, edge_axis=eax, edge_quads=eq, edge_sides=es)
+
+    @property
+    def n_quads(self) -> int:
+        """Number of quads ``q``."""
+        return int(self.quad_label.size)
+
+    @property
+    def n_edges(self) -> int:
+        """Number of global quad edges ``E``."""
+        return int(self.edge_axis.size)
+
+    @property
+    def res(self) -> int:
+        """Sub-cells along a tile side."""
+        return int(self.quad_grid.shape[1] - 1)
+
+    @property
+    def quad_axes(self) -> np.ndarray:
+        """In-plane axes ``(a1, a2)`` of every quad's frame, ``(q, 2)`` int64."""
+        _, a1, a2 = chart_axes(self.quad_label)
+        return np.stack([a1, a2], axis=1)
+
+    @property
+    def face_quad(self) -> np.ndarray:
+        """Quad of every sub-grid face, ``(q * 2 res^2,)`` int64 (faces run quad by quad)."""
+        return np.arange(self.n_quads * 2 * self.res ** 2, dtype=np.int64) // (2 * self.res ** 2)
 
 
 def chart_axes(label: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

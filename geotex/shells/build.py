@@ -70,16 +70,16 @@ class Shell:
 
     @property
     def n_quads(self) -> int:
-        return self.polycube.n_quads
+        return self.polycube.layout.n_quads
 
     @property
     def distortion(self) -> dict:
-        return self.polycube.distortion
+        return self.polycube.diagnostics.distortion
 
     @property
     def tile_search(self) -> dict:
-        """How the tile size was chosen (see :attr:`PolyCube.tile_search`)."""
-        return self.polycube.tile_search
+        """How the tile size was chosen (see :attr:`PolyCubeDiagnostics.tile_search`)."""
+        return self.polycube.diagnostics.tile_search
 
 
 def offset_directions(V: np.ndarray, F: np.ndarray, *, smoothing: int = 3) -> np.ndarray:
@@ -173,7 +173,7 @@ def _unpinched(pc: PolyCube, D: np.ndarray, *, rounds: int = 4) -> tuple[np.ndar
     pinched : numpy.ndarray, (k,) int64
         Faces of ``pc.F`` still pinched.
     """
-    used = np.flatnonzero(~pc.quad_folded[pc.face_quad])
+    used = np.flatnonzero(~pc.quad_folded[pc.layout.face_quad])
     F, h = pc.F[used], PINCH_PROBE * pc.tile_size
     n = pc.Y.shape[0]
     M = neighbour_mean(pc.F, n)
@@ -210,7 +210,7 @@ def build_shell(V, F, *, tile_size: float | None = None, name: str = "shell", so
         Tile (quad) side length in the units of ``V``; None (the default)
         chooses the largest size that resolves the shape and covers it (see
         :func:`~geotex.param.polycube.polycube`; the attempts are in
-        ``shell.polycube.tile_search``).
+        ``shell.polycube.diagnostics.tile_search``).
     name, source : str, optional
         Recorded in the shell file.
     recipe : dict, optional
@@ -240,12 +240,12 @@ def build_shell(V, F, *, tile_size: float | None = None, name: str = "shell", so
     # concave creases; too much makes them lean, so a lighter smoothing is
     # tried as well when the first one does not reach half a tile.
     h, D, upper = -1.0, None, 2.0 * pc.tile_size
-    textured = ~pc.quad_folded[pc.face_quad]
+    textured = ~pc.quad_folded[pc.layout.face_quad]
     for steps in (8 * pc.res, 2 * pc.res):
         Dk, pinched = _unpinched(pc, offset_directions(pc.Y, pc.F, smoothing=steps))
-        pinched_quad = np.zeros(pc.n_quads, dtype=bool)
-        pinched_quad[pc.face_quad[pinched]] = True
-        used = pc.F[textured & ~pinched_quad[pc.face_quad]]
+        pinched_quad = np.zeros(pc.layout.n_quads, dtype=bool)
+        pinched_quad[pc.layout.face_quad[pinched]] = True
+        used = pc.F[textured & ~pinched_quad[pc.layout.face_quad]]
         if D is None:
             report(progress, "height")
         elif not _offset_ok(pc.Y, used, Dk, h + upper / 64, face_cross(pc.Y, used)):

@@ -10,32 +10,18 @@ recorded in the recipe.
 from __future__ import annotations
 
 import hashlib
-import json
 from pathlib import Path
 
-from geotex.catalogs import catalog_file, catalog_recipes
+from geotex.catalogs import Catalog
 from geotex.errors import InputError, MissingFileError
 
 __all__ = ["CATALOG_DIR", "recipes", "shell_path", "list_shells", "load_named", "rebuild",
            "source_mesh"]
 
 CATALOG_DIR = Path(__file__).resolve().parent / "catalog"
-
-
-def recipes() -> dict:
-    """Return ``{name: recipe}`` of the catalog (empty if it has none)."""
-    return catalog_recipes(CATALOG_DIR)
-
-
-def shell_path(name_or_path) -> Path:
-    """Resolve a catalog name or a file path to a shell file.
-
-    Raises
-    ------
-    MissingFileError
-        Neither an existing file nor a catalog name (the message lists the names).
-    """
-    return catalog_file(name_or_path, CATALOG_DIR, what="shell")
+CATALOG = Catalog(CATALOG_DIR, what="shell")
+recipes = CATALOG.recipes
+shell_path = CATALOG.path
 
 
 def load_named(name_or_path):
@@ -47,17 +33,12 @@ def load_named(name_or_path):
 
 def list_shells() -> list[dict]:
     """Catalog entries with the metadata stored in each shell file."""
-    import numpy as np
+    from geotex.shells.store import shell_file_metadata
 
-    out = []
-    for name, recipe in sorted(recipes().items()):
-        f = CATALOG_DIR / f"{name}.npz"
-        entry = {"name": name, "file": str(f), "bytes": f.stat().st_size if f.is_file() else 0,
-                 "recipe": recipe}
-        if f.is_file():
-            with np.load(f, allow_pickle=False) as z:
-                entry.update(json.loads(bytes(z["metadata"]).decode("utf-8")))
-        out.append(entry)
+    out = CATALOG.entries()
+    for entry in out:
+        if entry["bytes"]:
+            entry.update(shell_file_metadata(entry["file"]))
     return out
 
 
@@ -103,10 +84,7 @@ def rebuild(name: str, path=None, *, progress=None):
     from geotex.shells.build import build_shell
     from geotex.shells.store import save_shell
 
-    rec = recipes()
-    if name not in rec:
-        raise InputError(f"unknown catalog shell {name!r}; choose one of {', '.join(sorted(rec))}")
-    r = rec[name]
+    r = CATALOG.recipe(name)
     V, F = source_mesh(r)
     shell = build_shell(V, F, tile_size=r["tile_size"], name=name, source=r["source"],
                         recipe=r, progress=progress)

@@ -26,9 +26,9 @@ def quad_grid_lines(shell, *, samples: int = 8, lift: float = 0.0):
         Index pairs into ``points``.
     """
     pc = shell.polycube
-    E = pc.edge_axis.size
-    q = pc.edge_quads[:, 0]
-    side = pc.edge_sides[:, 0]
+    E = pc.layout.edge_axis.size
+    q = pc.layout.edge_quads[:, 0]
+    side = pc.layout.edge_sides[:, 0]
     t = np.linspace(0.0, 1.0, samples)
     u = np.select([side[:, None] == 0, side[:, None] == 1, side[:, None] == 2],
                   [t[None, :], np.ones((1, samples)), 1.0 - t[None, :]], 0.0)
@@ -48,7 +48,7 @@ def shell_panels(shell, *, title: str | None = None) -> list:
 
     pc = shell.polycube
     name = title or shell.name
-    labels = pc.quad_label[pc.face_quad]
+    labels = pc.layout.quad_label[pc.layout.face_quad]
     diag = float(np.linalg.norm(np.ptp(pc.Y, axis=0)))
     pts, seg = quad_grid_lines(shell, lift=2e-3 * diag)
     n = shell.base_vertices.shape[0]
@@ -56,7 +56,7 @@ def shell_panels(shell, *, title: str | None = None) -> list:
     folded = int(pc.quad_folded.sum())
     return [
         Panel(pc.positions, pc.F, scalars=labels, cmap="Set2",
-              title=f"{name}: polycube, {pc.n_quads} quads"),
+              title=f"{name}: polycube, {pc.layout.n_quads} quads"),
         Panel(pc.Y, pc.F, scalars=labels, cmap="Set2",
               title="mapped onto the base" + (f", {folded} bare" if folded else "")),
         Panel(Vg, shell.base_faces, color="#d9c7a3", highlight={"quad edge segments": seg + n},

@@ -40,14 +40,15 @@ def scaled_shell(shell, factor: float):
     if not np.isfinite(f) or f <= 0:
         raise InputError(f"scale factor must be a positive number, got {factor!r}")
     pc = shell.polycube
-    voxels = dict(pc.voxels)
+    voxels = dict(pc.diagnostics.voxels)
     if "cell" in voxels:
         voxels["cell"] = voxels["cell"] * f
-    search = dict(pc.tile_search)
+    search = dict(pc.diagnostics.tile_search)
     if "attempts" in search:
         search["attempts"] = [dict(a, tile_size=a["tile_size"] * f) if "tile_size" in a else a
                               for a in search["attempts"]]
     pc = dataclasses.replace(pc, tile_size=pc.tile_size * f, origin=pc.origin * f, Y=pc.Y * f,
-                             voxels=voxels, tile_search=search)
+                             diagnostics=dataclasses.replace(pc.diagnostics, voxels=voxels,
+                                                             tile_search=search))
     return dataclasses.replace(shell, polycube=pc, max_height=shell.max_height * f,
                                base_vertices=shell.base_vertices * f)

@@ -9,22 +9,20 @@ sub-grid and the quad edges) is not stored.
 
 from __future__ import annotations
 
-import io
 import json
-import zipfile
 from pathlib import Path
 
 import numpy as np
 
-from geotex.errors import GeotexError, InputError, MeshFileError, MissingFileError
-from geotex.io.limits import check_archive
-from geotex.param.polycube import PolyCube
-from geotex.param.polycube_quads import quad_edges
+from geotex.errors import GeotexError, InputError, MeshFileError
+from geotex.io.records import read_record, write_record
+from geotex.param.polycube import PolyCube, PolyCubeDiagnostics
+from geotex.param.polycube_quads import QuadLayout
 from geotex.param.polycube_surface import subdivided_quads
 from geotex.shells.build import Shell
 from geotex.version import VERSION
 
-__all__ = ["save_shell", "load_shell", "shell_metadata", "FORMAT"]
+__all__ = ["save_shell", "load_shell", "shell_metadata", "shell_file_metadata", "FORMAT"]
 
 FORMAT = "geotex-shell-2"
 
@@ -36,11 +34,13 @@ _ARRAYS = {
     "base_faces": np.int32,
 }
 _DATE = (2020, 1, 1, 0, 0, 0)
+_HINT = "rebuild it with 'geotex shell build'"
 
 
 def _arrays_of(shell: Shell) -> dict:
     pc = shell.polycube
-    return {"origin": pc.origin, "quad_corners": pc.quad_corners, "quad_label": pc.quad_label,
+    return {"origin": pc.origin, "quad_corners": pc.layout.quad_corners,
+            "quad_label": pc.layout.quad_label,
             "Y": pc.Y, "D": shell.D, "quad_folded": pc.quad_folded,
             "base_vertices": shell.base_vertices, "base_faces": shell.base_faces}
 
@@ -48,17 +48,17 @@ def _arrays_of(shell: Shell) -> dict:
 def shell_metadata(shell: Shell) -> dict:
     """The JSON metadata stored with a shell."""
 
-    pc = shell.polycube
+    pc, diag = shell.polycube, shell.polycube.diagnostics
     return {
         "format": FORMAT, "name": shell.name, "tile_size": pc.tile_size, "res": pc.res,
         "vertices": int(pc.Y.shape[0]), "faces": int(pc.F.shape[0]),
         "base_vertices": int(shell.base_vertices.shape[0]),
-        "base_faces": int(shell.base_faces.shape[0]), "quads": pc.n_quads,
-        "folded_quads": int(pc.quad_folded.sum()), "edges": int(pc.edge_axis.size),
+        "base_faces": int(shell.base_faces.shape[0]), "quads": pc.layout.n_quads,
+        "folded_quads": int(pc.quad_folded.sum()), "edges": pc.layout.n_edges,
         "max_height": shell.max_height,
-        "distortion": {k: float(v) for k, v in pc.distortion.items()},
-        "coverage": {k: float(v) for k, v in pc.coverage.items()},
-        "voxels": pc.voxels, "tile_search": pc.tile_search, "source": shell.source,
+        "distortion": {k: float(v) for k, v in diag.distortion.items()},
+        "coverage": {k: float(v) for k, v in diag.coverage.items()},
+        "voxels": diag.voxels, "tile_search": diag.tile_search, "source": shell.source,
         "geotex_version": VERSION,
         "recipe": shell.recipe,
     }
@@ -74,29 +74,11 @@ def save_shell(path, shell: Shell) -> Path:
     MeshFileError
         If the file cannot be written.
     """
-    from geotex.io.atomic import atomic_output
-
-    path = Path(path)
-    if path.suffix.lower() != ".npz":
-        raise InputError(f"{path}: shell files are .npz; use a .npz file name")
-    buf = io.BytesIO()
-    with zipfile.ZipFile(buf, "w", compression=zipfile.ZIP_DEFLATED) as zf:
-        for key, arr in _arrays_of(shell).items():
-            _member(zf, key, np.ascontiguousarray(np.asarray(arr).astype(_ARRAYS[key])))
-        meta = json.dumps(shell_metadata(shell), sort_keys=True)
-        _member(zf, "metadata", np.frombuffer(meta.encode("utf-8"), dtype=np.uint8))
-    with atomic_output(path, "wb") as fh:
-        fh.write(buf.getvalue())
-    return path
-
-
-def _member(zf: zipfile.ZipFile, key: str, arr: np.ndarray) -> None:
-    data = io.BytesIO()
-    np.lib.format.write_array(data, arr, allow_pickle=False)
-    info = zipfile.ZipInfo(f"{key}.npy", date_time=_DATE)
-    info.compress_type = zipfile.ZIP_DEFLATED
-    info.external_attr = 0o644 << 16
-    zf.writestr(info, data.getvalue(), compresslevel=9)
+    arrays = {key: np.ascontiguousarray(np.asarray(arr).astype(_ARRAYS[key]))
+              for key, arr in _arrays_of(shell).items()}
+    meta = json.dumps(shell_metadata(shell), sort_keys=True)
+    arrays["metadata"] = np.frombuffer(meta.encode("utf-8"), dtype=np.uint8)
+    return write_record(path, arrays, compressed=True, date_time=_DATE, kind="shell")
 
 
 def load_shell(path) -> Shell:
@@ -110,33 +92,24 @@ def load_shell(path) -> Shell:
         If it is not a geotex shell file, or is truncated or corrupted.
     """
     path = Path(path)
-    if not path.is_file():
-        raise MissingFileError(f"{path}: shell file not found")
-    try:
-        check_archive(path)
-        with np.load(path, allow_pickle=False) as z:
-            if "metadata" in z.files:
-                meta = json.loads(bytes(z["metadata"]).decode("utf-8"))
-                if not isinstance(meta, dict) or meta.get("format") != FORMAT:
-                    fmt = meta.get("format") if isinstance(meta, dict) else None
-                    raise MeshFileError(path, f"unknown shell format {fmt!r} (expected "
-                                        f"{FORMAT}); rebuild it with 'geotex shell build'")
-            missing = [k for k in list(_ARRAYS) + ["metadata"] if k not in z.files]
-            if missing:
-                raise MeshFileError(path, "not a geotex shell file (missing "
-                                    + ", ".join(missing) + "); build one with 'geotex shell build'")
-            arrays = {k: z[k] for k in _ARRAYS}
-    except MeshFileError:
-        raise
-    except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile, UnicodeDecodeError,
-            json.JSONDecodeError) as exc:
-        raise MeshFileError(path, f"cannot read the shell file (truncated or corrupted?): "
-                            f"{exc}") from None
+    arrays, meta = read_record(path, kind="shell", format=FORMAT, arrays=list(_ARRAYS),
+                               hint=_HINT)
     try:
         return _shell_of(arrays, meta, path)
     except (KeyError, TypeError, ValueError, IndexError, GeotexError):
         raise MeshFileError(path, "inconsistent shell file (array shapes, indices or metadata "
-                            "do not match); rebuild it with 'geotex shell build'") from None
+                            "do not match); " + _HINT) from None
+
+
+def shell_file_metadata(path) -> dict:
+    """The JSON metadata of a shell file, without reading its arrays.
+
+    Raises
+    ------
+    MissingFileError, MeshFileError
+        As :func:`load_shell`.
+    """
+    return read_record(path, kind="shell", format=FORMAT, arrays=(), hint=_HINT)[1]
 
 
 def _shell_of(a: dict, meta: dict, path) -> Shell:
@@ -154,15 +127,12 @@ def _shell_of(a: dict, meta: dict, path) -> Shell:
             or bv.ndim != 2 or bv.shape[1] != 3 or bf.ndim != 2 or bf.shape[1] != 3
             or bf.shape[0] == 0 or bf.min() < 0 or bf.max() >= bv.shape[0]):
         raise InputError("arrays")
-    qe, qf, eax, eq, es = quad_edges(corners)
+    diagnostics = PolyCubeDiagnostics(**{k: dict(meta.get(k, {})) for k in (
+        "distortion", "coverage", "voxels", "tile_search")})
     pc = PolyCube(tile_size=float(meta["tile_size"]), res=res,
                   origin=a["origin"].astype(np.float64), P=P, Y=a["Y"].astype(np.float64),
-                  F=F, quad_grid=grid, quad_label=labels, quad_corners=corners, quad_edge=qe,
-                  quad_edge_forward=qf, edge_axis=eax, edge_quads=eq, edge_sides=es,
-                  quad_folded=a["quad_folded"].astype(bool),
-                  distortion=dict(meta.get("distortion", {})),
-                  coverage=dict(meta.get("coverage", {})), voxels=dict(meta.get("voxels", {})),
-                  tile_search=dict(meta.get("tile_search", {})))
+                  F=F, quad_folded=a["quad_folded"].astype(bool),
+                  layout=QuadLayout.of_quads(corners, labels, grid), diagnostics=diagnostics)
     return Shell(name=str(meta.get("name", Path(path).stem)), polycube=pc,
                  D=a["D"].astype(np.float64), max_height=float(meta["max_height"]),
                  base_vertices=bv.astype(np.float64), base_faces=bf,

@@ -12,30 +12,16 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from geotex.catalogs import catalog_file, catalog_recipes
-from geotex.errors import InputError
+from geotex.catalogs import Catalog
 
 __all__ = ["CATALOG_DIR", "MAX_BYTES", "recipes", "tileset_path", "list_tilesets",
            "rebuild", "load_named", "main"]
 
 CATALOG_DIR = Path(__file__).resolve().parent / "catalog"
 MAX_BYTES = 2_000_000          # size limit of one catalog file
-
-
-def recipes() -> dict:
-    """Return ``{name: recipe}`` of the catalog (empty if it has none)."""
-    return catalog_recipes(CATALOG_DIR)
-
-
-def tileset_path(name_or_path) -> Path:
-    """Resolve a catalog name or a file path to a tile set file.
-
-    Raises
-    ------
-    MissingFileError
-        Neither an existing file nor a catalog name (the message lists the names).
-    """
-    return catalog_file(name_or_path, CATALOG_DIR, what="tile set")
+CATALOG = Catalog(CATALOG_DIR, what="tile set")
+recipes = CATALOG.recipes
+tileset_path = CATALOG.path
 
 
 def load_named(name_or_path):
@@ -59,12 +45,11 @@ def _kind(recipe: dict) -> str:
 def list_tilesets() -> list[dict]:
     """Catalog entries: name, kind, file, size in bytes, tiles, colours, exemplar, description."""
     out = []
-    for name, recipe in sorted(recipes().items()):
-        f = CATALOG_DIR / f"{name}.npz"
-        out.append({"name": name, "kind": _kind(recipe), "file": str(f),
-                    "bytes": f.stat().st_size if f.is_file() else 0,
-                    "tiles": recipe.get("tiles"), "colors": recipe.get("colors"),
-                    "planar": recipe.get("planar", False),
+    for e in CATALOG.entries():
+        recipe = e["recipe"]
+        out.append({"name": e["name"], "kind": _kind(recipe), "file": e["file"],
+                    "bytes": e["bytes"], "tiles": recipe.get("tiles"),
+                    "colors": recipe.get("colors"), "planar": recipe.get("planar", False),
                     "isotropic": recipe.get("isotropic", False),
                     "exemplar": recipe.get("exemplar", {}).get("name"),
                     "description": recipe.get("description", "")})
@@ -94,10 +79,7 @@ def rebuild(name: str, *, progress=None, table: dict | None = None):
     from geotex.exemplars import exemplar
     from geotex.tiles.build import build_tileset
 
-    table = recipes() if table is None else table
-    if name not in table:
-        raise InputError(f"{name!r} is not in the tile catalog ({', '.join(sorted(table))})")
-    r = table[name]
+    r = CATALOG.recipe(name, table)
     ex = exemplar(r["exemplar"]["name"], **r["exemplar"].get("params", {}))
     return build_tileset(ex, colors=r["colors"], planar=r.get("planar", False),
                          isotropic=r.get("isotropic", False), lattice=r.get("lattice", False),
@@ -124,7 +106,7 @@ def main(argv=None) -> int:
         tiles = rebuild(name)
         elapsed = time.perf_counter() - start
         rep = check_seams(tiles)
-        out = CATALOG_DIR / f"{name}.npz"
+        out = CATALOG.file(name)
         if not rep.ok:
             print(f"{name}: NOT seamless: {rep.problems[0]}", file=sys.stderr)
             status = 1

@@ -8,23 +8,20 @@ height, depth, seed, the recipe that rebuilds the set, geotex version).
 
 from __future__ import annotations
 
-import io
 import json
-import zipfile
-import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from geotex.errors import InputError, MeshFileError, MissingFileError
+from geotex.errors import MeshFileError
+from geotex.io.records import read_record, write_record
 
 __all__ = ["TileSet", "save_tileset", "load_tileset", "FORMAT_VERSION"]
 
 FORMAT_VERSION = 1
 _DATE = (1980, 1, 1, 0, 0, 0)       # fixed member time stamps: same set, same bytes
-_KEYS = ("vertices", "faces", "vertex_offsets", "face_offsets", "groups", "colors",
-         "metadata")
+_KEYS = ("vertices", "faces", "vertex_offsets", "face_offsets", "groups", "colors")
 
 
 @dataclass(frozen=True)
@@ -128,11 +125,6 @@ def save_tileset(path, tiles: TileSet) -> None:
         Output path; ``.npz`` is the only format.
     tiles : TileSet
     """
-    from geotex.io.atomic import atomic_output
-
-    path = Path(path)
-    if path.suffix.lower() != ".npz":
-        raise InputError(f"{path}: tile sets are written as .npz files")
     meta = dict(tiles.metadata)
     meta.update(format="geotex-tileset", format_version=FORMAT_VERSION, name=tiles.name,
                 n_colors=list(tiles.n_colors), height=tiles.height, depth=tiles.depth)
@@ -142,17 +134,7 @@ def save_tileset(path, tiles: TileSet) -> None:
               "face_offsets": tiles.face_offsets.astype(np.int64),
               "groups": tiles.groups.astype(np.int8), "colors": tiles.colors.astype(np.int8),
               "metadata": np.array(json.dumps(meta, sort_keys=True))}
-    buf = io.BytesIO()
-    with zipfile.ZipFile(buf, "w", compression=zipfile.ZIP_DEFLATED) as zf:
-        for key, arr in arrays.items():
-            member = io.BytesIO()
-            np.lib.format.write_array(member, arr, allow_pickle=False)
-            info = zipfile.ZipInfo(f"{key}.npy", date_time=_DATE)
-            info.compress_type = zipfile.ZIP_DEFLATED
-            info.external_attr = 0o644 << 16
-            zf.writestr(info, member.getvalue(), compresslevel=9)
-    with atomic_output(path, "wb") as fh:
-        fh.write(buf.getvalue())
+    write_record(path, arrays, compressed=True, date_time=_DATE, kind="tile set")
 
 
 def load_tileset(path) -> TileSet:
@@ -166,25 +148,8 @@ def load_tileset(path) -> TileSet:
         Not a tile set file, truncated, corrupted or inconsistent.
     """
     path = Path(path)
-    if not path.is_file():
-        raise MissingFileError(f"{path}: no such tile set file")
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            missing = [k for k in _KEYS if k not in z.files]
-            if missing:
-                raise MeshFileError(path, "not a geotex tile set (missing "
-                                    f"{', '.join(missing)})")
-            data = {k: z[k] for k in _KEYS}
-    except (zipfile.BadZipFile, OSError, ValueError, EOFError, KeyError, zlib.error) as exc:
-        raise MeshFileError(path, f"unreadable tile set file ({exc})") from None
-    except zipfile.LargeZipFile as exc:  # pragma: no cover
-        raise MeshFileError(path, f"unreadable tile set file ({exc})") from None
-    try:
-        meta = json.loads(str(data["metadata"]))
-    except json.JSONDecodeError:
-        raise MeshFileError(path, "tile set metadata is not valid JSON") from None
-    if meta.get("format") != "geotex-tileset":
-        raise MeshFileError(path, "not a geotex tile set")
+    data, meta = read_record(path, kind="tile set", format="geotex-tileset", arrays=_KEYS,
+                             hint="rebuild it with 'geotex tiles build'")
     if meta.get("format_version", 0) > FORMAT_VERSION:
         raise MeshFileError(path, f"tile set format {meta['format_version']} is newer than "
                             "this geotex; upgrade geotex")
