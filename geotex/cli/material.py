@@ -41,6 +41,9 @@ def register(sub):
                    help="luminance threshold in [0, 1] for A's mask (default Otsu)")
     t.add_argument("--threshold-b", default=None, metavar="T",
                    help="luminance threshold in [0, 1] for B's mask (default Otsu)")
+    t.add_argument("--blend", choices=("linear", "select"), default="linear",
+                   help="combine the two syntheses of a layer by the paper's linear blend "
+                        "(default) or by a histogram-keeping selection along a smooth noise")
     t.add_argument("--preview", metavar="SLICES.png", default=None,
                    help="also write a picture of the m-slices and their masks")
     t.add_argument("--json", action="store_true", help="print one JSON object")
@@ -153,7 +156,7 @@ def run_tile(args) -> int:
                 tile = build_material_tile(imgs[0], imgs[1], size=size, layers=layers,
                                            seed=args.seed, mask_a=masks[0], mask_b=masks[1],
                                            threshold_a=thr[0], threshold_b=thr[1],
-                                           progress=bar)
+                                           blend=args.blend, progress=bar)
     except InputError as exc:
         raise flag_error(exc, {"threshold": "--threshold-a/-b"}) from None
     meta = dict(tile.metadata)

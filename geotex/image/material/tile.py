@@ -40,11 +40,13 @@ from geotex.image.material.synthesis import (SynthesisOptions, indirection_color
 from geotex.image.material.tileable import tileable_image
 
 __all__ = ["TILE_FORMAT", "MaterialTile", "build_material_tile", "build_periodicity_tile",
-           "sample_tile", "save_tile", "load_tile", "tile_slices_image", "histogram_distance",
+           "sample_tile", "blend_weights", "save_tile", "load_tile", "tile_slices_image", "histogram_distance",
            "cross_fade_layers"]
 
 #: format tag of tile files
 TILE_FORMAT = "geotex-material-tile/1"
+#: width of the soft border of the "select" blend, in units of m
+SELECT_SOFTNESS = 0.15
 #: bins per channel of :func:`histogram_distance`
 HISTOGRAM_BINS = 64
 
@@ -153,7 +155,7 @@ def _to_uint8(x: np.ndarray) -> np.ndarray:
 def build_material_tile(image_a, image_b, *, size: int = 128, layers: int = 8, seed=None,
                         mask_a=None, mask_b=None, threshold_a: float | None = None,
                         threshold_b: float | None = None, options: SynthesisOptions | None = None,
-                        progress=None) -> MaterialTile:
+                        blend: str = "linear", progress=None) -> MaterialTile:
     """Build a material-space tile that morphs one texture into another.
 
     Parameters
@@ -173,6 +175,10 @@ def build_material_tile(image_a, image_b, *, size: int = 128, layers: int = 8, s
     threshold_a, threshold_b : float, optional
         Luminance thresholds in ``[0, 1]`` (default Otsu).
     options : SynthesisOptions, optional
+    blend : {"linear", "select"}, optional
+        How the two syntheses of a layer combine (:func:`blend_weights`):
+        the paper's linear blend with weight ``m``, or a histogram-keeping
+        selection.
     progress : callable, optional
         Called with a stage name as each stage starts.
 
@@ -194,6 +200,8 @@ def build_material_tile(image_a, image_b, *, size: int = 128, layers: int = 8, s
     if isinstance(layers, bool) or int(layers) != layers or int(layers) < 2:
         raise InputError(f"layers must be an integer >= 2, got {layers!r}")
     K = int(layers)
+    if blend not in ("linear", "select"):
+        raise InputError(f"blend must be 'linear' or 'select', got {blend!r}")
     t0 = time.perf_counter()
     _report(progress, "tileable inputs")
     ta = tileable_image(A, size=size, mask=mask_a, threshold=threshold_a)
@@ -213,11 +221,11 @@ def build_material_tile(image_a, image_b, *, size: int = 128, layers: int = 8, s
     t3 = time.perf_counter()
     col_a = indirection_colors(ta.colors, maps_a)
     col_b = indirection_colors(tb.colors, maps_b)
-    w = np.linspace(0.0, 1.0, K)[:, None, None, None]
+    w = blend_weights(size, K, blend=blend, seed=int(seeds[0]))[..., None]
     layers_f = (1.0 - w) * col_a + w * col_b
     layers_f[0], layers_f[-1] = ta.colors, tb.colors
     out = _to_uint8(layers_f)
-    meta = {"kind": "morph", "size": size, "layers": K, "seed": seed,
+    meta = {"kind": "morph", "size": size, "layers": K, "seed": seed, "blend": blend,
             "thresholds": [ta.threshold, tb.threshold],
             "seam_cost": [list(ta.seam_cost), list(tb.seam_cost)],
             "mask_areas": morph.areas.tolist(), "morph_steps": morph.steps.tolist(),
@@ -229,6 +237,42 @@ def build_material_tile(image_a, image_b, *, size: int = 128, layers: int = 8, s
                           "histogram_weight": opt.histogram_weight}}
     meta.update(_histogram_report(out))
     return MaterialTile(layers=out, masks=morph.masks, metadata=meta)
+
+
+def blend_weights(size: int, layers: int, *, blend: str = "linear", seed=None,
+                  softness: float = SELECT_SOFTNESS) -> np.ndarray:
+    """Weight of the second synthesis per layer and texel, ``(K, n, n)`` float64.
+
+    ``"linear"`` (the paper, Fig. 5): ``m = k / (K - 1)`` everywhere.  Each
+    texel then mixes the two syntheses' colours, which pulls the layer's
+    histogram toward the mean (what a cross-fade does too, only with the
+    features aligned).
+
+    ``"select"`` (geotex's variant, not in the paper): a smooth periodic
+    noise ``u(s, t)`` with uniform distribution (a Gaussian-blurred random
+    field, ranked) decides where the second synthesis shows:
+    ``w = clip((m - u) / softness + 1/2, 0, 1)``.  A fraction ``m`` of the
+    texels shows the second synthesis, the rest the first, with narrow soft
+    borders, so the layer's colour histogram is close to the blend
+    ``(1 - m) H_0 + m H_M`` of the two syntheses' histograms (which the usage
+    penalty keeps close to the inputs').  Every texel moves from 0 to 1 once
+    along ``m``, so the tile stays smooth along ``m``.
+    """
+    K = int(layers)
+    m = np.linspace(0.0, 1.0, K)[:, None, None]
+    if blend == "linear":
+        return np.broadcast_to(m, (K, size, size)).copy()
+    from scipy.ndimage import gaussian_filter
+
+    rng = np.random.default_rng(seed)
+    noise = gaussian_filter(rng.normal(size=(size, size)), sigma=max(size / 24.0, 1.0),
+                            mode="wrap")
+    rank = np.empty(size * size)
+    rank[np.argsort(noise.ravel(), kind="stable")] = (np.arange(size * size) + 0.5) / (size ** 2)
+    u = rank.reshape(size, size)[None]
+    # squeeze u into [softness / 2, 1 - softness / 2]: w = 0 at m = 0, 1 at m = 1
+    u = softness / 2.0 + u * (1.0 - softness)
+    return np.clip((m - u) / softness + 0.5, 0.0, 1.0)
 
 
 def build_periodicity_tile(image, *, size: int = 128, layers: int = 4, seed=None, mask=None,
