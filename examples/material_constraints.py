@@ -6,7 +6,7 @@ Writes ``material_constraints.png`` into OUT_DIR (default docs/gallery), four pa
    m = 1, blue: m = 0) over the interpolated material field (colour = m);
 2. the result: the (s, t, m) tile baked over Bob through the PGP steered by
    the smooth cross field through the strokes;
-3. a local update: one more material point (m = 1, on the other side); only
+3. a local update: one more material point (m = 1, on the flank); only
    its effect area (25 % of the surface, outlined) is re-solved, the rest
    stays locked;
 4. the textured result after the update.
@@ -96,16 +96,20 @@ def main(out: Path) -> None:
     mats = [{"point": head.tolist(), "material": 1.0, "radius": 0.08 * diag},
             {"point": tail.tolist(), "material": 0.0, "radius": 0.08 * diag}]
     field = smooth_direction_field(V, F, symmetry=4, constraints=strokes, seed=0)
-    params = periodic_parameterization(V, F, field, scale=0.06 * diag)
+    params = periodic_parameterization(V, F, field, scale=0.09 * diag)
     lv, lval = material_locks(V, F, mats)
     m0 = material_field(V, F, lv, lval)
     res = 1024 if QUICK else 2048
     before = bake_material_texture(V, F, params, m0, tile, field=field, resolution=res)
-    # local update: one more m = 1 point on the belly
+    # local update: one more m = 1 point on the flank facing the camera (-y)
     adj = face_adjacency(V, F)
-    belly = int(np.argmin(V[:, 2] + 0.3 * np.abs(V[:, 0] - V[:, 0].mean())))
+    mid = 0.5 * (lo + hi)
+    belly = int(np.argmin(V[:, 1] + 0.5 * np.abs(V[:, 0] - mid[0] + 0.15 * (hi - lo)[0])
+                          + 0.5 * np.abs(V[:, 2] - mid[2])))
     t0 = time.perf_counter()
-    upd = update_material(V, F, m0, [belly], [1.0], budget_area=0.25 * adj.areas.sum(),
+    nv, nval = material_locks(V, F, [{"point": V[belly].tolist(), "material": 1.0,
+                                      "radius": 0.06 * diag}])
+    upd = update_material(V, F, m0, nv, nval, budget_area=0.25 * adj.areas.sum(),
                           keep_vertices=lv, adjacency=adj)
     t_up = time.perf_counter() - t0
     after = bake_material_texture(V, F, params, upd.material, tile, field=field,
@@ -129,7 +133,7 @@ def main(out: Path) -> None:
                     title=f"local update: {upd.faces.size} of {F.shape[0]} faces\n"
                           f"re-solved in {t_up * 1000:.0f} ms"),
               corner_panel(V, F, after, "after the update")]
-    render_panels(panels, out / "material_constraints.png", size=(1800, 560))
+    render_panels(panels, out / "material_constraints.png", size=(650, 520))
     print(f"Bob {F.shape[0]} faces; local update {t_up * 1000:.1f} ms on {upd.faces.size} faces "
           f"({upd.free_vertices.size} free vertices)")
     print(f"wrote {out / 'material_constraints.png'}")

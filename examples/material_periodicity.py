@@ -84,7 +84,7 @@ def main(out: Path) -> None:
     panels = [textured(repeat, "A: repeat mode (m = 0)"),
               textured(hidden, "B: m modulated over 4 layers\n(same mask, other details)"),
               Panel(V, F, scalars=m, cmap="viridis", title="C: m (wavelength 3 tiles)")]
-    render_panels(panels, out / "material_periodicity.png", size=(1500, 560))
+    render_panels(panels, out / "material_periodicity.png", size=(700, 600))
     print(f"wrote {out / 'material_periodicity.png'} and "
           f"{out / 'material_periodicity_tile.png'}")
 

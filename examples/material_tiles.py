@@ -102,13 +102,22 @@ def main(out: Path) -> None:
     Vs, Fs, uvs, atlas = stacked_slices(tile)
     h = tile.metadata["histogram_distance"][1:-1]
     c = tile.metadata["cross_fade_histogram_distance"][1:-1]
+    # close-up: the faces around the middle of the body, where m is near 1/2
+    mid = np.abs(material[F].mean(axis=1) - 0.5) < 0.2
+    mid &= V[F].mean(axis=1)[:, 2] > np.percentile(V[:, 2], 40)
+    close = np.flatnonzero(mid)
+    Vz = V[F[close]].reshape(-1, 3)
+    Fz = np.arange(Vz.shape[0], dtype=np.int64).reshape(-1, 3)
+    uvz = textured.uv[textured.uv_faces[close]].reshape(-1, 2)
     panels = [Panel(Vs, Fs, uv=uvs, texture=atlas,
                     title=f"(s, t, m) tile: {label}\n{layers} slices of {size}^2, "
                           f"built in {t_tile:.0f} s"),
               Panel(Vc, Fc, uv=uv, texture=textured.texture,
                     title=f"Spot, m from tail (0) to head (1)\n"
-                          f"{int(params.singular.sum())} singular faces blended")]
-    render_panels(panels, out / "material_tiles.png", size=(1500, 700))
+                          f"{int(params.singular.sum())} singular faces blended"),
+              Panel(Vz, Fz, uv=uvz, texture=textured.texture,
+                    title="close-up where m is about 1/2")]
+    render_panels(panels, out / "material_tiles.png", size=(700, 650))
     print(f"tile {label}: {t_tile:.1f} s; histogram distance inner layers "
           f"{np.mean(h):.4f} (cross-fade {np.mean(c):.4f}); mask areas "
           f"{tile.metadata['mask_areas']}")

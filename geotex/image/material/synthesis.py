@@ -79,6 +79,11 @@ class SynthesisOptions:
         Also examine the 8 coherent candidates (the input texel that each
         neighbour's source would place here, Ashikhmin / Lefebvre-Hoppe
         k-coherence), which keeps larger pieces of the input together.
+    exclude_fraction : float
+        Input texels closer (periodically, per axis) than this fraction of
+        the tile to the output texel's own position are refused unless no
+        candidate is left: a synthesis under the input's own mask then
+        cannot fall back to copying the input (periodicity-hiding tiles).
     """
 
     levels: int = 3
@@ -89,6 +94,7 @@ class SynthesisOptions:
     color_dims: int = 5
     mask_dims: int = 3
     coherent: bool = True
+    exclude_fraction: float = 0.0
 
 
 _NEIGHBOURS = [(dy, dx) for dy in (-1, 0, 1) for dx in (-1, 0, 1) if dy or dx]
@@ -128,7 +134,7 @@ class _Projection:
         sign[sign == 0] = 1.0
         self.basis = (Vt[:d] * sign[:, None]).T
         total = float((s ** 2).sum()) / max(X.shape[0], 1)
-        self.scale = weight / np.sqrt(max(total, 1e-12))
+        self.scale = weight / np.sqrt(max(total, 1e-2))      # floor: near-empty masks
 
     def __call__(self, X: np.ndarray) -> np.ndarray:
         return (X - self.mean) @ self.basis * self.scale
@@ -174,6 +180,7 @@ def _optimize(S: np.ndarray, level: _Level, target: np.ndarray, passes: int,
     S = S.copy()
     use = np.bincount(S.ravel(), minlength=n * n).astype(np.float64)
     lam = opt.histogram_weight * level.sigma2
+    radius = opt.exclude_fraction * n
     for _ in range(passes):
         for g in rng.permutation(4):
             rows, cols = groups[g]
@@ -194,6 +201,12 @@ def _optimize(S: np.ndarray, level: _Level, target: np.ndarray, passes: int,
             cur = S[rows, cols]
             others = use[idx] - (idx == cur[:, None])
             cost = d2 + lam * others
+            if radius > 0:
+                cy, cx = np.divmod(idx, n)
+                dy = np.abs(cy - rows[:, None])
+                dx = np.abs(cx - cols[:, None])
+                near = (np.minimum(dy, n - dy) < radius) & (np.minimum(dx, n - dx) < radius)
+                cost = cost + near * (1e6 * level.sigma2 + 1e6)
             best = idx[np.arange(idx.shape[0]), np.argmin(cost, axis=1)]
             use -= np.bincount(cur, minlength=n * n)
             use += np.bincount(best, minlength=n * n)

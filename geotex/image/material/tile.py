@@ -15,8 +15,10 @@ layers are the two tileable inputs themselves.
 
 A *periodicity-hiding* tile (paper Fig. 14) is built from one input: every
 layer keeps the input's own feature mask, layer 0 is the input, and every
-other layer is synthesized from a random coarse start (drawn from ``seed``),
-so the layers share their layout and differ in their details.
+other layer is synthesized starting from the input shifted by a random
+offset (drawn from ``seed``), with the input texels near each output texel's own position refused
+(``EXCLUDE_FRACTION``), so the layers share their layout and differ in their
+details.
 
 File format (``.npz``, :data:`TILE_FORMAT` in ``format``): ``layers``
 ``(K, n, n, 3)`` uint8, ``masks`` ``(K, n, n)`` bool, ``format``, and
@@ -25,6 +27,7 @@ File format (``.npz``, :data:`TILE_FORMAT` in ``format``): ``layers``
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import json
 import time
@@ -45,6 +48,9 @@ __all__ = ["TILE_FORMAT", "MaterialTile", "build_material_tile", "build_periodic
 
 #: format tag of tile files
 TILE_FORMAT = "geotex-material-tile/1"
+#: periodicity-hiding layers copy nothing from within this fraction of the
+#: tile around their own position (so they cannot fall back to the input)
+EXCLUDE_FRACTION = 0.1
 #: width of the soft border of the "select" blend, in units of m
 SELECT_SOFTNESS = 0.15
 #: bins per channel of :func:`histogram_distance`
@@ -309,10 +315,17 @@ def build_periodicity_tile(image, *, size: int = 128, layers: int = 4, seed=None
     ta = tileable_image(A, size=size, mask=mask, threshold=threshold)
     rng = np.random.default_rng(seed)
     n0 = size // 2 ** (opt.levels - 1)
-    starts = rng.integers(0, n0 * n0, size=(K - 1, n0, n0))
+    # every layer starts as the input shifted by a random offset beyond the exclusion
+    yy, xx = np.divmod(np.arange(n0 * n0).reshape(n0, n0), n0)
+    lo = int(np.ceil(EXCLUDE_FRACTION * n0)) + 1
+    off = rng.integers(lo, n0 - lo + 1, size=(K - 1, 2))
+    starts = ((yy[None] + off[:, 0, None, None]) % n0) * n0 + (xx[None] + off[:, 1, None,
+                                                                             None]) % n0
     _report(progress, "synthesis")
+    hide = dataclasses.replace(opt, exclude_fraction=max(opt.exclude_fraction,
+                                                         EXCLUDE_FRACTION))
     maps = synthesize_layers(ta.colors, ta.mask, np.repeat(ta.mask[None], K - 1, axis=0),
-                             options=opt, seed=int(rng.integers(2 ** 62)), starts=starts,
+                             options=hide, seed=int(rng.integers(2 ** 62)), starts=starts,
                              progress=progress)
     out = np.concatenate([ta.colors[None], indirection_colors(ta.colors, maps)])
     layers_u8 = _to_uint8(out)
