@@ -2,8 +2,9 @@
 
 Writes ``material_periodicity.png`` into OUT_DIR (default docs/gallery):
 
-A. a brick tile in repeat mode (``m = 0`` everywhere): the repetition shows;
-B. the same through a 4-layer periodicity-hiding tile (every layer has the
+A. a brick tile in repeat mode (``m = 0`` everywhere): the repetition shows
+   (close-up of Spot's flank);
+B. the same flank through a 4-layer periodicity-hiding tile (every layer has the
    bricks' feature mask, the layers differ in their details), with ``m``
    modulated over the surface by smooth noise (wavelength 3 tiles);
 C. the modulated ``m`` (colour).
@@ -74,14 +75,20 @@ def main(out: Path) -> None:
     m = modulated_material(V, np.full(V.shape[0], 0.5), amplitude=0.5, wavelength=3 * scale,
                            seed=0)
     hidden = bake_material_texture(V, F, params, m, tile, field=field, resolution=res)
-    Vc = V[F].reshape(-1, 3)
-    Fc = np.arange(Vc.shape[0], dtype=np.int64).reshape(-1, 3)
+    # close-up: the flank that faces the camera (the body between the legs and the back)
+    cen = V[F].mean(axis=1)
+    lo, hi = V.min(axis=0), V.max(axis=0)
+    rel = (cen - lo) / (hi - lo)
+    flank = np.flatnonzero((rel[:, 1] > 0.3) & (rel[:, 1] < 0.95) & (rel[:, 2] > 0.25)
+                           & (rel[:, 2] < 0.75) & (cen[:, 0] > 0.5 * (lo[0] + hi[0])))
+    Vz = V[F[flank]].reshape(-1, 3)
+    Fz = np.arange(Vz.shape[0], dtype=np.int64).reshape(-1, 3)
 
     def textured(mesh, title):
-        return Panel(Vc, Fc, uv=mesh.uv[mesh.uv_faces].reshape(-1, 2), texture=mesh.texture,
-                     title=title)
+        return Panel(Vz, Fz, uv=mesh.uv[mesh.uv_faces[flank]].reshape(-1, 2),
+                     texture=mesh.texture, title=title)
 
-    panels = [textured(repeat, "A: repeat mode (m = 0)"),
+    panels = [textured(repeat, "A: repeat mode (m = 0), flank close-up"),
               textured(hidden, "B: m modulated over 4 layers\n(same mask, other details)"),
               Panel(V, F, scalars=m, cmap="viridis", title="C: m (wavelength 3 tiles)")]
     render_panels(panels, out / "material_periodicity.png", size=(700, 600))

@@ -343,3 +343,23 @@ def test_cli_errors_are_one_line(tmp_path, capsys, case, needle):
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and err.startswith("geotex: error:") and needle in err
     assert not (tmp_path / "o.glb").exists()
+
+
+def test_field_arms_predict_the_corner_coordinates():
+    from geotex.image.material.mapping import field_arms
+
+    V, F = icosphere(3)
+    vec, _ = projected_direction_field(V, F, [0.0, 0.0, 1.0])
+    p = periodic_parameterization(V, F, vec, scale=0.4)
+    a, b, S = field_arms(V, F, p, vec)
+    ok = ~p.singular
+    d = V[F[:, 1]] - V[F[:, 0]]
+    pred = np.stack([np.einsum("fd,fd->f", d, a), np.einsum("fd,fd->f", d, b)], axis=1) / S[:, None]
+    got = p.coords[:, 1] - p.coords[:, 0]
+    err = np.linalg.norm(pred - got, axis=1)[ok]
+    step = np.linalg.norm(got, axis=1)[ok]
+    # PGP trades size for seamlessness (its scale error is ~0.35 here): loose bound
+    assert np.median(err) < 0.4 * np.median(step)
+    # a flipped t arm would not predict them
+    flip = np.stack([pred[:, 0], -pred[:, 1]], axis=1)
+    assert np.median(np.linalg.norm(flip - got, axis=1)[ok]) > 3 * np.median(err)

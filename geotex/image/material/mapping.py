@@ -48,7 +48,7 @@ from geotex.options import finite_number, positive_number
 from geotex.patches.effect import effect_area
 
 __all__ = ["material_locks", "default_material", "modulated_material", "MaterialUpdate",
-           "update_material", "bake_material_texture", "surface_coordinates"]
+           "update_material", "bake_material_texture", "field_arms"]
 
 #: fraction of the height locked at each end by :func:`default_material`
 DEFAULT_BAND = 0.05
@@ -358,7 +358,7 @@ def update_material(V, F, material, locked_vertices, locked_values, *, max_dista
     return MaterialUpdate(material=out, faces=faces, free_vertices=kept[~fixed])
 
 
-def surface_coordinates(V, F, params, field) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def field_arms(V, F, params, field) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The field's combed arms and tile size per face, for the singular blend.
 
     Returns
@@ -431,7 +431,7 @@ def bake_material_texture(V, F, params, material, tile: MaterialTile, *, field,
     sing = np.asarray(params.singular, dtype=bool)[face]
     n_sing = int(sing.sum())
     if n_sing:
-        a, b, S = surface_coordinates(V, F, params, field)
+        a, b, S = field_arms(V, F, params, field)
         fs, bs = face[sing], bary[sing]
         P = np.einsum("kc,kcd->kd", bs, V[F[fs]])
         blend = np.zeros((n_sing, 3))

@@ -95,7 +95,7 @@ class MaterialTile:
         return int(self.layers.shape[1])
 
 
-def _as_float_image(img, name: str) -> np.ndarray:
+def _checked_image(img, name: str) -> np.ndarray:
     arr = np.asarray(img)
     if arr.ndim != 3 or arr.shape[2] not in (3, 4):
         raise InputError(f"{name} must be an (h, w, 3 or 4) image, got shape {arr.shape}")
@@ -200,8 +200,8 @@ def build_material_tile(image_a, image_b, *, size: int = 128, layers: int = 8, s
         On bad images, masks of the wrong size, empty masks or bad options.
     """
     opt = SynthesisOptions() if options is None else options
-    A = _as_float_image(image_a, "image A")
-    B = _as_float_image(image_b, "image B")
+    A = _checked_image(image_a, "image A")
+    B = _checked_image(image_b, "image B")
     size = _tile_size(size, opt)
     if isinstance(layers, bool) or int(layers) != layers or int(layers) < 2:
         raise InputError(f"layers must be an integer >= 2, got {layers!r}")
@@ -305,7 +305,7 @@ def build_periodicity_tile(image, *, size: int = 128, layers: int = 4, seed=None
         As :func:`build_material_tile`.
     """
     opt = SynthesisOptions() if options is None else options
-    A = _as_float_image(image, "image")
+    A = _checked_image(image, "image")
     size = _tile_size(size, opt)
     if isinstance(layers, bool) or int(layers) != layers or int(layers) < 2:
         raise InputError(f"layers must be an integer >= 2, got {layers!r}")

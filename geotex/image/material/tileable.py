@@ -197,10 +197,9 @@ def _cut_labels(A: np.ndarray, B: np.ndarray, *, wrap_rows: bool) -> tuple[np.nd
     take_a = np.zeros(h * o + 2, dtype=bool)
     take_a[reach] = True
     labels = take_a[:h * o].reshape(h, o)
-    # seam: neighbouring texels on different sides
-    cut = np.concatenate([(labels[:, :-1] != labels[:, 1:]).ravel() * d[:, :-1].ravel()])
-    n_cut = max(int((labels[:, :-1] != labels[:, 1:]).sum()), 1)
-    return labels, float(cut.sum() / n_cut / A.shape[2])
+    # seam cost: mean colour difference (per channel) where neighbours took different sides
+    seam = labels[:, :-1] != labels[:, 1:]
+    return labels, float((seam * d[:, :-1]).sum() / max(int(seam.sum()), 1) / A.shape[2])
 
 
 def _wrap_columns(img: np.ndarray, size: int, extra: list[np.ndarray], *, wrap_rows: bool):
