@@ -49,10 +49,10 @@ def synthetic(kind: str, n: int = 96) -> np.ndarray:
     rng = np.random.default_rng(1)
     yy, xx = np.mgrid[0:n, 0:n]
     if kind == "dots":
-        img = np.where((((xx % 16) - 8) ** 2 + ((yy % 16) - 8) ** 2 < 16)[..., None],
+        img = np.where((((xx % 24) - 12) ** 2 + ((yy % 24) - 12) ** 2 < 49)[..., None],
                        [0.2, 0.12, 0.08], [0.85, 0.75, 0.55])
     else:
-        img = np.where((((xx + yy) % 12) < 4)[..., None], [0.95, 0.9, 0.3], [0.1, 0.15, 0.45])
+        img = np.where((((xx + yy) % 32) < 12)[..., None], [0.95, 0.9, 0.3], [0.1, 0.15, 0.45])
     img = img + rng.normal(0, 0.03, img.shape)
     return np.clip(np.rint(img * 255), 0, 255).astype(np.uint8)
 
