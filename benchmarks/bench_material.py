@@ -131,7 +131,8 @@ def mapping_rows(n_major: int, n_minor: int, resolution: int) -> dict:
     return {"faces": int(F.shape[0]), "field_s": round(t1 - t0, 3), "pgp_s": round(t2 - t1, 3),
             "default_material_s": round(t3 - t2, 3), "bake_s": round(t4 - t3, 3),
             "atlas": list(mesh.texture.shape[:2]), "singular_faces": int(params.singular.sum()),
-            "update_s_best": round(min(times), 3), "update_cpu_s_best": round(min(cpus), 3), "update_s_all": [round(x, 3) for x in times],
+            "update_s_best": round(min(times), 3), "update_cpu_s_best": round(min(cpus), 3),
+            "update_s_all": [round(x, 3) for x in times],
             "effect_faces": int(up.faces.size), "effect_area_fraction": round(frac, 3),
             "global_material_solve_s": round(g1 - g0, 3)}
 
@@ -174,7 +175,8 @@ def main() -> None:
              "distance to `(1 - m) H_0 + m H_M` (colour range = 1); `fade`: the same for a "
              "plain cross-fade of the two tileable inputs. Wrap difference: largest colour "
              "difference (0-255) between a lookup and the lookup one period away.", "",
-             "| pair | size x layers | blend | wall (s) | CPU (s) | synthesis wall (s) | mask areas | "
+             "| pair | size x layers | blend | wall (s) | CPU (s) | synthesis wall (s) | "
+             "mask areas | "
              "monotone | re-thresholded | wrap diff | hist (ours) | hist (fade) | "
              "layers beating fade |",
              "|---|---|---|---:|---:|---:|---|---|---:|---:|---:|---:|---:|"]

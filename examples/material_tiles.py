@@ -63,7 +63,7 @@ def inputs() -> tuple[np.ndarray, np.ndarray, str]:
 
 def stacked_slices(tile, *, gap: float = 0.28):
     """One quad per m-slice, stacked along z, textured from a side-by-side atlas."""
-    K, n = tile.n_layers, tile.size
+    K = tile.n_layers
     atlas = np.concatenate(list(tile.layers), axis=1)                 # (n, K n, 3)
     V, F, uv = [], [], []
     for k in range(K):

@@ -12,8 +12,7 @@ from geotex.fields.scalar import material_field
 from geotex.image.material.mapping import (bake_material_texture, default_material,
                                            material_locks, modulated_material, update_material)
 from geotex.image.material.morph import morph_masks, periodic_signed_distance
-from geotex.image.material.synthesis import (SynthesisOptions, indirection_colors,
-                                             synthesize_layers)
+from geotex.image.material.synthesis import indirection_colors, synthesize_layers
 from geotex.image.material.tile import (TILE_FORMAT, MaterialTile, build_material_tile,
                                         build_periodicity_tile, load_tile, sample_tile,
                                         save_tile, tile_slices_image)

@@ -187,8 +187,6 @@ def run_tile(args) -> int:
 
 
 def run_map(args) -> int:
-    import numpy as np
-
     from geotex.errors import InputError
     from geotex.image.material.mapping import (bake_material_texture, default_material,
                                                material_locks, modulated_material)

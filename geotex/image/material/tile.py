@@ -43,7 +43,8 @@ from geotex.image.material.synthesis import (SynthesisOptions, indirection_color
 from geotex.image.material.tileable import tileable_image
 
 __all__ = ["TILE_FORMAT", "MaterialTile", "build_material_tile", "build_periodicity_tile",
-           "sample_tile", "blend_weights", "save_tile", "load_tile", "tile_slices_image", "histogram_distance",
+           "sample_tile", "blend_weights", "save_tile", "load_tile", "tile_slices_image",
+           "histogram_distance",
            "cross_fade_layers"]
 
 #: format tag of tile files
@@ -461,5 +462,6 @@ def tile_slices_image(tile: MaterialTile, *, masks: bool = True, repeat: int = 1
     img = np.full((len(rows) * (side + gap) - gap, K * (side + gap) - gap, 3), 255, np.uint8)
     for r, row in enumerate(rows):
         for k, im in enumerate(row):
-            img[r * (side + gap):r * (side + gap) + side, k * (side + gap):k * (side + gap) + side] = im
+            y0, x0 = r * (side + gap), k * (side + gap)
+            img[y0:y0 + side, x0:x0 + side] = im
     return img
