@@ -54,6 +54,8 @@ TILE_FORMAT = "geotex-material-tile/1"
 EXCLUDE_FRACTION = 0.1
 #: width of the soft border of the "select" blend, in units of m
 SELECT_SOFTNESS = 0.15
+#: metadata keys that :func:`save_tile` leaves out (they change from run to run)
+VOLATILE_METADATA = ("timings",)
 #: bins per channel of :func:`histogram_distance`
 HISTOGRAM_BINS = 64
 
@@ -391,12 +393,17 @@ def sample_tile(tile: MaterialTile, s, t, m) -> np.ndarray:
 
 
 def save_tile(path, tile: MaterialTile) -> Path:
-    """Write a tile file (``.npz``, atomically); returns the path."""
+    """Write a tile file (``.npz``, atomically); returns the path.
+
+    The metadata keys in :data:`VOLATILE_METADATA` (timings) are not
+    written, so the same inputs and seed give a byte-identical file.
+    """
     from geotex.io.atomic import atomic_output
 
+    meta = {k: v for k, v in tile.metadata.items() if k not in VOLATILE_METADATA}
     buf = io.BytesIO()
     np.savez_compressed(buf, format=np.array(TILE_FORMAT), layers=tile.layers,
-                        masks=tile.masks, metadata=np.array(json.dumps(tile.metadata)))
+                        masks=tile.masks, metadata=np.array(json.dumps(meta)))
     out = Path(path)
     with atomic_output(out, "wb") as fh:
         fh.write(buf.getvalue())
