@@ -59,9 +59,10 @@ def main(out: Path) -> None:
     img = load_texture_image(BRICKS) if BRICKS.is_file() else synthetic_bricks()
     size = 32 if QUICK else 96
     tile = build_periodicity_tile(img, size=size, layers=4, seed=0)
+    strip = tile_slices_image(tile, repeat=2, masks=False)
+    zoom = max(2, -(-200 // strip.shape[0]))                  # at least 200 pixels high
     (out / "material_periodicity_tile.png").write_bytes(
-        texture_to_png_bytes(np.kron(tile_slices_image(tile, repeat=2, masks=False),
-                                     np.ones((2, 2, 1), np.uint8))))
+        texture_to_png_bytes(np.kron(strip, np.ones((zoom, zoom, 1), np.uint8))))
     spot = read_mesh(sample_path("spot"))
     V, F = spot.vertices[:, [0, 2, 1]] * [-1, 1, 1], spot.faces
     V, F = igl.upsample(V, F, 1)
