@@ -257,6 +257,7 @@ def test_pgp_file_round_trip_and_tile_image(capsys, tmp_path):
 @pytest.mark.parametrize("argv, message", [
     (["--param", "{other}"], "made for a mesh of"),
     (["--param", "{junk}"], "not a geotex PGP file"),
+    (["--param", "{image}"], "unreadable PGP file: not an .npz"),
     (["--image", "{junk}"], "--image"),
 ])
 def test_tile_image_errors_name_the_flag(capsys, tmp_path, argv, message):
@@ -272,7 +273,7 @@ def test_tile_image_errors_name_the_flag(capsys, tmp_path, argv, message):
     Image.fromarray(np.zeros((4, 4, 3), np.uint8)).save(tmp_path / "i.png")
     args = {"--param": str(pgp), "--image": str(tmp_path / "i.png")}
     for flag, value in zip(argv[::2], argv[1::2]):
-        args[flag] = value.format(other=opgp, junk=junk)
+        args[flag] = value.format(other=opgp, junk=junk, image=tmp_path / "i.png")
     code, _, err = _run(capsys, "tile-image", mesh, *sum(args.items(), ()),
                         "-o", tmp_path / "out.glb")
     assert code == 2 and message in err and err.count("\n") == 1

@@ -10,6 +10,7 @@
 ``composite``   the composited colour of all pastes at surface points
 ``atlas``       a packed texture atlas (xatlas) with the pastes composited in
 ``displace``    the composited texture as a height field: a printable solid
+``material``    material-space (s, t, m) tiles (subpackage, imported on demand)
 ==============  ============================================================
 """
 

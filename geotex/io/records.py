@@ -79,6 +79,9 @@ def read_record(path, *, kind: str, format: str, arrays, optional=(),
     tail = f"; {hint}" if hint else ""
     if not path.is_file():
         raise MissingFileError(f"{path}: no such {kind} file")
+    if not zipfile.is_zipfile(path):
+        raise MeshFileError(path, f"unreadable {kind} file: not an .npz archive (truncated "
+                                  f"or corrupted, or another kind of file){tail}")
     try:
         check_archive(path)
     except RefusedInput as exc:

@@ -8,17 +8,14 @@ and a JSON ``metadata`` string whose ``format`` is :data:`PGP_FORMAT`.
 
 from __future__ import annotations
 
-import io
 import json
-import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from geotex.errors import MeshFileError, MissingFileError
-from geotex.io.atomic import atomic_output
-from geotex.io.limits import RefusedInput, check_archive
+from geotex.errors import MeshFileError
+from geotex.io.records import read_record, write_record
 
 __all__ = ["PGP_FORMAT", "PgpFile", "save_parameterization", "load_parameterization"]
 
@@ -74,17 +71,19 @@ def save_parameterization(path, p, *, metadata: dict | None = None) -> Path:
     Returns
     -------
     pathlib.Path
+
+    Raises
+    ------
+    InputError
+        If the path does not end in ``.npz``.
     """
     meta = dict(metadata or {}, format=PGP_FORMAT)
-    buf = io.BytesIO()
-    np.savez_compressed(buf, coords=p.coords, singular=p.singular, scale=p.scale,
-                        cone_vertices=np.array([v for v, _ in p.cones], dtype=np.int64),
-                        cone_indices=np.array([k for _, k in p.cones], dtype=np.float64),
-                        functions=p.functions, axes=p.axes, metadata=np.array(json.dumps(meta)))
-    path = Path(path)
-    with atomic_output(path, "wb") as fh:
-        fh.write(buf.getvalue())
-    return path
+    return write_record(path, {
+        "coords": p.coords, "singular": p.singular, "scale": p.scale,
+        "cone_vertices": np.array([v for v, _ in p.cones], dtype=np.int64),
+        "cone_indices": np.array([k for _, k in p.cones], dtype=np.float64),
+        "functions": p.functions, "axes": p.axes,
+        "metadata": np.array(json.dumps(meta))}, compressed=True, kind="PGP")
 
 
 def load_parameterization(path) -> PgpFile:
@@ -101,32 +100,20 @@ def load_parameterization(path) -> PgpFile:
     MeshFileError
         If it is not a geotex PGP file, is damaged, or its arrays disagree.
     """
-    path = Path(path)
-    if not path.is_file():
-        raise MissingFileError(f"{path}: no such file")
-    try:
-        check_archive(path)
-    except RefusedInput as exc:
-        raise MeshFileError(path, str(exc)) from None
-    try:
-        with np.load(path, allow_pickle=False) as d:
-            meta = json.loads(str(d["metadata"])) if "metadata" in d.files else None
-            if not isinstance(meta, dict) or meta.get("format") != PGP_FORMAT:
-                raise MeshFileError(path, "not a geotex PGP file (make one with 'geotex pgp')")
-            coords, singular, scale = d["coords"], d["singular"], d["scale"]
-            functions, axes = d["functions"], d["axes"]
-            cones = tuple((int(v), float(k)) for v, k in zip(d["cone_vertices"],
-                                                              d["cone_indices"]))
-    except MeshFileError:
-        raise
-    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile,
-            json.JSONDecodeError) as exc:
-        raise MeshFileError(path, f"damaged or not a PGP file ({type(exc).__name__})") from None
+    d, meta = read_record(path, kind="PGP", format=PGP_FORMAT, record="geotex PGP file",
+                          arrays=("coords", "singular", "scale", "cone_vertices",
+                                  "cone_indices", "functions", "axes"),
+                          hint="make one with 'geotex pgp'")
+    coords, singular, scale = d["coords"], d["singular"], d["scale"]
+    functions, axes = d["functions"], d["axes"]
     m = coords.shape[0] if coords.ndim == 3 else -1
     n = scale.shape[0] if scale.ndim == 1 else -1
     if (coords.shape != (m, 3, 2) or singular.shape != (m,) or functions.shape != (n, 4)
-            or axes.shape != (m, 3) or not np.isfinite(coords).all()):
-        raise MeshFileError(path, "inconsistent PGP file (array shapes do not match)")
+            or axes.shape != (m, 3) or d["cone_vertices"].shape != d["cone_indices"].shape
+            or not np.isfinite(coords).all()):
+        raise MeshFileError(path, "inconsistent PGP file (array shapes do not match); "
+                                  "make it again with 'geotex pgp'")
+    cones = tuple((int(v), float(k)) for v, k in zip(d["cone_vertices"], d["cone_indices"]))
     return PgpFile(np.asarray(coords, np.float64), np.asarray(singular, bool),
                    np.asarray(scale, np.float64), cones, np.asarray(functions, np.float64),
                    np.asarray(axes, np.float64), meta)

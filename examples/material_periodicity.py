@@ -1,0 +1,102 @@
+"""Hiding the periodicity of a tile by modulating m (paper Fig. 14), on Spot.
+
+Writes ``material_periodicity.png`` into OUT_DIR (default docs/gallery):
+
+A. a brick tile in repeat mode (``m = 0`` everywhere): the repetition shows
+   (close-up of Spot's flank);
+B. the same flank through a 4-layer periodicity-hiding tile (every layer has the
+   bricks' feature mask, the layers differ in their details), with ``m``
+   modulated over the surface by smooth noise (wavelength 3 tiles);
+C. the modulated ``m`` (colour).
+
+Also ``material_periodicity_tile.png``: the four layers (2 x 2 repeats each).
+
+Image: ``t1_bricks`` from ``../shared/data/images``; without the shared
+data, a synthetic brick wall.  ``GEOTEX_EXAMPLES_QUICK=1`` draws a smaller tile.
+
+Run:  python examples/material_periodicity.py [OUT_DIR]
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from pathlib import Path
+
+import igl
+import numpy as np
+
+from geotex.data import sample_path
+from geotex.fields.directions import projected_direction_field
+from geotex.image.material.mapping import bake_material_texture, modulated_material
+from geotex.image.material.tile import build_periodicity_tile, tile_slices_image
+from geotex.io import read_mesh
+from geotex.io.images import load_texture_image, texture_to_png_bytes
+from geotex.param.pgp import periodic_parameterization
+from geotex.render import Panel, render_panels
+
+SHARED = Path(os.environ.get("GEOTEX_SHARED_DATA",
+                             Path(__file__).resolve().parents[2] / "shared" / "data"))
+BRICKS = SHARED / "images" / "quilting_classic" / "t1_bricks.png"
+QUICK = bool(os.environ.get("GEOTEX_EXAMPLES_QUICK"))
+
+
+def synthetic_bricks(n: int = 128) -> np.ndarray:
+    rng = np.random.default_rng(2)
+    yy, xx = np.mgrid[0:n, 0:n]
+    row = yy // 16
+    col = (xx + 16 * (row % 2)) // 32
+    tint = rng.uniform(0.7, 1.1, size=(n // 16 + 1, n // 32 + 2))[row, col]
+    mortar = ((yy % 16) < 2) | (((xx + 16 * (row % 2)) % 32) < 2)
+    img = np.where(mortar[..., None], [0.8, 0.78, 0.72], np.array([0.65, 0.25, 0.18])
+                   * tint[..., None])
+    img = img + rng.normal(0, 0.03, img.shape)
+    return np.clip(np.rint(img * 255), 0, 255).astype(np.uint8)
+
+
+def main(out: Path) -> None:
+    out.mkdir(parents=True, exist_ok=True)
+    img = load_texture_image(BRICKS) if BRICKS.is_file() else synthetic_bricks()
+    size = 32 if QUICK else 96
+    tile = build_periodicity_tile(img, size=size, layers=4, seed=0)
+    strip = tile_slices_image(tile, repeat=2, masks=False)
+    zoom = max(2, -(-200 // strip.shape[0]))                  # at least 200 pixels high
+    (out / "material_periodicity_tile.png").write_bytes(
+        texture_to_png_bytes(np.kron(strip, np.ones((zoom, zoom, 1), np.uint8))))
+    spot = read_mesh(sample_path("spot"))
+    V, F = spot.vertices[:, [0, 2, 1]] * [-1, 1, 1], spot.faces
+    V, F = igl.upsample(V, F, 1)
+    V, F = np.asarray(V, np.float64), np.asarray(F, np.int64)
+    field, _ = projected_direction_field(V, F, [0.0, 0.0, 1.0])
+    scale = 0.3
+    params = periodic_parameterization(V, F, field, scale=scale)
+    res = 1024 if QUICK else 2048
+    flat = np.zeros(V.shape[0])
+    repeat = bake_material_texture(V, F, params, flat, tile, field=field, resolution=res)
+    m = modulated_material(V, np.full(V.shape[0], 0.5), amplitude=0.5, wavelength=3 * scale,
+                           seed=0)
+    hidden = bake_material_texture(V, F, params, m, tile, field=field, resolution=res)
+    # close-up: the flank that faces the camera (the body between the legs and the back)
+    cen = V[F].mean(axis=1)
+    lo, hi = V.min(axis=0), V.max(axis=0)
+    rel = (cen - lo) / (hi - lo)
+    flank = np.flatnonzero((rel[:, 1] > 0.3) & (rel[:, 1] < 0.95) & (rel[:, 2] > 0.25)
+                           & (rel[:, 2] < 0.75) & (cen[:, 0] > 0.5 * (lo[0] + hi[0])))
+    Vz = V[F[flank]].reshape(-1, 3)
+    Fz = np.arange(Vz.shape[0], dtype=np.int64).reshape(-1, 3)
+
+    def textured(mesh, title):
+        return Panel(Vz, Fz, uv=mesh.uv[mesh.uv_faces[flank]].reshape(-1, 2),
+                     texture=mesh.texture, title=title)
+
+    panels = [textured(repeat, "A: repeat mode (m = 0), flank close-up"),
+              textured(hidden, "B: m modulated over 4 layers\n(same mask, other details)"),
+              Panel(V, F, scalars=m, cmap="viridis", title="C: m (wavelength 3 tiles)")]
+    render_panels(panels, out / "material_periodicity.png", size=(700, 600))
+    print(f"wrote {out / 'material_periodicity.png'} and "
+          f"{out / 'material_periodicity_tile.png'}")
+
+
+if __name__ == "__main__":
+    main(Path(sys.argv[1]) if len(sys.argv) > 1 else
+         Path(__file__).resolve().parents[1] / "docs" / "gallery")
