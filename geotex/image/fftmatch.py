@@ -9,15 +9,16 @@ of placing the mask at every translation ``x0`` of the sample ``T`` is
 with ``(f * g)(x0) = sum_x f(x) g(x + x0)``, computed for all translations at
 once with real FFTs (``F^-1(conj(F(f)) F(g))``).  The spectra of ``T`` and
 ``T^2`` are precomputed for every orientation (rotated copies of the sample),
-so a fit costs the forward transforms of ``I``, ``J`` and of the footprint,
-and one inverse transform per orientation for ``E`` and one for the
-footprint test.  Channels are summed in the Fourier domain before the
-inverse transform.
+so a fit costs the forward transforms of ``I`` and ``J`` and one inverse
+transform per orientation.  Channels are summed in the Fourier domain before
+the inverse transform.
 
 The sample is **not** assumed toroidal: a translation is admissible only
 when the whole footprint of the patch (the cluster and its mask) falls on
-pixels of the rotated sample that come from inside the image, tested by the
-correlation of the footprint with the invalid pixels of each rotation.
+pixels of the rotated sample that come from inside the image.  The inside
+of a rotated image is a rotated rectangle, so the admissible translations
+are cut out by four half-planes, offset by the footprint's extent along the
+rectangle's axes (no extra transform needed).
 
 Colour space.  The paper matches in HSV.  Hue is an angle (red sits at both
 ends of its range) and is undefined for grey pixels, so squared differences
@@ -81,8 +82,6 @@ class TextureSpectra:
     spec_t : numpy.ndarray, (k, c, h, w // 2 + 1) complex128
     spec_t2 : numpy.ndarray, (k, h, w // 2 + 1) complex128
         Spectrum of ``sum_c T_c^2``.
-    spec_bad : numpy.ndarray, (k, h, w // 2 + 1) complex128
-        Spectrum of the invalid-pixel indicator.
     variance : float
         Sum over channels of the sample's variance (``2 * variance`` is the
         mean squared difference of two random pixels).
@@ -94,7 +93,6 @@ class TextureSpectra:
     valid: np.ndarray
     spec_t: np.ndarray
     spec_t2: np.ndarray
-    spec_bad: np.ndarray
     variance: float
 
     @property
@@ -149,10 +147,9 @@ def texture_spectra(image, *, orientations: int = 24) -> TextureSpectra:
     h, w = T.shape[:2]
     spec_t = sfft.rfft2(np.moveaxis(rot, 3, 1), axes=(-2, -1))
     spec_t2 = sfft.rfft2(np.sum(rot * rot, axis=3), axes=(-2, -1))
-    spec_bad = sfft.rfft2((~val).astype(np.float64), axes=(-2, -1))
     var = float(np.sum(T.reshape(-1, T.shape[2]).var(axis=0)))
     return TextureSpectra(image=T, angles=angles, rotated=rot, valid=val, spec_t=spec_t,
-                          spec_t2=spec_t2, spec_bad=spec_bad, variance=var)
+                          spec_t2=spec_t2, variance=var)
 
 
 def match_energy(spectra: TextureSpectra, mask, support, footprint, *, which=None):
@@ -185,15 +182,25 @@ def match_energy(spectra: TextureSpectra, mask, support, footprint, *, which=Non
     idx = np.arange(spectra.angles.size) if which is None else np.asarray(which, np.int64)
     fI = np.conj(sfft.rfft2(np.moveaxis(I, 2, 0), axes=(-2, -1)))
     fJ = np.conj(sfft.rfft2(J))
-    fK = np.conj(sfft.rfft2(K))
     spec = -2.0 * np.einsum("chw,kchw->khw", fI, spectra.spec_t[idx]) + fJ * spectra.spec_t2[idx]
-    E = sfft.irfft2(spec, s=(h, w), axes=(-2, -1)) + float(np.sum(I * I))
-    bad = sfft.irfft2(fK * spectra.spec_bad[idx], s=(h, w), axes=(-2, -1))
+    E = np.maximum(sfft.irfft2(spec, s=(h, w), axes=(-2, -1)) + float(np.sum(I * I)), 0.0)
     ys, xs = np.nonzero(K > 0)
-    E = np.where(bad > 0.5, np.inf, np.maximum(E, 0.0))
-    if ys.size:
-        E[:, h - int(ys.max()):, :] = np.inf          # the footprint would wrap around
-        E[:, :, w - int(xs.max()):] = np.inf
+    if ys.size == 0:
+        return E
+    E[:, h - int(ys.max()):, :] = np.inf          # the footprint would wrap around
+    E[:, :, w - int(xs.max()):] = np.inf
+    # inside of the rotated image: |r1 . (p - c)| <= w/2 - 1, |r2 . (p - c)| <= h/2 - 1
+    c = spectra.center
+    q = np.stack([xs + 0.5 - c[0], ys + 0.5 - c[1]], axis=1)
+    dy, dx = np.mgrid[0:h, 0:w].astype(np.float64)
+    for j, k in enumerate(idx):
+        a = spectra.angles[k]
+        co, si = np.cos(a), np.sin(a)
+        for r, half in (((co, si), w / 2.0 - 1.0), ((-si, co), h / 2.0 - 1.0)):
+            proj = q @ np.array(r)
+            t = r[0] * dx + r[1] * dy
+            out = (t > half - proj.max()) | (t < -half - proj.min())
+            E[j][out] = np.inf
     return E
 
 

@@ -72,7 +72,8 @@ from geotex.patches.flatten import (barycentric_hierarchy, cluster_frames, contr
 from geotex.patches.grow import face_adjacency
 from geotex.progress import report
 
-__all__ = ["HPMLevel", "HPMResult", "hpm_texture", "check_hpm_base"]
+__all__ = ["HPMLevel", "HPMResult", "hpm_texture", "check_hpm_base", "read_hpm_image",
+           "hpm_mesh"]
 
 
 @dataclass
@@ -94,7 +95,8 @@ class HPMLevel:
     def as_dict(self) -> dict:
         """JSON-ready summary."""
         return {"level": self.level, "clusters": self.clusters, "placed": self.placed,
-                "subdivided": self.subdivided, "mean_error": self.mean_error,
+                "subdivided": self.subdivided,
+                "mean_error": None if not self.errors else self.mean_error,
                 "filled_faces": self.filled_faces}
 
 
@@ -187,6 +189,32 @@ class _State:
         self.patch = np.full(m, -1, np.int64)
         self.face_level = np.full(m, -1, np.int64)
         self.n_patch = 0
+        n = V.shape[0]
+        self.vacc = np.zeros((n, 2))        # sum of textured corner positions per vertex
+        self.vcnt = np.zeros(n)             # number of textured corners per vertex
+        self.vsq = np.zeros(n)              # sum of squared norms (to detect disagreement)
+
+    def agreed(self) -> np.ndarray:
+        """Per-vertex mean textured position, nan where none or where corners disagree."""
+        c = np.maximum(self.vcnt, 1.0)
+        mean = self.vacc / c[:, None]
+        spread = self.vsq / c - np.sum(mean * mean, axis=1)
+        ok = (self.vcnt > 0) & (spread < 1e-6 * (1.0 + self.vsq / c))
+        return np.where(ok[:, None], mean, np.nan)
+
+    def mark(self, F, faces, corner, patch, level):
+        """Record the corner positions of newly textured faces."""
+        self.corner[faces] = corner
+        self.done[faces] = True
+        self.patch[faces] = patch
+        self.face_level[faces] = level
+        cv = F[faces].ravel()
+        n = self.vcnt.size
+        self.vcnt += np.bincount(cv, minlength=n)
+        cu = corner.reshape(-1, 2)
+        self.vacc[:, 0] += np.bincount(cv, weights=cu[:, 0], minlength=n)
+        self.vacc[:, 1] += np.bincount(cv, weights=cu[:, 1], minlength=n)
+        self.vsq += np.bincount(cv, weights=np.sum(cu * cu, axis=1), minlength=n)
 
 
 def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = None,
@@ -357,18 +385,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
 
     def vertex_uv_of_done(verts):
         """Mean full-res position of each vertex over textured faces (nan if none)."""
-        mask = st.done
-        fs = np.flatnonzero(mask)
-        cv = F[fs].ravel()
-        cu = st.corner[fs].reshape(-1, 2)
-        acc = np.zeros((V.shape[0], 2))
-        cnt = np.zeros(V.shape[0])
-        np.add.at(acc, cv, cu)
-        np.add.at(cnt, cv, 1.0)
-        out = np.full((verts.size, 2), np.nan)
-        ok = cnt[verts] > 0
-        out[ok] = acc[verts[ok]] / cnt[verts[ok], None]
-        return out
+        return st.agreed()[verts]
 
     def place(li, c):
         """Try to texture cluster c of level li; returns the relative error or None."""
@@ -382,8 +399,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         # band of textured faces within band_w of the cluster
         in_c = np.zeros(V.shape[0], bool)
         in_c[verts] = True
-        touch = np.zeros(V.shape[0], bool)
-        touch[F[st.done].ravel()] = True
+        touch = st.vcnt > 0
         src = np.flatnonzero(in_c & touch)
         band_faces = np.zeros(0, np.int64)
         fixed = fixed_mask = None
@@ -462,21 +478,12 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             close = has & (np.linalg.norm(P - np.nan_to_num(nb_uv), axis=1) <= snap)
             P[close] = nb_uv[close]
             if relax:
-                P = _relax(P, verts, faces, has & ~close, F, st, full, rng, f,
-                           lambda moved_mask, moved: _respread(moved_mask, moved))
+                P = _relax(P, verts, faces, has & ~close, F, st, full, rng, f)
         vpos = np.zeros((V.shape[0], 2))
         vpos[verts] = P
-        st.corner[faces] = vpos[F[faces]]
-        st.done[faces] = True
-        st.patch[faces] = st.n_patch
-        st.face_level[faces] = li
+        st.mark(F, faces, vpos[F[faces]], st.n_patch, li)
         st.n_patch += 1
         return err
-
-        # (no code after return)
-
-    def _respread(moved_mask, moved):
-        return moved
 
     # ------------------------------------------------------------------
     # start: the flattest cluster of the coarsest level with a flat one
@@ -565,7 +572,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                      face_level=fl, levels=levels)
 
 
-def _relax(P, verts, faces, movable, F, st, full, rng, f, _unused):
+def _relax(P, verts, faces, movable, F, st, full, rng, f):
     """Local edge relaxation (Fig. 6): greedy random moves of shared border vertices.
 
     ``P`` (p, 2) full-res positions of ``verts``; ``movable`` marks the shared
@@ -581,13 +588,9 @@ def _relax(P, verts, faces, movable, F, st, full, rng, f, _unused):
     n = int(F.max()) + 1
     pos = np.full((n, 2), np.nan)
     pos[verts] = P
-    # neighbour corner positions per (vertex) from textured faces
-    fs = np.flatnonzero(st.done)
-    acc = np.zeros((n, 2))
-    cnt = np.zeros(n)
-    np.add.at(acc, F[fs].ravel(), st.corner[fs].reshape(-1, 2))
-    np.add.at(cnt, F[fs].ravel(), 1.0)
-    nb = np.where(cnt[:, None] > 0, acc / np.maximum(cnt, 1)[:, None], np.nan)
+    # neighbour positions per vertex (mean over textured corners)
+    nb = st.agreed()
+    cnt = np.where(np.isnan(nb[:, 0]), 0.0, 1.0)
     # shared edges of the cluster (both ends with a neighbour position)
     e = np.concatenate([F[faces][:, [0, 1]], F[faces][:, [1, 2]], F[faces][:, [2, 0]]])
     e = np.unique(np.sort(e, axis=1), axis=0)
@@ -709,3 +712,72 @@ def _fill_gaps(V, F, FF, st) -> int:
         filled += fa.size
         _ = (r, sg, tg, m)
     return filled
+
+
+
+
+
+def read_hpm_image(path) -> np.ndarray:
+    """Read the texture sample: a grey or RGB(A) picture, as ``(h, w, 3)`` uint8.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+
+    Returns
+    -------
+    numpy.ndarray, (h, w, 3) uint8
+
+    Raises
+    ------
+    MissingFileError
+        If the file does not exist.
+    InputError
+        If it is not a readable picture, or not grey/RGB (e.g. CMYK, float).
+    """
+    from pathlib import Path
+
+    from PIL import Image
+
+    from geotex.errors import MissingFileError
+    from geotex.image.patches import load_image
+
+    p = Path(path)
+    if not p.is_file():
+        raise MissingFileError(f"{p}: no such image file")
+    try:
+        with Image.open(p) as im:
+            mode = im.mode
+    except Exception as exc:  # pillow raises many types for unreadable images
+        raise InputError(f"{p}: cannot read the image ({type(exc).__name__}); "
+                         "give a PNG or JPEG file") from None
+    if mode not in ("1", "L", "LA", "P", "PA", "RGB", "RGBA"):
+        raise InputError(f"{p}: the image is {mode}, not RGB or grey; convert it to an RGB "
+                         "or grey PNG/JPEG first")
+    arr = load_image(p)
+    if min(arr.shape[:2]) < 8:
+        raise InputError(f"{p}: the image is {arr.shape[1]} x {arr.shape[0]} pixels; give one "
+                         "of at least 8 x 8")
+    return np.ascontiguousarray(arr[:, :, :3])
+
+
+def hpm_mesh(V, F, result: HPMResult, image, *, name: str = ""):
+    """The textured mesh record: the base with ``result``'s uv and the image itself.
+
+    Parameters
+    ----------
+    V : array_like, (n, 3) float64
+    F : array_like, (m, 3) int64
+    result : HPMResult
+    image : numpy.ndarray, (h, w, 3) uint8
+    name : str, optional
+
+    Returns
+    -------
+    geotex.mesh.record.Mesh
+    """
+    from geotex.mesh.record import Mesh
+
+    return Mesh(V, F, uv=result.uv, uv_faces=result.uv_faces,
+                texture=np.ascontiguousarray(image[:, :, :3]), name=name,
+                metadata={"hpm": result.report()})

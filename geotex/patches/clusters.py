@@ -357,7 +357,7 @@ def _build_level(V, F, labels, C, parent, child_ptr, ctx) -> ClusterLevel:
         picked = _farthest_corners(V[loop_vertices[lo:hi]], np.flatnonzero(is_j[lo:hi]).tolist(), 3)
         keep[lo + np.asarray(picked, dtype=np.int64)] = True
     # non-alignment property: second singular value of the control points vs the first
-    for _ in range(2):
+    for _ in range(16):
         ks = seg[keep]
         P = V[loop_vertices[keep]]
         cnt = np.maximum(np.bincount(ks, minlength=C), 1)
