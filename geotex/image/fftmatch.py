@@ -182,26 +182,37 @@ def match_energy(spectra: TextureSpectra, mask, support, footprint, *, which=Non
     idx = np.arange(spectra.angles.size) if which is None else np.asarray(which, np.int64)
     fI = np.conj(sfft.rfft2(np.moveaxis(I, 2, 0), axes=(-2, -1)))
     fJ = np.conj(sfft.rfft2(J))
-    spec = -2.0 * np.einsum("chw,kchw->khw", fI, spectra.spec_t[idx]) + fJ * spectra.spec_t2[idx]
-    E = np.maximum(sfft.irfft2(spec, s=(h, w), axes=(-2, -1)) + float(np.sum(I * I)), 0.0)
+    if which is None:
+        St, St2 = spectra.spec_t, spectra.spec_t2
+    else:
+        St, St2 = spectra.spec_t[idx], spectra.spec_t2[idx]
+    spec = fJ * St2
+    for ch in range(fI.shape[0]):
+        fI[ch] *= 2.0
+        spec -= fI[ch] * St[:, ch]
+    E = sfft.irfft2(spec, s=(h, w), axes=(-2, -1))
     ys, xs = np.nonzero(K > 0)
     if ys.size == 0:
-        return E
-    E[:, h - int(ys.max()):, :] = np.inf          # the footprint would wrap around
-    E[:, :, w - int(xs.max()):] = np.inf
+        return np.maximum(E + float(np.sum(I * I)), 0.0)
+    # admissible block: the footprint must not wrap around
+    hy, wx = h - int(ys.max()), w - int(xs.max())
+    out = np.full(E.shape, np.inf)
+    blk = np.maximum(E[:, :hy, :wx] + float(np.sum(I * I)), 0.0)
     # inside of the rotated image: |r1 . (p - c)| <= w/2 - 1, |r2 . (p - c)| <= h/2 - 1
     c = spectra.center
     q = np.stack([xs + 0.5 - c[0], ys + 0.5 - c[1]], axis=1)
-    dy, dx = np.mgrid[0:h, 0:w].astype(np.float64)
-    for j, k in enumerate(idx):
-        a = spectra.angles[k]
-        co, si = np.cos(a), np.sin(a)
-        for r, half in (((co, si), w / 2.0 - 1.0), ((-si, co), h / 2.0 - 1.0)):
-            proj = q @ np.array(r)
-            t = r[0] * dx + r[1] * dy
-            out = (t > half - proj.max()) | (t < -half - proj.min())
-            E[j][out] = np.inf
-    return E
+    a = spectra.angles[idx]
+    co, si = np.cos(a), np.sin(a)
+    dy = np.arange(hy, dtype=np.float64)[None, :, None]
+    dx = np.arange(wx, dtype=np.float64)[None, None, :]
+    for r0, r1, half in ((co, si, w / 2.0 - 1.0), (-si, co, h / 2.0 - 1.0)):
+        proj = q @ np.stack([r0, r1])                              # (p, k')
+        t = r0[:, None, None] * dx + r1[:, None, None] * dy
+        bad = (t > (half - proj.max(axis=0))[:, None, None]) | \
+            (t < (-half - proj.min(axis=0))[:, None, None])
+        np.putmask(blk, bad, np.inf)
+    out[:, :hy, :wx] = blk
+    return out
 
 
 def brute_force_energy(image, mask, support, dy: int, dx: int) -> float:

@@ -175,9 +175,18 @@ def _block_mean(img: np.ndarray, f: int) -> np.ndarray:
 
 def _sample(img: np.ndarray, xy: np.ndarray) -> np.ndarray:
     """Bilinear samples of ``img`` (h, w, c) at pixel positions ``xy`` (x, y), clamped."""
-    coords = [xy[:, 1] - 0.5, xy[:, 0] - 0.5]
-    return np.stack([map_coordinates(img[:, :, k], coords, order=1, mode="nearest")
-                     for k in range(img.shape[2])], axis=1)
+    h, w = img.shape[:2]
+    x = np.clip(xy[:, 0] - 0.5, 0.0, w - 1.0)
+    y = np.clip(xy[:, 1] - 0.5, 0.0, h - 1.0)
+    x0 = np.minimum(np.floor(x).astype(np.int64), w - 2) if w > 1 else np.zeros(x.size, np.int64)
+    y0 = np.minimum(np.floor(y).astype(np.int64), h - 2) if h > 1 else np.zeros(y.size, np.int64)
+    fx = (x - x0)[:, None]
+    fy = (y - y0)[:, None]
+    x1 = np.minimum(x0 + 1, w - 1)
+    y1 = np.minimum(y0 + 1, h - 1)
+    top = img[y0, x0] * (1 - fx) + img[y0, x1] * fx
+    bot = img[y1, x0] * (1 - fx) + img[y1, x1] * fx
+    return top * (1 - fy) + bot * fy
 
 
 class _State:
@@ -218,8 +227,8 @@ class _State:
 
 
 def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = None,
-                seed: int | None = 0, orientations: int = 24, max_error: float = 0.35,
-                max_flat_error: float = 0.2, band: float = 0.06, match_size: int = 160,
+                seed: int | None = 0, orientations: int = 20, max_error: float = 0.35,
+                max_flat_error: float = 0.2, band: float = 0.06, match_size: int = 200,
                 snap: float = 1.5, relax: bool = True, progress=None) -> HPMResult:
     """Texture a closed mesh with patches of one image, coarse to fine (see module docstring).
 
@@ -315,7 +324,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
     var2 = 2.0 * max(spectra.variance, 1e-12)
     # field: per-face direction and allowed orientation indices
     fvec = None
-    allowed = np.arange(orientations)
+    allowed = None                       # every orientation
     if field is not None:
         fvec = np.asarray(field.vectors, dtype=np.float64)
         if fvec.shape != (m, 3):
@@ -374,9 +383,14 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             return np.inf
         return abs(A[faces].sum() / a2 - 1.0)
 
+    def pix(loc):
+        """Local coords (mesh units) -> matching pixels; image rows grow downwards, so
+        the local y axis is flipped to keep the texture unmirrored on the surface."""
+        return np.column_stack([loc[:, 0], -loc[:, 1]]) * ppm_m
+
     def to_image(loc, rot_k, shift):
         """Local coords (mesh units) -> full-res image pixel positions."""
-        p = loc * ppm_m + shift                          # pixels of the rotated small image
+        p = pix(loc) + shift                          # pixels of the rotated small image
         a = spectra.angles[rot_k]
         c, s = np.cos(a), np.sin(a)
         q = p - center
@@ -423,18 +437,19 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         Lall[verts] = loc
         # raster: footprint = cluster + band, origin at its bbox corner
         pts = loc if not band_faces.size else np.vstack([loc, bl[np.unique(F[band_faces])]])
-        origin = np.floor(pts.min(axis=0) * ppm_m) - 1.0
-        ext = np.ceil(pts.max(axis=0) * ppm_m) - origin + 1.0
+        pp = pix(pts)
+        origin = np.floor(pp.min(axis=0)) - 1.0
+        ext = np.ceil(pp.max(axis=0)) - origin + 1.0
         if ext[0] >= wm or ext[1] >= hm:
             return None
-        tri_c = Lall[F[faces]] * ppm_m - origin
+        tri_c = pix(Lall[F[faces]].reshape(-1, 2)).reshape(-1, 3, 2) - origin
         K = np.zeros(hm * wm)
         t_, _, _ = rasterize_triangles(tri_c, wm, hm)
         K[t_] = 1.0
         I = np.zeros((hm * wm, 3))
         J = np.zeros(hm * wm)
         if band_faces.size:
-            tri_b = bl[F[band_faces]] * ppm_m - origin
+            tri_b = pix(bl[F[band_faces]].reshape(-1, 2)).reshape(-1, 3, 2) - origin
             tb, fb, bb = rasterize_triangles(tri_b, wm, hm)
             uvb = np.einsum("tk,tkd->td", bb, st.corner[band_faces[fb]]) / f
             I[tb] = _sample(small, uvb)
@@ -468,7 +483,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                 return -err
             which = allowed
         kk, dy, dx = np.unravel_index(pick, Eg.shape)
-        rot_k = int(np.asarray(which)[kk])
+        rot_k = int(kk if which is None else np.asarray(which)[kk])
         shift = np.array([dx, dy], dtype=np.float64) - origin
         P = to_image(loc, rot_k, shift)
         # border cracks: snap to the neighbour's coordinates where they (nearly) agree
@@ -610,20 +625,39 @@ def _relax(P, verts, faces, movable, F, st, full, rng, f):
     if ea.size == 0:
         return P
 
+    na, nbb = nb[ea], nb[eb]
+    y = na[:, None, :] * (1 - ts)[None, :, None] + nbb[:, None, :] * ts[None, :, None]
+    target = _sample(full, y.reshape(-1, 2))         # the neighbour's texture along the edges
+    b = pos[eb]
+
     def err(cand):                       # cand (k, 2) positions of the movable vertices
         a = cand[owner]
-        b = pos[eb]
-        na, nbb = nb[ea], nb[eb]
         x = a[:, None, :] * (1 - ts)[None, :, None] + b[:, None, :] * ts[None, :, None]
-        y = na[:, None, :] * (1 - ts)[None, :, None] + nbb[:, None, :] * ts[None, :, None]
-        d = _sample(full, x.reshape(-1, 2)) - _sample(full, y.reshape(-1, 2))
+        d = _sample(full, x.reshape(-1, 2)) - target
         w = np.broadcast_to((1 - ts)[None, :], x.shape[:2]).ravel()
         per = np.sum(d * d, axis=1) * w
         return np.bincount(np.repeat(owner, ts.size), weights=per, minlength=vid.size)
 
     cur = pos[vid].copy()
     e0 = err(cur)
-    radius = float(f)
+    # search radius: the paper's disc, capped by a fifth of the shortest edge at the vertex
+    elen = np.linalg.norm(pos[ea] - pos[eb], axis=1)
+    short = np.full(vid.size, np.inf)
+    np.minimum.at(short, owner, elen)
+    ff = F[faces]
+    loc = np.searchsorted(verts, ff)
+    for a_, b_ in ((0, 1), (1, 2), (2, 0)):
+        own = slot[ff[:, a_]]
+        ok_ = own >= 0
+        np.minimum.at(short, own[ok_], np.linalg.norm(P[loc[ok_, a_]] - P[loc[ok_, b_]], axis=1))
+    radius = np.minimum(float(f), 0.2 * np.where(np.isfinite(short), short, 0.0))
+
+    def areas(posv):
+        t = posv[loc]
+        return (t[:, 1, 0] - t[:, 0, 0]) * (t[:, 2, 1] - t[:, 0, 1]) \
+            - (t[:, 1, 1] - t[:, 0, 1]) * (t[:, 2, 0] - t[:, 0, 0])
+
+    a_before = areas(P)
     for _ in range(3):
         for _k in range(6):
             r = radius * np.sqrt(rng.random(vid.size))
@@ -633,7 +667,18 @@ def _relax(P, verts, faces, movable, F, st, full, rng, f):
             better = e1 < e0
             cur[better] = cand[better]
             e0 = np.where(better, e1, e0)
-        radius *= 0.5
+        radius = radius * 0.5
+    # undo moves that fold or crush a face of the cluster
+    for _ in range(3):
+        trial = P.copy()
+        trial[mv] = cur
+        a_after = areas(trial)
+        crushed = (a_after * np.sign(a_before) < 0.3 * np.abs(a_before))
+        if not crushed.any():
+            break
+        back = np.unique(ff[crushed])
+        back = back[slot[back] >= 0]
+        cur[slot[back]] = P[mv][slot[back]]
     out = P.copy()
     out[mv] = cur
     # spread the moves inside the cluster: decaying neighbour averaging of the displacement
