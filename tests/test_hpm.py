@@ -206,8 +206,9 @@ def test_fft_energy_equals_brute_force():
     for dy in range(h):
         for dx in range(w):
             if np.isfinite(E[dy, dx]):
+                # single-precision FFT: agreement to 1e-5 of the mask's energy scale
                 assert E[dy, dx] == pytest.approx(brute_force_energy(T, I, J, dy, dx),
-                                                  rel=1e-9, abs=1e-9)
+                                                  abs=1e-5 * float(np.sum(I * I) + J.sum()))
                 checked += 1
     assert checked > 100
     # positions where the footprint would leave the image are refused
@@ -229,7 +230,7 @@ def test_fft_match_finds_a_planted_patch_and_its_rotation():
     E = match_energy(spectra, I, J, J)
     kk, dy, dx = np.unravel_index(np.argmin(E), E.shape)
     assert (kk, dy, dx) == (k, 30, 25)
-    assert E[kk, dy, dx] < 1e-9
+    assert E[kk, dy, dx] < 1e-4
 
 
 # ---------------------------------------------------------------------------
@@ -375,3 +376,20 @@ def test_cli_hpm_errors(files, capsys):
     assert "no such image" in err([str(base), "--image", str(tmp / "x.png"),
                                    "-o", str(tmp / "a.glb")])
     assert not (tmp / "a.glb").exists()
+
+
+def test_hpm_follows_a_direction_field_and_cli_field(files, tmp_path):
+    from geotex.fields.directions import smooth_direction_field
+    from geotex.fields.store import save_direction_field
+    V, F = icosphere(3)
+    field = smooth_direction_field(V, F, symmetry=2, seed=0)
+    img = noise_image(64, 64)
+    r = hpm_texture(V, F, img, scale=3.0, seed=0, field=field)
+    assert np.isfinite(r.uv).all() and r.report()["placements"] >= 1
+    tmp, base, png = files
+    fpath = tmp / "up.npz"
+    save_direction_field(fpath, field)
+    out = tmp / "f.glb"
+    assert main(["hpm", str(base), "--image", str(png), "--scale", "3", "--field", str(fpath),
+                 "-o", str(out)]) == 0
+    assert read_mesh(out).has_uv

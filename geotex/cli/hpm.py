@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import math
-import sys
 from pathlib import Path
 
 from geotex.cli._common import EXIT_OK, UsageError, flag_error, guard_output

@@ -56,7 +56,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.ndimage import map_coordinates
 from scipy.sparse.csgraph import dijkstra
 
 from geotex.errors import InputError
@@ -242,9 +241,10 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
     scale : float
         Surface length (mesh units, millimetres for prints) covered by the
         image's width.
-    field : DirectionField, optional
-        Orientation: every patch's image x axis follows the field (searched
-        within +-20 degrees of it, and of its symmetric copies).
+    field : DirectionField or array_like (m, 3), optional
+        Orientation: every patch's image x axis follows the per-face field
+        (searched within +-20 degrees of it, and of its symmetric copies for
+        an N-direction field).
     angle : float, optional
         Orientation of the first patch in degrees (without ``field``;
         default random).  Later patches take the orientation that fits.
@@ -326,7 +326,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
     fvec = None
     allowed = None                       # every orientation
     if field is not None:
-        fvec = np.asarray(field.vectors, dtype=np.float64)
+        fvec = np.asarray(getattr(field, "vectors", field), dtype=np.float64)
         if fvec.shape != (m, 3):
             raise InputError(f"field has {fvec.shape[0]} faces, the mesh {m}")
         sym = max(int(getattr(field, "symmetry", 1)), 1)
@@ -351,7 +351,6 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             lv = Hc.levels[li]
             direction = None
             if fvec is not None:
-                ref = fvec[np.argmax(np.bincount(lv.labels, minlength=lv.n_clusters) >= 0)]
                 first = np.full(lv.n_clusters, -1, np.int64)
                 first[lv.labels[::-1]] = np.arange(m)[::-1]
                 ref = fvec[first]
@@ -504,10 +503,17 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
     # start: the flattest cluster of the coarsest level with a flat one
     report(progress, "start")
     start = None
+    an = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
     for li in range(L - 1):
         lv = Hc.levels[li]
         best = None
-        for c in range(lv.n_clusters):
+        # flatten only the clusters with the narrowest normal cone (|sum a n| / sum a)
+        vec = np.stack([np.bincount(lv.labels, weights=an[:, i], minlength=lv.n_clusters)
+                        for i in range(3)], 1)
+        tot = np.bincount(lv.labels, weights=np.linalg.norm(an, axis=1),
+                          minlength=lv.n_clusters)
+        cone = np.linalg.norm(vec, axis=1) / np.maximum(tot, 1e-300)
+        for c in np.argsort(-cone, kind="stable")[:8]:
             if not lv.disc[c] or lv.control_ptr[c + 1] - lv.control_ptr[c] < 3:
                 continue
             _, verts, loc, faces = flatten(li, c)
@@ -515,7 +521,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             ext = np.ptp(loc, axis=0) * ppm_m
             if e <= max_flat_error and ext.max() < 0.9 * min(hm, wm) and (best is None
                                                                            or e < best[0]):
-                best = (e, c)
+                best = (e, int(c))
         if best is not None:
             start = (li, best[1])
             break
@@ -563,10 +569,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             r = place(li, c)
             if r is None or r < 0:
                 levels[li].subdivided += 1
-                kids = Hc.children(li, c)
-                if kids.size == 1 and li + 1 < L - 1:
-                    pass
-                nxt.extend(kids.tolist())
+                nxt.extend(Hc.children(li, c).tolist())
             else:
                 levels[li].placed += 1
                 levels[li].errors.append(r)
@@ -704,7 +707,6 @@ def _relax(P, verts, faces, movable, F, st, full, rng, f):
 def _fill_gaps(V, F, FF, st) -> int:
     """Texture the remaining faces by unfolding them from a textured neighbour."""
     filled = 0
-    m = F.shape[0]
     while not st.done.all():
         todo = np.flatnonzero(~st.done)
         nb = FF[todo]
@@ -727,9 +729,8 @@ def _fill_gaps(V, F, FF, st) -> int:
         ga = np.argmax(F[g] == a[:, None], axis=1)
         gb = np.argmax(F[g] == b[:, None], axis=1)
         gc = 3 - ga - gb
-        r = np.arange(g.size)
         ua, ub, ug = st.corner[g, ga], st.corner[g, gb], st.corner[g, gc]
-        pa, pb, pg = V[a], V[b], V[F[g, gc]]
+        pa, pb = V[a], V[b]
         ev = pb - pa
         le = np.linalg.norm(ev, axis=1)
         ex = ev / np.maximum(le, 1e-300)[:, None]
@@ -740,7 +741,6 @@ def _fill_gaps(V, F, FF, st) -> int:
             t = np.linalg.norm(d - s[:, None] * ex, axis=1)
             return s, t
         sc, tc = st_coords(V[c])
-        sg, tg = st_coords(pg)
         # texture-space frame from g: along the edge, and toward g's third vertex
         du = ub - ua
         lu = np.linalg.norm(du, axis=1)
@@ -755,7 +755,6 @@ def _fill_gaps(V, F, FF, st) -> int:
         st.corner[fa, (k + 2) % 3] = uc
         st.done[fa] = True
         filled += fa.size
-        _ = (r, sg, tg, m)
     return filled
 
 
