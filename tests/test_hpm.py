@@ -393,3 +393,39 @@ def test_hpm_follows_a_direction_field_and_cli_field(files, tmp_path):
     assert main(["hpm", str(base), "--image", str(png), "--scale", "3", "--field", str(fpath),
                  "-o", str(out)]) == 0
     assert read_mesh(out).has_uv
+
+
+def test_topological_coordinates_and_edge_bands():
+    from geotex.patches.flatten import edge_band
+    V, F = icosphere(4)
+    H = cluster_hierarchy(V, F)
+    bh = barycentric_hierarchy(V, F, H)
+    for li in (1, 2):
+        lv = H[li]
+        k = len(lv.controls(0))
+        verts, M, faces = flatten_cluster(bh, li, 0, np.eye(k), topological=True)
+        assert np.allclose(M.sum(axis=1), 1.0) and M.min() >= -1e-12
+        # control vertices are their own corner
+        ctrl = lv.controls(0)
+        pos = np.searchsorted(verts, ctrl)
+        assert np.allclose(M[pos], np.eye(k))
+        # a band touches its edge and stays a strict part of the cluster
+        loop = lv.boundary_loop(0)
+        for e in range(k):
+            band = edge_band(bh, li, 0, [e])
+            assert 0 < band.size < faces.size
+            a, b = ctrl[e], ctrl[(e + 1) % k]
+            i, j = list(loop).index(a), list(loop).index(b)
+            seg = loop[i:j + 1] if i <= j else np.concatenate([loop[i:], loop[:j + 1]])
+            assert np.isin(seg, F[band]).mean() > 0.5
+        wide = edge_band(bh, li, 0, [0], width=0.5)
+        narrow = edge_band(bh, li, 0, [0])
+        assert np.isin(narrow, wide).all() and wide.size > narrow.size
+
+
+def test_hpm_topological_band_mode(mapped):
+    V, F, img, _ = mapped
+    r = hpm_texture(V, F, img, scale=3.0, seed=1, band_mode="topological")
+    assert np.isfinite(r.uv).all() and r.report()["placements"] >= 2
+    with pytest.raises(InputError, match="band_mode"):
+        hpm_texture(V, F, img, scale=3.0, band_mode="rings")

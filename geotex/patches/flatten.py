@@ -45,7 +45,7 @@ from geotex.errors import InputError
 from geotex.patches.clusters import ClusterHierarchy
 
 __all__ = ["BarycentricHierarchy", "barycentric_hierarchy", "control_polygon",
-           "flatten_cluster", "polygon_coordinates", "cluster_frames"]
+           "flatten_cluster", "polygon_coordinates", "cluster_frames", "edge_band"]
 
 _CHUNK = 4096
 
@@ -57,6 +57,8 @@ class BarycentricHierarchy:
     Attributes
     ----------
     hierarchy : ClusterHierarchy
+    faces : numpy.ndarray, (m, 3) int64
+        The mesh faces.
     normals : list of numpy.ndarray, (c, 3) float64
         Unit mean-plane normal of every cluster of every level.
     base : list of numpy.ndarray, (s, 3) int64
@@ -65,12 +67,25 @@ class BarycentricHierarchy:
         ``l - 1`` (global slot indices); level 0 holds an empty array.
     weights : list of numpy.ndarray, (s, 3) float64
         The barycentric coordinates (sum 1) with respect to ``base``.
+    topo_base, topo_weights : list of numpy.ndarray, (s, 3)
+        The *topological* barycentric coordinates (§4.1) of every control
+        slot w.r.t. its parent's control points: a parent control point
+        copies it; a vertex on the parent's border between corners ``a`` and
+        ``b`` gets ``(1 - t, t)`` on them with ``t`` its arc-length fraction
+        along that stretch of border (the paper uses 1/2, 1/2 for the
+        midpoints of subdivision surfaces); an inner vertex gets weights
+        proportional to the inverse distances to the three nearest parent
+        corners (the paper: proportional to the distances to all corners,
+        which needs a variable number of columns).
     """
 
     hierarchy: ClusterHierarchy
+    faces: np.ndarray
     normals: list
     base: list
     weights: list
+    topo_base: list
+    topo_weights: list
 
 
 def cluster_frames(V, F, labels, n_clusters, direction=None):
@@ -243,8 +258,93 @@ def barycentric_hierarchy(V, F, hierarchy: ClusterHierarchy) -> BarycentricHiera
                 w[todo[sel]] = ww
         bases.append(base)
         weights.append(w)
-    return BarycentricHierarchy(hierarchy=hierarchy, normals=normals, base=bases,
-                                weights=weights)
+    tb, tw = _topological(V, hierarchy)
+    return BarycentricHierarchy(hierarchy=hierarchy, faces=np.asarray(F, dtype=np.int64),
+                                normals=normals, base=bases,
+                                weights=weights, topo_base=tb, topo_weights=tw)
+
+
+def _topological(V, hierarchy):
+    """Topological barycentric coordinates of every control slot (see the class doc)."""
+    n = V.shape[0]
+    bases = [np.zeros((0, 3), np.int64)]
+    weights = [np.zeros((0, 3))]
+    for li in range(1, len(hierarchy.levels)):
+        lv, pv = hierarchy.levels[li], hierarchy.levels[li - 1]
+        S = lv.control_vertices.size
+        slot_cluster = np.repeat(np.arange(lv.n_clusters), np.diff(lv.control_ptr))
+        par = lv.parent[slot_cluster]
+        base = np.zeros((S, 3), np.int64)
+        w = np.zeros((S, 3))
+        pk = np.diff(pv.control_ptr)
+        # arc-length position of every parent loop vertex between its corners
+        lp = pv.loop_ptr
+        loop_c = np.repeat(np.arange(pv.n_clusters), np.diff(lp))
+        lv_v = pv.loop_vertices
+        nxt = np.arange(lv_v.size) + 1
+        nxt[lp[1:][np.diff(lp) > 0] - 1] = lp[:-1][np.diff(lp) > 0]
+        seg = np.linalg.norm(V[lv_v[nxt]] - V[lv_v], axis=1) if lv_v.size else np.zeros(0)
+        corner_key = pv.control_vertices + np.repeat(np.arange(pv.n_clusters), pk) * np.int64(n)
+        loop_key = lv_v + loop_c * np.int64(n)
+        is_corner = np.isin(loop_key, corner_key)
+        # corner index (slot) at or before each loop position, and after it
+        slot_of_key = dict(zip(corner_key.tolist(), range(corner_key.size)))
+        prev_slot = np.full(lv_v.size, -1, np.int64)
+        next_slot = np.full(lv_v.size, -1, np.int64)
+        t_arc = np.zeros(lv_v.size)
+        for c in np.flatnonzero((np.diff(lp) > 0) & (pk >= 1)):
+            a, b = lp[c], lp[c + 1]
+            keys = loop_key[a:b]
+            corn = np.flatnonzero(is_corner[a:b])
+            L = b - a
+            order = (np.arange(L) - corn[0]) % L              # start at the first corner
+            ro = np.argsort(order)
+            cum = np.concatenate([[0.0], np.cumsum(seg[a:b][ro])])
+            cslots = np.array([slot_of_key[int(k)] for k in keys[corn]])
+            cpos = np.sort(order[corn])
+            cs_sorted = cslots[np.argsort(order[corn])]
+            k_idx = np.searchsorted(cpos, order, side="right") - 1
+            lo_pos = cpos[k_idx]
+            hi_pos = np.where(k_idx + 1 < cpos.size, cpos[np.minimum(k_idx + 1, cpos.size - 1)],
+                              L)
+            lo_arc = cum[lo_pos]
+            hi_arc = cum[hi_pos]
+            t = (cum[order] - lo_arc) / np.maximum(hi_arc - lo_arc, 1e-300)
+            prev_slot[a:b] = cs_sorted[k_idx]
+            next_slot[a:b] = cs_sorted[(k_idx + 1) % cs_sorted.size]
+            t_arc[a:b] = t
+        on = np.zeros(S, bool)
+        hit = np.zeros(S, np.int64)
+        if loop_key.size:
+            lk_order = np.argsort(loop_key, kind="stable")
+            key = lv.control_vertices + par * np.int64(n)
+            posc = np.minimum(np.searchsorted(loop_key[lk_order], key), loop_key.size - 1)
+            hit = lk_order[posc]
+            on = (loop_key[hit] == key) & (prev_slot[hit] >= 0)
+        base[on, 0] = prev_slot[hit[on]]
+        base[on, 1] = next_slot[hit[on]]
+        base[on, 2] = prev_slot[hit[on]]
+        w[on, 0] = 1.0 - t_arc[hit[on]]
+        w[on, 1] = t_arc[hit[on]]
+        inner = np.flatnonzero(~on & (pk[par] >= 1))
+        if inner.size:
+            kmax = int(pk[par[inner]].max())
+            start = pv.control_ptr[par[inner]]
+            idx = start[:, None] + np.arange(kmax)[None, :]
+            valid = np.arange(kmax)[None, :] < pk[par[inner]][:, None]
+            idx = np.where(valid, idx, start[:, None])
+            d = np.linalg.norm(V[pv.control_vertices[idx]]
+                               - V[lv.control_vertices[inner]][:, None, :], axis=2)
+            d = np.where(valid, d, np.inf)
+            near = np.argsort(d, axis=1)[:, :3]
+            dn = np.take_along_axis(d, near, axis=1)
+            inv = np.where(np.isfinite(dn), 1.0 / np.maximum(dn, 1e-300), 0.0)
+            inv /= inv.sum(axis=1, keepdims=True)
+            base[inner] = np.take_along_axis(idx, near, axis=1)
+            w[inner] = inv
+        bases.append(base)
+        weights.append(w)
+    return bases, weights
 
 
 def control_polygon(V, corners, e1, e2) -> np.ndarray:
@@ -279,7 +379,7 @@ def control_polygon(V, corners, e1, e2) -> np.ndarray:
 
 
 def flatten_cluster(bh: BarycentricHierarchy, level: int, cluster: int, polygon,
-                    *, fixed=None, fixed_mask=None):
+                    *, fixed=None, fixed_mask=None, topological: bool = False):
     """Texture positions of the vertices of one cluster by recursive barycentric mapping.
 
     Parameters
@@ -293,11 +393,16 @@ def flatten_cluster(bh: BarycentricHierarchy, level: int, cluster: int, polygon,
         Vertices whose position is imposed (replaces the computed value at
         every level, so the change spreads through the descendants).
 
+    topological : bool, optional
+        Propagate with the topological coordinates instead (pass the
+        identity as ``polygon`` to get every vertex's topological
+        coordinates ``M`` in the cluster's base, §4.1).
+
     Returns
     -------
     vertices : numpy.ndarray, (p,) int64
         The vertices of the cluster's faces, ascending.
-    uv : numpy.ndarray, (p, 2) float64
+    uv : numpy.ndarray, (p, d) float64
         Their positions (mean over the faces that reach them).
     faces : numpy.ndarray, (f,) int64
         The cluster's faces.
@@ -306,7 +411,9 @@ def flatten_cluster(bh: BarycentricHierarchy, level: int, cluster: int, polygon,
     lv = H.levels[level]
     lo, hi = int(cluster), int(cluster) + 1
     s0, s1 = lv.control_ptr[lo], lv.control_ptr[hi]
-    pos = np.asarray(polygon, dtype=np.float64).reshape(s1 - s0, 2).copy()
+    pos = np.asarray(polygon, dtype=np.float64).reshape(s1 - s0, -1).copy()
+    base_l = bh.topo_base if topological else bh.base
+    weight_l = bh.topo_weights if topological else bh.weights
     if fixed_mask is not None:
         cv = lv.control_vertices[s0:s1]
         pos[fixed_mask[cv]] = fixed[cv[fixed_mask[cv]]]
@@ -316,8 +423,8 @@ def flatten_cluster(bh: BarycentricHierarchy, level: int, cluster: int, polygon,
         clo, chi = int(cp[lo]), int(cp[hi])
         t0, t1 = clv.control_ptr[clo], clv.control_ptr[chi]
         ps0 = plv.control_ptr[lo]
-        b = bh.base[li][t0:t1] - ps0
-        new = np.einsum("sk,skd->sd", bh.weights[li][t0:t1], pos[b])
+        b = base_l[li][t0:t1] - ps0
+        new = np.einsum("sk,skd->sd", weight_l[li][t0:t1], pos[b])
         if fixed_mask is not None:
             cv = clv.control_vertices[t0:t1]
             m = fixed_mask[cv]
@@ -328,6 +435,43 @@ def flatten_cluster(bh: BarycentricHierarchy, level: int, cluster: int, polygon,
     verts, inv = np.unique(cv, return_inverse=True)
     cnt = np.bincount(inv, minlength=verts.size)
     uv = np.stack([np.bincount(inv, weights=pos[:, i], minlength=verts.size)
-                   for i in range(2)], 1) / cnt[:, None]
+                   for i in range(pos.shape[1])], 1) / cnt[:, None]
     faces = np.flatnonzero((last.labels >= lo) & (last.labels < hi))
     return verts, uv, faces
+
+
+def edge_band(bh: BarycentricHierarchy, level: int, cluster: int, edges, *,
+              width: float = 0.2) -> np.ndarray:
+    """Faces of a cluster in a band along some of its control-polygon edges (§4.1).
+
+    The *position value* of a vertex w.r.t. the edge ``(i, i + 1)`` of the
+    cluster's control polygon is the sum of its topological barycentric
+    coordinates in the cluster's base except those of corners ``i`` and
+    ``i + 1``; the band keeps the faces whose three vertices have a position
+    value below ``width`` for one of ``edges``.
+
+    Parameters
+    ----------
+    bh : BarycentricHierarchy
+    level, cluster : int
+    edges : array_like of int
+        Indices ``i`` of the polygon edges ``(i, i + 1 mod k)``.
+    width : float, optional
+        The paper's threshold (0.2).
+
+    Returns
+    -------
+    numpy.ndarray, (b,) int64
+        Faces, ascending.
+    """
+    lv = bh.hierarchy.levels[level]
+    k = int(lv.control_ptr[cluster + 1] - lv.control_ptr[cluster])
+    verts, M, faces = flatten_cluster(bh, level, cluster, np.eye(k), topological=True)
+    e = np.asarray(edges, dtype=np.int64).reshape(-1)
+    if e.size == 0 or k == 0:
+        return np.zeros(0, np.int64)
+    val = 1.0 - M[:, e % k] - M[:, (e + 1) % k]              # (p, edges)
+    near = (val < width).any(axis=1)
+    keep = np.zeros(int(verts.max()) + 1, bool)
+    keep[verts[near]] = True
+    return np.sort(faces[np.all(keep[bh.faces[faces]], axis=1)])
