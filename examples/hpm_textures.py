@@ -47,7 +47,7 @@ SIZE = (520, 520)
 
 def mesh(name: str):
     paths = {"spot": SHARED / "base" / "spot_odedstein.obj",
-             "bob": SHARED / "base" / "bob_small_geometrycentral.ply",
+             "bob": SHARED / "base" / "bob_uv" / "bob_tri.obj",
              "double torus": SHARED / "base" / "double_torus_gpjs.obj",
              "fertility": SHARED / "base" / "fertility_libigl.off"}
     p = paths.get(name)
@@ -65,7 +65,8 @@ def image(name: str) -> tuple[str, np.ndarray]:
         img = np.asarray(Image.fromarray((small * 255).astype(np.uint8)).resize(
             (112, 112), Image.BICUBIC))
         return "synthetic", img
-    return Path(name).stem.split("_", 1)[-1], read_hpm_image(p)
+    label = "water" if name == "embark/1.jpg" else Path(name).stem.split("_", 1)[-1]
+    return label, read_hpm_image(p)
 
 
 def split(V, F, uv, uv_faces):
@@ -98,9 +99,9 @@ def clusters_figure(out: Path) -> None:
     for li in (1, 2, 3):
         lv = H[li]
         colors = rng.permutation(lv.n_clusters)
+        markers = {"control vertices": (V[np.unique(lv.control_vertices)], "#222222")}
         panels.append(Panel(V, F, scalars=colors[lv.labels], cmap="tab20",
-                            markers={"control vertices": (V[np.unique(lv.control_vertices)],
-                                                          "#222222")},
+                            markers=markers if li < 3 else None,
                             title=f"level {li}: {lv.n_clusters} clusters"))
     render_panels(panels, out, size=SIZE, up="y")
     print(f"wrote {out}")
@@ -112,11 +113,11 @@ def scale_figure(out: Path) -> None:
     d = diag(V)
     panels, last = [], None
     for k in (0.15, 0.3, 0.6):
-        p, r = textured(V, F, img, k * d, title=f"{label}, image width = {k:g} x diagonal")
+        p, r = textured(V, F, img, k * d, title=f"scale {k:g} x diagonal")
         panels.append(p)
         last = r
     panels.append(Panel(V, F, scalars=last.face_level, cmap="viridis",
-                        title="levels of the patches (dark = coarse)"))
+                        title="patch levels (scale 0.6, dark = coarse)"))
     render_panels(panels, out, size=SIZE, up="y")
     print(f"wrote {out}")
 
@@ -124,8 +125,8 @@ def scale_figure(out: Path) -> None:
 def results_figure(out: Path) -> None:
     jobs = [("spot", "quilting_classic/t4_gravel.png", 0.3, "y"),
             ("spot", "quilting_classic/t1_bricks.png", 0.35, "y"),
-            ("bob", "quilting_classic/t6_peppers.png", 0.35, "z"),
-            ("bob", "quilting_classic/t2_basket_weave.png", 0.35, "z"),
+            ("bob", "quilting_classic/t6_peppers.png", 0.35, "y"),
+            ("bob", "quilting_classic/t2_basket_weave.png", 0.35, "y"),
             ("double torus", "embark/1.jpg", 0.35, "y"),
             ("fertility", "quilting_classic/t8_rope_net.png", 0.3, "y")]
     if QUICK:

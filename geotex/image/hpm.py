@@ -396,6 +396,15 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         verts, loc, faces = flatten_cluster(bh, li, c, poly, fixed=fixed, fixed_mask=fixed_mask)
         return poly, verts, loc, faces
 
+    def folded(verts, loc, faces):
+        """Whether some face of the cluster is reversed or collapsed in ``loc``."""
+        U = np.zeros((V.shape[0], 2))
+        U[verts] = loc
+        t = U[F[faces]]
+        d = (t[:, 1, 0] - t[:, 0, 0]) * (t[:, 2, 1] - t[:, 0, 1]) \
+            - (t[:, 1, 1] - t[:, 0, 1]) * (t[:, 2, 0] - t[:, 0, 0])
+        return bool((d <= 1e-12 * np.abs(d).max()).any())
+
     def flat_error(verts, loc, faces):
         U = np.zeros((V.shape[0], 2))
         U[verts] = loc
@@ -487,6 +496,8 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             shared = np.intersect1d(bverts, verts)
             fixed_mask[shared] = True
             poly, verts, loc, faces = flatten(li, c, fixed, fixed_mask)
+            if folded(verts, loc, faces) and li < L - 1:
+                return None              # imposing the border folded the map: subdivide
             bl = np.zeros((V.shape[0], 2))
             bl[bverts] = bloc
         Lall = np.zeros((V.shape[0], 2))
@@ -562,7 +573,8 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                     _, v2, loc2, f2 = flatten(li, c, fixed, fixed_mask)
                     P2 = to_image(loc2, rot_k, shift)
                     P2[close] = P[close]
-                    P = P2
+                    if not folded(verts, np.column_stack([P2[:, 0], -P2[:, 1]]), faces):
+                        P = P2
         vpos = np.zeros((V.shape[0], 2))
         vpos[verts] = P
         st.mark(F, faces, vpos[F[faces]], st.n_patch, li)
@@ -850,8 +862,8 @@ def read_hpm_image(path) -> np.ndarray:
         raise InputError(f"{p}: cannot read the image ({type(exc).__name__}); "
                          "give a PNG or JPEG file") from None
     if mode not in ("1", "L", "LA", "P", "PA", "RGB", "RGBA"):
-        raise InputError(f"{p}: the image is {mode}, not RGB or grey; convert it to an RGB "
-                         "or grey PNG/JPEG first")
+        raise InputError(f"{p}: the image is {mode}, not 8-bit RGB or grey; convert it to an "
+                         "8-bit RGB or grey PNG/JPEG first")
     arr = load_image(p)
     if min(arr.shape[:2]) < 8:
         raise InputError(f"{p}: the image is {arr.shape[1]} x {arr.shape[0]} pixels; give one "
