@@ -362,7 +362,7 @@ def test_cli_hpm_errors(files, capsys):
                              "-o", str(tmp / "a.glb")])
     cmyk = tmp / "cmyk.jpg"
     Image.new("CMYK", (32, 32)).save(cmyk)
-    assert "not RGB or grey" in err([str(base), "--image", str(cmyk), "-o", str(tmp / "a.glb")])
+    assert "not 8-bit RGB or grey" in err([str(base), "--image", str(cmyk), "-o", str(tmp / "a.glb")])
     Vg, Fg = grid_plane(4, 4)
     open_base = tmp / "open.obj"
     write_mesh(open_base, Mesh(Vg, Fg))

@@ -29,7 +29,11 @@ into the original image.
    ``orientations`` angles) gives the cluster's texture coordinates; if the
    relative error (mean squared colour difference per mask pixel divided by
    twice the image's colour variance: 1 is as bad as random pixels) exceeds
-   ``max_error`` the cluster is subdivided instead.
+   ``max_error`` the cluster is subdivided instead.  Besides the FFT
+   candidates (``orientations`` discrete angles), the rigid placement that
+   continues the neighbours' own texture coordinates (least-squares fit on
+   the band vertices, any angle) is tried and kept when its error is lower
+   and it stays inside the image.
 4. Cracks: a vertex reached through several faces gets the mean of its
    values (in-cluster cracks); the vertices the cluster shares with textured
    faces take the positions the neighbours' band has in the cluster's frame,
@@ -95,6 +99,7 @@ class HPMLevel:
     subdivided: int = 0
     errors: list = field(default_factory=list)
     filled_faces: int = 0
+    continued: int = 0
 
     @property
     def mean_error(self) -> float:
@@ -106,7 +111,7 @@ class HPMLevel:
         return {"level": self.level, "clusters": self.clusters, "placed": self.placed,
                 "subdivided": self.subdivided,
                 "mean_error": None if not self.errors else self.mean_error,
-                "filled_faces": self.filled_faces}
+                "filled_faces": self.filled_faces, "continued": self.continued}
 
 
 @dataclass(frozen=True, eq=False)
@@ -421,23 +426,52 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         the local y axis is flipped to keep the texture unmirrored on the surface."""
         return np.column_stack([loc[:, 0], -loc[:, 1]]) * ppm_m
 
-    def to_image(loc, rot_k, shift):
-        """Local coords (mesh units) -> full-res image pixel positions."""
-        p = pix(loc) + shift                          # pixels of the rotated small image
-        a = spectra.angles[rot_k]
-        c, s = np.cos(a), np.sin(a)
-        q = p - center
-        src = np.stack([c * q[:, 0] + s * q[:, 1], -s * q[:, 0] + c * q[:, 1]], 1) + center
-        return src * f
-
-    def from_image(P, rot_k, shift):
-        """Inverse of :func:`to_image`."""
+    def fft_placement(rot_k, shift):
+        """(R, t) of a translation ``shift`` of the mask over rotated copy ``rot_k``:
+        matching-image position = R pix + t."""
         a = spectra.angles[rot_k]
         c, s_ = np.cos(a), np.sin(a)
-        q = P / f - center
-        p = np.stack([c * q[:, 0] - s_ * q[:, 1], s_ * q[:, 0] + c * q[:, 1]], 1) + center
-        p = (p - shift) / ppm_m
+        R = np.array([[c, s_], [-s_, c]])
+        return R, R @ (shift - center) + center
+
+    def to_image(loc, R, t):
+        """Local coords (mesh units) -> full-res image pixel positions."""
+        return (pix(loc) @ R.T + t) * f
+
+    def from_image(P, R, t):
+        """Inverse of :func:`to_image`."""
+        p = (P / f - t) @ R / ppm_m
         return np.column_stack([p[:, 0], -p[:, 1]])
+
+    def continuation(bverts, bl, tb, I, origin):
+        """Rigid placement continuing the neighbours' own coordinates, and its error.
+
+        The band vertices whose texture coordinates agree give a least-squares
+        rotation + translation from the cluster's frame to the image (the
+        neighbours "positioned exactly next to" the cluster); the FFT search
+        only sees ``orientations`` discrete angles, this candidate any angle.
+        """
+        A = st.agreed()[bverts] / f
+        ok = np.isfinite(A[:, 0])
+        if ok.sum() < 3:
+            return None
+        X = pix(bl[bverts[ok]])
+        Y = A[ok]
+        xm, ym = X.mean(axis=0), Y.mean(axis=0)
+        Hm = (X - xm).T @ (Y - ym)
+        U, _, Wt = np.linalg.svd(Hm)
+        R = (U @ Wt).T
+        if np.linalg.det(R) < 0:
+            return None
+        t = ym - R @ xm
+        ty, tx = np.divmod(tb, wm)
+        q = np.stack([tx + 0.5, ty + 0.5], 1) + origin
+        S = _sample(small, q @ R.T + t)
+        return R, t, float(np.sum((I[tb] - S) ** 2))
+
+    def inside_image(P):
+        return bool((P[:, 0] >= 0).all() and (P[:, 0] <= W_img).all()
+                    and (P[:, 1] >= 0).all() and (P[:, 1] <= H_img).all())
 
     def vertex_uv_of_done(verts):
         """Mean full-res position of each vertex over textured faces (nan if none)."""
@@ -545,14 +579,23 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             best = float(flat.min())
             near = np.flatnonzero(flat <= best + 1e-9 * (1.0 + best))
             pick = near[int(rng.integers(near.size))]
+            which = allowed
+            cont = continuation(bverts, bl, tb, I, origin) if fvec is None else None
+            if cont is not None and cont[2] <= best:
+                Pc = to_image(loc, cont[0], cont[1])
+                if inside_image(Pc):
+                    best, pick = cont[2], None
+                    levels[li].continued += 1
             err = best / J.sum() / var2
             if err > max_error and li < L - 1:
                 return -err
-            which = allowed
-        kk, dy, dx = np.unravel_index(pick, Eg.shape)
-        rot_k = int(kk if which is None else np.asarray(which)[kk])
-        shift = np.array([dx, dy], dtype=np.float64) - origin
-        P = to_image(loc, rot_k, shift)
+        if pick is None:
+            R_, t_ = cont[0], cont[1]
+        else:
+            kk, dy, dx = np.unravel_index(pick, Eg.shape)
+            rot_k = int(kk if which is None else np.asarray(which)[kk])
+            R_, t_ = fft_placement(rot_k, np.array([dx, dy], dtype=np.float64) - origin)
+        P = to_image(loc, R_, t_)
         # border cracks: snap to the neighbour's coordinates where they (nearly) agree
         nb_uv = vertex_uv_of_done(verts)
         has = np.isfinite(nb_uv[:, 0])
@@ -568,10 +611,10 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                     if fixed is None:
                         fixed = np.zeros((V.shape[0], 2))
                         fixed_mask = np.zeros(V.shape[0], bool)
-                    fixed[verts[mm]] = from_image(moved[mm], rot_k, shift)
+                    fixed[verts[mm]] = from_image(moved[mm], R_, t_)
                     fixed_mask[verts[mm]] = True
                     _, v2, loc2, f2 = flatten(li, c, fixed, fixed_mask)
-                    P2 = to_image(loc2, rot_k, shift)
+                    P2 = to_image(loc2, R_, t_)
                     P2[close] = P[close]
                     if not folded(verts, np.column_stack([P2[:, 0], -P2[:, 1]]), faces):
                         P = P2
