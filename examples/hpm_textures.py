@@ -117,7 +117,7 @@ def scale_figure(out: Path) -> None:
         panels.append(p)
         last = r
     panels.append(Panel(V, F, scalars=last.face_level, cmap="viridis",
-                        title="patch levels (scale 0.6, dark = coarse)"))
+                        title="levels used (dark = coarse)"))
     render_panels(panels, out, size=SIZE, up="y")
     print(f"wrote {out}")
 
