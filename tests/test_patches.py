@@ -207,127 +207,7 @@ def test_is_disc():
 # cluster hierarchy
 # ---------------------------------------------------------------------------
 
-MESHES = {
-    "sphere": lambda: icosphere(3),
-    "torus": lambda: torus(1.0, 0.35, n_major=32, n_minor=16),
-    "box": lambda: box(divisions=4),
-    "jittered": lambda: jittered_disc(300, seed=1),
-}
-
-
-def regions_at_vertices(F, labels, n):
-    reg = [set() for _ in range(n)]
-    for f, tri in enumerate(F.tolist()):
-        for v in tri:
-            reg[v].add(int(labels[f]))
-    return reg
-
-
-@pytest.mark.parametrize("name", sorted(MESHES))
-def test_cluster_hierarchy_invariants(name):
-    V, F = MESHES[name]()
-    H = cluster_hierarchy(V, F)
-    m, n = len(F), len(V)
-    assert len(H) >= 3
-    assert np.array_equal(H[0].labels, np.arange(m))
-    t = edge_topology(F, n)
-    border = np.zeros(n, bool)
-    border[t.edges[t.face_count != 2].ravel()] = True
-    A = face_areas(V, F)
-    for lv_i, lv in enumerate(H.levels):
-        lab = lv.labels
-        assert lab.shape == (m,) and lab.min() == 0 and lab.max() == lv.n_clusters - 1
-        assert np.unique(lab).size == lv.n_clusters            # a partition, all used
-        assert is_disc_partition(F, lab)
-        assert np.allclose(lv.area, np.bincount(lab, weights=A))
-        # adjacency = shared mesh edges between clusters
-        ef = t.edge_faces()[t.face_count == 2]
-        la, lb = lab[ef[:, 0]], lab[ef[:, 1]]
-        x = la != lb
-        expect = np.zeros((lv.n_clusters, lv.n_clusters), np.int64)
-        np.add.at(expect, (la[x], lb[x]), 1)
-        np.add.at(expect, (lb[x], la[x]), 1)
-        assert np.array_equal(lv.adjacency.toarray(), expect)
-        G = lv.graph()
-        assert G.number_of_nodes() == lv.n_clusters
-        assert G.number_of_edges() == np.count_nonzero(expect) // 2
-        # control vertices: junctions where >= 3 regions meet (outside counts as one)
-        reg = regions_at_vertices(F, lab, n)
-        nreg = np.array([len(r) for r in reg]) + border
-        assert np.array_equal(lv.junction, nreg >= 3)
-        for c in range(lv.n_clusters):
-            loop = lv.boundary_loop(c)
-            ctrl = lv.controls(c)
-            assert len(ctrl) >= 3
-            js = lv.control_is_junction[lv.control_ptr[c]:lv.control_ptr[c + 1]]
-            assert np.all(nreg[ctrl[js]] >= 3)
-            assert all(c in reg[v] for v in ctrl)
-            # every junction on the loop is a control vertex, in loop order
-            on_loop_j = loop[lv.junction[loop]]
-            assert np.array_equal(ctrl[js], on_loop_j)
-            if js.sum() >= 3:
-                assert js.all()
-            # the loop is exactly the cluster's boundary cycle
-            sub = F[lab == c]
-            st = edge_topology(sub, n)
-            bnd = {tuple(e) for e in st.edges[st.face_count == 1].tolist()}
-            lp = loop.tolist()
-            assert len(lp) == len(bnd) == len(set(lp))
-            assert {tuple(sorted((lp[i], lp[(i + 1) % len(lp)]))) for i in range(len(lp))} == bnd
-        if lv_i + 1 < len(H):
-            nxt = H[lv_i + 1]
-            assert nxt.n_clusters < lv.n_clusters
-            assert np.array_equal(nxt.labels, lv.parent[lab])     # unions of finer clusters
-            kids = H.children(lv_i + 1, 0)
-            assert kids.size >= 1 and np.all(lv.parent[kids] == 0)
-        else:
-            assert np.all(lv.parent == -1)
-    # finest level: every face has its three corners as junctions on closed meshes
-    if name in ("sphere", "torus", "box"):
-        assert np.all(np.diff(H[0].control_ptr) == 3) and H[0].control_is_junction.all()
-
-
-def test_cluster_hierarchy_levels_and_min_clusters(sphere):
-    V, F = sphere
-    H = cluster_hierarchy(V, F, levels=3)
-    assert len(H) == 3
-    H = cluster_hierarchy(V, F, min_clusters=50)
-    assert H[-1].n_clusters >= 50 and H[-2].n_clusters > 50
-    # a closed sphere cannot end with one cluster (it is not a disc)
-    H = cluster_hierarchy(V, F)
-    assert H[-1].n_clusters >= 2
-    # a disc can collapse to a single cluster
-    Vg, Fg = grid_plane(6, 6)
-    Hg = cluster_hierarchy(Vg, Fg)
-    assert Hg[-1].n_clusters == 1
-
-
-def test_cluster_hierarchy_deterministic_and_pure(ring):
-    V, F = ring
-    V0, F0 = V.copy(), F.copy()
-    a = cluster_hierarchy(V, F)
-    b = cluster_hierarchy(V, F)
-    assert np.array_equal(V, V0) and np.array_equal(F, F0)
-    assert len(a) == len(b)
-    for x, y in zip(a.levels, b.levels):
-        assert np.array_equal(x.labels, y.labels)
-        assert np.array_equal(x.control_vertices, y.control_vertices)
-
-
-def test_cluster_hierarchy_errors(sphere):
-    V, F = sphere
-    with pytest.raises(InputError, match="ratio"):
-        cluster_hierarchy(V, F, ratio=1.0)
-    with pytest.raises(InputError, match="levels"):
-        cluster_hierarchy(V, F, levels=0)
-    with pytest.raises(InputError, match="min_clusters"):
-        cluster_hierarchy(V, F, min_clusters=0)
-    flipped = F.copy()
-    flipped[0] = flipped[0, ::-1]
-    with pytest.raises(InputError, match="oriented"):
-        cluster_hierarchy(V, flipped)
-    with pytest.raises(InputError, match="empty"):
-        cluster_hierarchy(V, np.zeros((0, 3), np.int64))
+# The face-cluster hierarchy itself is tested in tests/test_hpm.py.
 
 
 def test_is_disc_partition_detects_bad_clusters(sphere):
@@ -436,7 +316,7 @@ def test_non_manifold_edges_are_never_crossed():
     H = cluster_hierarchy(V, F)
     for lv in H.levels:
         assert is_disc_partition(F, lv.labels)
-    assert H[-1].n_clusters == 3
+    assert H[0].n_clusters == 3                  # one top cluster per fin
     faces = effect_area(V, F, 0, max_distance=np.inf)
     assert len(faces) == 32
 

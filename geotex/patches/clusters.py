@@ -1,33 +1,38 @@
-"""Face-cluster hierarchies (hierarchical pattern mapping §3.1).
+"""Face-cluster hierarchies, built top-down (hierarchical pattern mapping §3.1).
 
-Every level of the hierarchy is a partition of the faces into clusters, each a
-topological disc bounded by mesh edges; level 0 is the single faces and every
-coarser level is obtained by merging adjacent clusters of the level below.
+The coarsest level holds the whole surface (one cluster per connected
+component).  Every cluster is then split, level after level, into a variable
+number ``n`` of sub-clusters by seeded growth: ``n`` seed faces are chosen
+inside the cluster (the first at random, the others by farthest-point
+sampling, which keeps the sub-clusters compact), and every face joins the
+seed it is closest to along the dual graph of the cluster (centroid-to-centroid
+distances, edges crossing the cluster's border removed).  This is the paper's
+growth ("each untreated face sharing an edge with a growing sub-region joins
+the sub-region whose seed is nearest") computed for every cluster of a level
+at once by one multi-source Dijkstra (:func:`scipy.sparse.csgraph.dijkstra`).
+``n`` adapts to the cluster's area so that clusters of one level have a
+nearly uniform size.
 
-The paper builds its general hierarchy top-down (seeded region growing inside
-each cluster).  We build it bottom-up, which gives the same three properties
-the paper asks for ((a) each level is a partition, (b) borders run along mesh
-edges, (c) the deepest level is the faces) and makes the disc property easy to
-guarantee: two disc clusters ``A`` and ``B`` that share at least one edge unite
-into a disc exactly when ``chi(A ∩ B) = #shared vertices - #shared edges = 1``
-(their common border is one path: ``chi(A ∪ B) = chi(A) + chi(B) - chi(A ∩ B)``),
-so the test needs only two counts per adjacent pair.
-
-Merging is greedy: each round takes a greedy matching of the valid pairs by a
-cost that prefers small, flat and compact unions,
-``cost = area * compactness * (1 + normal_weight * (1 - |sum_f a_f n_f| / area))``
-with ``compactness = perimeter**2 / (4 pi area)``, so clusters stay of nearly
-uniform size and not elongated (the paper's requirement for stable
-barycentric flattening).  Rounds repeat until the level has about ``1/ratio``
-of the clusters of the level below.
+After growth, borders are regularized by exchanging triangles: a face two of
+whose three neighbours (inside the same parent) belong to one other
+sub-cluster moves to it (a notch in the border disappears); exchanges that
+would break a sub-cluster's disc topology are undone.  A sub-cluster that is
+not a disc (an annulus around a handle, a ring around another sub-cluster)
+gets one more seed and the growth of its parent is redone, until every
+sub-cluster is a disc.  Splitting stops when clusters have at most
+``leaf_faces`` faces; the last level is the single faces.
 
 Control vertices (paper §3.1) are the points of a cluster's contour shared by
 at least three regions of the level; the outside of an open mesh counts as a
-region, so where two clusters meet on the mesh border the vertex is a control
-vertex too.  A cluster with fewer than three such junctions (e.g. one of two
-hemispheres of a closed sphere) gets extra corners picked on its boundary loop
-by farthest-point sampling, so that every cluster has a control polygon with
-at least three corners, as the paper's flattening needs.
+region.  A cluster with fewer than three such junctions gets extra corners
+on its boundary loop by farthest-point sampling, and a cluster whose control
+points are nearly aligned (the second singular value of the centred points
+below ``0.15`` times the first; the paper's *non-alignment property*, needed
+for stable barycentric coordinates) gets the loop vertex farthest from their
+line as an extra corner.
+
+Children are numbered by parent, so the descendants of a cluster form one
+contiguous range of clusters on every finer level (``child_ptr``).
 """
 
 from __future__ import annotations
@@ -38,14 +43,17 @@ from dataclasses import dataclass
 import networkx as nx
 import numpy as np
 import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components, dijkstra
 
-from geotex.errors import InputError
+from geotex.errors import InputError, SolverError
 from geotex.mesh.arrays import as_faces, as_mesh_arrays
 from geotex.mesh.topology import edge_topology
 from geotex.patches.grow import check_triangles, face_adjacency, region_topology
 
 __all__ = ["ClusterLevel", "ClusterHierarchy", "cluster_hierarchy", "is_disc_partition",
            "disc_clusters"]
+
+ALIGNMENT_RATIO = 0.15
 
 
 @dataclass(frozen=True, eq=False)
@@ -55,30 +63,37 @@ class ClusterLevel:
     Attributes
     ----------
     labels : numpy.ndarray, (m,) int64
-        Cluster of every face; clusters are numbered ``0 .. n_clusters - 1`` in
-        order of their lowest face index.
+        Cluster of every face, ``0 .. n_clusters - 1``; clusters are numbered
+        by parent (the children of one parent are consecutive).
     n_clusters : int
     adjacency : scipy.sparse.csr_matrix, (c, c) int64
         Symmetric; entry ``(a, b)`` is the number of mesh edges clusters ``a``
         and ``b`` share (zero diagonal).
     parent : numpy.ndarray, (c,) int64
         Cluster of the next coarser level containing each cluster, ``-1`` on
-        the coarsest level.
+        the coarsest level; non-decreasing.
+    child_ptr : numpy.ndarray, (c + 1,) int64
+        Children of cluster ``c`` on the next finer level are
+        ``child_ptr[c] .. child_ptr[c + 1] - 1`` (empty on the face level).
     area : numpy.ndarray, (c,) float64
         Surface area of every cluster.
+    disc : numpy.ndarray, (c,) bool
+        Whether each cluster is a topological disc (all clusters below the
+        coarsest level are).
     loop_ptr : numpy.ndarray, (c + 1,) int64
     loop_vertices : numpy.ndarray, (sum,) int64
-        Boundary loop of cluster ``c`` is
+        Boundary loop of disc cluster ``c`` is
         ``loop_vertices[loop_ptr[c]:loop_ptr[c + 1]]``: ordered global vertex
         ids, counter-clockwise seen from the normal side, starting at the
-        smallest vertex id.
+        smallest vertex id (empty for a cluster that is not a disc).
     control_ptr : numpy.ndarray, (c + 1,) int64
     control_vertices : numpy.ndarray, (sum,) int64
         Control vertices of each cluster in boundary-loop order (same CSR
         layout).
     control_is_junction : numpy.ndarray, (sum,) bool
         ``True`` for control vertices where at least three regions meet,
-        ``False`` for the corners added to clusters with fewer than three.
+        ``False`` for the corners added (fewer than three junctions, or
+        aligned junctions).
     junction : numpy.ndarray, (n,) bool
         Vertices where at least three regions of this level meet (the mesh
         outside counting as one region).
@@ -88,7 +103,9 @@ class ClusterLevel:
     n_clusters: int
     adjacency: sp.csr_matrix
     parent: np.ndarray
+    child_ptr: np.ndarray
     area: np.ndarray
+    disc: np.ndarray
     loop_ptr: np.ndarray
     loop_vertices: np.ndarray
     control_ptr: np.ndarray
@@ -131,12 +148,13 @@ class ClusterLevel:
 
 @dataclass(frozen=True, eq=False)
 class ClusterHierarchy:
-    """A face-cluster hierarchy, finest level first.
+    """A face-cluster hierarchy, coarsest level first.
 
     Attributes
     ----------
     levels : tuple of ClusterLevel
-        ``levels[0]`` is the single faces, ``levels[-1]`` the coarsest level.
+        ``levels[0]`` is the whole surface (one cluster per connected
+        component), ``levels[-1]`` the single faces.
     """
 
     levels: tuple
@@ -148,10 +166,19 @@ class ClusterHierarchy:
         return self.levels[level]
 
     def children(self, level: int, cluster: int) -> np.ndarray:
-        """Return the clusters of ``level - 1`` that make up ``cluster`` of ``level``."""
-        if level <= 0:
-            raise InputError("level 0 clusters are single faces and have no children")
-        return np.flatnonzero(self.levels[level - 1].parent == int(cluster))
+        """Return the clusters of ``level + 1`` that make up ``cluster`` of ``level``."""
+        if level >= len(self.levels) - 1:
+            raise InputError("the last level holds single faces, which have no children")
+        ptr = self.levels[level].child_ptr
+        return np.arange(ptr[int(cluster)], ptr[int(cluster) + 1], dtype=np.int64)
+
+    def descendants(self, level: int, cluster: int, deeper: int) -> tuple[int, int]:
+        """Return the range ``(lo, hi)`` of clusters of level ``deeper`` inside ``cluster``."""
+        lo, hi = int(cluster), int(cluster) + 1
+        for lv in range(level, deeper):
+            ptr = self.levels[lv].child_ptr
+            lo, hi = int(ptr[lo]), int(ptr[hi])
+        return lo, hi
 
 
 # ---------------------------------------------------------------------------
@@ -236,7 +263,7 @@ def is_disc_partition(F, labels) -> bool:
 # level construction helpers
 # ---------------------------------------------------------------------------
 
-def _cluster_loops(F, labels, C, n, FF):
+def _cluster_loops(F, labels, C, n, FF, keep):
     """Ordered boundary loops of every cluster of a disc partition (vectorized).
 
     Boundary half-edges are chained by their start vertex inside each cluster;
@@ -248,7 +275,7 @@ def _cluster_loops(F, labels, C, n, FF):
     side = np.tile(np.arange(3), m)
     nb = FF.ravel()
     lab = labels[fidx]
-    is_b = (nb < 0) | (labels[np.maximum(nb, 0)] != lab)
+    is_b = ((nb < 0) | (labels[np.maximum(nb, 0)] != lab)) & keep[lab]
     f, k, lab = fidx[is_b], side[is_b], lab[is_b]
     s = F[f, k]
     t = F[f, (k + 1) % 3]
@@ -291,7 +318,21 @@ def _farthest_corners(P: np.ndarray, chosen: list[int], want: int) -> list[int]:
     return sorted(chosen)
 
 
-def _build_level(V, F, labels, C, ctx, parent=None) -> ClusterLevel:
+def _align_fix(V, loop, ctrl_idx) -> list[int]:
+    """Add the loop vertex farthest from the principal line of aligned control points."""
+    P = V[loop]
+    C = P[ctrl_idx]
+    c0 = C.mean(axis=0)
+    _, s, vt = np.linalg.svd(C - c0, full_matrices=False)
+    d = P - c0
+    off = d - np.outer(d @ vt[0], vt[0])
+    dist = np.linalg.norm(off, axis=1)
+    dist[ctrl_idx] = -1.0
+    k = int(np.argmax(dist))
+    return sorted(set(ctrl_idx) | {k})
+
+
+def _build_level(V, F, labels, C, parent, child_ptr, ctx) -> ClusterLevel:
     n = V.shape[0]
     FF, on_border, areas, ef2 = ctx["FF"], ctx["on_border"], ctx["areas"], ctx["ef2"]
     la, lb = labels[ef2[:, 0]], labels[ef2[:, 1]]
@@ -301,160 +342,226 @@ def _build_level(V, F, labels, C, ctx, parent=None) -> ClusterLevel:
     adjacency = sp.coo_matrix((np.ones(rows.size, np.int64), (rows, cols)),
                               shape=(C, C)).tocsr()
     adjacency.sum_duplicates()
+    disc = region_topology(F, labels, C, n).disc
     lab3 = np.repeat(labels, 3)
     vk = np.unique(F.ravel() * C + lab3)
     regions = np.bincount(vk // C, minlength=n) + on_border
     junction = regions >= 3
-    loop_ptr, loop_vertices = _cluster_loops(F, labels, C, n, FF)
+    loop_ptr, loop_vertices = _cluster_loops(F, labels, C, n, FF, disc)
     is_j = junction[loop_vertices]
     seg = np.repeat(np.arange(C), np.diff(loop_ptr))
     counts = np.bincount(seg[is_j], minlength=C)
     keep = is_j.copy()
-    for c in np.flatnonzero(counts < 3):
+    for c in np.flatnonzero((counts < 3) & disc):
         lo, hi = loop_ptr[c], loop_ptr[c + 1]
-        loop = loop_vertices[lo:hi]
-        picked = _farthest_corners(V[loop], np.flatnonzero(is_j[lo:hi]).tolist(), 3)
+        picked = _farthest_corners(V[loop_vertices[lo:hi]], np.flatnonzero(is_j[lo:hi]).tolist(), 3)
         keep[lo + np.asarray(picked, dtype=np.int64)] = True
+    # non-alignment property: second singular value of the control points vs the first
+    for _ in range(16):
+        ks = seg[keep]
+        P = V[loop_vertices[keep]]
+        cnt = np.maximum(np.bincount(ks, minlength=C), 1)
+        mean = np.stack([np.bincount(ks, weights=P[:, i], minlength=C) for i in range(3)],
+                        1).astype(np.float64)
+        mean /= cnt[:, None]
+        D = P - mean[ks]
+        cov = np.zeros((C, 3, 3))
+        for i in range(3):
+            for j in range(3):
+                cov[:, i, j] = np.bincount(ks, weights=D[:, i] * D[:, j], minlength=C)
+        ev = np.linalg.eigvalsh(cov)
+        s1 = np.sqrt(np.maximum(ev[:, 2], 0.0))
+        s2 = np.sqrt(np.maximum(ev[:, 1], 0.0))
+        bad = disc & (s2 < ALIGNMENT_RATIO * s1) & (np.diff(loop_ptr) > np.bincount(ks, minlength=C))
+        if not bad.any():
+            break
+        for c in np.flatnonzero(bad):
+            lo, hi = loop_ptr[c], loop_ptr[c + 1]
+            picked = _align_fix(V, loop_vertices[lo:hi], np.flatnonzero(keep[lo:hi]).tolist())
+            keep[lo + np.asarray(picked, dtype=np.int64)] = True
     control_vertices = loop_vertices[keep]
     control_is_junction = is_j[keep]
     control_ptr = np.searchsorted(seg[keep], np.arange(C + 1)).astype(np.int64)
     area = np.bincount(labels, weights=areas, minlength=C)
-    if parent is None:
-        parent = np.full(C, -1, np.int64)
     out = ClusterLevel(labels=labels, n_clusters=int(C), adjacency=adjacency, parent=parent,
-                       area=area, loop_ptr=loop_ptr, loop_vertices=loop_vertices,
-                       control_ptr=control_ptr, control_vertices=control_vertices,
+                       child_ptr=child_ptr, area=area, disc=disc, loop_ptr=loop_ptr,
+                       loop_vertices=loop_vertices, control_ptr=control_ptr,
+                       control_vertices=control_vertices,
                        control_is_junction=control_is_junction, junction=junction)
-    for arr in (labels, parent, area, loop_ptr, loop_vertices, control_ptr,
+    for arr in (labels, parent, child_ptr, area, disc, loop_ptr, loop_vertices, control_ptr,
                 control_vertices, control_is_junction, junction):
         arr.setflags(write=False)
     return out
 
 
-def _pair_candidates(F, labels, C, ctx, normal_weight):
-    """Valid merge pairs ``(a, b, cost)`` of adjacent clusters (vectorized)."""
-    n = ctx["n"]
-    ef2, elen2 = ctx["ef2"], ctx["elen2"]
-    la, lb = labels[ef2[:, 0]], labels[ef2[:, 1]]
-    cross = la != lb
-    a = np.minimum(la[cross], lb[cross])
-    b = np.maximum(la[cross], lb[cross])
-    pk, pinv = np.unique(a * C + b, return_inverse=True)
-    if pk.size == 0:
-        return (np.zeros(0, np.int64),) * 2 + (np.zeros(0),)
-    pinv = pinv.ravel()
-    se = np.bincount(pinv, minlength=pk.size)
-    slen = np.bincount(pinv, weights=elen2[cross], minlength=pk.size)
-    # shared vertices: all pairs of clusters meeting at each vertex
-    lab3 = np.repeat(labels, 3)
-    vk = np.unique(F.ravel() * C + lab3)
-    vv, vc = vk // C, vk % C
-    group_max = int(np.bincount(vv, minlength=n).max())
-    keys = []
-    for d in range(1, group_max):
-        same = vv[d:] == vv[:-d]
-        keys.append(vc[:-d][same] * C + vc[d:][same])
-    allk = np.concatenate(keys) if keys else np.zeros(0, np.int64)
-    sk, sc = np.unique(allk, return_counts=True)
-    if sk.size:
-        pos = np.minimum(np.searchsorted(sk, pk), sk.size - 1)
-        sv = np.where(sk[pos] == pk, sc[pos], 0)
-    else:
-        sv = np.zeros(pk.size, np.int64)
-    valid = (sv - se) == 1
-    pa, pb = pk[valid] // C, pk[valid] % C
-    st = ctx["stats"]
-    area, nsum, perim = st
-    au = area[pa] + area[pb]
-    nu = np.linalg.norm(nsum[pa] + nsum[pb], axis=1)
-    flat_dev = np.clip(1.0 - nu / au, 0.0, 1.0)
-    pu = perim[pa] + perim[pb] - 2.0 * slen[valid]
-    compact = pu * pu / (4.0 * math.pi * au)
-    cost = au * compact * (1.0 + normal_weight * flat_dev)
-    return pa, pb, cost
+# ---------------------------------------------------------------------------
+# top-down splitting
+# ---------------------------------------------------------------------------
+
+def _dual_graph(plab, ctx) -> sp.csr_matrix:
+    """Dual graph restricted to face pairs inside the same parent cluster."""
+    ef2, w = ctx["ef2"], ctx["dual_w"]
+    same = plab[ef2[:, 0]] == plab[ef2[:, 1]]
+    a, b, ww = ef2[same, 0], ef2[same, 1], w[same]
+    m = plab.size
+    return sp.csr_matrix((np.concatenate([ww, ww]), (np.concatenate([a, b]),
+                                                      np.concatenate([b, a]))), shape=(m, m))
 
 
-def _cluster_stats(labels, C, ctx):
-    areas, an = ctx["areas"], ctx["area_normals"]
-    area = np.bincount(labels, weights=areas, minlength=C)
-    nsum = np.stack([np.bincount(labels, weights=an[:, i], minlength=C) for i in range(3)], 1)
-    FF, side_len = ctx["FF"], ctx["side_len"]
-    nb = FF.ravel()
-    lab3 = np.repeat(labels, 3)
-    border = (nb < 0) | (labels[np.maximum(nb, 0)] != lab3)
-    perim = np.bincount(lab3[border], weights=side_len[border], minlength=C)
-    return area, nsum, perim
+def _first_per_group(group: np.ndarray, score: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """Index of the maximal ``score`` among ``mask`` entries of every group (-1 if none)."""
+    idx = np.flatnonzero(mask)
+    out = np.full(int(group.max()) + 1 if group.size else 0, -1, np.int64)
+    if idx.size == 0:
+        return out
+    o = idx[np.lexsort((idx, -score[idx], group[idx]))]
+    g = group[o]
+    first = np.ones(o.size, bool)
+    first[1:] = g[1:] != g[:-1]
+    out[g[first]] = o[first]
+    return out
 
 
-def _greedy_matching(pa, pb, cost, C):
-    """Greedy matching by cost (ties by pair order), as iterated local dominance."""
-    P = pa.size
-    rank = np.empty(P, np.int64)
-    rank[np.lexsort((pb, pa, cost))] = np.arange(P)
-    matched = np.zeros(C, bool)
-    alive = np.ones(P, bool)
-    chosen = []
-    while alive.any():
-        idx = np.flatnonzero(alive)
-        best = np.full(C, P, np.int64)
-        np.minimum.at(best, pa[idx], rank[idx])
-        np.minimum.at(best, pb[idx], rank[idx])
-        r = rank[idx]
-        sel = idx[(best[pa[idx]] == r) & (best[pb[idx]] == r)]
-        chosen.append(sel)
-        matched[pa[sel]] = True
-        matched[pb[sel]] = True
-        alive &= ~(matched[pa] | matched[pb])
-    sel = np.concatenate(chosen) if chosen else np.zeros(0, np.int64)
-    return sel[np.argsort(rank[sel], kind="stable")]
+def _grow(G, seeds, m):
+    dist, _, src = dijkstra(G, directed=False, indices=seeds, min_only=True,
+                            return_predecessors=True)
+    return dist, src
 
 
-def cluster_hierarchy(V, F, *, levels: int | None = None, min_clusters: int = 1,
-                      ratio: float = 4.0, normal_weight: float = 10.0) -> ClusterHierarchy:
-    """Build a face-cluster hierarchy whose clusters are all discs.
+def _split_level(plab, Cp, want, ctx, rng):
+    """Split every parent cluster into ``want[p]`` sub-clusters by seeded growth.
 
-    See the module docstring for the algorithm (bottom-up greedy merging of
-    adjacent clusters whose union is a disc) and the definition of control
-    vertices (hierarchical pattern mapping §3.1).
+    Returns child labels numbered by (parent, seed order) and the child parents.
+    """
+    m = plab.size
+    G = _dual_graph(plab, ctx)
+    order = np.argsort(plab, kind="stable")
+    cnt = np.bincount(plab, minlength=Cp)
+    off = np.concatenate([[0], np.cumsum(cnt)[:-1]])
+    first = order[off + np.minimum((rng.random(Cp) * cnt).astype(np.int64), cnt - 1)]
+    seeds = [first]
+    seed_parent = [np.arange(Cp)]
+    for r in range(2, int(want.max()) + 1):
+        dist, _ = _grow(G, np.concatenate(seeds), m)
+        need = want[plab] >= r
+        far = _first_per_group(plab, dist, need & np.isfinite(dist) & (dist > 0))
+        new = far[far >= 0]
+        if new.size == 0:
+            break
+        seeds.append(new)
+        seed_parent.append(plab[new])
+    seeds_a = np.concatenate(seeds)
+    sp_a = np.concatenate(seed_parent)
+    for _attempt in range(12):
+        dist, src = _grow(G, seeds_a, m)
+        if (src < 0).any():
+            raise SolverError("cluster growth did not reach every face; the mesh has faces "
+                              "connected only through non-manifold edges")
+        pos = np.empty(m, np.int64)
+        pos[seeds_a] = np.arange(seeds_a.size)
+        raw = pos[src]
+        raw = _regularize(raw, plab, seeds_a, ctx, m)
+        # number children by (parent, seed order)
+        rank = np.lexsort((np.arange(seeds_a.size), sp_a))
+        inv = np.empty_like(rank)
+        inv[rank] = np.arange(rank.size)
+        lab = inv[raw]
+        C = seeds_a.size
+        disc = region_topology(ctx["F"], lab, C, ctx["n"]).disc
+        if disc.all():
+            return lab, sp_a[rank], C
+        # one more seed inside every non-disc child: its face farthest from its seed
+        bad_face = ~disc[lab]
+        far = _first_per_group(lab, dist, bad_face & (dist > 0))
+        new = far[far >= 0]
+        if new.size == 0:
+            break
+        seeds_a = np.concatenate([seeds_a, new])
+        sp_a = np.concatenate([sp_a, plab[new]])
+    raise SolverError("could not split the surface into disc-shaped clusters; the mesh may "
+                      "have a very thin handle or be badly shaped: remesh it first")
+
+
+def _regularize(raw, plab, seeds, ctx, m, passes: int = 2):
+    """Exchange triangles along sub-cluster borders (a face two of whose neighbours are
+    in one other sub-cluster moves to it); moves that break a disc are undone."""
+    FF = ctx["FF"]
+    lab = raw.copy()
+    is_seed = np.zeros(m, bool)
+    is_seed[seeds] = True
+    C = int(seeds.size)
+    for _ in range(passes):
+        valid = FF >= 0
+        nb = np.where(valid, lab[np.maximum(FF, 0)], -1)
+        same_parent = valid & (plab[np.maximum(FF, 0)] == plab[:, None])
+        nb = np.where(same_parent, nb, -1)
+        target = np.full(m, -1, np.int64)
+        for i, j in ((0, 1), (1, 2), (0, 2)):
+            ok = (nb[:, i] == nb[:, j]) & (nb[:, i] >= 0) & (nb[:, i] != lab)
+            target = np.where(ok & (target < 0), nb[:, i], target)
+        move = (target >= 0) & ~is_seed
+        if not move.any():
+            break
+        new = lab.copy()
+        new[move] = target[move]
+        disc = region_topology(ctx["F"], new, C, ctx["n"]).disc
+        old_disc = region_topology(ctx["F"], lab, C, ctx["n"]).disc
+        broken = ~disc & old_disc
+        if broken.any():
+            undo = move & (broken[lab] | broken[target])
+            new[undo] = lab[undo]
+            disc = region_topology(ctx["F"], new, C, ctx["n"]).disc
+            if (~disc & old_disc).any():
+                break
+        lab = new
+    return lab
+
+
+def cluster_hierarchy(V, F, *, branching: float = 6.0, leaf_faces: int = 4,
+                      seed: int | None = 0) -> ClusterHierarchy:
+    """Build a top-down face-cluster hierarchy whose clusters are discs.
+
+    See the module docstring for the algorithm (hierarchical pattern mapping
+    §3.1, general meshes).
 
     Parameters
     ----------
     V : array_like, (n, 3) float64
     F : array_like, (m, 3) int64
         A consistently oriented mesh without faces that repeat a vertex.
-        Non-manifold edges are allowed but never merged across.
-    levels : int, optional
-        Maximum number of levels, including level 0 (single faces).  By
-        default levels are added until ``min_clusters`` is reached or no
-        adjacent pair can merge into a disc (a closed surface always keeps at
-        least two clusters).
-    min_clusters : int, optional
-        Stop coarsening at this many clusters.
-    ratio : float, optional
-        Each level aims at ``1 / ratio`` of the clusters of the level below
-        (``> 1``).
-    normal_weight : float, optional
-        Weight of the planarity penalty ``1 - |sum a_f n_f| / area`` in the
-        merge cost (``>= 0``).
+        Non-manifold edges are never crossed by a cluster.
+    branching : float, optional
+        Target ratio between the number of clusters of two successive levels
+        (``> 1``); the number of sub-clusters of each cluster adapts to its
+        area.
+    leaf_faces : int, optional
+        Clusters stop being split when the level's target size is at most
+        this many faces; the next level is then the single faces.
+    seed : int, optional
+        Seed of the random first seed face of every cluster.
 
     Returns
     -------
     ClusterHierarchy
-        ``levels[0].labels == arange(m)``; every level is a disc partition and
-        ``levels[l + 1].labels == levels[l].parent[levels[l].labels]``.
+        ``levels[0]`` is the whole surface (one cluster per edge-connected
+        component), ``levels[-1]`` the single faces; every level is a
+        partition and ``levels[l].parent[levels[l].labels] ==
+        levels[l - 1].labels``.
 
     Raises
     ------
     InputError
         On malformed arrays, an empty mesh, faces repeating a vertex, an
-        inconsistently oriented mesh, or out-of-range options.
+        inconsistently oriented mesh or out-of-range options.
+    SolverError
+        When some sub-cluster cannot be made a disc.
 
     Examples
     --------
     >>> from geotex.mesh.primitives import icosphere
     >>> V, F = icosphere(2)
     >>> H = cluster_hierarchy(V, F)
-    >>> H[0].n_clusters, all(is_disc_partition(F, lv.labels) for lv in H.levels)
+    >>> H[-1].n_clusters, all(is_disc_partition(F, lv.labels) for lv in H.levels[1:])
     (320, True)
     """
     V, F = as_mesh_arrays(V, F)
@@ -462,59 +569,58 @@ def cluster_hierarchy(V, F, *, levels: int | None = None, min_clusters: int = 1,
     if m == 0:
         raise InputError("F is empty: the mesh has no faces to cluster")
     check_triangles(F)
-    if levels is not None and (int(levels) != levels or levels < 1):
-        raise InputError(f"levels must be an integer >= 1, got {levels!r}")
-    if int(min_clusters) != min_clusters or min_clusters < 1:
-        raise InputError(f"min_clusters must be an integer >= 1, got {min_clusters!r}")
-    if not (float(ratio) > 1.0 and math.isfinite(float(ratio))):
-        raise InputError(f"ratio must be a finite number > 1, got {ratio!r}")
-    if not (float(normal_weight) >= 0.0 and math.isfinite(float(normal_weight))):
-        raise InputError(f"normal_weight must be a finite number >= 0, got {normal_weight!r}")
+    if not (math.isfinite(float(branching)) and float(branching) > 1.0):
+        raise InputError(f"branching must be a finite number > 1, got {branching!r}")
+    if int(leaf_faces) != leaf_faces or leaf_faces < 1:
+        raise InputError(f"leaf_faces must be an integer >= 1, got {leaf_faces!r}")
     topo = edge_topology(F, n)
     if topo.inconsistent.size:
         raise InputError("F is not consistently oriented (an edge is traversed twice in the "
                          "same direction); orient it first (geotex.repair)")
+    rng = np.random.default_rng(seed)
     adj = face_adjacency(V, F)
-    FE = adj.face_edges
-    count = topo.face_count
     ef = topo.edge_faces()
-    two = count == 2
-    ed = topo.edges
-    elen = np.linalg.norm(V[ed[:, 1]] - V[ed[:, 0]], axis=1)
+    two = topo.face_count == 2
     on_border = np.zeros(n, np.int64)
-    on_border[ed[~two].ravel()] = 1
-    ctx = {
-        "n": n, "FF": adj.face_neighbors, "areas": adj.areas,
-        "area_normals": adj.normals * adj.areas[:, None], "ef2": ef[two], "elen2": elen[two],
-        "side_len": elen[FE.ravel()], "on_border": on_border,
-    }
-    labels = np.arange(m, dtype=np.int64)
-    C = m
-    built: list[tuple[np.ndarray, int]] = [(labels, C)]
-    while (levels is None or len(built) < levels) and C > min_clusters:
-        target = max(int(min_clusters), int(math.ceil(C / float(ratio))))
-        cur, cc = labels, C
-        while cc > target:
-            ctx["stats"] = _cluster_stats(cur, cc, ctx)
-            pa, pb, cost = _pair_candidates(F, cur, cc, ctx, float(normal_weight))
-            if pa.size == 0:
-                break
-            sel = _greedy_matching(pa, pb, cost, cc)[: cc - target]
-            if sel.size == 0:
-                break
-            root = np.arange(cc, dtype=np.int64)
-            root[pb[sel]] = pa[sel]
-            cur, cc = _compact(root[cur])
-        if cc == C:
+    on_border[topo.edges[~two].ravel()] = 1
+    ef2 = ef[two]
+    scale = float(np.linalg.norm(np.ptp(V, axis=0))) or 1.0
+    dual_w = np.linalg.norm(adj.centroids[ef2[:, 0]] - adj.centroids[ef2[:, 1]], axis=1)
+    dual_w = np.maximum(dual_w, 1e-9 * scale)
+    ctx = {"F": F, "n": n, "FF": adj.face_neighbors, "areas": adj.areas, "ef2": ef2,
+           "dual_w": dual_w, "on_border": on_border}
+    G = sp.csr_matrix((np.ones(ef2.shape[0]), (ef2[:, 0], ef2[:, 1])), shape=(m, m))
+    C0, comp = connected_components(G, directed=False)
+    lab0, C0 = _compact(comp.astype(np.int64))
+    total = float(adj.areas.sum()) or 1.0
+    built = [(lab0, C0, np.full(C0, -1, np.int64))]
+    lab, C = lab0, C0
+    level = 1
+    while True:
+        target_clusters = float(branching) ** level
+        if m / target_clusters <= leaf_faces:
             break
-        labels, C = cur, cc
-        built.append((labels, C))
+        target_area = total / target_clusters
+        area = np.bincount(lab, weights=adj.areas, minlength=C)
+        nf = np.bincount(lab, minlength=C)
+        disc = region_topology(F, lab, C, n).disc
+        want = np.clip(np.rint(area / target_area), 1, None).astype(np.int64)
+        want = np.where(disc, want, np.maximum(want, 4))
+        want = np.minimum(want, nf)
+        lab_new, par, C_new = _split_level(lab, C, want, ctx, rng)
+        built.append((lab_new, C_new, par))
+        lab, C = lab_new, C_new
+        level += 1
+    # face level, numbered by parent
+    forder = np.lexsort((np.arange(m), lab))
+    flab = np.empty(m, np.int64)
+    flab[forder] = np.arange(m)
+    built.append((flab, m, lab[forder]))
     out = []
-    for i, (lab, c) in enumerate(built):
-        parent = None
+    for i, (lb, c, par) in enumerate(built):
         if i + 1 < len(built):
-            nxt = built[i + 1][0]
-            parent = np.empty(c, np.int64)
-            parent[lab] = nxt
-        out.append(_build_level(V, F, lab, c, ctx, parent))
+            child_ptr = np.searchsorted(built[i + 1][2], np.arange(c + 1)).astype(np.int64)
+        else:
+            child_ptr = np.zeros(c + 1, np.int64)
+        out.append(_build_level(V, F, lb, c, par, child_ptr, ctx))
     return ClusterHierarchy(levels=tuple(out))

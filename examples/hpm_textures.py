@@ -1,0 +1,177 @@
+"""Hierarchical pattern mapping: texture coordinates into one image, coarse to fine.
+
+Pictures (written to OUT_DIR), after the paper's figures:
+
+* ``hpm_textures_clusters.png`` (Fig. 1) - levels 1 to 3 of the top-down
+  face-cluster hierarchy of Spot, one colour per cluster, control vertices
+  as dots.
+* ``hpm_textures_scale.png`` (Fig. 8) - the same image mapped at three
+  scales (surface length per image width), and the patches used for the
+  largest, coloured by the hierarchy level they were placed at.
+* ``hpm_textures.png`` (Figs. 9-10) - Spot, Bob and genus-2 / genus-4
+  shapes (double torus, Fertility) with six images from
+  ``../shared/data/images``.
+
+The textured surfaces are the base meshes with the output texture
+coordinates and the input image itself (what ``geotex hpm`` writes as GLB /
+OBJ).  Without the shared data the bundled low-resolution Spot and Bob and a
+synthetic image are used; ``GEOTEX_EXAMPLES_QUICK=1`` (the test suite sets
+it) uses them too.
+
+Run:  python examples/hpm_textures.py [OUT_DIR]     (default docs/gallery)
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import tempfile
+import time
+import zlib
+from pathlib import Path
+
+import numpy as np
+from PIL import Image
+
+from geotex.data import sample_path
+from geotex.image.hpm import hpm_texture, read_hpm_image
+from geotex.io import read_mesh
+from geotex.patches import cluster_hierarchy
+from geotex.render import Panel, render_panels
+
+HERE = Path(__file__).resolve().parent
+SHARED = next((p / "shared" / "data" for p in HERE.parents[1:3]
+               if (p / "shared" / "data").is_dir()), HERE.parents[1] / "shared" / "data")
+QUICK = os.environ.get("GEOTEX_EXAMPLES_QUICK") == "1" or not SHARED.is_dir()
+SIZE = (520, 520)
+
+
+def mesh(name: str):
+    paths = {"spot": SHARED / "base" / "spot_odedstein.obj",
+             "bob": SHARED / "base" / "bob_uv" / "bob_tri.obj",
+             "double torus": SHARED / "base" / "double_torus_gpjs.obj",
+             "fertility": SHARED / "base" / "fertility_libigl.off"}
+    p = paths.get(name)
+    if QUICK or p is None or not p.exists():
+        p = sample_path("bob" if name == "bob" else "spot")
+    m = read_mesh(p)
+    return m.vertices, m.faces
+
+
+def image(name: str) -> tuple[str, np.ndarray]:
+    p = SHARED / "images" / name
+    if QUICK or not p.exists():
+        rng = np.random.default_rng(zlib.crc32(name.encode()))
+        small = rng.random((14, 14, 3))
+        img = np.asarray(Image.fromarray((small * 255).astype(np.uint8)).resize(
+            (112, 112), Image.BICUBIC))
+        return "synthetic", img
+    label = "water" if name == "embark/1.jpg" else Path(name).stem.split("_", 1)[-1]
+    return label, read_hpm_image(p)
+
+
+def split(V, F, uv, uv_faces):
+    """One render vertex per distinct (vertex, uv) corner."""
+    key = F.ravel() * np.int64(len(uv)) + uv_faces.ravel()
+    _, first, inv = np.unique(key, return_index=True, return_inverse=True)
+    return V[F.ravel()[first]], inv.reshape(-1, 3), uv[uv_faces.ravel()[first]]
+
+
+def textured(V, F, img, scale, *, seed=0, title=""):
+    t = time.perf_counter()
+    r = hpm_texture(V, F, img, scale=scale, seed=seed)
+    rep = r.report()
+    placed = sum(lv["placed"] for lv in rep["levels"])
+    print(f"  {title}: {placed} patches, {rep['levels'][-1]['filled_faces']} faces filled, "
+          f"{time.perf_counter() - t:.1f} s")
+    Vs, Fs, uv = split(V, F, r.uv, r.uv_faces)
+    return Panel(Vs, Fs, uv=uv, texture=img, title=title), r
+
+
+def diag(V) -> float:
+    return float(np.linalg.norm(np.ptp(V, axis=0)))
+
+
+def clusters_figure(out: Path) -> None:
+    V, F = mesh("spot")
+    H = cluster_hierarchy(V, F, seed=0)
+    rng = np.random.default_rng(0)
+    panels = []
+    for li in (1, 2, 3):
+        lv = H[li]
+        colors = rng.permutation(lv.n_clusters)
+        markers = {"control vertices": (V[np.unique(lv.control_vertices)], "#222222")}
+        panels.append(Panel(V, F, scalars=colors[lv.labels], cmap="tab20",
+                            markers=markers if li < 3 else None,
+                            title=f"level {li}: {lv.n_clusters} clusters"))
+    render_panels(panels, out, size=SIZE, up="y")
+    print(f"wrote {out}")
+
+
+def scale_figure(out: Path) -> None:
+    V, F = mesh("spot")
+    label, img = image("quilting_classic/t7_slate_tiles.png")
+    d = diag(V)
+    panels, last = [], None
+    for k in (0.15, 0.3, 0.6):
+        p, r = textured(V, F, img, k * d, title=f"scale {k:g} x diagonal")
+        panels.append(p)
+        last = r
+    panels.append(Panel(V, F, scalars=last.face_level, cmap="viridis",
+                        title="levels used (dark = coarse)"))
+    render_panels(panels, out, size=SIZE, up="y")
+    print(f"wrote {out}")
+
+
+def results_figure(out: Path) -> None:
+    jobs = [("spot", "quilting_classic/t4_gravel.png", 0.3, "y"),
+            ("spot", "quilting_classic/t1_bricks.png", 0.35, "y"),
+            ("bob", "quilting_classic/t6_peppers.png", 0.35, "y"),
+            ("bob", "quilting_classic/t2_basket_weave.png", 0.35, "y"),
+            ("double torus", "embark/1.jpg", 0.35, "y"),
+            ("fertility", "quilting_classic/t8_rope_net.png", 0.3, "y")]
+    if QUICK:
+        jobs = jobs[:2]
+    with tempfile.TemporaryDirectory() as tmp:
+        rows = []
+        for i in range(0, len(jobs), 3):
+            panels, up = [], "y"
+            for name, img_name, k, up in jobs[i:i + 3]:
+                V, F = mesh(name)
+                label, img = image(img_name)
+                p, _ = textured(V, F, img, k * diag(V), title=f"{name}, {label}")
+                panels.append(p)
+            part = Path(tmp) / f"row{i}.png"
+            # each row shares one up axis: render panels one by one, then paste
+            pics = []
+            for j, (p, job) in enumerate(zip(panels, jobs[i:i + 3])):
+                f = Path(tmp) / f"p{i}_{j}.png"
+                render_panels([p], f, size=SIZE, up=job[3])
+                pics.append(Image.open(f).convert("RGB"))
+            row = Image.new("RGB", (sum(q.width for q in pics), pics[0].height), "white")
+            x = 0
+            for q in pics:
+                row.paste(q, (x, 0))
+                x += q.width
+            row.save(part)
+            rows.append(Image.open(part).convert("RGB"))
+        W = max(r.width for r in rows)
+        sheet = Image.new("RGB", (W, sum(r.height for r in rows)), "white")
+        y = 0
+        for r in rows:
+            sheet.paste(r, (0, y))
+            y += r.height
+        sheet.save(out)
+    print(f"wrote {out}")
+
+
+def main() -> None:
+    out_dir = Path(sys.argv[1]) if len(sys.argv) > 1 else HERE.parent / "docs" / "gallery"
+    out_dir.mkdir(parents=True, exist_ok=True)
+    clusters_figure(out_dir / "hpm_textures_clusters.png")
+    scale_figure(out_dir / "hpm_textures_scale.png")
+    results_figure(out_dir / "hpm_textures.png")
+
+
+if __name__ == "__main__":
+    main()

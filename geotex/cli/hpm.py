@@ -1,0 +1,119 @@
+"""``geotex hpm BASE --image IMG -o OUT``: hierarchical pattern mapping (texture coordinates)."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+from geotex.cli._common import EXIT_OK, UsageError, flag_error, guard_output
+
+HELP = ("texture a closed mesh with patches of one image, coarse to fine (hierarchical "
+        "pattern mapping): GLB or OBJ+MTL+PNG with the image itself as texture")
+
+
+def register(sub):
+    p = sub.add_parser("hpm", help=HELP, description=HELP + ". Face clusters are flattened "
+                       "and matched against the image by FFT correlation with the texture "
+                       "already placed around them; clusters that fit badly are subdivided. "
+                       "The output holds texture coordinates into IMG (no new texture).")
+    p.add_argument("base", metavar="BASE", help="closed manifold mesh to texture")
+    p.add_argument("--image", required=True, metavar="IMG", help="texture sample (PNG, JPEG; "
+                   "RGB or grey)")
+    p.add_argument("--scale", type=float, default=None, metavar="S",
+                   help="surface length (mm) covered by the image width (default: a quarter "
+                        "of the bounding-box diagonal)")
+    p.add_argument("--field", default=None, metavar="F.npz",
+                   help="direction field from 'geotex field': patches follow it")
+    p.add_argument("--angle", type=float, default=None, metavar="DEG",
+                   help="orientation of the first patch in degrees (default random)")
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--max-error", type=float, default=0.35, metavar="E",
+                   help="largest relative matching error accepted before a cluster is "
+                        "subdivided (default 0.35; 1 = as bad as random pixels)")
+    p.add_argument("--report", default=None, metavar="R.json",
+                   help="also write per-level counts and matching errors")
+    p.add_argument("-o", "--output", required=True, help="OUT.glb or OUT.obj")
+    p.set_defaults(run=run)
+
+
+def _outputs(args) -> list[Path]:
+    out = Path(args.output)
+    ext = out.suffix.lower()
+    if ext not in (".glb", ".obj"):
+        raise UsageError(f"{out}: hpm writes a textured mesh; use .glb or .obj")
+    written = [out]
+    if ext == ".obj":
+        written += [out.with_name(out.stem + ".mtl"), out.with_name(out.stem + ".png")]
+    if args.report:
+        if Path(args.report).suffix.lower() != ".json":
+            raise UsageError(f"{args.report}: --report writes a .json file")
+        written.append(Path(args.report))
+    inputs = [args.base, args.image, args.field]
+    for path in written:
+        guard_output(path, *inputs)
+    if len({str(p.resolve()) for p in written}) != len(written):
+        raise UsageError("--report must differ from the output files")
+    return written
+
+
+def run(args) -> int:
+    import numpy as np
+
+    from geotex.image.hpm import hpm_mesh, hpm_texture, read_hpm_image
+    from geotex.io import read_mesh, write_mesh
+    from geotex.io.atomic import atomic_output
+    from geotex.progress import stage_bar
+
+    written = _outputs(args)
+    out = written[0]
+    if args.scale is not None and not (math.isfinite(args.scale) and args.scale > 0):
+        raise UsageError(f"--scale {args.scale!r}: give a positive surface length in mm")
+    if args.angle is not None and not math.isfinite(args.angle):
+        raise UsageError(f"--angle {args.angle!r}: give a finite angle in degrees")
+    if not (math.isfinite(args.max_error) and args.max_error > 0):
+        raise UsageError(f"--max-error {args.max_error!r}: give a positive number")
+    mesh = read_mesh(args.base)
+    if mesh.n_faces == 0:
+        raise UsageError(f"{args.base}: the mesh has no faces")
+    V, F = mesh.vertices, mesh.faces
+    image = read_hpm_image(args.image)
+    field = None
+    if args.field is not None:
+        if not args.field.lower().endswith(".npz"):
+            raise UsageError(f"--field {args.field}: give a field file (.npz) from 'geotex field'")
+        from geotex.fields.store import load_direction_field
+        field = load_direction_field(args.field).field
+        if field.vectors.shape != (F.shape[0], 3):
+            raise UsageError(f"{args.field}: the field has {field.vectors.shape[0]} faces, the "
+                             f"mesh {F.shape[0]}; compute it on this mesh with 'geotex field'")
+    scale = args.scale
+    if scale is None:
+        scale = 0.25 * float(np.linalg.norm(np.ptp(V, axis=0)))
+    try:
+        with stage_bar(8, "hpm") as bar:
+            result = hpm_texture(V, F, image, scale=scale, field=field, angle=args.angle,
+                                 seed=args.seed, max_error=args.max_error, progress=bar)
+    except Exception as exc:
+        from geotex.errors import InputError
+        if isinstance(exc, InputError):
+            msg = str(exc)
+            if msg.startswith("the base mesh"):
+                raise UsageError(f"{args.base}: {msg}") from None
+            raise flag_error(exc, {"scale": "--scale"}) from None
+        raise
+    textured = hpm_mesh(V, F, result, image, name=mesh.name or out.stem)
+    write_mesh(out, textured)
+    if args.report:
+        rep = dict(result.report(), base=str(args.base), image=str(args.image),
+                   scale=scale, seed=args.seed, faces=int(F.shape[0]))
+        text = json.dumps(rep, indent=2)
+        with atomic_output(args.report, "w", encoding="utf-8") as fh:
+            fh.write(text + "\n")
+    rep = result.report()
+    placed = sum(lv["placed"] for lv in rep["levels"])
+    print(f"{args.base}: {placed} patches over {F.shape[0]} faces "
+          f"({rep['levels'][-1]['filled_faces']} faces filled at face level), "
+          f"{result.uv.shape[0]} texture coordinates")
+    print("wrote " + " and ".join(str(p) for p in written))
+    return EXIT_OK

@@ -1,0 +1,431 @@
+"""Hierarchical pattern mapping: cluster hierarchy, barycentric flattening, FFT fitting, CLI."""
+
+import json
+
+import numpy as np
+import pytest
+from scipy.spatial import Delaunay
+
+from geotex.cli import main
+from geotex.errors import InputError
+from geotex.image.fftmatch import (brute_force_energy, match_energy, opponent_colors,
+                                   texture_spectra)
+from geotex.image.hpm import hpm_mesh, hpm_texture
+from geotex.io import read_mesh, write_mesh
+from geotex.mesh import edge_topology, face_areas
+from geotex.mesh.primitives import box, grid_plane, icosphere, torus
+from geotex.mesh.record import Mesh
+from geotex.patches import cluster_hierarchy, is_disc_partition
+from geotex.patches.clusters import ALIGNMENT_RATIO
+from geotex.patches.flatten import (barycentric_hierarchy, cluster_frames, control_polygon,
+                                    flatten_cluster)
+
+
+def jittered_disc(n=300, seed=0):
+    rng = np.random.default_rng(seed)
+    pts = np.vstack([rng.uniform(-1, 1, (n, 2)), [[-1, -1], [1, -1], [1, 1], [-1, 1]]])
+    F = Delaunay(pts).simplices.astype(np.int64)
+    a, b, c = pts[F[:, 0]], pts[F[:, 1]], pts[F[:, 2]]
+    neg = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]) < 0
+    F[neg] = F[neg][:, ::-1]
+    return np.column_stack([pts, np.zeros(len(pts))]), F
+
+
+MESHES = {
+    "sphere": lambda: icosphere(3),
+    "torus": lambda: torus(1.0, 0.35, n_major=32, n_minor=16),
+    "box": lambda: box(divisions=4),
+    "jittered": lambda: jittered_disc(300, seed=1),
+}
+
+
+def noise_image(h=64, w=64, seed=0):
+    """Smooth coloured noise, uint8 (a stand-in for a photo texture)."""
+    rng = np.random.default_rng(seed)
+    x = rng.random((h // 8 + 2, w // 8 + 2, 3))
+    from scipy.ndimage import zoom
+    img = zoom(x, (8, 8, 1), order=3)[:h, :w]
+    img = (img - img.min()) / (np.ptp(img) + 1e-12)
+    return (img * 255).astype(np.uint8)
+
+
+# ---------------------------------------------------------------------------
+# hierarchy
+# ---------------------------------------------------------------------------
+
+@pytest.mark.parametrize("name", sorted(MESHES))
+def test_hierarchy_invariants(name):
+    V, F = MESHES[name]()
+    H = cluster_hierarchy(V, F)
+    m, n = len(F), len(V)
+    assert len(H) >= 3
+    A = face_areas(V, F)
+    t = edge_topology(F, n)
+    border = np.zeros(n, bool)
+    border[t.edges[t.face_count != 2].ravel()] = True
+    # top: the whole surface; bottom: single faces
+    assert H[0].n_clusters == 1 and np.all(H[0].labels == 0)
+    last = H[-1]
+    assert last.n_clusters == m and np.unique(last.labels).size == m
+    prev = None
+    for li, lv in enumerate(H.levels):
+        lab = lv.labels
+        assert lab.min() == 0 and lab.max() == lv.n_clusters - 1
+        assert np.unique(lab).size == lv.n_clusters                  # partition, all used
+        assert np.allclose(lv.area, np.bincount(lab, weights=A))
+        if li >= 1:
+            assert is_disc_partition(F, lab) and lv.disc.all()
+            assert np.array_equal(lv.parent[lab], prev.labels)       # nested in the parent
+            assert np.all(np.diff(lv.parent) >= 0)                   # children contiguous
+            assert np.array_equal(prev.child_ptr, np.searchsorted(lv.parent,
+                                                                  np.arange(prev.n_clusters + 1)))
+        if 1 <= li < len(H) - 1:
+            assert lv.n_clusters > prev.n_clusters
+        for c in range(lv.n_clusters) if li >= 1 else []:
+            loop = lv.boundary_loop(c)
+            ctrl = lv.controls(c)
+            assert len(ctrl) >= 3
+            # borders are mesh edges: the loop is the cluster's boundary cycle
+            sub = F[lab == c]
+            st = edge_topology(sub, n)
+            bnd = {tuple(e) for e in st.edges[st.face_count == 1].tolist()}
+            lp = loop.tolist()
+            assert len(lp) == len(bnd) == len(set(lp))
+            assert {tuple(sorted((lp[i], lp[(i + 1) % len(lp)]))) for i in range(len(lp))} == bnd
+            # control vertices lie on the loop, in loop order
+            where = [lp.index(v) for v in ctrl.tolist()]
+            assert where == sorted(where)
+            js = lv.control_is_junction[lv.control_ptr[c]:lv.control_ptr[c + 1]]
+            assert np.all(lv.junction[ctrl[js]])
+            # non-alignment: the control points span a plane (or every loop vertex is used)
+            P = V[ctrl] - V[ctrl].mean(axis=0)
+            s = np.linalg.svd(P, compute_uv=False)
+            assert s[1] >= ALIGNMENT_RATIO * s[0] - 1e-12 or len(ctrl) == len(loop)
+        prev = lv
+    # junctions: vertices where >= 3 regions meet (the outside counts as one)
+    lv = H[2]
+    reg = [set() for _ in range(n)]
+    for f, tri in enumerate(F.tolist()):
+        for v in tri:
+            reg[v].add(int(lv.labels[f]))
+    nreg = np.array([len(r) for r in reg]) + border
+    assert np.array_equal(lv.junction, nreg >= 3)
+
+
+def test_hierarchy_genus_two_and_descendants():
+    from geotex.mesh.primitives import plate_with_holes
+    V, F = plate_with_holes(2)
+    H = cluster_hierarchy(V, F)
+    for lv in H.levels[1:]:
+        assert is_disc_partition(F, lv.labels)
+    lo, hi = H.descendants(1, 0, len(H) - 1)
+    faces = np.flatnonzero((H[-1].labels >= lo) & (H[-1].labels < hi))
+    assert np.array_equal(np.sort(faces), H[1].faces(0))
+
+
+def test_hierarchy_deterministic_pure_and_seeded():
+    V, F = torus(1.0, 0.35, n_major=32, n_minor=16)
+    V0, F0 = V.copy(), F.copy()
+    a = cluster_hierarchy(V, F, seed=3)
+    b = cluster_hierarchy(V, F, seed=3)
+    c = cluster_hierarchy(V, F, seed=4)
+    assert np.array_equal(V, V0) and np.array_equal(F, F0)
+    assert all(np.array_equal(x.labels, y.labels) and
+               np.array_equal(x.control_vertices, y.control_vertices)
+               for x, y in zip(a.levels, b.levels))
+    assert any(not np.array_equal(x.labels, y.labels) for x, y in zip(a.levels, c.levels))
+
+
+def test_hierarchy_errors():
+    V, F = icosphere(2)
+    with pytest.raises(InputError, match="branching"):
+        cluster_hierarchy(V, F, branching=1.0)
+    with pytest.raises(InputError, match="leaf_faces"):
+        cluster_hierarchy(V, F, leaf_faces=0)
+    flipped = F.copy()
+    flipped[0] = flipped[0, ::-1]
+    with pytest.raises(InputError, match="oriented"):
+        cluster_hierarchy(V, flipped)
+    with pytest.raises(InputError, match="empty"):
+        cluster_hierarchy(V, np.zeros((0, 3), np.int64))
+
+
+# ---------------------------------------------------------------------------
+# barycentric flattening
+# ---------------------------------------------------------------------------
+
+def test_flattening_is_exact_on_a_plane():
+    V, F = jittered_disc(200, seed=2)
+    H = cluster_hierarchy(V, F)
+    bh = barycentric_hierarchy(V, F, H)
+    for li in range(len(H) - 1):
+        N, e1, e2 = cluster_frames(V, F, H[li].labels, H[li].n_clusters)
+        for c in range(min(4, H[li].n_clusters)):
+            poly = control_polygon(V, H[li].controls(c), e1[c], e2[c])
+            verts, uv, faces = flatten_cluster(bh, li, c, poly)
+            assert np.array_equal(np.sort(faces), H[li].faces(c))
+            q = np.stack([V[verts] @ e1[c], V[verts] @ e2[c]], axis=1)
+            assert np.abs(uv - q).max() < 1e-9
+
+
+def test_flattening_fixed_vertices_are_kept_and_spread():
+    V, F = icosphere(3)
+    H = cluster_hierarchy(V, F)
+    bh = barycentric_hierarchy(V, F, H)
+    N, e1, e2 = cluster_frames(V, F, H[2].labels, H[2].n_clusters)
+    poly = control_polygon(V, H[2].controls(0), e1[0], e2[0])
+    verts, uv, _ = flatten_cluster(bh, 2, 0, poly)
+    fixed = np.zeros((len(V), 2))
+    mask = np.zeros(len(V), bool)
+    v0 = H[2].boundary_loop(0)[:3]
+    mask[v0] = True
+    fixed[verts] = uv
+    fixed[v0] += 0.01
+    verts2, uv2, _ = flatten_cluster(bh, 2, 0, poly, fixed=fixed, fixed_mask=mask)
+    k = np.searchsorted(verts2, v0)
+    assert np.allclose(uv2[k], fixed[v0])
+    moved = np.linalg.norm(uv2 - uv, axis=1)
+    assert (moved > 1e-6).sum() > 3                 # the change spreads past the fixed ones
+
+
+# ---------------------------------------------------------------------------
+# FFT matching
+# ---------------------------------------------------------------------------
+
+def test_fft_energy_equals_brute_force():
+    rng = np.random.default_rng(0)
+    T = opponent_colors(rng.random((24, 20, 3)))
+    spectra = texture_spectra(T, orientations=1)
+    h, w = T.shape[:2]
+    J = np.zeros((h, w))
+    J[1:6, 2:8] = (rng.random((5, 6)) > 0.3)
+    I = rng.random((h, w, 3)) * J[:, :, None]
+    K = J.copy()
+    E = match_energy(spectra, I, J, K)[0]
+    checked = 0
+    for dy in range(h):
+        for dx in range(w):
+            if np.isfinite(E[dy, dx]):
+                # single-precision FFT: agreement to 1e-5 of the mask's energy scale
+                assert E[dy, dx] == pytest.approx(brute_force_energy(T, I, J, dy, dx),
+                                                  abs=1e-5 * float(np.sum(I * I) + J.sum()))
+                checked += 1
+    assert checked > 100
+    # positions where the footprint would leave the image are refused
+    ys, xs = np.nonzero(K)
+    assert np.all(~np.isfinite(E[h - ys.max():, :])) and np.all(~np.isfinite(E[:, w - xs.max():]))
+
+
+def test_fft_match_finds_a_planted_patch_and_its_rotation():
+    img = noise_image(64, 64, seed=5).astype(np.float64) / 255.0
+    T = opponent_colors(img)
+    spectra = texture_spectra(T, orientations=8)
+    h, w = T.shape[:2]
+    J = np.zeros((h, w))
+    J[:12, :12] = 1.0
+    k = 3
+    R = spectra.rotated[k]
+    I = np.zeros((h, w, 3))
+    I[:12, :12] = R[30:42, 25:37]
+    E = match_energy(spectra, I, J, J)
+    kk, dy, dx = np.unravel_index(np.argmin(E), E.shape)
+    assert (kk, dy, dx) == (k, 30, 25)
+    assert E[kk, dy, dx] < 1e-4
+
+
+# ---------------------------------------------------------------------------
+# the mapping
+# ---------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def mapped():
+    V, F = icosphere(3)
+    img = noise_image(64, 64)
+    r = hpm_texture(V, F, img, scale=3.0, seed=1)
+    return V, F, img, r
+
+
+def test_hpm_covers_every_face_with_finite_uv(mapped):
+    V, F, img, r = mapped
+    assert r.uv_faces.shape == F.shape and np.isfinite(r.uv).all()
+    assert r.uv_faces.max() == r.uv.shape[0] - 1
+    rep = r.report()
+    placed = sum(lv["placed"] for lv in rep["levels"])
+    assert placed == rep["placements"] >= 2
+    assert sum(lv["filled_faces"] for lv in rep["levels"]) == np.count_nonzero(r.patch < 0)
+    # placed patches stay inside the image (it is not treated as toroidal)
+    ok = r.patch[np.arange(len(F))] >= 0
+    uvp = r.uv[r.uv_faces[ok]].reshape(-1, 2)
+    assert uvp.min() >= -0.02 and uvp.max() <= 1.02
+    errs = [lv["mean_error"] for lv in rep["levels"] if lv["mean_error"] is not None]
+    assert errs and all(0 <= e <= 0.35 for e in errs)
+
+
+def test_hpm_uv_continuous_within_clusters(mapped):
+    V, F, img, r = mapped
+    # every vertex has one texture coordinate per placement around it
+    for p in np.unique(r.patch[r.patch >= 0]):
+        fs = np.flatnonzero(r.patch == p)
+        pairs = np.unique(np.column_stack([F[fs].ravel(), r.uv_faces[fs].ravel()]), axis=0)
+        assert np.unique(pairs[:, 0]).size == pairs.shape[0]
+    # vertices are split only where the mapping jumps: fewer uv than corners
+    assert len(V) <= r.uv.shape[0] < 3 * len(F)
+
+
+def test_hpm_deterministic_and_pure(mapped):
+    V, F, img, r = mapped
+    V0, img0 = V.copy(), img.copy()
+    again = hpm_texture(V, F, img, scale=3.0, seed=1)
+    assert np.array_equal(V, V0) and np.array_equal(img, img0)
+    assert again.uv.tobytes() == r.uv.tobytes()
+    assert np.array_equal(again.uv_faces, r.uv_faces)
+    other = hpm_texture(V, F, img, scale=3.0, seed=2)
+    assert other.uv.shape != r.uv.shape or not np.array_equal(other.uv, r.uv)
+
+
+def test_hpm_errors():
+    V, F = icosphere(2)
+    img = noise_image(32, 32)
+    with pytest.raises(InputError, match="too small"):
+        hpm_texture(V, F, img, scale=0.05)
+    with pytest.raises(InputError, match="open"):
+        Vg, Fg = grid_plane(4, 4)
+        hpm_texture(Vg, Fg, img, scale=1.0)
+    with pytest.raises(InputError, match="image"):
+        hpm_texture(V, F, img[:, :, :2], scale=2.0)
+    with pytest.raises(InputError, match="scale"):
+        hpm_texture(V, F, img, scale=-1.0)
+
+
+def test_hpm_textured_mesh_round_trip(mapped, tmp_path):
+    V, F, img, r = mapped
+    mesh = hpm_mesh(V, F, r, img, name="ball")
+    for ext in ("glb", "obj"):
+        out = tmp_path / f"ball.{ext}"
+        write_mesh(out, mesh)
+        back = read_mesh(out)
+        assert back.texture is not None and back.texture.shape[:2] == img.shape[:2]
+        assert back.has_uv
+        # corner uv agree with the mapping (float32 in glTF)
+        got = back.uv[back.uv_faces]
+        assert np.allclose(np.sort(got.reshape(-1, 2), axis=0),
+                           np.sort(r.uv[r.uv_faces].reshape(-1, 2), axis=0), atol=1e-5)
+
+
+# ---------------------------------------------------------------------------
+# CLI
+# ---------------------------------------------------------------------------
+
+@pytest.fixture()
+def files(tmp_path):
+    from PIL import Image
+    V, F = icosphere(3)
+    base = tmp_path / "ball.obj"
+    write_mesh(base, Mesh(V, F))
+    img = tmp_path / "noise.png"
+    Image.fromarray(noise_image(64, 64)).save(img)
+    return tmp_path, base, img
+
+
+def test_cli_hpm_writes_glb_and_report(files, capsys):
+    tmp, base, img = files
+    out, rep = tmp / "out.glb", tmp / "r.json"
+    assert main(["hpm", str(base), "--image", str(img), "--scale", "3", "-o", str(out),
+                 "--report", str(rep)]) == 0
+    mesh = read_mesh(out)
+    assert mesh.has_uv and mesh.texture is not None
+    data = json.loads(rep.read_text())
+    assert [lv["level"] for lv in data["levels"]] == list(range(len(data["levels"])))
+    assert {"placed", "subdivided", "mean_error"} <= set(data["levels"][0])
+
+
+def test_cli_hpm_obj_writes_image_beside(files):
+    tmp, base, img = files
+    out = tmp / "out.obj"
+    assert main(["hpm", str(base), "--image", str(img), "--scale", "3", "-o", str(out)]) == 0
+    assert (tmp / "out.mtl").exists() and (tmp / "out.png").exists()
+
+
+def test_cli_hpm_errors(files, capsys):
+    from PIL import Image
+    tmp, base, img = files
+
+    def err(args):
+        code = main(["hpm", *args])
+        line = capsys.readouterr().err.strip()
+        assert code == 2 and line.count("\n") == 0 and line.startswith("geotex: error:")
+        return line
+
+    assert "too small" in err([str(base), "--image", str(img), "--scale", "0.01",
+                               "-o", str(tmp / "a.glb")])
+    assert "--scale" in err([str(base), "--image", str(img), "--scale", "-2",
+                             "-o", str(tmp / "a.glb")])
+    cmyk = tmp / "cmyk.jpg"
+    Image.new("CMYK", (32, 32)).save(cmyk)
+    assert "not 8-bit RGB or grey" in err([str(base), "--image", str(cmyk), "-o", str(tmp / "a.glb")])
+    Vg, Fg = grid_plane(4, 4)
+    open_base = tmp / "open.obj"
+    write_mesh(open_base, Mesh(Vg, Fg))
+    assert "open" in err([str(open_base), "--image", str(img), "-o", str(tmp / "a.glb")])
+    fins = tmp / "fins.obj"
+    Vf = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1]], float)
+    Ff = np.array([[0, 1, 2], [1, 0, 3], [0, 1, 4]])
+    write_mesh(fins, Mesh(Vf, Ff))
+    assert "non-manifold" in err([str(fins), "--image", str(img), "-o", str(tmp / "a.glb")])
+    assert ".glb or .obj" in err([str(base), "--image", str(img), "-o", str(tmp / "a.stl")])
+    assert "no such image" in err([str(base), "--image", str(tmp / "x.png"),
+                                   "-o", str(tmp / "a.glb")])
+    assert not (tmp / "a.glb").exists()
+
+
+def test_hpm_follows_a_direction_field_and_cli_field(files, tmp_path):
+    from geotex.fields.directions import smooth_direction_field
+    from geotex.fields.store import save_direction_field
+    V, F = icosphere(3)
+    field = smooth_direction_field(V, F, symmetry=2, seed=0)
+    img = noise_image(64, 64)
+    r = hpm_texture(V, F, img, scale=3.0, seed=0, field=field)
+    assert np.isfinite(r.uv).all() and r.report()["placements"] >= 1
+    tmp, base, png = files
+    fpath = tmp / "up.npz"
+    save_direction_field(fpath, field)
+    out = tmp / "f.glb"
+    assert main(["hpm", str(base), "--image", str(png), "--scale", "3", "--field", str(fpath),
+                 "-o", str(out)]) == 0
+    assert read_mesh(out).has_uv
+
+
+def test_topological_coordinates_and_edge_bands():
+    from geotex.patches.flatten import edge_band
+    V, F = icosphere(4)
+    H = cluster_hierarchy(V, F)
+    bh = barycentric_hierarchy(V, F, H)
+    for li in (1, 2):
+        lv = H[li]
+        k = len(lv.controls(0))
+        verts, M, faces = flatten_cluster(bh, li, 0, np.eye(k), topological=True)
+        assert np.allclose(M.sum(axis=1), 1.0) and M.min() >= -1e-12
+        # control vertices are their own corner
+        ctrl = lv.controls(0)
+        pos = np.searchsorted(verts, ctrl)
+        assert np.allclose(M[pos], np.eye(k))
+        # a band touches its edge and stays a strict part of the cluster
+        loop = lv.boundary_loop(0)
+        for e in range(k):
+            band = edge_band(bh, li, 0, [e])
+            assert 0 < band.size < faces.size
+            a, b = ctrl[e], ctrl[(e + 1) % k]
+            i, j = list(loop).index(a), list(loop).index(b)
+            seg = loop[i:j + 1] if i <= j else np.concatenate([loop[i:], loop[:j + 1]])
+            assert np.isin(seg, F[band]).mean() > 0.5
+        wide = edge_band(bh, li, 0, [0], width=0.5)
+        narrow = edge_band(bh, li, 0, [0])
+        assert np.isin(narrow, wide).all() and wide.size > narrow.size
+
+
+def test_hpm_topological_band_mode(mapped):
+    V, F, img, _ = mapped
+    r = hpm_texture(V, F, img, scale=3.0, seed=1, band_mode="topological")
+    assert np.isfinite(r.uv).all() and r.report()["placements"] >= 2
+    with pytest.raises(InputError, match="band_mode"):
+        hpm_texture(V, F, img, scale=3.0, band_mode="rings")
