@@ -257,7 +257,7 @@ def test_pgp_file_round_trip_and_tile_image(capsys, tmp_path):
 @pytest.mark.parametrize("argv, message", [
     (["--param", "{other}"], "made for a mesh of"),
     (["--param", "{junk}"], "not a geotex PGP file"),
-    (["--param", "{image}"], "unreadable PGP file: not an .npz"),
+    (["--param", "{image}"], "unreadable PGP file (not an .npz archive)"),
     (["--image", "{junk}"], "--image"),
 ])
 def test_tile_image_errors_name_the_flag(capsys, tmp_path, argv, message):

@@ -80,8 +80,8 @@ def read_record(path, *, kind: str, format: str, arrays, optional=(),
     if not path.is_file():
         raise MissingFileError(f"{path}: no such {kind} file")
     if not zipfile.is_zipfile(path):
-        raise MeshFileError(path, f"unreadable {kind} file: not an .npz archive (truncated "
-                                  f"or corrupted, or another kind of file){tail}")
+        raise MeshFileError(path, f"unreadable {kind} file (not an .npz archive): damaged "
+                                  f"or not a {kind} file (truncated or corrupted?){tail}")
     try:
         check_archive(path)
     except RefusedInput as exc:
