@@ -21,7 +21,7 @@ from pathlib import Path
 from geotex.errors import InputError, ToolNotFoundError
 
 __all__ = ["viewer_bundle_path", "viewer_bundle", "viewer_element", "viewer_page",
-           "write_viewer_page", "glb_bytes"]
+           "write_viewer_page", "glb_bytes", "mesh_turned_y_up"]
 
 BUILD_HINT = ("build it with `npm --prefix viewer ci && npm --prefix viewer run build` "
               "in the geotex source tree")
@@ -62,12 +62,50 @@ def viewer_bundle() -> str:
     return text.replace("</script", "<\\/script")
 
 
-def glb_bytes(mesh) -> bytes:
-    """Return ``mesh`` encoded as a binary glTF file (textured when it has a texture).
+def mesh_turned_y_up(mesh, *, up: str):
+    """Return ``mesh`` turned so that its ``up`` axis points along +y (glTF's convention).
 
     Parameters
     ----------
     mesh : geotex.mesh.Mesh
+    up : {"x", "y", "z"}
+        The axis that points up in ``mesh``.  A z-up mesh is turned by
+        ``(x, y, z) -> (x, z, -y)``, an x-up mesh by ``(x, y, z) -> (-y, x, z)``
+        (proper rotations: faces keep their orientation); a y-up mesh is
+        returned as it is.
+
+    Returns
+    -------
+    geotex.mesh.Mesh
+        A new record (the input is not modified); uv and texture are kept.
+
+    Raises
+    ------
+    InputError
+        If ``up`` is not ``"x"``, ``"y"`` or ``"z"``.
+    """
+    import numpy as np
+
+    up = _up_name(up)
+    V = mesh.vertices
+    if up == "y":
+        return mesh
+    if up == "z":
+        W = np.column_stack([V[:, 0], V[:, 2], -V[:, 1]])
+    else:
+        W = np.column_stack([-V[:, 1], V[:, 0], V[:, 2]])
+    return mesh.replace(vertices=W)
+
+
+def glb_bytes(mesh, *, up: str = "y") -> bytes:
+    """Return ``mesh`` encoded as a y-up binary glTF file (textured when it has a texture).
+
+    Parameters
+    ----------
+    mesh : geotex.mesh.Mesh
+    up : {"x", "y", "z"}, optional
+        The axis that points up in ``mesh``; the file is written y-up, as
+        the glTF specification says (see :func:`mesh_turned_y_up`).
 
     Returns
     -------
@@ -86,7 +124,7 @@ def glb_bytes(mesh) -> bytes:
     if not isinstance(mesh, Mesh):
         raise InputError(f"mesh must be a geotex.mesh.Mesh, got {type(mesh).__name__}")
     buf = io.BytesIO()
-    write_glb(buf, mesh)
+    write_glb(buf, mesh_turned_y_up(mesh, up=up))
     return buf.getvalue()
 
 
@@ -202,7 +240,7 @@ def write_viewer_page(mesh, path, *, title: str | None = None, up: str = "z") ->
     path = Path(path)
     if path.suffix.lower() not in (".html", ".htm"):
         raise InputError(f"{path}: viewer pages are HTML; use a .html file name")
-    page = viewer_page(glb_bytes(mesh), title=title or mesh.name or path.stem, up=_up_name(up))
+    page = viewer_page(glb_bytes(mesh, up=up), title=title or mesh.name or path.stem)
     with atomic_output(path, "w") as fh:
         fh.write(page)
     return path

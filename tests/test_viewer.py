@@ -56,7 +56,7 @@ def test_view_writes_a_page_next_to_the_file(tmp_path, capsys):
     write_mesh(tmp_path / "ring.stl", Mesh(V, F))
     assert main(["view", str(tmp_path / "ring.stl")]) == 0
     page = (tmp_path / "ring.stl.html").read_text()
-    assert 'data-up="z"' in page and "GeotexViewer" in page
+    assert 'data-up="y"' in page and "GeotexViewer" in page   # embedded turned y-up
     assert "http://" not in page.split("<script>")[0]          # nothing fetched
     write_mesh(tmp_path / "ball.glb", _textured_ball())
     assert main(["view", str(tmp_path / "ball.glb"), "-o", str(tmp_path / "b.html")]) == 0
