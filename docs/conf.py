@@ -26,6 +26,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(DOCS))
 
 import geotex  # noqa: E402
+import geotex_sphinx  # noqa: E402
 
 project = "geotex"
 author = "the geotex authors"
@@ -37,7 +38,6 @@ extensions = [
     "myst_parser",
     "numpydoc",
     "sphinx.ext.autodoc",
-    "sphinx.ext.autosummary",
     "sphinx.ext.mathjax",
     "sphinx_gallery.gen_gallery",
     "geotex_sphinx",
@@ -45,19 +45,18 @@ extensions = [
 
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
 root_doc = "index"
-exclude_patterns = ["_build", "gallery/*.md", "gallery-format.md", "README.md",
+exclude_patterns = ["_build", "gallery/*.md", "README.md", "api.rst",
                     "auto_examples/*.ipynb", "auto_examples/*.py", "auto_examples/*.zip",
                     "auto_examples/*.md5", "auto_examples/*.codeobj.json"]
 html_theme = "furo"
 html_title = f"geotex {release}"
-html_static_path = ["_static"]
+# the viewer bundle lands in _static/geotex-viewer.js
+html_static_path = [str(ROOT / "geotex" / "data" / "viewer")]
 templates_path = []
 
 myst_enable_extensions = ["dollarmath", "amsmath"]
 myst_heading_anchors = 3
 
-autosummary_generate = True
-autosummary_ignore_module_all = False
 autodoc_default_options = {"members": True}
 autodoc_typehints = "none"
 numpydoc_show_class_members = False
@@ -70,24 +69,12 @@ suppress_warnings = []
 # --- gallery ------------------------------------------------------------------------
 QUICK = os.environ.get("GEOTEX_EXAMPLES_QUICK") == "1"
 ONLY = os.environ.get("GEOTEX_EXAMPLES_ONLY", "")     # e.g. "tiles|polycube" (regex)
-GALLERY_OUT = DOCS / "_build" / "gallery-out"
-
-
-def _example_argv(gallery_conf, script_vars):
-    """Each example writes into its own folder, which the scraper then reads."""
-    out = GALLERY_OUT / Path(script_vars["src_file"]).stem
-    if out.exists():
-        shutil.rmtree(out)
-    out.mkdir(parents=True)
-    return [str(out)]
-
-
 sphinx_gallery_conf = {
     "examples_dirs": str(ROOT / "examples"),
     "gallery_dirs": "auto_examples",
     "filename_pattern": rf"/({ONLY})" if ONLY else r"/",
-    "ignore_pattern": r"__init__\.py" + (rf"|/(?!({ONLY})[^/]*$)[^/]*\.py$" if ONLY else ""),
-    "reset_argv": _example_argv,
+    "ignore_pattern": r"__init__\.py" + (rf"|(^|/)(?!({ONLY}))[^/]*\.py$" if ONLY else ""),
+    "reset_argv": "geotex_sphinx.example_argv",
     "image_scrapers": ("geotex_sphinx.output_scraper",),
     "reset_modules": (),
     "capture_repr": (),
@@ -114,4 +101,5 @@ def _build_viewer_bundle():
 
 
 _build_viewer_bundle()
+geotex_sphinx.write_api_page()
 os.environ.setdefault("COLUMNS", "88")      # argparse help wraps at a fixed width
