@@ -205,7 +205,9 @@ def output_scraper(block, block_vars, gallery_conf) -> str:
     new = sorted(p for p in out.rglob("*") if p.is_file() and str(p) not in seen)
     seen.update(str(p) for p in new)
     images = []
-    for png in (p for p in new if p.suffix.lower() == ".png"):
+    # pictures are named after the script (NAME.png, NAME_*.png); other PNGs are
+    # texture images that belong to a written OBJ
+    for png in (p for p in new if p.suffix.lower() == ".png" and p.name.startswith(stem)):
         target = Path(next(block_vars["image_path_iterator"]))
         shutil.copyfile(png, target)
         images.append(str(target))

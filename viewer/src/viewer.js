@@ -62,9 +62,9 @@ export function mount(el) {
 
   const scene = new Scene();
   scene.background = new Color("#eef1f5");
-  scene.add(new HemisphereLight(0xffffff, 0x8d8d8d, 1.6));
-  scene.add(new AmbientLight(0xffffff, 0.35));
-  const key = new DirectionalLight(0xffffff, 1.8);
+  scene.add(new HemisphereLight(0xffffff, 0x6d6a66, 0.9));
+  scene.add(new AmbientLight(0xffffff, 0.15));
+  const key = new DirectionalLight(0xffffff, 2.4);
   key.position.set(3, 5, 4);
   scene.add(key);
   const fill = new DirectionalLight(0xffffff, 0.6);
