@@ -30,7 +30,7 @@ from geotex.io import read_mesh
 from geotex.mesh.primitives import torus
 from geotex.render import Panel, render_panels
 
-BOB = Path(__file__).resolve().parents[2] / "shared" / "data" / "base" / "bob_uv" / "bob_tri.obj"
+BOB = Path(sys.argv[0]).resolve().parents[2] / "shared" / "data" / "base" / "bob_uv" / "bob_tri.obj"
 
 
 def field_panel(V, F, vectors, sing, *, title, every=1, length=0.6):

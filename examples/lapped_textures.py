@@ -46,7 +46,7 @@ from geotex.image import (alignment_errors, displace, lapped_texture, texture_pa
 from geotex.io import read_mesh
 from geotex.render import Panel, render_panels
 
-SHARED = Path(__file__).resolve().parents[2] / "shared" / "data"
+SHARED = Path(sys.argv[0]).resolve().parents[2] / "shared" / "data"
 IMAGES = SHARED / "images"
 SPOT = SHARED / "base" / "spot_uv" / "spot.obj"
 BOB = SHARED / "base" / "bob_uv" / "bob_tri.obj"

@@ -229,8 +229,12 @@ _VIEW_ANGLE = 30.0          # VTK's default vertical view angle, degrees
 
 
 def _fit_camera(P: np.ndarray, direction: np.ndarray, up: np.ndarray, aspect: float,
-                margin: float = 1.1):
-    """Camera looking along -direction at points P, as close as keeps all in view."""
+                margin: float = 1.1, top: float = 0.0, bottom: float = 0.0):
+    """Camera looking along -direction at points P, as close as keeps all in view.
+
+    ``top`` and ``bottom`` are the fractions of the picture's height kept free
+    (for the caption and the legend): the points fit in the band between.
+    """
     right = np.cross(direction, up)
     right /= np.linalg.norm(right)
     vup = np.cross(right, direction)
@@ -240,13 +244,18 @@ def _fit_camera(P: np.ndarray, direction: np.ndarray, up: np.ndarray, aspect: fl
     center = center + right * 0.5 * (xr.min() + xr.max()) + vup * 0.5 * (xu.min() + xu.max())
     Q = P - center
     xr, xu, xd = Q @ right, Q @ vup, Q @ direction
-    tv = np.tan(np.radians(_VIEW_ANGLE) / 2) / margin
-    th = tv * aspect
+    t = np.tan(np.radians(_VIEW_ANGLE) / 2)
+    top, bottom = min(max(top, 0.0), 0.4), min(max(bottom, 0.0), 0.3)
+    band = 1.0 - top - bottom                     # free height, as a fraction
+    tv = t * band / margin
+    th = t * aspect / margin
     dist = float(np.max(np.maximum(xd + np.abs(xr) / th, xd + np.abs(xu) / tv)))
     size = float(np.linalg.norm(np.ptp(P, axis=0))) or 1.0
     dist = max(dist, 1e-3 * size)
-    position = center + direction * dist
-    return [tuple(position), tuple(center), tuple(vup)]
+    # move the camera so that the band's middle is the picture's middle (a
+    # translation; the view direction is unchanged)
+    shift = vup * (top - bottom) * dist * t
+    return [tuple(center + direction * dist + shift), tuple(center + shift), tuple(vup)]
 
 
 def _closeup_camera(V, F, point, radius, up, aspect):
@@ -333,7 +342,12 @@ def _draw(pv, plotter, panel: Panel, up: np.ndarray, aspect: float):
                                                       panel.closeup_radius, up, aspect)
         else:
             # fit the mesh's own points (not its bounding sphere): it fills the panel
-            plotter.camera_position = _fit_camera(V, view_direction(up), up, aspect)
+            lines = panel.title.count("\n") + 1 if panel.title else 0
+            h = plotter.window_size[1]
+            plotter.camera_position = _fit_camera(
+                V, view_direction(up), up, aspect,
+                top=(lines * 26.0 + 8.0) / h if lines else 0.0,
+                bottom=0.07 * len(legend) + 0.02 if legend else 0.0)
         plotter.reset_camera_clipping_range()
 
 
