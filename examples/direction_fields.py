@@ -1,4 +1,6 @@
-"""Tangent direction fields and their singularities, drawn on real meshes.
+"""
+Tangent direction fields and their singularities, drawn on real meshes
+======================================================================
 
 Panels: a smooth 1-direction field through two constraints on Spot; the
 globally smoothest 4-direction (cross) field on Spot; the smoothest field on
@@ -28,7 +30,7 @@ from geotex.io import read_mesh
 from geotex.mesh.primitives import torus
 from geotex.render import Panel, render_panels
 
-BOB = Path(__file__).resolve().parents[2] / "shared" / "data" / "base" / "bob_uv" / "bob_tri.obj"
+BOB = Path(sys.argv[0]).resolve().parents[2] / "shared" / "data" / "base" / "bob_uv" / "bob_tri.obj"
 
 
 def field_panel(V, F, vectors, sing, *, title, every=1, length=0.6):
@@ -68,6 +70,11 @@ def main(out: Path) -> None:
     render_panels(panels, out / "direction_fields.png", size=(700, 650))
     print(f"wrote {out / 'direction_fields.png'}")
 
+
+# %%
+# Run: the pictures (and, for the examples that make a mesh, a GLB shown in
+# the 3D viewer) go to the folder given as the first argument, by
+# default ``docs/gallery``.
 
 if __name__ == "__main__":
     main(Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).parents[1] / "docs" / "gallery")

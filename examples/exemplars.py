@@ -1,4 +1,6 @@
-"""The six procedural exemplar geometric textures, each fused onto a slab.
+"""
+The six procedural exemplar geometric textures, each fused onto a slab
+======================================================================
 
 Every kind of :mod:`geotex.exemplars` (studs, scales, knurl, weave, chain
 mail, bark) is built on a 2 x 2 patch (one Wang tile is 1 x 1), united with a
@@ -62,6 +64,11 @@ def main(out: Path) -> None:
             sheet.save(fh, format="PNG")
     print(f"wrote {path}")
 
+
+# %%
+# Run: the pictures (and, for the examples that make a mesh, a GLB shown in
+# the 3D viewer) go to the folder given as the first argument, by
+# default ``docs/gallery``.
 
 if __name__ == "__main__":
     main(Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).parents[1] / "docs" / "gallery")

@@ -1,4 +1,6 @@
-"""Deforming a textured stick: texture reapplied versus naive space deformation.
+"""
+Deforming a textured stick: texture reapplied versus naive space deformation
+============================================================================
 
 A tentacle stick (leaning bumps on a cylinder) is bent by 240 degrees. Left:
 the original. Middle: the base is bent and the height-and-tilt texture is
@@ -47,6 +49,11 @@ def main(out: Path) -> None:
           "(of the largest height)")
     print(f"wrote {out / 'heighttilt_deform.png'}")
 
+
+# %%
+# Run: the pictures (and, for the examples that make a mesh, a GLB shown in
+# the 3D viewer) go to the folder given as the first argument, by
+# default ``docs/gallery``.
 
 if __name__ == "__main__":
     main(Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).parents[1] / "docs" / "gallery")

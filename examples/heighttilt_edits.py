@@ -1,4 +1,6 @@
-"""Height-and-tilt textures: round trip, set tilt, wrap and wiggle on a spiky sphere.
+"""
+Height-and-tilt textures: round trip, set tilt, wrap and wiggle on a spiky sphere
+=================================================================================
 
 The spiky sphere has leaning spikes that overhang: no height field can hold
 them. Panels: the original; the reconstruction from base + height + tilt
@@ -47,6 +49,11 @@ def main(out: Path) -> None:
     print(f"round trip error {err:.2e}, height-field baseline error {hf_err:.2%} (of bbox)")
     print(f"wrote {out / 'heighttilt_edits.png'}, {out / 'heighttilt_edits_animation.png'}")
 
+
+# %%
+# Run: the pictures (and, for the examples that make a mesh, a GLB shown in
+# the 3D viewer) go to the folder given as the first argument, by
+# default ``docs/gallery``.
 
 if __name__ == "__main__":
     main(Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).parents[1] / "docs" / "gallery")

@@ -1,4 +1,6 @@
-"""A spiky texture moved between shapes of different proportions (paper Figs. 1, 5, 6).
+"""
+A spiky texture moved between shapes of different proportions (paper Figs. 1, 5, 6)
+===================================================================================
 
 A procedural "lychee" (a sphere with spikes, the texture extracted over its
 smooth base) is edited with a whirl -- ``wrap`` along a swirl around the
@@ -134,6 +136,11 @@ def main(out: Path) -> None:
     path.write_bytes(buf.getvalue())
     print(f"wrote {path}")
 
+
+# %%
+# Run: the pictures (and, for the examples that make a mesh, a GLB shown in
+# the 3D viewer) go to the folder given as the first argument, by
+# default ``docs/gallery``.
 
 if __name__ == "__main__":
     main(Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).parents[1] / "docs" / "gallery")

@@ -1,4 +1,6 @@
-"""A planar height-and-tilt texture tiled over Spot and Bob along the "up" field.
+"""
+A planar height-and-tilt texture tiled over Spot and Bob along the "up" field
+=============================================================================
 
 Left: the planar texture, leaning bumps on a periodic square (one tile).
 Middle and right: the same texture on Spot and on Bob (when the shared data
@@ -85,6 +87,11 @@ def main(out: Path) -> None:
     render_panels(panels, out / "heighttilt_transfer.png", size=(520, 620), up="z")
     print(f"wrote {out / 'heighttilt_transfer.png'}")
 
+
+# %%
+# Run: the pictures (and, for the examples that make a mesh, a GLB shown in
+# the 3D viewer) go to the folder given as the first argument, by
+# default ``docs/gallery``.
 
 if __name__ == "__main__":
     main(Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).parents[1] / "docs" / "gallery")

@@ -1,4 +1,6 @@
-"""Lapped textures: image patches pasted over Spot and Bob, isotropic and along fields.
+"""
+Lapped textures: image patches pasted over Spot and Bob, isotropic and along fields
+===================================================================================
 
 Pictures (written to OUT_DIR):
 
@@ -44,7 +46,7 @@ from geotex.image import (alignment_errors, displace, lapped_texture, texture_pa
 from geotex.io import read_mesh
 from geotex.render import Panel, render_panels
 
-SHARED = Path(__file__).resolve().parents[2] / "shared" / "data"
+SHARED = Path(sys.argv[0]).resolve().parents[2] / "shared" / "data"
 IMAGES = SHARED / "images"
 SPOT = SHARED / "base" / "spot_uv" / "spot.obj"
 BOB = SHARED / "base" / "bob_uv" / "bob_tri.obj"
@@ -215,6 +217,11 @@ def main(out: Path) -> None:
              Panel(Vd[used], Fk.reshape(-1, 3), color="#c9b28f", title="close up")]],
            out / "lapped_textures_relief.png")
 
+
+# %%
+# Run: the pictures (and, for the examples that make a mesh, a GLB shown in
+# the 3D viewer) go to the folder given as the first argument, by
+# default ``docs/gallery``.
 
 if __name__ == "__main__":
     main(Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).parents[1] / "docs" / "gallery")

@@ -1,4 +1,6 @@
-"""A field-aligned patch parameterization, shown with a checkerboard.
+"""
+A field-aligned patch parameterization, shown with a checkerboard
+=================================================================
 
 Grows a disc patch on Spot around a seed face (geodesic radius and normal-cone
 predicates), computes a smooth direction field, and flattens the patch with
@@ -64,6 +66,11 @@ def main(out: Path) -> None:
     print(f"patch: {patch.n_faces} faces, disc: {patch.is_disc}; {title}")
     print(f"wrote {out / 'patch_parameterization.png'}")
 
+
+# %%
+# Run: the pictures (and, for the examples that make a mesh, a GLB shown in
+# the 3D viewer) go to the folder given as the first argument, by
+# default ``docs/gallery``.
 
 if __name__ == "__main__":
     main(Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).parents[1] / "docs" / "gallery")

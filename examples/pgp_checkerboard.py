@@ -1,4 +1,6 @@
-"""A checkerboard through the periodic global parameterization (PGP) on four shapes.
+"""
+A checkerboard through the periodic global parameterization (PGP) on four shapes
+================================================================================
 
 Panels: Spot (the bundled low-resolution cow, one Loop subdivision) with the
 smoothest cross field; the bundled Bob (genus 1) with the smoothest cross
@@ -91,6 +93,11 @@ def main(out: Path) -> None:
     print("\n".join(lines))
     print(f"wrote {out / 'pgp_checkerboard.png'}")
 
+
+# %%
+# Run: the pictures (and, for the examples that make a mesh, a GLB shown in
+# the 3D viewer) go to the folder given as the first argument, by
+# default ``docs/gallery``.
 
 if __name__ == "__main__":
     main(Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).parents[1] / "docs" / "gallery")

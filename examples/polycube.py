@@ -1,4 +1,6 @@
-"""PolyCube shells of the catalog: Spot, Bob (genus 1), Blub and a torus.
+"""
+PolyCube shells of the catalog: Spot, Bob (genus 1), Blub and a torus
+=====================================================================
 
 For each shell of the catalog, one row: the voxel polycube coloured by quad
 direction (+-X, +-Y, +-Z), the same quads fitted onto the base (the map that
@@ -47,6 +49,11 @@ def main(out: Path) -> None:
         sheet.save(fh, format="PNG")
     print(f"wrote {out / 'polycube.png'}")
 
+
+# %%
+# Run: the pictures (and, for the examples that make a mesh, a GLB shown in
+# the 3D viewer) go to the folder given as the first argument, by
+# default ``docs/gallery``.
 
 if __name__ == "__main__":
     main(Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).parents[1] / "docs" / "gallery")

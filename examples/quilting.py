@@ -1,4 +1,6 @@
-"""Mesh quilting: every procedural exemplar beside a larger patch synthesized from it.
+"""
+Mesh quilting: every procedural exemplar beside a larger patch synthesized from it
+==================================================================================
 
 For each exemplar kind of ``geotex.exemplars`` (a 2 x 2 patch), a 4 x 4 texture
 (four times the area) is quilted: copies of the exemplar are placed where they
@@ -77,6 +79,11 @@ def main(out: Path) -> None:
     print("\n".join(lines))
     print(f"wrote {out / 'quilting.png'}")
 
+
+# %%
+# Run: the pictures (and, for the examples that make a mesh, a GLB shown in
+# the 3D viewer) go to the folder given as the first argument, by
+# default ``docs/gallery``.
 
 if __name__ == "__main__":
     main(Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).parents[1] / "docs" / "gallery")

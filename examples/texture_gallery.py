@@ -1,4 +1,6 @@
-"""Gallery of the main job: every catalog tile set on catalog shells.
+"""
+Gallery of the main job: every catalog tile set on catalog shells
+=================================================================
 
 For every tile set of the catalog that can cover a closed shape (complete or
 isotropic sets; planar sets only tile the plane) and each of the shells
@@ -23,12 +25,15 @@ from pathlib import Path
 
 from PIL import Image
 
+from geotex.io import write_mesh
 from geotex.io.atomic import atomic_output
 from geotex.mapping import textured_solid
+from geotex.mesh import Mesh
 from geotex.printing import export_printable
 from geotex.render import Panel, render_panels
 from geotex.shells import load_named as load_shell
 from geotex.tiles.catalog import list_tilesets, load_named as load_tiles
+from geotex.viewpage import mesh_turned_y_up
 
 SHELLS = {"spot": "y", "bob": "z", "torus": "z"}   # name -> up axis (y-up is turned z-up)
 COLOURS = ("#c9b38f", "#a9bfd1", "#b9c99a", "#d1a9a9", "#c4b0d6", "#d6c7a0")
@@ -58,6 +63,9 @@ def main(out: Path) -> None:
             if res.report.printable:
                 export_printable(out / f"texture_gallery_{name}_{shell_name}.stl",
                                  res.vertices, res.faces, report=res.report)
+                if k == 0 and not firsts and not panels:   # one model for the 3D viewer
+                    write_mesh(out / f"texture_gallery_{name}_{shell_name}.glb",
+                               mesh_turned_y_up(Mesh(res.vertices, res.faces), up=up))
             shown = res.vertices[:, [0, 2, 1]] * [-1.0, 1.0, 1.0] if up == "y" else res.vertices
             panels.append(Panel(shown, res.faces, color=COLOURS[k % len(COLOURS)],
                                 title=f"{name} on {shell_name}, {s.elements} elements"
@@ -77,6 +85,11 @@ def main(out: Path) -> None:
         sheet.save(fh, format="PNG")
     print(f"wrote {out / 'texture_gallery.png'}")
 
+
+# %%
+# Run: the pictures (and, for the examples that make a mesh, a GLB shown in
+# the 3D viewer) go to the folder given as the first argument, by
+# default ``docs/gallery``.
 
 if __name__ == "__main__":
     main(Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).parents[1] / "docs" / "gallery")

@@ -1,4 +1,6 @@
-"""Textured output: OBJ + MTL + PNG and GLB, read back and drawn.
+"""
+Textured output: OBJ + MTL + PNG and GLB, read back and drawn
+=============================================================
 
 Builds a torus with its natural (angle, angle) texture coordinates, which need
 separate uv indices along the two seams, paints a checkerboard texture, writes
@@ -18,6 +20,7 @@ import numpy as np
 from geotex.io import read_mesh, write_mesh
 from geotex.mesh import Mesh
 from geotex.render import Panel, render_panels
+from geotex.viewpage import mesh_turned_y_up
 
 
 def torus_with_uv(nu: int = 48, nv: int = 24, R: float = 1.0, r: float = 0.4) -> Mesh:
@@ -41,28 +44,30 @@ def torus_with_uv(nu: int = 48, nv: int = 24, R: float = 1.0, r: float = 0.4) ->
     return Mesh(V, F, uv=uv, uv_faces=FT, texture=tex, name="torus")
 
 
-def per_uv_vertices(mesh: Mesh) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Split vertices along uv seams so every vertex has one uv (for drawing)."""
-    P = np.zeros((mesh.uv.shape[0], 3))
-    P[mesh.uv_faces] = mesh.vertices[mesh.faces]
-    return P, mesh.uv_faces, mesh.uv
-
-
 def main(out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
     mesh = torus_with_uv()
     obj = write_mesh(out / "textured_torus.obj", mesh)
-    glb = write_mesh(out / "textured_torus.glb", mesh)
+    # glTF is y-up: the GLB gets the torus turned, (x, y, z) -> (x, z, -y)
+    glb = write_mesh(out / "textured_torus.glb", mesh_turned_y_up(mesh, up="z"))
     panels = []
     for path in (obj, glb):
         back = read_mesh(path)
         assert np.array_equal(back.texture[..., :3], mesh.texture)
         assert back.n_faces == mesh.n_faces and back.has_uv
-        panels.append(Panel(*per_uv_vertices(back)[:2], uv=per_uv_vertices(back)[2],
+        if path.suffix == ".glb":                    # turned back to z-up for the picture
+            back = back.replace(vertices=back.vertices[:, [0, 2, 1]] * [1.0, -1.0, 1.0])
+        assert np.allclose(back.vertices[back.faces], mesh.vertices[mesh.faces], atol=1e-6)
+        panels.append(Panel(back.vertices, back.faces, uv=back.uv, uv_faces=back.uv_faces,
                             texture=back.texture, title=f"read back from {path.name}"))
     render_panels(panels, out / "textured_export.png", size=(700, 550))
     print(f"wrote {obj} (+ .mtl, .png), {glb}, {out / 'textured_export.png'}")
 
+
+# %%
+# Run: the pictures (and, for the examples that make a mesh, a GLB shown in
+# the 3D viewer) go to the folder given as the first argument, by
+# default ``docs/gallery``.
 
 if __name__ == "__main__":
     main(Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).parents[1] / "docs" / "gallery")

@@ -1,4 +1,6 @@
-"""Geometric Wang tiles: every catalog set laid out tile by tile, and a random tiling of it.
+"""
+Geometric Wang tiles: every catalog set laid out tile by tile, and a random tiling of it
+========================================================================================
 
 For each set of the tile catalog (``geotex tiles list``), two pictures:
 
@@ -44,6 +46,11 @@ def main(out: Path) -> None:
               f"{entry['bytes'] / 1e6:.2f} MB, seams {'ok' if seams.ok else 'BROKEN'} "
               f"({seams.pairs_checked} side pairs), 6 x 6 tiling printable: {printable}")
 
+
+# %%
+# Run: the pictures (and, for the examples that make a mesh, a GLB shown in
+# the 3D viewer) go to the folder given as the first argument, by
+# default ``docs/gallery``.
 
 if __name__ == "__main__":
     main(Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).parents[1] / "docs" / "gallery")

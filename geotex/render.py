@@ -16,7 +16,8 @@ import numpy as np
 from geotex.errors import InputError
 from geotex.mesh.arrays import as_mesh_arrays
 
-__all__ = ["render_mesh", "render_panels", "Panel", "UP_AXES", "offscreen_pyvista"]
+__all__ = ["render_mesh", "render_panels", "Panel", "UP_AXES", "offscreen_pyvista",
+           "split_by_uv", "view_direction"]
 
 UP_AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
 DEFAULT_COLOR = "#d9c7a3"
@@ -73,16 +74,34 @@ class Panel:
     markers : dict of str -> (array_like (k, 3), str), optional
         Named point sets drawn as spheres with a colour, with a legend; e.g.
         field singularities.
-    uv : array_like, (n, 2), optional
-        Per-vertex texture coordinates; with ``texture`` the surface shows
-        the image (e.g. a checkerboard over a parameterization).
-    texture : numpy.ndarray, (h, w, 3) uint8, optional
+    uv : array_like, (n, 2) or (k, 2), optional
+        Texture coordinates; with ``texture`` the surface shows the image
+        (e.g. a checkerboard over a parameterization).  Per vertex (n rows)
+        unless ``uv_faces`` is given.
+    texture : numpy.ndarray, (h, w, 3 or 4) uint8, optional
+        Image drawn with ``uv``; row 0 is the top of the image, ``v = 0`` its
+        bottom (the convention of :class:`geotex.mesh.Mesh`).
+    uv_faces : array_like, (m, 3) int64, optional
+        Per-corner indices into ``uv`` (as read from OBJ or GLB files); a
+        vertex used with several uv is drawn as several vertices.
+    closeup : array_like (3,), optional
+        Point to look at from close by, instead of the whole mesh.
+    closeup_radius : float, optional
+        Radius of the region shown around ``closeup`` (default: 12% of the
+        bounding-box diagonal).
+
+    Raises
+    ------
+    InputError
+        If the arrays have the wrong shapes, ``uv`` and ``texture`` are not
+        given together, or the close-up point or radius is not finite.
     """
 
     def __init__(self, V, F, *, title: str = "", color: str = DEFAULT_COLOR,
                  scalars=None, cmap: str = "viridis", highlight: dict | None = None,
                  show_edges: bool = False, arrows=None, markers: dict | None = None,
-                 uv=None, texture=None):
+                 uv=None, texture=None, uv_faces=None, closeup=None,
+                 closeup_radius: float | None = None):
         self.V, self.F = as_mesh_arrays(V, F)
         self.title = title
         self.color = color
@@ -100,11 +119,68 @@ class Panel:
         self.markers = {k: (np.asarray(p, dtype=np.float64).reshape(-1, 3), c)
                         for k, (p, c) in (markers or {}).items()}
         self.uv = None if uv is None else np.asarray(uv, dtype=np.float64)
-        if self.uv is not None and self.uv.shape != (self.V.shape[0], 2):
-            raise InputError(f"uv must have shape ({self.V.shape[0]}, 2), got {self.uv.shape}")
         if (self.uv is None) != (texture is None):
             raise InputError("uv and texture must be given together")
+        if uv_faces is not None:
+            if self.uv is None:
+                raise InputError("uv_faces needs uv and texture")
+            self.V, self.F, self.uv = split_by_uv(self.V, self.F, self.uv, uv_faces)
+        if self.uv is not None and self.uv.shape != (self.V.shape[0], 2):
+            raise InputError(f"uv must have shape ({self.V.shape[0]}, 2), got {self.uv.shape}")
         self.texture = None if texture is None else np.ascontiguousarray(texture, dtype=np.uint8)
+        if self.texture is not None and (self.texture.ndim != 3
+                                         or self.texture.shape[2] not in (3, 4)):
+            raise InputError("texture must be an (h, w, 3 or 4) uint8 image")
+        self.closeup = None
+        self.closeup_radius = None
+        if closeup is not None:
+            c = np.asarray(closeup, dtype=np.float64).reshape(-1)
+            if c.shape != (3,) or not np.isfinite(c).all():
+                raise InputError("closeup must be a finite point (x, y, z)")
+            self.closeup = c
+            if closeup_radius is not None:
+                r = float(closeup_radius)
+                if not np.isfinite(r) or r <= 0:
+                    raise InputError(f"closeup radius must be a positive number, got {r}")
+                self.closeup_radius = r
+
+
+def split_by_uv(V, F, uv, uv_faces) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Return a mesh with one vertex per distinct (vertex, uv) corner pair.
+
+    Parameters
+    ----------
+    V : array_like, (n, 3) float64
+    F : array_like, (m, 3) int64
+    uv : array_like, (k, 2) float64
+        Texture coordinates.
+    uv_faces : array_like, (m, 3) int64
+        Per-corner indices into ``uv``.
+
+    Returns
+    -------
+    V2 : numpy.ndarray, (p, 3) float64
+        Positions; a vertex used with several uv appears once per uv.
+    F2 : numpy.ndarray, (m, 3) int64
+        The same triangles over ``V2``.
+    uv2 : numpy.ndarray, (p, 2) float64
+        One texture coordinate per vertex of ``V2``.
+
+    Raises
+    ------
+    InputError
+        If ``uv_faces`` does not have one row per face or indexes outside ``uv``.
+    """
+    V, F = as_mesh_arrays(V, F)
+    uv = np.asarray(uv, dtype=np.float64).reshape(-1, 2)
+    FT = np.asarray(uv_faces, dtype=np.int64)
+    if FT.shape != F.shape:
+        raise InputError(f"uv_faces must have shape {F.shape}, got {FT.shape}")
+    if FT.size and (FT.min() < 0 or FT.max() >= uv.shape[0]):
+        raise InputError("uv_faces indexes outside uv")
+    pairs = np.stack([F.ravel(), FT.ravel()], axis=1)
+    unique, inverse = np.unique(pairs, axis=0, return_inverse=True)
+    return V[unique[:, 0]], inverse.reshape(-1, 3).astype(np.int64), uv[unique[:, 1]]
 
 
 def _up_vector(up) -> np.ndarray:
@@ -118,22 +194,101 @@ def _up_vector(up) -> np.ndarray:
     return v / np.linalg.norm(v)
 
 
-def _camera(V: np.ndarray, up: np.ndarray):
-    lo, hi = V.min(axis=0), V.max(axis=0)
-    center = 0.5 * (lo + hi)
-    radius = 0.5 * float(np.linalg.norm(hi - lo)) or 1.0
-    # a three-quarter view from the front-right, slightly above
+def view_direction(up) -> np.ndarray:
+    """Return the unit direction from the object to the camera of the default view.
+
+    The view is the front three-quarter view, from the front-right and above
+    (elevation about 25 degrees), so the underside is never shown.  "Front"
+    is the side facing -y for a z-up picture and +z for a y-up or x-up one
+    (the usual front of models in those conventions).
+
+    Parameters
+    ----------
+    up : {"x", "y", "z"} or array_like (3,)
+        World direction that points up in the picture.
+
+    Returns
+    -------
+    numpy.ndarray, (3,) float64
+
+    Raises
+    ------
+    InputError
+        If ``up`` is not an axis name or a non-zero finite vector.
+    """
+    up = _up_vector(up)
     helper = np.array([0.0, 0.0, 1.0]) if abs(up[2]) < 0.9 else np.array([0.0, -1.0, 0.0])
     front = helper - up * (helper @ up)
     front /= np.linalg.norm(front)
     right = np.cross(up, front)
-    direction = front * 1.0 + right * 0.75 + up * 0.55
-    direction /= np.linalg.norm(direction)
-    position = center + direction * radius * 3.2
-    return [tuple(position), tuple(center), tuple(up)]
+    direction = front * 1.0 + right * 0.75 + up * 0.58
+    return direction / np.linalg.norm(direction)
 
 
-def _draw(pv, plotter, panel: Panel, up: np.ndarray):
+_VIEW_ANGLE = 30.0          # VTK's default vertical view angle, degrees
+
+
+def _fit_camera(P: np.ndarray, direction: np.ndarray, up: np.ndarray, aspect: float,
+                margin: float = 1.1, top: float = 0.0, bottom: float = 0.0):
+    """Camera looking along -direction at points P, as close as keeps all in view.
+
+    ``top`` and ``bottom`` are the fractions of the picture's height kept free
+    (for the caption and the legend): the points fit in the band between.
+    """
+    right = np.cross(direction, up)
+    right /= np.linalg.norm(right)
+    vup = np.cross(right, direction)
+    center = 0.5 * (P.min(axis=0) + P.max(axis=0))
+    Q = P - center
+    xr, xu = Q @ right, Q @ vup
+    center = center + right * 0.5 * (xr.min() + xr.max()) + vup * 0.5 * (xu.min() + xu.max())
+    Q = P - center
+    xr, xu, xd = Q @ right, Q @ vup, Q @ direction
+    t = np.tan(np.radians(_VIEW_ANGLE) / 2)
+    top, bottom = min(max(top, 0.0), 0.4), min(max(bottom, 0.0), 0.3)
+    band = 1.0 - top - bottom                     # free height, as a fraction
+    tv = t * band / margin
+    th = t * aspect / margin
+    dist = float(np.max(np.maximum(xd + np.abs(xr) / th, xd + np.abs(xu) / tv)))
+    size = float(np.linalg.norm(np.ptp(P, axis=0))) or 1.0
+    dist = max(dist, 1e-3 * size)
+    # move the camera so that the band's middle is the picture's middle (a
+    # translation; the view direction is unchanged)
+    shift = vup * (top - bottom) * dist * t
+    return [tuple(center + direction * dist + shift), tuple(center + shift), tuple(vup)]
+
+
+def _closeup_camera(V, F, point, radius, up, aspect):
+    """Camera looking at ``point`` from outside, along the local surface normal."""
+    from geotex.mesh.geometry import face_areas, face_normals
+
+    diag = float(np.linalg.norm(np.ptp(V, axis=0))) or 1.0
+    r = 0.12 * diag if radius is None else radius
+    default = view_direction(up)
+    direction = default
+    if F.shape[0]:
+        C = V[F].mean(axis=1)
+        dist_c = np.linalg.norm(C - point, axis=1)
+        near = dist_c <= r
+        if not near.any():
+            near = dist_c == dist_c.min()
+        n = (face_normals(V, F[near]) * face_areas(V, F[near])[:, None]).sum(axis=0)
+        if np.linalg.norm(n) > 0:
+            # the local outward normal, bent toward the default view so the relief
+            # is lit from the side
+            d = n / np.linalg.norm(n) + 0.35 * default
+            if np.linalg.norm(d) > 0:
+                direction = d / np.linalg.norm(d)
+    right = np.cross(direction, up)
+    if np.linalg.norm(right) < 1e-6:            # looking straight down or up
+        right = np.cross(default, up)
+    right /= np.linalg.norm(right)
+    vup = np.cross(right, direction)
+    dist = r / np.tan(np.radians(_VIEW_ANGLE) / 2) / min(aspect, 1.0)
+    return [tuple(point + direction * dist), tuple(point), tuple(vup)]
+
+
+def _draw(pv, plotter, panel: Panel, up: np.ndarray, aspect: float):
     V, F = panel.V, panel.F
     if F.shape[0]:
         poly = _polydata(pv, V, F)
@@ -141,6 +296,7 @@ def _draw(pv, plotter, panel: Panel, up: np.ndarray):
                       show_edges=panel.show_edges, edge_color="#555555", line_width=0.5)
         if panel.texture is not None:
             poly.active_texture_coordinates = panel.uv
+            kwargs["specular"] = 0.1
             plotter.add_mesh(poly, texture=pv.Texture(panel.texture), **kwargs)
         elif panel.scalars is not None:
             plotter.add_mesh(poly, scalars=panel.scalars, cmap=panel.cmap,
@@ -181,8 +337,17 @@ def _draw(pv, plotter, panel: Panel, up: np.ndarray):
     if panel.title:
         plotter.add_text(panel.title, position="upper_edge", font_size=12, color="#222222")
     if V.shape[0]:
-        plotter.camera_position = _camera(V, up)
-        plotter.reset_camera()            # keep the view direction, fit the whole mesh
+        if panel.closeup is not None:
+            plotter.camera_position = _closeup_camera(V, F, panel.closeup,
+                                                      panel.closeup_radius, up, aspect)
+        else:
+            # fit the mesh's own points (not its bounding sphere): it fills the panel
+            lines = panel.title.count("\n") + 1 if panel.title else 0
+            h = plotter.window_size[1]
+            plotter.camera_position = _fit_camera(
+                V, view_direction(up), up, aspect,
+                top=(lines * 26.0 + 8.0) / h if lines else 0.0,
+                bottom=0.07 * len(legend) + 0.02 if legend else 0.0)
         plotter.reset_camera_clipping_range()
 
 
@@ -229,7 +394,7 @@ def render_panels(panels: list[Panel], path, *, size=(1200, 900), up="z") -> Pat
             plotter.subplot(0, i)
             plotter.set_background("white", top="#dfe6ee")
             plotter.enable_lightkit()
-            _draw(pv, plotter, panel, upv)
+            _draw(pv, plotter, panel, upv, w / h)
         plotter.enable_anti_aliasing("ssaa", all_renderers=True)
         image = plotter.screenshot(return_img=True)
     finally:
@@ -243,8 +408,14 @@ def render_panels(panels: list[Panel], path, *, size=(1200, 900), up="z") -> Pat
 
 def render_mesh(V, F, path, *, size=(1200, 900), up="z", title: str = "",
                 color: str = DEFAULT_COLOR, scalars=None, cmap: str = "viridis",
-                highlight: dict | None = None, show_edges: bool = False) -> Path:
+                highlight: dict | None = None, show_edges: bool = False,
+                uv=None, uv_faces=None, texture=None, closeup=None,
+                closeup_radius: float | None = None) -> Path:
     """Render one mesh off-screen into a PNG picture.
+
+    The default camera shows the front three-quarter view from above (see
+    :func:`view_direction`) and fits the mesh to the picture; ``closeup``
+    looks at one point from outside instead.
 
     Parameters
     ----------
@@ -258,10 +429,18 @@ def render_mesh(V, F, path, *, size=(1200, 900), up="z", title: str = "",
         World direction that points up in the picture.
     title, color, scalars, cmap, highlight, show_edges
         See :class:`Panel`.
+    uv, uv_faces, texture, closeup, closeup_radius
+        See :class:`Panel`.
 
     Returns
     -------
     pathlib.Path
+        The written file.
+
+    Raises
+    ------
+    InputError
+        On a bad ``up``, a non-PNG path or inconsistent arrays.
 
     Examples
     --------
@@ -272,5 +451,6 @@ def render_mesh(V, F, path, *, size=(1200, 900), up="z", title: str = "",
     >>> render_mesh(V, F, "tet.png")  # doctest: +SKIP
     """
     panel = Panel(V, F, title=title, color=color, scalars=scalars, cmap=cmap,
-                  highlight=highlight, show_edges=show_edges)
+                  highlight=highlight, show_edges=show_edges, uv=uv, uv_faces=uv_faces,
+                  texture=texture, closeup=closeup, closeup_radius=closeup_radius)
     return render_panels([panel], path, size=size, up=up)

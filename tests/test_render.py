@@ -52,3 +52,128 @@ def test_arrows_markers_and_texture(tmp_path, sphere):
     assert right.std() > 30               # the checkerboard shows contrast
     with pytest.raises(InputError, match="uv and texture"):
         Panel(V, F, uv=V[:, :2])
+
+
+# ---- one up-axis rule, textures, camera (issue 19) ------------------------------------
+
+def _figure():
+    """An asymmetric z-up object: a tall box with a ball on top, off to +x."""
+    from geotex.mesh.primitives import box, icosphere
+    Vb, Fb = box((0.0, 0.0, 0.0), (1.0, 0.6, 2.0), divisions=2)
+    Vs, Fs = icosphere(2, radius=0.45, center=(1.1, 0.3, 2.2))
+    return np.vstack([Vb, Vs]), np.vstack([Fb, Fs + Vb.shape[0]])
+
+
+def _mask(path):
+    img = np.asarray(Image.open(path).convert("RGB")).astype(int)
+    # the background is a white-to-blue-grey gradient; the object is beige and shaded
+    return np.abs(img - img[:, :1]).sum(axis=2) > 30, img
+
+
+def _moments(mask):
+    ys, xs = np.nonzero(mask)
+    return np.array([xs.mean() / mask.shape[1], ys.mean() / mask.shape[0],
+                     xs.std() / mask.shape[1], ys.std() / mask.shape[0]])
+
+
+def _render_cli(capsys, path, out, *extra):
+    from geotex.cli import main
+    code = main(["render", str(path), "-o", str(out), "--size", "240", "180",
+                 "--title", "", *extra])
+    capsys.readouterr()
+    assert code == 0
+    return out
+
+
+def test_up_rule_is_the_same_for_every_format(tmp_path, capsys):
+    from geotex.io import write_mesh
+    from geotex.mesh import Mesh
+    V, F = _figure()
+    write_mesh(tmp_path / "m.obj", Mesh(V, F))
+    write_mesh(tmp_path / "m.stl", Mesh(V, F))
+    # the same object in glTF's y-up convention: (x, y, z) -> (x, z, -y)
+    write_mesh(tmp_path / "m.glb", Mesh(np.column_stack([V[:, 0], V[:, 2], -V[:, 1]]), F))
+    moments = {}
+    for name in ("m.obj", "m.stl", "m.glb"):
+        mask, _ = _mask(_render_cli(capsys, tmp_path / name, tmp_path / (name + ".png")))
+        moments[name] = _moments(mask)
+    np.testing.assert_allclose(moments["m.obj"], moments["m.stl"], atol=0.01)
+    np.testing.assert_allclose(moments["m.obj"], moments["m.glb"], atol=0.01)
+    # upright: the tall object spreads more vertically than horizontally, and the
+    # ball on top lies in the upper part of the picture (above the centroid)
+    m = moments["m.obj"]
+    assert m[3] > m[2]
+    # --up y on the z-up STL lies it down: a different picture
+    mask, _ = _mask(_render_cli(capsys, tmp_path / "m.stl", tmp_path / "y.png", "--up", "y"))
+    assert np.abs(_moments(mask) - m).max() > 0.03
+
+
+def test_default_view_fills_the_picture_and_looks_from_above(tmp_path):
+    from geotex.render import view_direction
+    V, F = _figure()
+    mask, _ = _mask(render_mesh(V, F, tmp_path / "f.png", size=(240, 180)))
+    rows, cols = np.nonzero(mask.any(axis=1))[0], np.nonzero(mask.any(axis=0))[0]
+    # the object spans nearly the full height of the picture
+    assert rows.max() - rows.min() > 0.8 * mask.shape[0]
+    for up in ("x", "y", "z"):
+        d = view_direction(up)
+        assert d @ np.eye(3)["xyz".index(up)] > 0.3     # from above, never the underside
+
+
+def test_closeup_looks_at_the_point(tmp_path, capsys):
+    from geotex.io import write_mesh
+    from geotex.mesh import Mesh
+    V, F = _figure()
+    write_mesh(tmp_path / "m.stl", Mesh(V, F))
+    full, _ = _mask(_render_cli(capsys, tmp_path / "m.stl", tmp_path / "a.png"))
+    close, _ = _mask(_render_cli(capsys, tmp_path / "m.stl", tmp_path / "b.png",
+                                 "--closeup", "1.1,0.3,2.65,0.3"))
+    # the top of the ball seen from close by covers much more of the picture
+    assert close.mean() > 1.3 * full.mean()
+    from geotex.cli import main
+    for bad in ("1,2", "a,b,c", "1,2,3,-1", "1,2,nan"):
+        assert main(["render", str(tmp_path / "m.stl"), "-o", str(tmp_path / "c.png"),
+                     "--closeup", bad]) == 2
+        assert "--closeup" in capsys.readouterr().err
+    assert not (tmp_path / "c.png").exists()
+
+
+def test_textured_glb_and_obj_draw_their_texture(tmp_path, capsys):
+    from geotex.io import read_mesh, write_mesh
+    from geotex.mesh import Mesh
+    from geotex.mesh.primitives import icosphere
+    V, F = icosphere(3)
+    # per-corner uv: u from the longitude of each corner, v from the height
+    P = V[F].reshape(-1, 3)
+    uv = np.column_stack([(np.arctan2(P[:, 1], P[:, 0]) / (2 * np.pi)) % 1.0,
+                          0.5 + 0.5 * P[:, 2]])
+    tex = np.zeros((64, 64, 3), np.uint8)
+    tex[:, :32] = (220, 30, 30)          # red left half, green right half
+    tex[:, 32:] = (30, 180, 40)
+    mesh = Mesh(V, F, uv=uv, uv_faces=np.arange(F.size).reshape(-1, 3), texture=tex)
+    for name in ("t.glb", "t.obj"):
+        write_mesh(tmp_path / name, mesh)
+        assert read_mesh(tmp_path / name).texture is not None
+        _, img = _mask(_render_cli(capsys, tmp_path / name, tmp_path / (name + ".png")))
+        r, g, b = img[..., 0], img[..., 1], img[..., 2]
+        red = (r > g + 60) & (r > b + 60)
+        green = (g > r + 40) & (g > b + 40)
+        assert red.mean() > 0.03 and green.mean() > 0.03, name
+        _, plain = _mask(_render_cli(capsys, tmp_path / name, tmp_path / "p.png",
+                                     "--no-texture"))
+        r, g, b = plain[..., 0], plain[..., 1], plain[..., 2]
+        assert not ((r > g + 60) & (r > b + 60)).any() and not ((g > r + 40) & (g > b + 40)).any()
+
+
+def test_split_by_uv():
+    from geotex.render import split_by_uv
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], float)
+    F = np.array([[0, 1, 2], [1, 3, 2]])
+    uv = np.array([[0, 0], [1, 0], [0, 1], [1, 1], [0.5, 0.5]])
+    FT = np.array([[0, 1, 2], [4, 3, 2]])    # vertex 1 has two uv
+    V2, F2, uv2 = split_by_uv(V, F, uv, FT)
+    assert V2.shape == (5, 3) and uv2.shape == (5, 2)
+    np.testing.assert_array_equal(V2[F2], V[F])
+    np.testing.assert_array_equal(uv2[F2], uv[FT])
+    with pytest.raises(InputError, match="uv_faces"):
+        split_by_uv(V, F, uv, FT[:1])

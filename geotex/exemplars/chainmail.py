@@ -19,6 +19,8 @@ from geotex.errors import InputError
 from geotex.exemplars.builders import assemble, loop_faces
 from geotex.exemplars.params import Param
 
+__all__ = ["DESCRIPTION", "PARAMS", "centre_line_clearance", "period", "build"]
+
 DESCRIPTION = "interlocking rings in the European 4-in-1 pattern (rings never touch)"
 GAP = 0.01
 MARGIN = 0.005

@@ -14,7 +14,7 @@ The paper writes the field vector of a face as ``T = a A + b B + c C`` with
 ``T`` to the texture axes: it minimises ``sum_f |phi(S) - s|^2 + |phi(T) - t|^2``.
 On a face, ``phi`` is linear with Jacobian ``J = [grad u; grad v]`` (rows in
 the face plane), so ``phi(S) = (grad u . S, grad v . S)``.  With ``(S, T)``
-orthonormal in the face plane,
+orthonormal in the face plane::
 
     |J S - s|^2 + |J T - t|^2
         = (grad u.S - 1)^2 + (grad v.S)^2 + (grad u.T)^2 + (grad v.T - 1)^2

@@ -2,7 +2,7 @@
 
 The energy of placing the exemplar ``M`` translated by ``t`` under the region
 ``P_T`` of the texture built so far (its vertices ``v`` with normals
-``n(v)``) is
+``n(v)``) is::
 
     E(t) = sum_v (1 + lam * dist(v - t, M)) * (1 + |n(v) - n(f)|)
 
