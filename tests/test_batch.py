@@ -6,7 +6,6 @@ import json
 import os
 import sys
 
-import numpy as np
 import pytest
 
 from geotex.batch import JOBS, Job, Part, read_manifest, read_parts, run
@@ -148,6 +147,19 @@ def test_unknown_tile_set_fails_only_its_parts(folder, tmp_path):
     assert "not watertight" in rows[1]["reason"]
 
 
+def test_shared_tile_set_loaded_once(folder, tmp_path, monkeypatch):
+    from geotex.batch import jobs
+
+    calls = []
+    loader = jobs.SHARED_LOADERS["tiles"]
+    monkeypatch.setitem(jobs.SHARED_LOADERS, "tiles",
+                        lambda name: calls.append(name) or loader(name))
+    parts = [Part(name=f"h{i}", input=str(folder / "holed.obj"), job="texture", tiles=TILES,
+                  source="test") for i in range(3)]
+    rows = run(parts, outdir=tmp_path / "o", workers=0)
+    assert calls == [TILES] and [r["status"] for r in rows] == ["failed"] * 3
+
+
 def test_output_never_overwrites_an_input(folder):
     parts = read_parts(folder, job="repair")
     with pytest.raises(InputError, match="refusing to overwrite the input"):
@@ -233,6 +245,15 @@ def test_dead_worker_is_retried_once_then_reported(client, tmp_path, monkeypatch
     assert _statuses(rows) == {"a": "ok", "boom": "failed", "b": "ok"}
     assert "worker running this part died 2 times" in rows[1]["reason"]
     client.wait_for_workers(2, timeout=60)
+
+
+def test_scheduler_address(client, folder, tmp_path):
+    """--scheduler: connect to a running scheduler (here the test cluster's)."""
+    rows = run(read_parts(folder, job="check"), outdir=tmp_path / "o",
+               scheduler=client.scheduler.address)
+    assert _statuses(rows) == {"ball": "ok", "holed": "failed", "ring": "ok"}
+    doc = json.loads((tmp_path / "o" / "summary.json").read_text())
+    assert doc["meta"]["scheduler"] == client.scheduler.address
 
 
 # --- command line ------------------------------------------------------------
