@@ -12,6 +12,7 @@ Run:  python examples/batch_folder.py [OUT_DIR]     (default docs/gallery)
 
 from __future__ import annotations
 
+import os
 import shutil
 import sys
 import tempfile
@@ -27,11 +28,12 @@ from geotex.render import Panel, render_panels
 
 MANIFEST = """\
 input,name,tiles,size_mm,tile_size,seed
-spot.obj,spot,studs,50,5,0
-bob.ply,bob,knurl,50,5,1
-ring.off,ring,chainmail,50,6,2
-teapot.stl,teapot,studs,50,5,0
+spot.obj,spot,studs,50,{t},0
+bob.ply,bob,knurl,50,{t},1
+ring.off,ring,chainmail,50,{r},2
+teapot.stl,teapot,studs,50,{t},0
 """
+QUICK = bool(os.environ.get("GEOTEX_EXAMPLES_QUICK"))     # the test suite: larger tiles
 
 
 def main(out_dir: Path) -> Path:
@@ -41,9 +43,10 @@ def main(out_dir: Path) -> Path:
         parts.mkdir()
         shutil.copy(sample_path("spot"), parts / "spot.obj")
         shutil.copy(sample_path("bob"), parts / "bob.ply")
-        shutil.copy(sample_path("teapot"), parts / "teapot.stl")
+        shutil.copy(sample_path("teapot-open"), parts / "teapot.stl")
         write_mesh(parts / "ring.off", Mesh(*torus(1.0, 0.4, n_major=48, n_minor=24)))
-        (parts / "parts.csv").write_text(MANIFEST)
+        (parts / "parts.csv").write_text(MANIFEST.format(t=8 if QUICK else 5,
+                                                         r=8 if QUICK else 6))
         outdir = Path(tmp) / "out"
         rows = run(parts / "parts.csv", job="texture", outdir=outdir, workers=2,
                    progress=lambda r, done, total: print(f"[{done}/{total}] {r['part']}: "
@@ -59,9 +62,11 @@ def main(out_dir: Path) -> Path:
                 panels.append(Panel(mesh.vertices, mesh.faces, title=title, color="#c9b38f"))
             else:
                 mesh = read_mesh(r["input"])
-                reason = textwrap.shorten(r["reason"], 60, placeholder="...")
+                # "FILE: mesh cannot get a polycube: open (64 boundary edges), ..."
+                first = r["reason"].split(": ")[-1].split(", ")[0]
                 panels.append(Panel(mesh.vertices, mesh.faces, color="#d05050",
-                                    title=f"{r['part']}: FAILED\n{reason}"))
+                                    title=f"{r['part']}: FAILED, batch went on\n"
+                                    f"{textwrap.shorten(first, 30)}"))
         print(f"summary: {outdir / 'summary.csv'}")
         print((outdir / "summary.csv").read_text())
     return render_panels(panels, out_dir / "batch_folder.png", size=(520, 520), up="y")

@@ -242,7 +242,7 @@ def test_dead_worker_is_retried_once_then_reported(client, tmp_path, monkeypatch
     write_mesh(f, Mesh(*icosphere(1)))
     parts = [Part(name=n, input=str(f), job="crash", source="test") for n in ("a", "boom", "b")]
     rows = run(parts, outdir=tmp_path / "o", client=client)
-    assert _statuses(rows) == {"a": "ok", "boom": "failed", "b": "ok"}
+    assert _statuses(rows) == {"a": "ok", "boom": "failed", "b": "ok"}, rows
     assert "worker running this part died 2 times" in rows[1]["reason"]
     client.wait_for_workers(2, timeout=60)
 

@@ -80,6 +80,7 @@ def _base_row(part: Part, out: Path | None) -> dict:
     return {"part": part.name, "job": part.job, "input": part.input,
             "output": out.name if out is not None else "", "status": "pending", "reason": "",
             "faces": None, "tile_size": None, "coverage": None, "seconds": None,
+            "cpu_seconds": None,
             "printable": None, "bytes": None, "mtime_ns": None, "worker": None,
             "worker_peak_mb": None, "options": part.options()}
 
@@ -104,7 +105,7 @@ def run_part(part: Part, shared: dict, out: str | None) -> dict:
     """
     out_path = None if out is None else Path(out)
     row = _base_row(part, out_path)
-    t = time.perf_counter()
+    t, cpu = time.perf_counter(), time.process_time()
     try:
         row.update(JOBS[part.job].run(part, shared, out_path))
         row["status"] = "ok"
@@ -114,6 +115,7 @@ def run_part(part: Part, shared: dict, out: str | None) -> dict:
         row.update(status="failed", reason=f"{part.input}: out of memory on the worker; "
                    "give the workers more memory or make the part smaller")
     row["seconds"] = round(time.perf_counter() - t, 3)
+    row["cpu_seconds"] = round(time.process_time() - cpu, 3)
     if row["status"] == "ok":
         row["bytes"], row["mtime_ns"] = _file_stamp(out if out is not None else part.input)
     row["worker"] = f"{socket.gethostname()}:{os.getpid()}"
@@ -371,15 +373,28 @@ def _run_dask(parts, shared, outs, finish, rows, meta, *, client, workers, sched
         # heavy shared inputs go to every worker once; tasks refer to them by future
         futures = {key: client.scatter(obj, broadcast=True, hash=False)
                    for key, obj in shared.items()}
-        tasks, submitted = {}, []
-        for p in parts:
-            dep = {kind: futures[(kind, name)] for kind, name in JOBS[p.job].shared_keys(p)}
-            out = None if outs[p.name] is None else str(outs[p.name])
-            fut = client.submit(run_part, p, dep, out, retries=1, pure=False,
-                                key=f"geotex-batch-{p.name}-{os.getpid()}-{time.time_ns()}")
-            tasks[fut.key] = p
-            submitted.append(fut)
-        for fut in as_completed(submitted):
+        # at most one part per worker thread is submitted at a time: Dask counts a
+        # worker's death against every task assigned to it, so a part waiting
+        # on a worker behind a crashing one would be charged with the crash too
+        tasks, waiting = {}, list(reversed(parts))
+        running = as_completed()
+
+        def submit_more() -> None:
+            threads = sum(w.get("nthreads", 1)
+                          for w in client.scheduler_info().get("workers", {}).values())
+            while waiting and running.count() < max(1, threads):
+                p = waiting.pop()
+                dep = {kind: futures[(kind, name)]
+                       for kind, name in JOBS[p.job].shared_keys(p)}
+                out = None if outs[p.name] is None else str(outs[p.name])
+                fut = client.submit(run_part, p, dep, out, retries=1, pure=False,
+                                    key=f"geotex-batch-{p.name}-{os.getpid()}-"
+                                    f"{time.time_ns()}")
+                tasks[fut.key] = p
+                running.add(fut)
+
+        submit_more()
+        for fut in running:
             p = tasks[fut.key]
             try:
                 row = fut.result()
@@ -387,6 +402,7 @@ def _run_dask(parts, shared, outs, finish, rows, meta, *, client, workers, sched
                 row = dict(rows[p.name], status="failed", reason=_task_failure(p, exc))
             finish(row)
             fut.release()
+            submit_more()
         for fut in futures.values():
             fut.release()
     finally:

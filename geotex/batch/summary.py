@@ -13,8 +13,9 @@ Row fields (:data:`FIELDS`):
 ``faces``, ``tile_size``, ``coverage``
     Faces of the output; tile side chosen (mm); share of the base within a
     tile of the polycube (``texture``, ``map``) or covered by pastes (``lapped``).
-``seconds``
-    Wall time of the part on its worker.
+``seconds``, ``cpu_seconds``
+    Wall time of the part on its worker, and the CPU time its process spent
+    meanwhile (all threads; less than ``seconds`` when the machine is busy).
 ``printable``
     The verdict on the written file: :func:`geotex.printing.export_printable`
     judges exactly the arrays the file reads back as (it reads the written
@@ -39,7 +40,7 @@ from pathlib import Path
 __all__ = ["FIELDS", "write_summary", "read_summary", "SUMMARY_CSV", "SUMMARY_JSON"]
 
 FIELDS = ("part", "job", "input", "output", "status", "reason", "faces", "tile_size",
-          "coverage", "seconds", "printable", "bytes", "mtime_ns", "worker", "worker_peak_mb",
+          "coverage", "seconds", "cpu_seconds", "printable", "bytes", "mtime_ns", "worker", "worker_peak_mb",
           "options")
 SUMMARY_CSV = "summary.csv"
 SUMMARY_JSON = "summary.json"
