@@ -182,7 +182,9 @@ def local_cluster(workers: int | None = None, *, memory_limit="auto"):
     """A local Dask cluster of ``workers`` single-threaded processes.
 
     The scheduler allows one worker death per task (the part is rescheduled
-    once); the workers run with :data:`WORKER_ENVIRON`.
+    once); the workers run with :data:`WORKER_ENVIRON` and without Dask's
+    statistical profiler (it samples every thread's stack every 10 ms for a
+    dashboard the local cluster does not start).
 
     Parameters
     ----------
@@ -202,7 +204,8 @@ def local_cluster(workers: int | None = None, *, memory_limit="auto"):
 
     n = default_workers() if workers is None else int(workers)
     with dask.config.set({"distributed.scheduler.allowed-failures": ALLOWED_WORKER_DEATHS,
-                          "distributed.nanny.pre-spawn-environ": WORKER_ENVIRON}):
+                          "distributed.nanny.pre-spawn-environ": WORKER_ENVIRON,
+                          "distributed.worker.profile.enabled": False}):
         return LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
                             dashboard_address=None, memory_limit=memory_limit,
                             silence_logs=logging.ERROR)
