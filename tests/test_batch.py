@@ -160,6 +160,21 @@ def test_shared_tile_set_loaded_once(folder, tmp_path, monkeypatch):
     assert calls == [TILES] and [r["status"] for r in rows] == ["failed"] * 3
 
 
+def test_repair_and_check_jobs(tmp_path):
+    from geotex.mesh.primitives import box
+
+    V, F = box(divisions=2)
+    write_mesh(tmp_path / "open_box.obj", Mesh(V * 20.0, F[1:]))
+    rows = run([Part(name="fixed", input=str(tmp_path / "open_box.obj"), job="repair"),
+                Part(name="as-is", input=str(tmp_path / "open_box.obj"), job="check")],
+               outdir=tmp_path / "o", workers=0)
+    assert _statuses(rows) == {"fixed": "ok", "as-is": "failed"}
+    assert rows[0]["printable"] is True and rows[0]["output"] == "fixed.stl"
+    fixed = read_mesh(tmp_path / "o" / "fixed.stl")
+    assert check_mesh(fixed.vertices, fixed.faces).printable
+    assert "not watertight" in rows[1]["reason"] and rows[1]["output"] == ""
+
+
 def test_output_never_overwrites_an_input(folder):
     parts = read_parts(folder, job="repair")
     with pytest.raises(InputError, match="refusing to overwrite the input"):
