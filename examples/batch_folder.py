@@ -1,4 +1,6 @@
-"""A small batch on Dask: four parts, per-part tile sets, one failing part, a contact sheet.
+"""
+A small batch on Dask: four parts, per-part tile sets, one failing part, a contact sheet
+========================================================================================
 
 Writes a folder of parts (the bundled Spot and Bob, a generated torus, and the
 bundled open teapot, which cannot be textured), a manifest giving each part
@@ -72,7 +74,12 @@ def main(out_dir: Path) -> Path:
     return render_panels(panels, out_dir / "batch_folder.png", size=(520, 520), up="y")
 
 
+# %%
+# Run: the pictures (and, for the examples that make a mesh, a GLB shown in
+# the 3D viewer) go to the folder given as the first argument, by
+# default ``docs/gallery``.
+
 if __name__ == "__main__":
-    gallery = Path(__file__).parents[1] / "docs" / "gallery"
+    gallery = Path(sys.argv[0]).resolve().parents[1] / "docs" / "gallery"
     target = Path(sys.argv[1]) if len(sys.argv) > 1 else gallery
     print(f"wrote {main(target)}")

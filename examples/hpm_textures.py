@@ -1,4 +1,6 @@
-"""Hierarchical pattern mapping: texture coordinates into one image, coarse to fine.
+"""
+Hierarchical pattern mapping: texture coordinates into one image, coarse to fine
+================================================================================
 
 Pictures (written to OUT_DIR), after the paper's figures:
 
@@ -39,7 +41,7 @@ from geotex.io import read_mesh
 from geotex.patches import cluster_hierarchy
 from geotex.render import Panel, render_panels
 
-HERE = Path(__file__).resolve().parent
+HERE = Path(sys.argv[0]).resolve().parent
 SHARED = next((p / "shared" / "data" for p in HERE.parents[1:3]
                if (p / "shared" / "data").is_dir()), HERE.parents[1] / "shared" / "data")
 QUICK = os.environ.get("GEOTEX_EXAMPLES_QUICK") == "1" or not SHARED.is_dir()
@@ -172,6 +174,11 @@ def main() -> None:
     scale_figure(out_dir / "hpm_textures_scale.png")
     results_figure(out_dir / "hpm_textures.png")
 
+
+# %%
+# Run: the pictures (and, for the examples that make a mesh, a GLB shown in
+# the 3D viewer) go to the folder given as the first argument, by
+# default ``docs/gallery``.
 
 if __name__ == "__main__":
     main()

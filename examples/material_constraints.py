@@ -1,4 +1,6 @@
-"""Material and orientation constraints on Bob (paper Figs. 8-10), with a local update.
+"""
+Material and orientation constraints on Bob (paper Figs. 8-10), with a local update
+===================================================================================
 
 Writes ``material_constraints.png`` into OUT_DIR (default docs/gallery), four panels:
 
@@ -138,6 +140,11 @@ def main(out: Path) -> None:
           f"({upd.free_vertices.size} free vertices)")
     print(f"wrote {out / 'material_constraints.png'}")
 
+
+# %%
+# Run: the pictures (and, for the examples that make a mesh, a GLB shown in
+# the 3D viewer) go to the folder given as the first argument, by
+# default ``docs/gallery``.
 
 if __name__ == "__main__":
     main(Path(sys.argv[1]) if len(sys.argv) > 1 else

@@ -1,4 +1,6 @@
-"""Hiding the periodicity of a tile by modulating m (paper Fig. 14), on Spot.
+"""
+Hiding the periodicity of a tile by modulating m (paper Fig. 14), on Spot
+=========================================================================
 
 Writes ``material_periodicity.png`` into OUT_DIR (default docs/gallery):
 
@@ -96,6 +98,11 @@ def main(out: Path) -> None:
     print(f"wrote {out / 'material_periodicity.png'} and "
           f"{out / 'material_periodicity_tile.png'}")
 
+
+# %%
+# Run: the pictures (and, for the examples that make a mesh, a GLB shown in
+# the 3D viewer) go to the folder given as the first argument, by
+# default ``docs/gallery``.
 
 if __name__ == "__main__":
     main(Path(sys.argv[1]) if len(sys.argv) > 1 else

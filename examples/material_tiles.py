@@ -1,4 +1,6 @@
-"""Material-space tiles (paper Fig. 1): the 3D (s, t, m) tile and Spot with material varying.
+"""
+Material-space tiles (paper Fig. 1): the 3D (s, t, m) tile and Spot with material varying
+=========================================================================================
 
 Writes into OUT_DIR (default docs/gallery):
 
@@ -123,6 +125,11 @@ def main(out: Path) -> None:
           f"{tile.metadata['mask_areas']}")
     print(f"wrote {out / 'material_tiles.png'} and {out / 'material_tiles_slices.png'}")
 
+
+# %%
+# Run: the pictures (and, for the examples that make a mesh, a GLB shown in
+# the 3D viewer) go to the folder given as the first argument, by
+# default ``docs/gallery``.
 
 if __name__ == "__main__":
     main(Path(sys.argv[1]) if len(sys.argv) > 1 else

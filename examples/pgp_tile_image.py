@@ -1,4 +1,6 @@
-"""A tileable image laid over Spot through the periodic global parameterization.
+"""
+A tileable image laid over Spot through the periodic global parameterization
+============================================================================
 
 ``geotex pgp`` gives every face corner tile coordinates ``(s, t)``;
 ``geotex tile-image`` uses them directly as texture coordinates, one image
@@ -29,6 +31,7 @@ from geotex.image.tiled import tiled_texture_mesh
 from geotex.io import read_mesh, write_mesh
 from geotex.param.pgp import periodic_parameterization
 from geotex.render import Panel, render_panels
+from geotex.viewpage import mesh_turned_y_up
 
 
 def stud_tile(px: int = 128) -> np.ndarray:
@@ -64,7 +67,7 @@ def brick_tile(px: int = 128) -> np.ndarray:
 def panel(V, F, field, image, *, tile: float, title: str, out: Path, stem: str):
     p = periodic_parameterization(V, F, field, scale=tile)
     textured = tiled_texture_mesh(V, F, p.coords, image)
-    write_mesh(out / f"{stem}.glb", textured)
+    write_mesh(out / f"{stem}.glb", mesh_turned_y_up(textured, up="z"))
     Vc = V[F].reshape(-1, 3)                       # one vertex per corner: per-corner uv
     Fc = np.arange(Vc.shape[0], dtype=np.int64).reshape(-1, 3)
     cones = np.array([V[v] for v, _ in p.cones]).reshape(-1, 3)
@@ -93,6 +96,11 @@ def main(out: Path) -> None:
     print(lb)
     print(f"wrote {out / 'pgp_tile_image.png'}")
 
+
+# %%
+# Run: the pictures (and, for the examples that make a mesh, a GLB shown in
+# the 3D viewer) go to the folder given as the first argument, by
+# default ``docs/gallery``.
 
 if __name__ == "__main__":
     main(Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).parents[1] / "docs" / "gallery")
