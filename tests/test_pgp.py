@@ -252,6 +252,17 @@ def test_pgp_file_round_trip_and_tile_image(capsys, tmp_path):
         uv = m.uv[m.uv_faces]
         assert np.allclose(np.sort(uv.reshape(-1, 2), axis=0),
                            np.sort(back.coords.reshape(-1, 2), axis=0), atol=1e-6)
+    # a photo that is not periodic is made tileable first (graph-cut wrap)
+    rng = np.random.default_rng(0)
+    Image.fromarray(rng.integers(0, 255, (40, 50, 3), dtype=np.uint8)).save(tmp_path / "ph.png")
+    out = tmp_path / "ph.glb"
+    code, _, err = _run(capsys, "tile-image", mesh, "--image", tmp_path / "ph.png",
+                        "--param", pgp, "--make-tileable", "16", "-o", out)
+    assert code == 0, err
+    assert read_mesh(out).texture.shape[:2] == (16, 16)
+    code, _, err = _run(capsys, "tile-image", mesh, "--image", tmp_path / "ph.png",
+                        "--param", pgp, "--make-tileable", "4", "-o", tmp_path / "no.glb")
+    assert code == 2 and "--make-tileable" in err and not (tmp_path / "no.glb").exists()
 
 
 @pytest.mark.parametrize("argv, message", [

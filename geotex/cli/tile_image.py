@@ -18,6 +18,9 @@ def register(sub):
                    help="tileable image (PNG, JPEG): one period per tile")
     p.add_argument("--param", required=True, metavar="P.npz",
                    help="periodic parameterization written by 'geotex pgp' for BASE")
+    p.add_argument("--make-tileable", type=int, default=None, metavar="PX",
+                   help="the image is not periodic: make a PX x PX periodic tile from its "
+                        "central square first (graph-cut wrap, as for material-space tiles)")
     p.add_argument("-o", "--output", required=True, help="OUT.glb or OUT.obj (textured)")
     p.set_defaults(run=run)
 
@@ -45,6 +48,16 @@ def run(args) -> int:
         image = load_image(args.image)
     except InputError as exc:
         raise UsageError(f"--image {exc}") from None
+    if args.make_tileable is not None:
+        import numpy as np
+
+        from geotex.image.material.tileable import tileable_image
+
+        try:
+            tile = tileable_image(image, size=args.make_tileable)
+        except InputError as exc:
+            raise UsageError(f"--make-tileable {args.make_tileable}: {exc}") from None
+        image = np.clip(np.rint(tile.colors * 255.0), 0, 255).astype(np.uint8)
     textured = tiled_texture_mesh(mesh.vertices, mesh.faces, pgp.coords, image,
                                   name=mesh.name or "geotex")
     write_mesh(out, textured)
