@@ -21,13 +21,13 @@ import os
 import sys
 
 from geotex import __version__
-from geotex.cli import (check, convert, demo, exemplar, field, heighttilt, lapped, mapping,
-                        pgp, quilt, render, repair, shell, tiles)
+from geotex.cli import (check, convert, demo, displace, exemplar, field, heighttilt, lapped,
+                        mapping, pgp, quilt, render, repair, shell, tiles)
 from geotex.cli._common import EXIT_INTERNAL, EXIT_USAGE, Parser, fail
 from geotex.errors import GeotexError
 
 COMMANDS = (demo, mapping, check, repair, render, convert, field, pgp, heighttilt, exemplar,
-            quilt, tiles, shell, lapped)
+            quilt, tiles, shell, lapped, displace)
 
 
 def build_parser() -> Parser:
