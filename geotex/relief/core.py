@@ -232,7 +232,8 @@ def displaced_solid(V, F, heights: Callable[[ReliefPoints], np.ndarray] | None =
     symmetric : bool, optional
         Offset ``depth * (h - 0.5)``: 50 % grey stays on the surface.
     weights : callable, optional
-        ``weights(points) -> (p,)`` in ``[0, 1]``: a mask (0 keeps the base).
+        ``weights(points) -> (p,)`` in ``[0, 1]``: a mask (0 keeps the base);
+        it may return ``None`` for "no mask".
     smoothing : int, optional
         Uniform Laplacian low-pass steps on ``h``.
     crease_angle : float, optional
@@ -294,10 +295,12 @@ def displaced_solid(V, F, heights: Callable[[ReliefPoints], np.ndarray] | None =
     h = _smoothed(Fr, n, np.clip(h, 0.0, 1.0), int(smoothing))
     off = d * ((h - 0.5) if symmetric else h)
     if weights is not None:
-        w = np.asarray(weights(points), dtype=np.float64)
-        if w.shape != (n,):
-            raise InputError(f"weights must be {n} values, got shape {w.shape}")
-        off = off * np.clip(w, 0.0, 1.0)
+        w = weights(points)
+        if w is not None:                         # None: no mask
+            w = np.asarray(w, dtype=np.float64)
+            if w.shape != (n,):
+                raise InputError(f"weights must be {n} values, got shape {w.shape}")
+            off = off * np.clip(w, 0.0, 1.0)
     sec["heights"] = time.perf_counter() - t
     t = time.perf_counter()
     report(progress, "displace")
