@@ -210,10 +210,13 @@ def displaced_mesh(V, F, image, *, depth: float, mapping: str = "triplanar", sca
         from geotex.printing import printable_stored_solid
 
         def judge_fn(Vx, Fx):
-            s = printable_stored_solid(Vx, Fx, precision=precision)
+            # manifold3d's second opinion is skipped: what it checks (closed, manifold,
+            # oriented) the topology stage checks too (see geotex.check.report.check_mesh)
+            s = printable_stored_solid(Vx, Fx, precision=precision, manifold3d=False)
             return s.vertices, s.faces, s.report
 
     res = displaced_solid(V, F, sampler, depth=d, edge_length=L, symmetric=symmetric,
+                          precision=precision,
                           weights=weights, max_faces=max_faces, decimate_to=decimate_to,
                           judge=judge_fn, progress=progress)
     stats = dict(res.stats)

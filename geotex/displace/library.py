@@ -105,9 +105,16 @@ def honeycomb(N):
     return 1.0 - hexagons(N)
 
 
+def _jittered(n, seed, jitter=0.8):
+    """``n * n`` cell sites: a grid with random offsets (no near-duplicate sites)."""
+    rng = np.random.default_rng(seed)
+    j, i = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+    g = np.column_stack([i.ravel(), j.ravel()]) + 0.5
+    return (g + jitter * (rng.random(g.shape) - 0.5)) / n
+
+
 def voronoi(N):
-    pts = np.random.default_rng(7).random((48, 2))
-    d, _ = _cells(N, pts)
+    d, _ = _cells(N, _jittered(7, 7))
     return _smooth(0.0, 0.03, d[..., 1] - d[..., 0])
 
 
@@ -155,7 +162,7 @@ def wood(N):
 
 
 def leather(N):
-    pts = np.random.default_rng(11).random((220, 2))
+    pts = _jittered(15, 11)
     d, _ = _cells(N, pts)
     ridge = _smooth(0.0, 0.012, d[..., 1] - d[..., 0])
     return 0.8 * ridge * (0.7 + 0.3 * _noise(N, beta=1.2, seed=5)) + 0.2 * _noise(N, seed=6)
@@ -236,15 +243,17 @@ def waves(N):
 
 def scales(N):
     x, y = _grid(N)
-    rows, per = 8, 6
+    n = 8                                        # scales per row and rows per tile
     h = np.zeros_like(x)
-    for k in range(2):                          # the scale of this row and of the row below
-        j = np.floor(y * rows) - k
-        cx = (np.round(x * per - 0.5 * (j % 2)) + 0.5 * (j % 2)) / per
-        cy = (j + 1.0) / rows
-        d = np.hypot(_periodic_delta(x, cx) * per, (y - cy) * rows) / 0.75
-        dome = np.sqrt(np.clip(1 - d * d, 0, 1)) * (y <= cy)
-        h = np.maximum(h, dome * (1.0 if k == 0 else 0.7))
+    # each scale: a disc of radius 0.7 hanging from the top of its row; rows lower down
+    # the tile lie on top (painted later), so every scale shows its rounded lower rim
+    for k in (1, 0):
+        j = np.floor(y * n) + k                  # the row whose scale may reach here
+        off = 0.5 * (j % 2)
+        cx = (np.floor(x * n - off) + 0.5 + off) / n
+        d = np.hypot(_periodic_delta(x, cx) * n, (y - j / n) * n) / 0.72
+        inside = (d < 1) & (y <= j / n)
+        h = np.where(inside, 0.35 + 0.65 * d, h)
     return h
 
 
@@ -273,7 +282,7 @@ def ribs(N):
 
 
 def hammered(N):
-    pts = np.random.default_rng(41).random((90, 2))
+    pts = _jittered(9, 41)
     d, _ = _cells(N, pts, k=1)
     return 1.0 - _norm(d[..., 0] ** 2)
 
@@ -283,7 +292,7 @@ _MAPS = {
     "knurl-straight": (knurl_straight, "straight knurl: 16 ridges"),
     "hexagons": (hexagons, "raised hexagons with grooves (7 x 8 lattice)"),
     "honeycomb": (honeycomb, "hexagon walls raised, cells sunk"),
-    "voronoi": (voronoi, "raised Voronoi cells with grooves (48 cells)"),
+    "voronoi": (voronoi, "raised Voronoi cells with grooves (49 jittered cells)"),
     "bricks": (bricks, "running bond, 8 courses of 4 bricks"),
     "weave": (weave, "plain weave, 8 x 8 crossings"),
     "carbon-fiber": (carbon_fiber, "2 x 2 twill of rounded tows"),

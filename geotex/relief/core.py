@@ -199,6 +199,32 @@ def _smoothed(F, n, h, steps):
     return h
 
 
+def _lowered_where_crossing(P, F, off, N, precision):
+    """Halve the relief around crossing faces until none is left (then flatten there)."""
+    from geotex.check.intersections import self_intersecting_pairs
+
+    n = P.shape[0]
+    gain = np.ones(n)
+    rounds = 0
+    Vd = P + off[:, None] * N
+    rings = 2
+    while rounds < 3 * RELIEF_ROUNDS:
+        Vr = Vd.astype(precision).astype(np.float64)          # as the file stores it
+        pairs = self_intersecting_pairs(Vr, F)
+        if len(pairs) == 0:
+            break
+        hit = np.zeros(n, dtype=bool)
+        hit[F[np.unique(np.asarray(pairs).ravel())].ravel()] = True
+        if rounds >= RELIEF_ROUNDS:                             # flatten, on wider rings
+            rings += 1
+        for _ in range(rings):
+            hit[F[hit[F].any(axis=1)].ravel()] = True
+        gain[hit] = 0.5 * gain[hit] if rounds < RELIEF_ROUNDS else 0.0
+        Vd = P + (off * gain)[:, None] * N
+        rounds += 1
+    return Vd, rounds
+
+
 def displaced_solid(V, F, heights: Callable[[ReliefPoints], np.ndarray] | None = None, *,
                     depth: float, edge_length: float | None = None,
                     target_faces: int | None = None, symmetric: bool = False,
@@ -207,7 +233,7 @@ def displaced_solid(V, F, heights: Callable[[ReliefPoints], np.ndarray] | None =
                     max_faces: int = DEFAULT_MAX_FACES, decimate_to: int | None = None,
                     judge: Callable | None = None, fix_intersections: bool = True,
                     points: ReliefPoints | None = None, heights_array=None,
-                    progress=None) -> ReliefResult:
+                    precision=np.float64, progress=None) -> ReliefResult:
     """Displace a refined copy of a base along smoothed normals by a sampled height.
 
     This is the public relief core ("displace this base by these heights"):
@@ -248,7 +274,12 @@ def displaced_solid(V, F, heights: Callable[[ReliefPoints], np.ndarray] | None =
         verified export's ``printable_stored_solid``; used to find
         self-intersections and to return a verdict.
     fix_intersections : bool, optional
-        Lower the relief where the judged solid crosses itself.
+        Lower the relief where the judged solid crosses itself: halved on the
+        crossing faces and two rings around them, up to ``RELIEF_ROUNDS``
+        times, then flattened on growing rings; judged again once at the end.
+    precision : type, optional
+        Coordinates as the file stores them (``numpy.float32`` for STL): the
+        crossings are looked for on these.
     points : ReliefPoints, optional
         Reuse a refinement (then ``edge_length``/``target_faces`` are ignored).
     heights_array : array_like, (p,) optional
@@ -325,22 +356,8 @@ def displaced_solid(V, F, heights: Callable[[ReliefPoints], np.ndarray] | None =
         report(progress, "check")
         Vs, Fs, rep = judge(Vd, Fd)
         if fix_intersections_here and not rep.printable and rep.self_intersecting_pairs:
-            from geotex.check.intersections import self_intersecting_pairs
-
-            gain = np.ones(n)
-            while rounds <= RELIEF_ROUNDS and not rep.printable and rep.self_intersecting_pairs:
-                pairs = self_intersecting_pairs(Vs, Fs) if Fs.shape[0] == Fd.shape[0] else \
-                    self_intersecting_pairs(Vd, Fd)
-                if len(pairs) == 0:
-                    break
-                hit = np.zeros(n, dtype=bool)
-                hit[Fd[np.unique(np.asarray(pairs).ravel())].ravel()] = True
-                for _ in range(2):
-                    hit[Fd[hit[Fd].any(axis=1)].ravel()] = True
-                gain[hit] = 0.0 if rounds == RELIEF_ROUNDS - 1 else 0.5 * gain[hit]
-                Vd = P + (off * gain)[:, None] * N
-                Vs, Fs, rep = judge(Vd, Fd)
-                rounds += 1
+            Vd, rounds = _lowered_where_crossing(P, Fd, off, N, precision)
+            Vs, Fs, rep = judge(Vd, Fd)
         Vd, Fd = Vs, Fs
         sec["check"] = time.perf_counter() - t
     stats = {"faces": int(Fd.shape[0]), "vertices": int(Vd.shape[0]),

@@ -118,9 +118,11 @@ def refined_by_edge_splits(V, F, max_edge: float, *, max_faces: int = 8_000_000,
     done_F, done_P, done_B = [], [], []
     while F.shape[0] and rounds < MAX_ROUNDS:
         # a side's length is the same from both faces, so "long" needs no edge list
-        P0 = Vall[F]                                      # (m, 3, 3)
-        d = P0 - np.roll(P0, -1, axis=1)
-        split = np.einsum("ijk,ijk->ij", d, d) > L2       # (m, 3) side k: corner k -> k+1
+        A, B1, C = Vall[F[:, 0]], Vall[F[:, 1]], Vall[F[:, 2]]
+        split = np.empty(F.shape, dtype=bool)             # side k: corner k -> k+1
+        for k, (p, q) in enumerate(((A, B1), (B1, C), (C, A))):
+            d = q - p
+            split[:, k] = np.einsum("ij,ij->i", d, d) > L2
         if not split.any():
             break
         cnt = split.sum(axis=1)
