@@ -54,7 +54,8 @@ from geotex.mesh.record import Mesh
 from geotex.relief import refined_by_edge_splits
 
 HERE = Path(__file__).resolve().parent
-SHARED = HERE.parents[1] / "shared" / "data"
+SHARED = next((p / "shared" / "data" for p in HERE.parents[1:3]
+               if (p / "shared" / "data").is_dir()), HERE.parents[1] / "shared" / "data")
 SPOT = SHARED / "base" / "spot_odedstein.obj"
 BRICKS = SHARED / "texture_exemplars" / "heightmaps" / "godot_texture_bricks_depth.jpg"
 TILE_MM = 20.0
@@ -139,6 +140,26 @@ def edge_for_target(path, target=TARGET):
     return float(best[0]), int(best[1]), int(F.shape[0])
 
 
+CLOSEUPS = []
+
+
+def closeup(path, name, label):
+    """Keep the faces near the close-up point (cylinder cap edge, Spot's flank)."""
+    from geotex.mesh.topology import compacted
+
+    m = read_mesh(path)
+    V, F = m.vertices, m.faces
+    if name == "cylinder":
+        c, r = np.array([20 / np.sqrt(2), 20 / np.sqrt(2), 40.0]), 7.0
+    else:
+        hi = V.max(axis=0)
+        c, r = np.array([hi[0], 0.45 * hi[1], 0.5 * hi[2]]), 9.0
+        c = V[np.argmin(np.linalg.norm(V - c, axis=1))]
+    sel = np.linalg.norm(V[F].mean(axis=1) - c, axis=1) < r
+    Vc, Fc = compacted(V, F[sel])
+    CLOSEUPS.append((name, label, Vc, Fc))
+
+
 def verdicts(path):
     m = read_mesh(path)
     rep = check_mesh(m.vertices, m.faces)
@@ -200,6 +221,7 @@ def main(argv=None):
                            "edge_mm": L, "run": r}
                     if r == args.repeat - 1 and out.exists():
                         row.update(verdicts(out))
+                        closeup(out, name, label)
                     rows.append(row)
                     print(json.dumps({k: v for k, v in row.items()
                                       if k not in ("prusaslicer", "admesh")}), flush=True)
@@ -219,9 +241,19 @@ def main(argv=None):
                            "subdivision_levels": levels, "run": r}
                     if r == args.repeat - 1 and out.exists():
                         row.update(verdicts(out))
+                        closeup(out, name, "Blender displace modifier")
                     rows.append(row)
                     print(json.dumps({k: v for k, v in row.items()
                                       if k not in ("prusaslicer", "admesh")}), flush=True)
+    if CLOSEUPS:
+        from geotex.render import Panel, render_panels
+
+        panels = [Panel(V, F, color="#c9b38f", title=f"{n}: {label}")
+                  for n, label, V, F in CLOSEUPS]
+        gallery = HERE.parent / "docs" / "gallery"
+        gallery.mkdir(parents=True, exist_ok=True)
+        render_panels(panels, gallery / "displace_bench_closeups.png", size=(520, 520),
+                      up="z")
     load = os.getloadavg()
     meta = {"date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
             "machine": f"{platform.machine()}, {os.cpu_count()} cores, shared",

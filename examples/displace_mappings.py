@@ -30,7 +30,9 @@ from geotex.io import read_mesh
 from geotex.render import Panel, render_panels
 
 HERE = Path(__file__).resolve().parent
-SPOT_UV = HERE.parents[1] / "shared" / "data" / "base" / "spot_uv" / "spot.obj"
+SHARED = next((p / "shared" / "data" for p in HERE.parents[1:3]
+               if (p / "shared" / "data").is_dir()), HERE.parents[1] / "shared" / "data")
+SPOT_UV = SHARED / "base" / "spot_uv" / "spot.obj"
 QUICK = bool(os.environ.get("GEOTEX_EXAMPLES_QUICK"))
 
 

@@ -263,3 +263,38 @@ def test_cli_refuses_to_overwrite_the_input(cylinder_file):
     res = _geotex("displace", cylinder_file, "--image", "dots", "--depth", "1", "-o",
                   cylinder_file)
     assert res.returncode == 2 and "overwrite" in res.stderr
+
+
+def _step_part(path):
+    gmsh = pytest.importorskip("gmsh")
+    gmsh.initialize(readConfigFiles=False, interruptible=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.occ.addBox(0, 0, 0, 30, 20, 10)
+        gmsh.model.occ.synchronize()
+        gmsh.write(str(path))
+    finally:
+        gmsh.finalize()
+
+
+def test_step_parts_are_tessellated_closed(tmp_path):
+    from geotex.check.report import check_mesh
+    from geotex.displace.step import read_step
+
+    part = tmp_path / "box.step"
+    _step_part(part)
+    counts = []
+    for q in ("coarse", "fine"):
+        V, F = read_step(part, quality=q)
+        assert check_mesh(V, F).printable
+        assert np.allclose(np.ptp(V, axis=0), [30, 20, 10])
+        counts.append(F.shape[0])
+    assert counts[1] > counts[0]
+    out = tmp_path / "box.stl"
+    res = _geotex("displace", part, "--image", "grid", "--depth", "0.5", "--faces", "20000",
+                  "--step-quality", "coarse", "-o", out)
+    assert res.returncode == 0, res.stderr
+    bad = tmp_path / "bad.step"
+    bad.write_text("not a step file")
+    res = _geotex("displace", bad, "--image", "grid", "--depth", "0.5", "-o", out)
+    assert res.returncode == 2 and "bad.step" in res.stderr

@@ -207,11 +207,19 @@ def displaced_mesh(V, F, image, *, depth: float, mapping: str = "triplanar", sca
                                      curve=masks.curve)
     judge_fn = None
     if judge:
-        from geotex.printing import printable_stored_solid
+        from geotex.check.report import check_mesh
+        from geotex.printing import printable_stored_solid, stored_form
 
         def judge_fn(Vx, Fx):
-            # manifold3d's second opinion is skipped: what it checks (closed, manifold,
-            # oriented) the topology stage checks too (see geotex.check.report.check_mesh)
+            # the verdict on the coordinates as stored; manifold3d's second opinion is
+            # skipped (what it checks, closed, manifold and oriented, the topology stage
+            # checks too: geotex.check.report.check_mesh); every crossing pair is listed
+            # so the relief can be lowered there without a second search
+            Vs, Fs = stored_form(Vx, Fx, precision=precision)
+            rep = check_mesh(Vs, Fs, manifold3d=False, max_examples=2 ** 62)
+            if rep.printable or all(r.endswith("self-intersecting face pairs")
+                                    for r in rep.reasons):
+                return Vs, Fs, rep
             s = printable_stored_solid(Vx, Fx, precision=precision, manifold3d=False)
             return s.vertices, s.faces, s.report
 

@@ -14,7 +14,9 @@ sharpness``; ``cubic`` uses the dominant axis only and blends across the
 cube seams within ``blend`` (difference of the normal's two largest
 components); both read each side from outside (not mirrored).
 ``cylindrical`` wraps around an axis with a whole number of tiles around
-(``scale_u`` is rounded to the nearest such size, so the wrap has no seam)
+(``scale_u`` is rounded to the nearest such size, so the wrap has no seam;
+a ``rotation`` other than 0 turns the tiles off the wrap direction and a
+seam can show there)
 and projects the caps (normals within ``cap_angle`` of the axis) flat,
 blending over 10 degrees; ``spherical`` wraps longitude the same way and
 reads latitude as arc length (the poles pinch, as in every spherical map).

@@ -199,7 +199,7 @@ def _smoothed(F, n, h, steps):
     return h
 
 
-def _lowered_where_crossing(P, F, off, N, precision):
+def _lowered_where_crossing(P, F, off, N, precision, first_pairs=None):
     """Halve the relief around crossing faces until none is left (then flatten there)."""
     from geotex.check.intersections import self_intersecting_pairs
 
@@ -209,8 +209,11 @@ def _lowered_where_crossing(P, F, off, N, precision):
     Vd = P + off[:, None] * N
     rings = 2
     while rounds < 3 * RELIEF_ROUNDS:
-        Vr = Vd.astype(precision).astype(np.float64)          # as the file stores it
-        pairs = self_intersecting_pairs(Vr, F)
+        if rounds == 0 and first_pairs is not None:
+            pairs = first_pairs
+        else:
+            Vr = Vd.astype(precision).astype(np.float64)      # as the file stores it
+            pairs = self_intersecting_pairs(Vr, F)
         if len(pairs) == 0:
             break
         hit = np.zeros(n, dtype=bool)
@@ -272,7 +275,9 @@ def displaced_solid(V, F, heights: Callable[[ReliefPoints], np.ndarray] | None =
     judge : callable, optional
         ``judge(V, F) -> (V_stored, F_stored, CheckReport)``, for example the
         verified export's ``printable_stored_solid``; used to find
-        self-intersections and to return a verdict.
+        self-intersections and to return a verdict.  When its report lists
+        every crossing pair in ``examples`` (``max_examples`` large) and
+        keeps the faces' order, the first crossing search is skipped.
     fix_intersections : bool, optional
         Lower the relief where the judged solid crosses itself: halved on the
         crossing faces and two rings around them, up to ``RELIEF_ROUNDS``
@@ -356,7 +361,11 @@ def displaced_solid(V, F, heights: Callable[[ReliefPoints], np.ndarray] | None =
         report(progress, "check")
         Vs, Fs, rep = judge(Vd, Fd)
         if fix_intersections_here and not rep.printable and rep.self_intersecting_pairs:
-            Vd, rounds = _lowered_where_crossing(P, Fd, off, N, precision)
+            # a judge that lists every crossing pair saves the first search
+            ex = rep.examples.get("self_intersecting_pairs") if Fs.shape == Fd.shape else None
+            first = (np.asarray(ex, dtype=np.int64).reshape(-1, 2)
+                     if ex is not None and len(ex) == rep.self_intersecting_pairs else None)
+            Vd, rounds = _lowered_where_crossing(P, Fd, off, N, precision, first)
             Vs, Fs, rep = judge(Vd, Fd)
         Vd, Fd = Vs, Fs
         sec["check"] = time.perf_counter() - t
