@@ -199,23 +199,22 @@ def _smoothed(F, n, h, steps):
     return h
 
 
-def _lowered_where_crossing(P, F, off, N, precision, first_pairs=None):
-    """Halve the relief around crossing faces until none is left (then flatten there)."""
+def _lowered_where_crossing(P, F, off, N, gain, pairs, precision):
+    """Lower the relief around crossing faces until they are clean locally.
+
+    The first search is the judge's (every pair, whole mesh); later rounds
+    only search the faces within a few rings of the lowered region (the
+    judge checks the whole mesh again afterwards).  Rounds halve the relief
+    on the crossing faces and two rings around them; after ``RELIEF_ROUNDS``
+    they flatten it on growing rings.
+    """
     from geotex.check.intersections import self_intersecting_pairs
 
     n = P.shape[0]
-    gain = np.ones(n)
+    gain = gain.copy()
     rounds = 0
-    Vd = P + off[:, None] * N
     rings = 2
-    while rounds < 3 * RELIEF_ROUNDS:
-        if rounds == 0 and first_pairs is not None:
-            pairs = first_pairs
-        else:
-            Vr = Vd.astype(precision).astype(np.float64)      # as the file stores it
-            pairs = self_intersecting_pairs(Vr, F)
-        if len(pairs) == 0:
-            break
+    while len(pairs) and rounds < 3 * RELIEF_ROUNDS:
         hit = np.zeros(n, dtype=bool)
         hit[F[np.unique(np.asarray(pairs).ravel())].ravel()] = True
         if rounds >= RELIEF_ROUNDS:                             # flatten, on wider rings
@@ -223,9 +222,15 @@ def _lowered_where_crossing(P, F, off, N, precision, first_pairs=None):
         for _ in range(rings):
             hit[F[hit[F].any(axis=1)].ravel()] = True
         gain[hit] = 0.5 * gain[hit] if rounds < RELIEF_ROUNDS else 0.0
-        Vd = P + (off * gain)[:, None] * N
         rounds += 1
-    return Vd, rounds
+        near = hit.copy()
+        for _ in range(4):
+            near[F[near[F].any(axis=1)].ravel()] = True
+        local = np.flatnonzero(near[F].any(axis=1))
+        Vr = (P + (off * gain)[:, None] * N).astype(precision).astype(np.float64)
+        sub = self_intersecting_pairs(Vr, F[local])
+        pairs = local[np.asarray(sub, dtype=np.int64).reshape(-1, 2)] if len(sub) else ()
+    return gain, rounds
 
 
 def displaced_solid(V, F, heights: Callable[[ReliefPoints], np.ndarray] | None = None, *,
@@ -360,12 +365,22 @@ def displaced_solid(V, F, heights: Callable[[ReliefPoints], np.ndarray] | None =
         t = time.perf_counter()
         report(progress, "check")
         Vs, Fs, rep = judge(Vd, Fd)
-        if fix_intersections_here and not rep.printable and rep.self_intersecting_pairs:
-            # a judge that lists every crossing pair saves the first search
+        gain = np.ones(n)
+        passes = 0
+        while (fix_intersections_here and not rep.printable and rep.self_intersecting_pairs
+               and passes < 4):
+            # a judge that lists every crossing pair saves a whole-mesh search
             ex = rep.examples.get("self_intersecting_pairs") if Fs.shape == Fd.shape else None
-            first = (np.asarray(ex, dtype=np.int64).reshape(-1, 2)
-                     if ex is not None and len(ex) == rep.self_intersecting_pairs else None)
-            Vd, rounds = _lowered_where_crossing(P, Fd, off, N, precision, first)
+            if ex is not None and len(ex) == rep.self_intersecting_pairs:
+                pairs = np.asarray(ex, dtype=np.int64).reshape(-1, 2)
+            else:
+                from geotex.check.intersections import self_intersecting_pairs
+
+                pairs = self_intersecting_pairs(Vd.astype(precision).astype(np.float64), Fd)
+            gain, r = _lowered_where_crossing(P, Fd, off, N, gain, pairs, precision)
+            rounds += r
+            passes += 1
+            Vd = P + (off * gain)[:, None] * N
             Vs, Fs, rep = judge(Vd, Fd)
         Vd, Fd = Vs, Fs
         sec["check"] = time.perf_counter() - t
