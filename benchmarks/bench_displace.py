@@ -152,8 +152,9 @@ def closeup(path, name, label):
     if name == "cylinder":
         c, r = np.array([20 / np.sqrt(2), 20 / np.sqrt(2), 40.0]), 7.0
     else:
-        hi = V.max(axis=0)
-        c, r = np.array([hi[0], 0.45 * hi[1], 0.5 * hi[2]]), 9.0
+        V = V[:, [0, 2, 1]] * np.array([1.0, -1.0, 1.0])      # Spot is y-up: show it z-up
+        lo, hi = V.min(axis=0), V.max(axis=0)
+        c, r = np.array([hi[0], 0.5 * (lo[1] + hi[1]), lo[2] + 0.45 * (hi[2] - lo[2])]), 12.0
         c = V[np.argmin(np.linalg.norm(V - c, axis=1))]
     sel = np.linalg.norm(V[F].mean(axis=1) - c, axis=1) < r
     Vc, Fc = compacted(V, F[sel])
@@ -193,9 +194,15 @@ def blender_levels(faces):
 
 def main(argv=None):
     ap = argparse.ArgumentParser()
+    ap.add_argument("--markdown-only", action="store_true",
+                    help="rewrite results/displace.md from results/displace.json")
     ap.add_argument("--repeat", type=int, default=1)
     ap.add_argument("--no-blender", action="store_true")
     args = ap.parse_args(argv)
+    if args.markdown_only:
+        doc = json.loads((HERE / "results" / "displace.json").read_text())
+        write_markdown(HERE / "results" / "displace.md", doc["meta"], doc["rows"])
+        return
     env = dict(os.environ, PYTHONPATH=str(HERE.parent))
     rows = []
     with tempfile.TemporaryDirectory() as td:
@@ -214,11 +221,12 @@ def main(argv=None):
                        "--mask-bottom", "0", "-o", str(out), "--report", str(rep)]
                 for r in range(args.repeat):
                     secs, mb, p = timed_process(cmd, env)
-                    stages = json.loads(rep.read_text())["stats"]["seconds"] \
-                        if rep.exists() else {}
+                    doc = json.loads(rep.read_text())["stats"] if rep.exists() else {}
+                    stages = doc.get("seconds", {})
                     row = {"base": name, "base_faces": n_base, "tool": label, "seconds": secs,
                            "peak_mb": mb, "exit": p.returncode, "stages": stages,
-                           "edge_mm": L, "run": r}
+                           "edge_mm": L, "run": r,
+                           "relief_reduced_rounds": doc.get("relief_reduced_rounds")}
                     if r == args.repeat - 1 and out.exists():
                         row.update(verdicts(out))
                         closeup(out, name, label)
@@ -280,15 +288,17 @@ def write_markdown(path, meta, rows):
              "are inflated; both tools ran in the same conditions, interleaved). "
              f"Bricks depth map, {meta['tile_mm']:g} mm per tile, {meta['depth_mm']:g} mm depth, "
              "STL written. Produced by `benchmarks/bench_displace.py`.", "",
-             "| base | tool | triangles | time (s) | vs Blender | peak memory (MB) | geotex check "
+             "| base | tool | triangles | time (s) | Blender time / this time | peak memory (MB) "
+             "| geotex check "
              "| PrusaSlicer | admesh | geotex stages (s) |",
              "|---|---|---|---|---|---|---|---|---|---|"]
     blender = {r["base"]: r["seconds"] for r in rows if r["tool"].startswith("Blender")}
     for r in rows:
         b = blender.get(r["base"])
-        ratio = f"{b / r['seconds']:.2f}x faster" if b and not r["tool"].startswith("Blender") \
-            else ""
+        ratio = f"{b / r['seconds']:.2f}" if b and not r["tool"].startswith("Blender") else ""
         st = ", ".join(f"{k} {v:.1f}" for k, v in r.get("stages", {}).items())
+        if r.get("relief_reduced_rounds"):
+            st += f"; relief lowered in {r['relief_reduced_rounds']} round(s)"
         ok = lambda x: "-" if x is None else ("yes" if x else "NO")  # noqa: E731
         lines.append(f"| {r['base']} ({r['base_faces']} faces) | {r['tool']} | "
                      f"{r.get('triangles', '?')} | {r['seconds']:.1f} | {ratio} | "

@@ -54,7 +54,7 @@ def main(out_dir=None):
 
     out = Path(out_dir or HERE.parent / "docs" / "gallery")
     out.mkdir(parents=True, exist_ok=True)
-    faces = 80_000 if QUICK else 700_000
+    faces = 80_000 if QUICK else 500_000
     V, F = closed_cylinder(20.0, 40.0, n_theta=200 if not QUICK else 64,
                            n_height=130 if not QUICK else 20,
                            n_cap_rings=20 if not QUICK else 5)

@@ -56,7 +56,7 @@ def main(out_dir=None):
         mappings.remove("uv")
     if QUICK:
         mappings = ["triplanar", "cylindrical", "pgp"]
-    faces = 60_000 if QUICK else 400_000
+    faces = 60_000 if QUICK else 250_000
     panels = []
     for m in mappings:
         t = time.perf_counter()

@@ -15,15 +15,15 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from geotex.displace.heightmap import filtered_height_map, load_height_map
-from geotex.displace.mappings import MAPPINGS, mapping_options, projected_heights
+from geotex.displace.mappings import mapping_options, projected_heights
 from geotex.displace.masks import MaskOptions, mask_weights, selected_faces
 from geotex.errors import InputError
 from geotex.mesh.arrays import as_mesh_arrays
 from geotex.progress import report
 from geotex.relief import DEFAULT_MAX_FACES, displaced_solid, edge_length_for_faces
 
-__all__ = ["displaced_mesh", "displace_file", "DisplaceResult", "depth_warnings",
-           "DEFAULT_TARGET_FACES", "DISPLACE_STAGES", "STEP_PRESETS"]
+__all__ = ["displaced_mesh", "displace_file", "stored_judge", "DisplaceResult", "depth_warnings",
+           "DEFAULT_TARGET_FACES", "DISPLACE_STAGES"]
 
 #: Default size of the refined mesh.
 DEFAULT_TARGET_FACES = 1_000_000
@@ -32,8 +32,6 @@ WARN_DEPTH_FRACTION = 0.10
 #: Progress stages of :func:`displace_file`.
 DISPLACE_STAGES = ("read", "map", "refine", "normals", "heights", "displace", "decimate",
                    "check", "write")
-#: STEP tessellation presets: largest element size as a fraction of the part's diagonal.
-STEP_PRESETS = {"coarse": 0.05, "standard": 0.02, "fine": 0.008}
 
 
 @dataclass(frozen=True)
@@ -80,6 +78,33 @@ def depth_warnings(V, depth: float) -> tuple[str, ...]:
         return (f"depth {depth:g} mm is more than 10 % of the part's smallest extent "
                 f"({small:.4g} mm): expect reduced relief where it would cross itself",)
     return ()
+
+
+def stored_judge(precision):
+    """The verdict callable of :func:`geotex.relief.displaced_solid` for a file format.
+
+    ``judge(V, F) -> (V_stored, F_stored, CheckReport)``: the solid rounded
+    and welded as the file stores it (:func:`geotex.printing.stored_form`),
+    checked without manifold3d's second opinion (what it checks, closed,
+    manifold and oriented, the topology stage checks too; see
+    :func:`geotex.check.report.check_mesh`), with every crossing pair listed
+    so the relief can be lowered there without a second search.  Other
+    failures go through :func:`geotex.printing.printable_stored_solid` (its
+    rebuild of what rounding broke).
+    """
+    from geotex.check.report import check_mesh
+    from geotex.printing import printable_stored_solid, stored_form
+
+    def judge(Vx, Fx):
+        Vs, Fs = stored_form(Vx, Fx, precision=precision)
+        rep = check_mesh(Vs, Fs, manifold3d=False, max_examples=2 ** 62)
+        if rep.printable or all(r.endswith("self-intersecting face pairs")
+                                for r in rep.reasons):
+            return Vs, Fs, rep
+        s = printable_stored_solid(Vx, Fx, precision=precision, manifold3d=False)
+        return s.vertices, s.faces, s.report
+
+    return judge
 
 
 def displaced_mesh(V, F, image, *, depth: float, mapping: str = "triplanar", scale_u=None,
@@ -205,24 +230,7 @@ def displaced_mesh(V, F, image, *, depth: float, mapping: str = "triplanar", sca
         raise InputError("the mask leaves no face to texture; loosen the mask options")
     weights = lambda p: mask_weights(p, faces_on, width=masks.width,  # noqa: E731
                                      curve=masks.curve)
-    judge_fn = None
-    if judge:
-        from geotex.check.report import check_mesh
-        from geotex.printing import printable_stored_solid, stored_form
-
-        def judge_fn(Vx, Fx):
-            # the verdict on the coordinates as stored; manifold3d's second opinion is
-            # skipped (what it checks, closed, manifold and oriented, the topology stage
-            # checks too: geotex.check.report.check_mesh); every crossing pair is listed
-            # so the relief can be lowered there without a second search
-            Vs, Fs = stored_form(Vx, Fx, precision=precision)
-            rep = check_mesh(Vs, Fs, manifold3d=False, max_examples=2 ** 62)
-            if rep.printable or all(r.endswith("self-intersecting face pairs")
-                                    for r in rep.reasons):
-                return Vs, Fs, rep
-            s = printable_stored_solid(Vx, Fx, precision=precision, manifold3d=False)
-            return s.vertices, s.faces, s.report
-
+    judge_fn = stored_judge(precision) if judge else None
     res = displaced_solid(V, F, sampler, depth=d, edge_length=L, symmetric=symmetric,
                           precision=precision,
                           weights=weights, max_faces=max_faces, decimate_to=decimate_to,

@@ -9,8 +9,8 @@ surface points and normals such a sampler works on;
 from geotex.relief.core import (DEFAULT_MAX_FACES, RELIEF_ROUNDS, RELIEF_STAGES, ReliefPoints,
                                 ReliefResult, displaced_solid, edge_length_for_faces,
                                 relief_points)
-from geotex.relief.subdivide import RefinedMesh, predicted_face_count, refined_by_edge_splits
+from geotex.relief.subdivide import RefinedMesh, refined_by_edge_splits
 
 __all__ = ["displaced_solid", "relief_points", "ReliefPoints", "ReliefResult",
            "edge_length_for_faces", "refined_by_edge_splits", "RefinedMesh",
-           "predicted_face_count", "RELIEF_STAGES", "RELIEF_ROUNDS", "DEFAULT_MAX_FACES"]
+           "RELIEF_STAGES", "RELIEF_ROUNDS", "DEFAULT_MAX_FACES"]

@@ -23,7 +23,7 @@ import numpy as np
 from geotex.errors import InputError
 from geotex.mesh.arrays import as_mesh_arrays
 
-__all__ = ["RefinedMesh", "refined_by_edge_splits", "predicted_face_count", "MAX_ROUNDS"]
+__all__ = ["RefinedMesh", "refined_by_edge_splits", "MAX_ROUNDS"]
 
 #: Split rounds at most (each halves the longest edges).
 MAX_ROUNDS = 40
@@ -52,23 +52,6 @@ class RefinedMesh:
     parent: np.ndarray
     corner_bary: np.ndarray | None
     rounds: int
-
-
-def predicted_face_count(V, F, max_edge: float) -> int:
-    """Faces after refinement to ``max_edge``, estimated from the base's area.
-
-    Edge splitting stops as soon as no edge is longer than ``max_edge``, so
-    the edges end between half the target and the target; measured on
-    closed meshes the result has about ``area / (0.2 * max_edge**2)`` faces.
-
-    Returns
-    -------
-    int
-    """
-    V, F = as_mesh_arrays(V, F)
-    area = 0.5 * float(np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]],
-                                               V[F[:, 2]] - V[F[:, 0]]), axis=1).sum())
-    return max(F.shape[0], int(area / (0.2 * max_edge * max_edge)))
 
 
 def _rolled(A: np.ndarray, r: np.ndarray) -> np.ndarray:
