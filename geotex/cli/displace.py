@@ -75,9 +75,9 @@ def register(sub):
                    help="cylindrical/spherical axis (default z)")
     p.add_argument("--cap-angle", type=float, default=20.0, metavar="DEG",
                    help="cylindrical: faces within DEG of the axis are caps, projected flat")
-    p.add_argument("--field", default="smooth", metavar="smooth|curvature|X,Y,Z",
-                   help="pgp: cross field (default smooth); lapped: up direction "
-                   "(default 0,0,1)")
+    p.add_argument("--field", default=None, metavar="X,Y,Z|smooth|curvature",
+                   help="pgp and lapped: the direction the image's up follows (default "
+                   "0,0,1); pgp also takes smooth (smoothest cross field) or curvature")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--faces", type=int, default=1_000_000, metavar="N",
                    help="approximate refined face count (default 1000000)")
@@ -152,7 +152,7 @@ def run(args) -> int:
         if report_path.suffix.lower() != ".json":
             raise UsageError(f"{report_path}: --report needs a .json file name")
     field = args.field
-    if field not in ("smooth", "curvature"):
+    if field is not None and field not in ("smooth", "curvature"):
         field = _numbers(field, 3, "--field")
     from geotex.displace import DISPLACE_STAGES, displace_file, mask_options
     from geotex.displace.masks import face_selection_file

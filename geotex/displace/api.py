@@ -115,7 +115,7 @@ def displaced_mesh(V, F, image, *, depth: float, mapping: str = "triplanar", sca
                    edge_length: float | None = None,
                    target_faces: int = DEFAULT_TARGET_FACES,
                    max_faces: int = DEFAULT_MAX_FACES, decimate_to: int | None = None,
-                   uv=None, field="smooth", seed: int = 0, precision=np.float32,
+                   uv=None, field=None, seed: int = 0, precision=np.float32,
                    judge: bool = True, progress=None) -> DisplaceResult:
     """Displace a part (millimetres) by a height map under a mapping.
 
@@ -152,8 +152,10 @@ def displaced_mesh(V, F, image, *, depth: float, mapping: str = "triplanar", sca
     uv : numpy.ndarray, (m, 3, 2), optional
         Per-corner texture coordinates (``uv`` mapping).
     field : str or sequence, optional
-        ``pgp``: the cross field (``"smooth"``, ``"curvature"`` or a
-        direction); ``lapped``: the "up" direction (default +z).
+        ``pgp``: the cross field, a direction the image's "up" follows
+        (default ``(0, 0, 1)``: horizontal courses on upright walls),
+        ``"smooth"`` or ``"curvature"``; ``lapped``: the "up" direction
+        (default ``(0, 0, 1)``).
     seed : int, optional
     precision : type, optional
         Coordinates as the output file stores them (float32 for STL).
@@ -211,14 +213,21 @@ def displaced_mesh(V, F, image, *, depth: float, mapping: str = "triplanar", sca
     elif mapping == "pgp":
         from geotex.displace.seamless import pgp_corner_coordinates, pgp_heights
 
+        field = (0.0, 0.0, 1.0) if field is None else field
         coords = pgp_corner_coordinates(V, F, tile=opt.scale_u, field=field, seed=seed)
         off = (opt.offset_u / opt.scale_u, opt.offset_v / opt.scale_u)
+        # a direction field is the image's "up": the parameterization's s axis runs
+        # along it, so the image is turned by -90 degrees (u = -t, v = s)
+        turn = 0.0 if isinstance(field, str) else -90.0
         sampler = lambda p: pgp_heights(p, H, coords, offset=off,  # noqa: E731
-                                        rotation=opt.rotation)
+                                        rotation=opt.rotation + turn)
     elif mapping == "lapped":
         from geotex.displace.seamless import lapped_height_texture, lapped_heights
 
-        up = (0.0, 0.0, 1.0) if isinstance(field, str) and field == "smooth" else field
+        if isinstance(field, str):
+            raise InputError(f"field {field!r}: the lapped mapping needs a direction X,Y,Z "
+                             "for the image's up")
+        up = (0.0, 0.0, 1.0) if field is None else field
         lt = lapped_height_texture(V, F, H, tile=opt.scale_u, up=up, seed=seed)
         sampler = lambda p: lapped_heights(p, lt)  # noqa: E731
     else:

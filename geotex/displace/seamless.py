@@ -7,7 +7,11 @@ height map repeats with period one tile, so translations never show; a
 90-degree turn shows only for images that are not four-fold symmetric (it
 happens only along the few seams that lead to the field's singular points).
 One tile is ``scale_u`` millimetres (the parameterization is isotropic:
-``scale_v`` is ignored).
+``scale_v`` is ignored).  The field is ``"smooth"`` (the globally smoothest
+cross field: its orientation on a surface without features is arbitrary, on a
+cylinder courses can come out helical), ``"curvature"``, or a direction that
+the image's "up" follows (e.g. ``(0, 0, 1)`` for horizontal courses on
+upright walls; it degenerates where the surface faces that direction).
 
 ``lapped``: the existing lapped-texture machinery
 (:func:`geotex.image.lapped.lapped_texture`) pastes the height map, 2 x 2
