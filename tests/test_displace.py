@@ -298,3 +298,15 @@ def test_step_parts_are_tessellated_closed(tmp_path):
     bad.write_text("not a step file")
     res = _geotex("displace", bad, "--image", "grid", "--depth", "0.5", "-o", out)
     assert res.returncode == 2 and "bad.step" in res.stderr
+
+
+def test_lapped_mapping_is_printable_and_refuses_a_named_field():
+    V, F = icosphere(2, radius=15.0)
+    r = displaced_mesh(V, F, "bricks", depth=0.4, mapping="lapped", scale_u=12.0,
+                       target_faces=20_000, masks=mask_options(bottom_angle=0))
+    assert r.report.printable, r.report.reasons
+    moved = np.linalg.norm(r.vertices, axis=1) - 15.0
+    assert moved.max() > 0.2
+    with pytest.raises(InputError, match="needs a direction"):
+        displaced_mesh(V, F, "bricks", depth=0.4, mapping="lapped", field="smooth",
+                       judge=False, target_faces=5000)
