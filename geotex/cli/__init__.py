@@ -21,14 +21,14 @@ import os
 import sys
 
 from geotex import __version__
-from geotex.cli import (batch, check, convert, demo, exemplar, field, heighttilt, hpm, lapped,
-                        mapping, material, pgp, quilt, render, repair, shell, tile_image,
-                        tiles, view)
+from geotex.cli import (batch, check, convert, demo, displace, exemplar, field, heighttilt,
+                        hpm, lapped, mapping, material, pgp, quilt, render, repair, shell,
+                        tile_image, tiles, view)
 from geotex.cli._common import EXIT_INTERNAL, EXIT_USAGE, Parser, fail
 from geotex.errors import GeotexError
 
 COMMANDS = (demo, mapping, check, repair, render, convert, field, pgp, tile_image, heighttilt,
-            exemplar, quilt, tiles, shell, lapped, hpm, material, view, batch)
+            exemplar, quilt, tiles, shell, lapped, displace, hpm, material, view, batch)
 
 
 def build_parser() -> Parser:

@@ -1,23 +1,22 @@
 """The composited lapped texture as a height field: a printable relief solid.
 
 DESIGN §5.5: "a grey image mapped through any of these becomes a height
-field displacement for printing".  Steps:
+field displacement for printing".  The relief goes through the shared core
+:func:`geotex.relief.displaced_solid`:
 
-1. refine a copy of the base so its edges are short enough to carry the
-   texture (pymeshlab isotropic remeshing through
-   :func:`geotex.heighttilt.refine.refine_base`, or midpoint subdivision);
-2. locate every refined vertex on the base (closest point, libigl AABB) and
-   composite the pastes there (:func:`geotex.image.composite.composite_at`);
+1. the base is refined by exact edge splits to the edge length
+   (:func:`geotex.relief.refined_by_edge_splits`; every refined vertex knows
+   its base face and barycentric coordinates, so no closest-point search);
+2. the pastes are composited there (:func:`geotex.image.composite.composite_at`);
    the luminance is the height ``h`` in ``[0, 1]`` (inverted on request);
-3. low-pass ``h`` by a few uniform Laplacian steps over the refined mesh (the
-   vertex spacing is coarser than the texture's pixels; unfiltered samples
-   alias into spikes);
-4. move every vertex along its area-weighted normal by ``depth * h``;
-5. where the offset surface crosses itself (concave creases narrower than
-   the relief, found by :func:`geotex.check.intersections.self_intersecting_pairs`),
-   halve the relief on the crossing faces and two rings around them, and
-   repeat (at most ``RELIEF_ROUNDS`` times, then flatten those places to
-   the base), so the solid stays printable when the refined base is.
+3. ``h`` is low-passed by a few uniform Laplacian steps over the refined
+   mesh (unfiltered samples alias into spikes);
+4. every vertex moves along the smoothed, crease-aware normal by ``depth * h``;
+5. where the offset surface crosses itself (found by
+   :func:`geotex.check.intersections.self_intersecting_pairs` through
+   :func:`geotex.check.report.check_mesh`), the relief is halved on the
+   crossing faces and two rings around them, and repeated (at most
+   :data:`geotex.relief.RELIEF_ROUNDS` times, then flattened there).
 
 The relief only grows outward from the base surface.
 """
@@ -28,7 +27,6 @@ import math
 
 import igl
 import numpy as np
-import scipy.sparse as sp
 
 from geotex.errors import InputError
 from geotex.image.composite import composite_at, luminance
@@ -39,8 +37,6 @@ __all__ = ["displace", "surface_points", "height_at"]
 
 #: Refined meshes are kept below this many faces by default.
 DEFAULT_MAX_FACES = 400_000
-#: Rounds of local relief reduction where the offset surface crosses itself.
-RELIEF_ROUNDS = 6
 
 
 def surface_points(V, F, P) -> tuple[np.ndarray, np.ndarray]:
@@ -89,23 +85,16 @@ def height_at(V, F, lapped: LappedTexture, P, *, invert: bool = False) -> np.nda
     return 1.0 - h if invert else h
 
 
-def _smooth(F: np.ndarray, n: int, h: np.ndarray, steps: int) -> np.ndarray:
-    if steps <= 0:
-        return h
-    e = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
-    A = sp.coo_matrix((np.ones(2 * e.shape[0]), (np.r_[e[:, 0], e[:, 1]], np.r_[e[:, 1], e[:, 0]])),
-                      shape=(n, n)).tocsr()
-    A.data[:] = 1.0
-    deg = np.asarray(A.sum(axis=1)).ravel()
-    M = sp.diags(1.0 / np.maximum(deg, 1.0)) @ A
-    for _ in range(steps):
-        h = 0.5 * h + 0.5 * (M @ h)
-    return h
+def _judged(V, F):
+    from geotex.check.report import check_mesh
+
+    return V, F, check_mesh(V, F, manifold3d=False)
 
 
 def displace(V, F, lapped: LappedTexture, *, depth: float, edge_length: float | None = None,
-             refine: str = "remesh", smoothing: int = 1, invert: bool = False,
-             max_faces: int = DEFAULT_MAX_FACES, fix_intersections: bool = True) -> tuple[np.ndarray, np.ndarray]:
+             refine: str = "split", smoothing: int = 1, invert: bool = False,
+             max_faces: int = DEFAULT_MAX_FACES, fix_intersections: bool = True
+             ) -> tuple[np.ndarray, np.ndarray]:
     """Displace a refined copy of the base by the composited texture.
 
     Parameters
@@ -118,11 +107,12 @@ def displace(V, F, lapped: LappedTexture, *, depth: float, edge_length: float | 
     depth : float
         Relief height for luminance 1 (mesh units, > 0).
     edge_length : float, optional
-        Target edge length of the refined mesh.  Default: the texture scale
-        over 48 (about 4 texture pixels of a 192-pixel patch), but no finer
-        than ``max_faces`` allows.
-    refine : {"remesh", "subdivide", "none"}, optional
-        See :func:`geotex.heighttilt.refine.refine_base`.
+        Longest edge of the refined mesh.  Default: the texture scale over
+        48 (about 4 texture pixels of a 192-pixel patch), but no finer than
+        ``max_faces`` allows.
+    refine : {"split", "none"}, optional
+        ``"split"``: exact edge splits (:func:`geotex.relief.refined_by_edge_splits`);
+        ``"none"``: the base's own vertices.
     smoothing : int, optional
         Laplacian low-pass steps on the heights.
     invert : bool, optional
@@ -140,10 +130,10 @@ def displace(V, F, lapped: LappedTexture, *, depth: float, edge_length: float | 
     Raises
     ------
     InputError
-        On a non-positive depth, a lapped texture of another mesh, or a base
-        that cannot be refined.
+        On a non-positive depth, a lapped texture of another mesh, or a
+        length that needs more than ``max_faces`` faces.
     """
-    from geotex.heighttilt.refine import refine_base
+    from geotex.relief import displaced_solid
 
     V, F = as_mesh_arrays(V, F)
     if F.shape[0] != lapped.n_faces or V.shape[0] != lapped.n_vertices:
@@ -157,9 +147,11 @@ def displace(V, F, lapped: LappedTexture, *, depth: float, edge_length: float | 
         raise InputError(f"depth must be a positive number, got {depth!r}")
     if int(smoothing) != smoothing or smoothing < 0:
         raise InputError(f"smoothing must be an integer >= 0, got {smoothing!r}")
+    if refine not in ("split", "none"):
+        raise InputError(f"refine must be 'split' or 'none', got {refine!r}")
     area = 0.5 * float(np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]],
                                                V[F[:, 2]] - V[F[:, 0]]), axis=1).sum())
-    floor = math.sqrt(area / (0.433 * float(max_faces)))
+    floor = math.sqrt(area / (0.14 * float(max_faces)))
     if edge_length is None:
         sc = lapped.metadata.get("scale")
         if not isinstance(sc, (int, float)):
@@ -176,25 +168,15 @@ def displace(V, F, lapped: LappedTexture, *, depth: float, edge_length: float | 
         if L < floor:
             raise InputError(f"edge_length {L:.3g} needs more than {max_faces} faces; "
                              f"use at least {floor:.3g} or raise max_faces")
-    Vr, Fr = refine_base(V, F, L, method=refine)
-    h = height_at(V, F, lapped, Vr, invert=invert)
-    h = _smooth(Fr, Vr.shape[0], h, int(smoothing))
-    N = np.asarray(igl.per_vertex_normals(Vr, Fr, igl.PER_VERTEX_NORMALS_WEIGHTING_TYPE_AREA),
-                   dtype=np.float64)
-    Vd = Vr + (d * h)[:, None] * N
-    if fix_intersections:
-        from geotex.check.intersections import self_intersecting_pairs
+    if refine == "none":
+        L = float(np.linalg.norm(V.max(axis=0) - V.min(axis=0))) * 2.0
 
-        gain = np.ones(Vr.shape[0])
-        n = Vr.shape[0]
-        for r in range(RELIEF_ROUNDS + 1):
-            pairs = self_intersecting_pairs(Vd, Fr)
-            if len(pairs) == 0:
-                break
-            hit = np.zeros(n, dtype=bool)
-            hit[Fr[np.unique(np.asarray(pairs).ravel())].ravel()] = True
-            for _ in range(2):
-                hit[Fr[hit[Fr].any(axis=1)].ravel()] = True
-            gain[hit] = 0.0 if r == RELIEF_ROUNDS - 1 else 0.5 * gain[hit]
-            Vd = Vr + (d * h * gain)[:, None] * N
-    return np.ascontiguousarray(Vd), np.ascontiguousarray(Fr)
+    def heights(pts):
+        h = luminance(composite_at(lapped, pts.face, pts.bary)[:, :3]).astype(np.float64)
+        return 1.0 - h if invert else h
+
+    res = displaced_solid(V, F, heights, depth=d, edge_length=L, smoothing=int(smoothing),
+                          max_faces=int(max_faces),
+                          judge=_judged if fix_intersections else None,
+                          fix_intersections=fix_intersections)
+    return res.vertices, res.faces

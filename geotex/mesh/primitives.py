@@ -7,7 +7,7 @@ import numpy as np
 
 from geotex.errors import InputError
 
-__all__ = ["icosphere", "torus", "box", "grid_plane", "plate_with_holes", "sphere_with_rod"]
+__all__ = ["icosphere", "closed_cylinder", "torus", "box", "grid_plane", "plate_with_holes", "sphere_with_rod"]
 
 
 def icosphere(subdivisions: int = 2, *, radius: float = 1.0, center=(0.0, 0.0, 0.0)
@@ -36,6 +36,64 @@ def icosphere(subdivisions: int = 2, *, radius: float = 1.0, center=(0.0, 0.0, 0
         V, F = igl.upsample(V, F, subdivisions)
     V = V / np.linalg.norm(V, axis=1, keepdims=True)
     return np.ascontiguousarray(V * radius + np.asarray(center, float)), np.asarray(F, np.int64)
+
+
+def closed_cylinder(radius: float = 1.0, height: float = 2.0, *, n_theta: int = 64,
+                    n_height: int = 16, n_cap_rings: int = 4) -> tuple[np.ndarray, np.ndarray]:
+    """Return a closed cylinder along z (base at z = 0), outward oriented.
+
+    The side is a grid of ``n_theta`` x ``n_height`` quads (two triangles
+    each); each cap is ``n_cap_rings`` concentric rings of ``n_theta``
+    vertices around a centre vertex.  The cap's rim is a sharp 90 degree
+    crease.
+
+    Returns
+    -------
+    V : numpy.ndarray, (n_theta * (n_height + 1 + 2 * (n_cap_rings - 1)) + 2, 3) float64
+    F : numpy.ndarray, (2 * n_theta * (n_height + 2 * n_cap_rings - 1), 3) int64
+
+    Raises
+    ------
+    InputError
+        On non-positive sizes or counts below 3 / 1 / 1.
+    """
+    if n_theta < 3 or n_height < 1 or n_cap_rings < 1 or not (radius > 0 and height > 0):
+        raise InputError("closed_cylinder needs radius, height > 0, n_theta >= 3, "
+                         "n_height >= 1 and n_cap_rings >= 1")
+    t = np.arange(n_theta) * 2 * np.pi / n_theta
+    ring = np.stack([np.cos(t), np.sin(t)], axis=1)
+    z = np.linspace(0.0, height, n_height + 1)
+    side = np.concatenate([np.column_stack([radius * ring, np.full(n_theta, zz)]) for zz in z])
+    rows = [np.arange(n_theta) + k * n_theta for k in range(n_height + 1)]
+    Vs = [side]
+    nv = side.shape[0]
+    Fs = []
+
+    def band(lo, hi):             # quads between two rings, outward for lo below hi
+        a, b = lo, np.roll(lo, -1)
+        c, d = np.roll(hi, -1), hi
+        return np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
+
+    for k in range(n_height):
+        Fs.append(band(rows[k], rows[k + 1]))
+    for top in (False, True):
+        zz = height if top else 0.0
+        prev = rows[-1] if top else rows[0]
+        for r in range(n_cap_rings - 1, 0, -1):
+            rr = radius * r / n_cap_rings
+            Vs.append(np.column_stack([rr * ring, np.full(n_theta, zz)]))
+            cur = np.arange(n_theta) + nv
+            nv += n_theta
+            Fs.append(band(cur, prev) if not top else band(prev, cur))
+            prev = cur
+        Vs.append(np.array([[0.0, 0.0, zz]]))
+        c = nv
+        nv += 1
+        a, b = prev, np.roll(prev, -1)
+        fan = np.stack([a, b, np.full(n_theta, c)], 1)
+        Fs.append(fan if top else fan[:, ::-1])
+    V = np.ascontiguousarray(np.concatenate(Vs))
+    return V, np.ascontiguousarray(np.concatenate(Fs), dtype=np.int64)
 
 
 def torus(major: float = 1.0, minor: float = 0.35, *, n_major: int = 48, n_minor: int = 24

@@ -1,0 +1,337 @@
+"""``geotex displace`` as Python: a height map on a part, as a printable solid.
+
+:func:`displaced_mesh` works on arrays (millimetres) and returns the judged
+solid; :func:`displace_file` reads a part, optionally scales it, and writes
+the result only when it is printable as stored (the verified export of
+:mod:`geotex.printing`).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from geotex.displace.heightmap import filtered_height_map, load_height_map
+from geotex.displace.mappings import mapping_options, projected_heights
+from geotex.displace.masks import MaskOptions, mask_weights, selected_faces
+from geotex.errors import InputError
+from geotex.mesh.arrays import as_mesh_arrays
+from geotex.progress import report
+from geotex.relief import DEFAULT_MAX_FACES, displaced_solid, edge_length_for_faces
+
+__all__ = ["displaced_mesh", "displace_file", "stored_judge", "DisplaceResult", "depth_warnings",
+           "DEFAULT_TARGET_FACES", "DISPLACE_STAGES"]
+
+#: Default size of the refined mesh.
+DEFAULT_TARGET_FACES = 1_000_000
+#: Depth above this fraction of the smallest extent draws a warning.
+WARN_DEPTH_FRACTION = 0.10
+#: Progress stages of :func:`displace_file`.
+DISPLACE_STAGES = ("read", "map", "refine", "normals", "heights", "displace", "decimate",
+                   "check", "write")
+
+
+@dataclass(frozen=True)
+class DisplaceResult:
+    """The displaced solid as stored, its verdict, and what was done.
+
+    Attributes
+    ----------
+    vertices : numpy.ndarray, (n, 3) float64
+    faces : numpy.ndarray, (m, 3) int64
+    report : CheckReport or None
+    stats : dict
+    warnings : tuple of str
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    report: object
+    stats: dict = field(default_factory=dict)
+    warnings: tuple = ()
+
+
+def depth_warnings(V, depth: float) -> tuple[str, ...]:
+    """Warn about a depth that is large for the part; refuse an absurd one.
+
+    Returns
+    -------
+    tuple of str
+        A warning when ``depth`` is above 10 % of the smallest extent.
+
+    Raises
+    ------
+    InputError
+        When ``depth`` is at least the smallest extent or above a quarter of
+        the largest (the relief would swallow the part).
+    """
+    ext = np.ptp(np.asarray(V), axis=0)
+    small, large = float(ext.min()), float(ext.max())
+    if depth >= small or depth > 0.25 * large:
+        raise InputError(f"depth {depth:g} mm is absurd for a part of {ext[0]:.4g} x "
+                         f"{ext[1]:.4g} x {ext[2]:.4g} mm; use a depth below "
+                         f"{WARN_DEPTH_FRACTION * small:.3g} mm (10 % of the smallest extent)")
+    if depth > WARN_DEPTH_FRACTION * small:
+        return (f"depth {depth:g} mm is more than 10 % of the part's smallest extent "
+                f"({small:.4g} mm): expect reduced relief where it would cross itself",)
+    return ()
+
+
+def stored_judge(precision):
+    """The verdict callable of :func:`geotex.relief.displaced_solid` for a file format.
+
+    ``judge(V, F) -> (V_stored, F_stored, CheckReport)``: the solid rounded
+    and welded as the file stores it (:func:`geotex.printing.stored_form`),
+    checked without manifold3d's second opinion (what it checks, closed,
+    manifold and oriented, the topology stage checks too; see
+    :func:`geotex.check.report.check_mesh`), with every crossing pair listed
+    so the relief can be lowered there without a second search.  Other
+    failures go through :func:`geotex.printing.printable_stored_solid` (its
+    rebuild of what rounding broke).
+    """
+    from geotex.check.report import check_mesh
+    from geotex.printing import printable_stored_solid, stored_form
+
+    def judge(Vx, Fx):
+        Vs, Fs = stored_form(Vx, Fx, precision=precision)
+        rep = check_mesh(Vs, Fs, manifold3d=False, max_examples=2 ** 62)
+        if rep.printable or all(r.endswith("self-intersecting face pairs")
+                                for r in rep.reasons):
+            return Vs, Fs, rep
+        s = printable_stored_solid(Vx, Fx, precision=precision, manifold3d=False)
+        return s.vertices, s.faces, s.report
+
+    return judge
+
+
+def displaced_mesh(V, F, image, *, depth: float, mapping: str = "triplanar", scale_u=None,
+                   scale_v=None, offset_u: float = 0.0, offset_v: float = 0.0,
+                   rotation: float = 0.0, sharpness: float = 4.0, blend: float = 0.15,
+                   axis: str = "z", cap_angle: float = 20.0, symmetric: bool = False,
+                   blur: float = 0.0, invert: bool = False, masks: MaskOptions | None = None,
+                   edge_length: float | None = None,
+                   target_faces: int = DEFAULT_TARGET_FACES,
+                   max_faces: int = DEFAULT_MAX_FACES, decimate_to: int | None = None,
+                   uv=None, field=None, seed: int = 0, precision=np.float32,
+                   judge: bool = True, progress=None) -> DisplaceResult:
+    """Displace a part (millimetres) by a height map under a mapping.
+
+    Parameters
+    ----------
+    V : array_like, (n, 3) float64
+    F : array_like, (m, 3) int64
+        A closed manifold part, in millimetres.
+    image : str, os.PathLike or array_like
+        A library name (:func:`geotex.displace.library.library_names`), an
+        image file or an array (see :func:`~geotex.displace.heightmap.load_height_map`).
+    depth : float
+        Relief depth in mm (white = ``depth`` outward; with ``symmetric``,
+        ``depth / 2`` either side, 50 % grey neutral).
+    mapping : str, optional
+        One of :data:`geotex.displace.mappings.MAPPINGS`.
+    scale_u, scale_v, offset_u, offset_v, rotation, sharpness, blend, axis, cap_angle
+        See :class:`geotex.displace.mappings.MappingOptions`.
+    symmetric : bool, optional
+    blur : float, optional
+        Gaussian blur of the image, mm on the surface (pixels for ``uv``).
+    invert : bool, optional
+        Dark high.
+    masks : MaskOptions, optional
+        Default: the bed faces (within 5 degrees of -z) stay flat.
+    edge_length : float, optional
+        Longest refined edge, mm; default from ``target_faces``.
+    target_faces : int, optional
+        Approximate refined face count (default 1,000,000).
+    max_faces : int, optional
+        Safety cap.
+    decimate_to : int, optional
+        QEM-decimate the result to this many faces.
+    uv : numpy.ndarray, (m, 3, 2), optional
+        Per-corner texture coordinates (``uv`` mapping).
+    field : str or sequence, optional
+        ``pgp``: the cross field, a direction the image's "up" follows
+        (default ``(0, 0, 1)``: horizontal courses on upright walls),
+        ``"smooth"`` or ``"curvature"``; ``lapped``: the "up" direction
+        (default ``(0, 0, 1)``).
+    seed : int, optional
+    precision : type, optional
+        Coordinates as the output file stores them (float32 for STL).
+    judge : bool, optional
+        Judge the result as stored (and lower the relief where it crosses
+        itself); ``False`` skips the check (the result is then not verified).
+    progress : callable, optional
+
+    Returns
+    -------
+    DisplaceResult
+
+    Raises
+    ------
+    InputError
+        Bad options, an absurd depth, a mapping that cannot be made, or a
+        result above ``max_faces``.
+    """
+    from geotex.options import finite_number, positive_number
+
+    V, F = as_mesh_arrays(V, F)
+    if F.shape[0] == 0:
+        raise InputError("the part has no faces")
+    d = positive_number(depth, name="depth")
+    warns = list(depth_warnings(V, d))
+    opt = mapping_options(mapping, scale_u=scale_u, scale_v=scale_v, offset_u=offset_u,
+                          offset_v=offset_v, rotation=rotation, sharpness=sharpness,
+                          blend=blend, axis=axis, cap_angle=cap_angle)
+    b = finite_number(blur, name="blur")
+    if b < 0:
+        raise InputError(f"blur must be >= 0, got {blur!r}")
+    H0 = load_height_map(image)
+    if edge_length is None:
+        edge_length = edge_length_for_faces(V, F, target_faces)
+    L = positive_number(edge_length, name="edge_length")
+    sec = {}
+    t = time.perf_counter()
+    report(progress, "map")
+    # low-pass the image to the vertex spacing (sampling finer detail aliases)
+    if mapping == "uv":
+        sigma = b
+    else:
+        px = opt.scale_u / H0.shape[1]
+        aa = 0.5 * L / px if L > px else 0.0
+        sigma = math.hypot(b / px, aa)
+    H = filtered_height_map(H0, sigma_pixels=sigma, invert=invert)
+    if mapping == "uv":
+        if uv is None:
+            raise InputError("the uv mapping needs texture coordinates: the part file has "
+                             "none (use an OBJ with vt or a GLB with TEXCOORD_0)")
+        uvc = np.asarray(uv, dtype=np.float64)
+        if uvc.shape != (F.shape[0], 3, 2):
+            raise InputError(f"uv must be per-corner coordinates of shape ({F.shape[0]}, 3, 2)")
+        sampler = lambda p: projected_heights(p, H, opt, uv=uvc)  # noqa: E731
+    elif mapping == "pgp":
+        from geotex.displace.seamless import pgp_corner_coordinates, pgp_heights
+
+        field = (0.0, 0.0, 1.0) if field is None else field
+        coords = pgp_corner_coordinates(V, F, tile=opt.scale_u, field=field, seed=seed)
+        off = (opt.offset_u / opt.scale_u, opt.offset_v / opt.scale_u)
+        # a direction field is the image's "up": the parameterization's s axis runs
+        # along it, so the image is turned by -90 degrees (u = -t, v = s)
+        turn = 0.0 if isinstance(field, str) else -90.0
+        sampler = lambda p: pgp_heights(p, H, coords, offset=off,  # noqa: E731
+                                        rotation=opt.rotation + turn)
+    elif mapping == "lapped":
+        from geotex.displace.seamless import lapped_height_texture, lapped_heights
+
+        if isinstance(field, str):
+            raise InputError(f"field {field!r}: the lapped mapping needs a direction X,Y,Z "
+                             "for the image's up")
+        up = (0.0, 0.0, 1.0) if field is None else field
+        lt = lapped_height_texture(V, F, H, tile=opt.scale_u, up=up, seed=seed)
+        sampler = lambda p: lapped_heights(p, lt)  # noqa: E731
+    else:
+        sampler = lambda p: projected_heights(p, H, opt)  # noqa: E731
+    sec["map"] = time.perf_counter() - t
+    masks = MaskOptions() if masks is None else masks
+    faces_on = selected_faces(V, F, masks)
+    if not faces_on.any():
+        raise InputError("the mask leaves no face to texture; loosen the mask options")
+    weights = lambda p: mask_weights(p, faces_on, width=masks.width,  # noqa: E731
+                                     curve=masks.curve)
+    judge_fn = stored_judge(precision) if judge else None
+    res = displaced_solid(V, F, sampler, depth=d, edge_length=L, symmetric=symmetric,
+                          precision=precision,
+                          weights=weights, max_faces=max_faces, decimate_to=decimate_to,
+                          judge=judge_fn, progress=progress)
+    stats = dict(res.stats)
+    stats["seconds"] = dict(sec, **stats["seconds"])
+    stats["mapping"] = mapping
+    stats["depth_mm"] = d
+    stats["tile_mm"] = [opt.scale_u, opt.scale_v]
+    if res.stats.get("relief_reduced_rounds"):
+        warns.append(f"relief lowered locally in {res.stats['relief_reduced_rounds']} "
+                     "round(s) where the surface would have crossed itself")
+    return DisplaceResult(res.vertices, res.faces, res.report, stats, tuple(warns))
+
+
+def _read_part(path, *, step_quality: str = "standard"):
+    from pathlib import Path
+
+    p = Path(path)
+    if p.suffix.lower() in (".step", ".stp"):
+        from geotex.displace.step import read_step
+
+        V, F = read_step(p, quality=step_quality)
+        return V, F, None
+    from geotex.io import read_mesh
+
+    mesh = read_mesh(p)
+    uv = None
+    if mesh.uv is not None:
+        uv = np.asarray(mesh.uv, dtype=np.float64)[np.asarray(mesh.uv_faces)]
+    return mesh.vertices, mesh.faces, uv
+
+
+def displace_file(base, image, output, *, depth: float, size_mm: float | None = None,
+                  step_quality: str = "standard", force: bool = False, progress=None,
+                  **options) -> DisplaceResult:
+    """Read a part, displace it by a height map, and write it only if printable.
+
+    Parameters
+    ----------
+    base : str or os.PathLike
+        STL/OBJ/PLY/OFF/3MF/GLB (or STEP/STP through gmsh, when installed).
+    image : str, os.PathLike or array_like
+        Library name, image file or array.
+    output : str or os.PathLike
+        ``.stl`` or ``.3mf`` (``.obj``/``.ply``/``.off`` accepted).
+    depth : float
+        Millimetres.
+    size_mm : float, optional
+        Scale the part so its largest extent is this many millimetres.
+    step_quality : str, optional
+        STEP tessellation preset (``coarse``, ``standard``, ``fine``).
+    force : bool, optional
+        Write even when not printable.
+    progress : callable, optional
+        Called with each of ``DISPLACE_STAGES``.
+    **options
+        Passed to :func:`displaced_mesh`.
+
+    Returns
+    -------
+    DisplaceResult
+
+    Raises
+    ------
+    InputError
+        Unreadable files, bad options.
+    NotPrintableError
+        The result is not printable as stored (nothing written) and not ``force``.
+    """
+    from pathlib import Path
+
+    from geotex.printing import export_printable, stored_precision
+
+    t = time.perf_counter()
+    report(progress, "read")
+    V, F, uv = _read_part(base, step_quality=step_quality)
+    if size_mm is not None:
+        from geotex.options import positive_number
+
+        s = positive_number(size_mm, name="size_mm") / float(np.ptp(V, axis=0).max())
+        V = V * s
+    read_s = time.perf_counter() - t
+    if options.get("mapping") == "uv" and "uv" not in options:
+        options["uv"] = uv
+    res = displaced_mesh(V, F, image, depth=depth, progress=progress,
+                         precision=stored_precision(Path(output).suffix), **options)
+    t = time.perf_counter()
+    report(progress, "write")
+    rep = export_printable(output, res.vertices, res.faces, report=res.report, force=force,
+                           name=Path(base).stem)
+    stats = dict(res.stats)
+    stats["seconds"] = dict(stats["seconds"], read=round(read_s, 3),
+                            write=round(time.perf_counter() - t, 3))
+    return DisplaceResult(res.vertices, res.faces, rep, stats, res.warnings)
