@@ -364,3 +364,29 @@ def test_cli_local_update(capsys, tmp_path):
     code, _, err = _run(capsys, "pgp", mesh, "--up", "1,0,0", "--scale", "0.3",
                         "--update", old, "-o", tmp_path / "x.npz")
     assert code == 2 and "--around" in err
+
+
+def test_tile_image_relief_through_the_shared_displacement_path(capsys, tmp_path):
+    from PIL import Image
+
+    from geotex.check import check_mesh
+    from geotex.io import read_mesh
+
+    mesh = write_mesh(tmp_path / "s.obj", Mesh(*icosphere(2, radius=10.0)))
+    pgp = tmp_path / "p.npz"
+    assert _run(capsys, "pgp", mesh, "--up", "0,0,1", "--scale", "4", "-o", pgp)[0] == 0
+    img = np.zeros((16, 16), np.uint8)
+    img[:, :8] = 255                                     # stripes: half the tile raised
+    Image.fromarray(img).save(tmp_path / "h.png")
+    out = tmp_path / "r.stl"
+    code, text, err = _run(capsys, "tile-image", mesh, "--image", tmp_path / "h.png",
+                           "--param", pgp, "--displace", "0.5", "--faces", "20000",
+                           "-o", out)
+    assert code == 0, err
+    m = read_mesh(out)
+    assert check_mesh(m.vertices, m.faces).printable
+    r = np.linalg.norm(m.vertices, axis=1)
+    assert r.max() > 10.3 and r.min() > 9.5              # raised where white, nowhere sunk
+    code, _, err = _run(capsys, "tile-image", mesh, "--image", tmp_path / "h.png",
+                        "--param", pgp, "--displace", "0.5", "-o", tmp_path / "r.glb")
+    assert code == 2 and "--displace" in err

@@ -1,18 +1,26 @@
-"""``geotex tile-image BASE --image IMG --param P.npz -o OUT.glb|.obj``: a tileable image over a PGP."""
+"""``geotex tile-image BASE --image IMG --param P.npz -o OUT.glb|.obj``: a tileable image over a PGP.
+
+With ``--displace DEPTH -o OUT.stl|.3mf`` the image is a height map instead
+and the relief goes through the shared displacement path
+(:func:`geotex.displace.displace_file` with the ``uv`` mapping on the PGP's
+coordinates), written only when printable as stored.
+"""
 
 from __future__ import annotations
 
-from geotex.cli._common import EXIT_OK, UsageError, guard_output
+from geotex.cli._common import EXIT_NOT_PRINTABLE, EXIT_OK, UsageError, guard_output
 
 HELP = "lay a tileable image over a mesh through its periodic parameterization (geotex pgp)"
 TEXTURED = (".glb", ".obj")
+PRINTS = (".stl", ".3mf")
 
 
 def register(sub):
     p = sub.add_parser("tile-image", help=HELP, description=HELP + ". The per-corner tile "
                        "coordinates of the PGP file become the texture coordinates (one "
                        "image period per tile, repeated): no atlas, no seams except at the "
-                       "field's singularities. Writes OUT.glb, or OUT.obj + OUT.mtl + OUT.png.")
+                       "field's singularities. Writes OUT.glb, or OUT.obj + OUT.mtl + OUT.png; with "
+                       "--displace, a printable relief OUT.stl or OUT.3mf.")
     p.add_argument("base", metavar="BASE", help="the mesh the PGP file was computed on")
     p.add_argument("--image", required=True, metavar="IMG",
                    help="tileable image (PNG, JPEG): one period per tile")
@@ -21,7 +29,15 @@ def register(sub):
     p.add_argument("--make-tileable", type=int, default=None, metavar="PX",
                    help="the image is not periodic: make a PX x PX periodic tile from its "
                         "central square first (graph-cut wrap, as for material-space tiles)")
-    p.add_argument("-o", "--output", required=True, help="OUT.glb or OUT.obj (textured)")
+    p.add_argument("--displace", type=float, default=None, metavar="MM",
+                   help="write a printable relief instead: the image is a height map (white "
+                        "high) raised by up to MM along the surface (BASE in mm)")
+    p.add_argument("--size-mm", type=float, default=None, metavar="L",
+                   help="with --displace: scale the part so its largest extent is L mm")
+    p.add_argument("--faces", type=int, default=1_000_000, metavar="N",
+                   help="with --displace: about N refined faces (default 1000000)")
+    p.add_argument("-o", "--output", required=True,
+                   help="OUT.glb or OUT.obj (textured), OUT.stl or OUT.3mf (with --displace)")
     p.set_defaults(run=run)
 
 
@@ -33,9 +49,15 @@ def run(args) -> int:
     from geotex.param.pgp_store import load_parameterization
 
     out = guard_output(args.output, args.base, args.image, args.param)
-    if out.suffix.lower() not in TEXTURED:
+    suffix = out.suffix.lower()
+    if args.displace is None and suffix not in TEXTURED:
         raise UsageError(f"{out}: a tiled image is written as .glb or .obj (+ .mtl + .png); "
-                         f"got '{out.suffix}'")
+                         f"got '{out.suffix}' (a relief needs --displace MM)")
+    if args.displace is not None and suffix not in PRINTS:
+        raise UsageError(f"{out}: --displace writes a relief as .stl or .3mf; got "
+                         f"'{out.suffix}'")
+    if args.displace is not None and not (0 < args.displace < float("inf")):
+        raise UsageError(f"--displace {args.displace}: give a positive depth in mm")
     mesh = read_mesh(args.base)
     try:
         pgp = load_parameterization(args.param)
@@ -58,9 +80,37 @@ def run(args) -> int:
         except InputError as exc:
             raise UsageError(f"--make-tileable {args.make_tileable}: {exc}") from None
         image = np.clip(np.rint(tile.colors * 255.0), 0, 255).astype(np.uint8)
+    if args.displace is not None:
+        return _relief(args, out, pgp, image)
     textured = tiled_texture_mesh(mesh.vertices, mesh.faces, pgp.coords, image,
                                   name=mesh.name or "geotex")
     write_mesh(out, textured)
     print(f"wrote {out}: {mesh.n_faces} faces, {int(pgp.singular.sum())} singular, "
           f"image {image.shape[1]}x{image.shape[0]} per tile")
+    return EXIT_OK
+
+
+def _relief(args, out, pgp, image) -> int:
+    """The tileable image as a height map through the PGP: a printable relief."""
+    import sys
+
+    from geotex.cli._common import flag_error
+    from geotex.displace import DISPLACE_STAGES, displace_file
+    from geotex.errors import InputError, NotPrintableError
+    from geotex.progress import stage_bar
+
+    try:
+        with stage_bar(len(DISPLACE_STAGES), "relief") as bar:
+            res = displace_file(args.base, image, out, depth=args.displace, mapping="uv",
+                                uv=pgp.coords, target_faces=args.faces, size_mm=args.size_mm,
+                                progress=bar)
+    except NotPrintableError as exc:
+        print(f"geotex: error: {out}: not written, not printable as stored "
+              f"({'; '.join(exc.report.reasons)})", file=sys.stderr)
+        return EXIT_NOT_PRINTABLE
+    except InputError as exc:
+        raise flag_error(exc, {"depth": "--displace", "target_faces": "--faces",
+                               "size_mm": "--size-mm"}) from None
+    print(f"wrote {out}: relief {args.displace:g} mm through the PGP, "
+          f"{res.faces.shape[0]} faces (printable as written)")
     return EXIT_OK
