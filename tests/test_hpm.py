@@ -429,3 +429,20 @@ def test_hpm_topological_band_mode(mapped):
     assert np.isfinite(r.uv).all() and r.report()["placements"] >= 2
     with pytest.raises(InputError, match="band_mode"):
         hpm_texture(V, F, img, scale=3.0, band_mode="rings")
+
+
+def test_cli_hpm_relief_is_printable_and_refuses_a_textured_suffix(files, capsys):
+    from geotex.check import check_mesh
+
+    tmp, base, img = files
+    out = tmp / "relief.stl"
+    assert main(["hpm", str(base), "--image", str(img), "--scale", "3", "--displace", "0.05",
+                 "--faces", "20000", "-o", str(out)]) == 0
+    m = read_mesh(out)
+    assert check_mesh(m.vertices, m.faces).printable
+    r = np.linalg.norm(m.vertices, axis=1)
+    assert r.max() > 1.0 + 0.02                           # raised somewhere
+    capsys.readouterr()
+    assert main(["hpm", str(base), "--image", str(img), "--displace", "0.05",
+                 "-o", str(tmp / "x.glb")]) == 2
+    assert "--displace" in capsys.readouterr().err and not (tmp / "x.glb").exists()

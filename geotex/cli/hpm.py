@@ -33,15 +33,29 @@ def register(sub):
                         "subdivided (default 0.35; 1 = as bad as random pixels)")
     p.add_argument("--report", default=None, metavar="R.json",
                    help="also write per-level counts and matching errors")
-    p.add_argument("-o", "--output", required=True, help="OUT.glb or OUT.obj")
+    p.add_argument("--displace", type=float, default=None, metavar="MM",
+                   help="write a printable relief instead: the image's luminance (white high) "
+                        "raised by up to MM through the mapping (shared displacement path)")
+    p.add_argument("--size-mm", type=float, default=None, metavar="L",
+                   help="with --displace: scale the part so its largest extent is L mm")
+    p.add_argument("--faces", type=int, default=1_000_000, metavar="N",
+                   help="with --displace: about N refined faces (default 1000000)")
+    p.add_argument("-o", "--output", required=True,
+                   help="OUT.glb or OUT.obj (textured), OUT.stl or OUT.3mf (with --displace)")
     p.set_defaults(run=run)
 
 
 def _outputs(args) -> list[Path]:
     out = Path(args.output)
     ext = out.suffix.lower()
-    if ext not in (".glb", ".obj"):
-        raise UsageError(f"{out}: hpm writes a textured mesh; use .glb or .obj")
+    if args.displace is None and ext not in (".glb", ".obj"):
+        raise UsageError(f"{out}: hpm writes a textured mesh; use .glb or .obj (a relief "
+                         "needs --displace MM)")
+    if args.displace is not None:
+        if ext not in (".stl", ".3mf"):
+            raise UsageError(f"{out}: --displace writes a relief as .stl or .3mf")
+        if not (math.isfinite(args.displace) and args.displace > 0):
+            raise UsageError(f"--displace {args.displace!r}: give a positive depth in mm")
     written = [out]
     if ext == ".obj":
         written += [out.with_name(out.stem + ".mtl"), out.with_name(out.stem + ".png")]
@@ -102,8 +116,12 @@ def run(args) -> int:
                 raise UsageError(f"{args.base}: {msg}") from None
             raise flag_error(exc, {"scale": "--scale"}) from None
         raise
-    textured = hpm_mesh(V, F, result, image, name=mesh.name or out.stem)
-    write_mesh(out, textured)
+    if args.displace is not None:
+        status = _relief(args, out, result)
+        if status != EXIT_OK:
+            return status
+    else:
+        write_mesh(out, hpm_mesh(V, F, result, image, name=mesh.name or out.stem))
     if args.report:
         rep = dict(result.report(), base=str(args.base), image=str(args.image),
                    scale=scale, seed=args.seed, faces=int(F.shape[0]))
@@ -116,4 +134,28 @@ def run(args) -> int:
           f"({rep['levels'][-1]['filled_faces']} faces filled at face level), "
           f"{result.uv.shape[0]} texture coordinates")
     print("wrote " + " and ".join(str(p) for p in written))
+    return EXIT_OK
+
+
+def _relief(args, out, result) -> int:
+    """The image's luminance read through the mapping: a printable relief."""
+    import sys
+
+    from geotex.cli._common import EXIT_NOT_PRINTABLE
+    from geotex.displace import DISPLACE_STAGES, displace_file
+    from geotex.errors import InputError, NotPrintableError
+    from geotex.progress import stage_bar
+
+    try:
+        with stage_bar(len(DISPLACE_STAGES), "relief") as bar:
+            displace_file(args.base, args.image, out, depth=args.displace, mapping="uv",
+                          uv=result.uv[result.uv_faces], target_faces=args.faces,
+                          size_mm=args.size_mm, progress=bar)
+    except NotPrintableError as exc:
+        print(f"geotex: error: {out}: not written, not printable as stored "
+              f"({'; '.join(exc.report.reasons)})", file=sys.stderr)
+        return EXIT_NOT_PRINTABLE
+    except InputError as exc:
+        raise flag_error(exc, {"depth": "--displace", "target_faces": "--faces",
+                               "size_mm": "--size-mm"}) from None
     return EXIT_OK
