@@ -320,3 +320,13 @@ def test_cli_batch_file_errors(capsys, folder, tmp_path):
     bad.write_text("input,size_mm\nball.stl,huge\n")
     code, _, err = _cli(capsys, "batch", bad, "-o", tmp_path / "o2", "--tiles", TILES)
     assert code == 2 and f"{bad}:2: column size_mm: 'huge'" in err
+
+
+def test_displace_job_writes_a_printable_relief(tmp_path):
+    write_mesh(tmp_path / "ball.stl", Mesh(icosphere(2)[0] * 10.0, icosphere(2)[1]))
+    rows = run([Part(name="dots", input=str(tmp_path / "ball.stl"), job="displace",
+                     image="dots", height=0.5, size_mm=30.0)],
+               outdir=tmp_path / "o", workers=0)
+    assert _statuses(rows) == {"dots": "ok"} and rows[0]["printable"] is True
+    m = read_mesh(tmp_path / "o" / "dots.stl")
+    assert check_mesh(m.vertices, m.faces).printable

@@ -30,7 +30,10 @@ import numpy as np
 from geotex.errors import InputError, NotPrintableError
 
 __all__ = ["Job", "JOBS", "SHARED_LOADERS", "texture_part", "map_part", "lapped_part",
-           "check_part", "repair_part"]
+           "displace_part", "check_part", "repair_part", "DISPLACE_DEPTH_MM"]
+
+#: Relief depth of the ``displace`` job when a part gives no ``height`` (mm).
+DISPLACE_DEPTH_MM = 1.0
 
 
 @dataclass(frozen=True)
@@ -166,6 +169,21 @@ def lapped_part(part, shared, out) -> dict:
     return {"faces": int(rep.faces), "coverage": coverage, "printable": bool(rep.printable)}
 
 
+def displace_part(part, shared, out) -> dict:
+    """``geotex displace``: a height map (library name or image) as a printable relief.
+
+    ``height`` is the relief depth in mm (default :data:`DISPLACE_DEPTH_MM`),
+    ``size_mm`` scales the part first; the triplanar mapping and the other
+    defaults of the command.
+    """
+    from geotex.displace import displace_file
+
+    depth = DISPLACE_DEPTH_MM if part.height is None else part.height
+    res = displace_file(part.input, part.image, out, depth=depth, size_mm=part.size_mm,
+                        seed=part.seed)
+    return {"faces": int(res.faces.shape[0]), "printable": bool(res.report.printable)}
+
+
 def check_part(part, shared, out) -> dict:
     """``geotex check``: the validity report; a part that is not printable fails."""
     from geotex.check import check_mesh
@@ -229,6 +247,9 @@ JOBS: dict[str, Job] = {j.name: j for j in (
     Job("lapped", lapped_part, suffix=_lapped_suffix, needs=("image",),
         help="lapped image texture: GLB, or a relief STL with a height (geotex lapped)",
         imports=("geotex.image.lapped", "geotex.image.atlas", "geotex.printing")),
+    Job("displace", displace_part, needs=("image",),
+        help="height-map relief: a library map or an image, depth = height mm (geotex displace)",
+        imports=("geotex.displace", "geotex.printing")),
     Job("check", check_part, suffix=None,
         help="validity report; parts that are not printable fail (geotex check)",
         imports=("geotex.check", "geotex.io")),

@@ -21,7 +21,8 @@ and the others are optional (an empty cell means "the batch default"):
     Tile side in mm at print size (``texture``; default automatic).
 ``height``
     Texture height in mm (``texture``, ``map``); relief depth for ``lapped``
-    (then a printable STL relief is written instead of a textured GLB).
+    (then a printable STL relief is written instead of a textured GLB) and for
+    ``displace`` (default 1 mm).
 ``seed``
     Non-negative integer (default 0).
 ``image``
