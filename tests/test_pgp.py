@@ -390,3 +390,21 @@ def test_tile_image_relief_through_the_shared_displacement_path(capsys, tmp_path
     code, _, err = _run(capsys, "tile-image", mesh, "--image", tmp_path / "h.png",
                         "--param", pgp, "--displace", "0.5", "-o", tmp_path / "r.glb")
     assert code == 2 and "--displace" in err
+
+
+def test_edge_contrast_is_about_one_without_seams_and_larger_with_one():
+    from geotex.image.seams import edge_contrast
+
+    V, F = grid_plane(30, 30)
+    x = (np.arange(64) + 0.5) / 64
+    img = (127.5 + 127.5 * np.sin(2 * np.pi * x)[None, :, None] * np.ones((64, 1, 3)))
+    img = img.astype(np.uint8)
+    uv = V[:, :2] * 3.0                                    # three periods, continuous
+    smooth = edge_contrast(V, F, uv, F, img)
+    assert 0.8 < smooth.ratio < 1.25
+    # a seam: the right half's coordinates shifted by a quarter period
+    right = V[F].mean(axis=1)[:, 0] > 0.5
+    uvc = uv[F].copy()
+    uvc[right, :, 0] += 0.25
+    seam = edge_contrast(V, F, uvc.reshape(-1, 2), np.arange(3 * len(F)).reshape(-1, 3), img)
+    assert seam.ratio > 1.1 * smooth.ratio          # one seam line among 2640 edges
