@@ -78,18 +78,17 @@ def main(out: Path) -> None:
     m = modulated_material(V, np.full(V.shape[0], 0.5), amplitude=0.5, wavelength=3 * scale,
                            seed=0)
     hidden = bake_material_texture(V, F, params, m, tile, field=field, resolution=res)
-    # close-up: the flank that faces the camera (the body between the legs and the back)
-    cen = V[F].mean(axis=1)
+    # close-up: the flank (the whole mesh, seen by the renderer's close-up camera)
     lo, hi = V.min(axis=0), V.max(axis=0)
-    rel = (cen - lo) / (hi - lo)
-    flank = np.flatnonzero((rel[:, 1] > 0.3) & (rel[:, 1] < 0.95) & (rel[:, 2] > 0.25)
-                           & (rel[:, 2] < 0.75) & (cen[:, 0] > 0.5 * (lo[0] + hi[0])))
-    Vz = V[F[flank]].reshape(-1, 3)
-    Fz = np.arange(Vz.shape[0], dtype=np.int64).reshape(-1, 3)
+    target = lo + (hi - lo) * np.array([1.0, 0.6, 0.5])
+    flank = V[int(np.argmin(np.linalg.norm(V - target, axis=1)))]
+    Vc = V[F].reshape(-1, 3)
+    Fc = np.arange(Vc.shape[0], dtype=np.int64).reshape(-1, 3)
+    radius = 0.22 * float(np.linalg.norm(hi - lo))
 
     def textured(mesh, title):
-        return Panel(Vz, Fz, uv=mesh.uv[mesh.uv_faces[flank]].reshape(-1, 2),
-                     texture=mesh.texture, title=title)
+        return Panel(Vc, Fc, uv=mesh.uv[mesh.uv_faces].reshape(-1, 2), texture=mesh.texture,
+                     closeup=flank, closeup_radius=radius, title=title)
 
     panels = [textured(repeat, "A: repeat mode (m = 0), flank close-up"),
               textured(hidden, "B: m modulated over 4 layers\n(same mask, other details)"),

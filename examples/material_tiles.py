@@ -104,20 +104,18 @@ def main(out: Path) -> None:
     Vs, Fs, uvs, atlas = stacked_slices(tile)
     h = tile.metadata["histogram_distance"][1:-1]
     c = tile.metadata["cross_fade_histogram_distance"][1:-1]
-    # close-up: the faces around the middle of the body, where m is near 1/2
-    mid = np.abs(material[F].mean(axis=1) - 0.5) < 0.2
-    mid &= V[F].mean(axis=1)[:, 2] > np.percentile(V[:, 2], 40)
-    close = np.flatnonzero(mid)
-    Vz = V[F[close]].reshape(-1, 3)
-    Fz = np.arange(Vz.shape[0], dtype=np.int64).reshape(-1, 3)
-    uvz = textured.uv[textured.uv_faces[close]].reshape(-1, 2)
+    # close-up: a point in the middle of the body, where m is near 1/2 (the whole mesh,
+    # seen by the renderer's close-up camera)
+    mid = np.abs(material - 0.5) + 0.01 * (V[:, 2] < np.percentile(V[:, 2], 40))
+    spot_mid = V[int(np.argmin(mid))]
     panels = [Panel(Vs, Fs, uv=uvs, texture=atlas,
                     title=f"(s, t, m) tile: {label}\n{layers} slices of {size}^2, "
                           f"built in {t_tile:.0f} s"),
               Panel(Vc, Fc, uv=uv, texture=textured.texture,
                     title=f"Spot, m from tail (0) to head (1)\n"
                           f"{int(params.singular.sum())} singular faces blended"),
-              Panel(Vz, Fz, uv=uvz, texture=textured.texture,
+              Panel(Vc, Fc, uv=uv, texture=textured.texture, closeup=spot_mid,
+                    closeup_radius=0.25 * float(np.linalg.norm(np.ptp(V, axis=0))),
                     title="close-up where m is about 1/2")]
     render_panels(panels, out / "material_tiles.png", size=(700, 650))
     print(f"tile {label}: {t_tile:.1f} s; histogram distance inner layers "

@@ -41,9 +41,10 @@ def register(sub):
                    help="luminance threshold in [0, 1] for A's mask (default Otsu)")
     t.add_argument("--threshold-b", default=None, metavar="T",
                    help="luminance threshold in [0, 1] for B's mask (default Otsu)")
-    t.add_argument("--blend", choices=("linear", "select"), default="linear",
-                   help="combine the two syntheses of a layer by the paper's linear blend "
-                        "(default) or by a histogram-keeping selection along a smooth noise")
+    t.add_argument("--blend", choices=("linear", "select"), default="select",
+                   help="combine the two syntheses of a layer by a histogram-keeping selection "
+                        "along a smooth noise (default: closer to the inputs' histograms than a "
+                        "cross-fade) or by the paper's linear blend")
     t.add_argument("--preview", metavar="SLICES.png", default=None,
                    help="also write a picture of the m-slices and their masks")
     t.add_argument("--json", action="store_true", help="print one JSON object")

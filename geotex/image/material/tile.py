@@ -164,7 +164,7 @@ def _to_uint8(x: np.ndarray) -> np.ndarray:
 def build_material_tile(image_a, image_b, *, size: int = 128, layers: int = 8, seed=None,
                         mask_a=None, mask_b=None, threshold_a: float | None = None,
                         threshold_b: float | None = None, options: SynthesisOptions | None = None,
-                        blend: str = "linear", progress=None) -> MaterialTile:
+                        blend: str = "select", progress=None) -> MaterialTile:
     """Build a material-space tile that morphs one texture into another.
 
     Parameters
@@ -186,8 +186,10 @@ def build_material_tile(image_a, image_b, *, size: int = 128, layers: int = 8, s
     options : SynthesisOptions, optional
     blend : {"linear", "select"}, optional
         How the two syntheses of a layer combine (:func:`blend_weights`):
-        the paper's linear blend with weight ``m``, or a histogram-keeping
-        selection.
+        a histogram-keeping selection (default: measured closer to the
+        inputs' histograms than a plain cross-fade on every pair of
+        ``benchmarks/results/material.md``, where the paper's linear blend
+        lost on two of three), or the paper's linear blend with weight ``m``.
     progress : callable, optional
         Called with a stage name as each stage starts.
 
