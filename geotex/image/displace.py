@@ -30,7 +30,9 @@ import igl
 import numpy as np
 import scipy.sparse as sp
 
+from geotex.check.intersections import self_intersecting_pairs
 from geotex.errors import InputError
+from geotex.heighttilt.refine import refine_base
 from geotex.image.composite import composite_at, luminance
 from geotex.image.records import LappedTexture
 from geotex.mesh.arrays import as_mesh_arrays
@@ -143,8 +145,6 @@ def displace(V, F, lapped: LappedTexture, *, depth: float, edge_length: float | 
         On a non-positive depth, a lapped texture of another mesh, or a base
         that cannot be refined.
     """
-    from geotex.heighttilt.refine import refine_base
-
     V, F = as_mesh_arrays(V, F)
     if F.shape[0] != lapped.n_faces or V.shape[0] != lapped.n_vertices:
         raise InputError(f"the lapped texture was made for {lapped.n_vertices} vertices and "
@@ -183,8 +183,6 @@ def displace(V, F, lapped: LappedTexture, *, depth: float, edge_length: float | 
                    dtype=np.float64)
     Vd = Vr + (d * h)[:, None] * N
     if fix_intersections:
-        from geotex.check.intersections import self_intersecting_pairs
-
         gain = np.ones(Vr.shape[0])
         n = Vr.shape[0]
         for r in range(RELIEF_ROUNDS + 1):
