@@ -4,9 +4,9 @@ The base shape is a smoothed copy of the textured mesh with the same
 connectivity (vertex ``i`` of the base corresponds to vertex ``i`` of the
 detailed mesh; :func:`smoothed_base`, from :mod:`geotex.heighttilt.smoothing`,
 and :func:`check_base_mesh` / :func:`base_geometry`, from
-:mod:`geotex.heighttilt.validation`, are re-exported here).  Base normals, frames and the tilt encoding used by
-extraction, reconstruction and the edits live here so that every module
-agrees on them.  :func:`base_geometry` validates a base once and keeps its
+:mod:`geotex.heighttilt.validation`, are re-exported here).  Base normals,
+frames and the tilt encoding used by extraction, reconstruction and the edits
+live here so that every module agrees on them.  :func:`base_geometry` validates a base once and keeps its
 face geometry, edge topology, valences, normals and frames for reuse
 (:class:`geotex.heighttilt._kernels.BaseGeometry`).
 

@@ -1,6 +1,8 @@
-"""Validation of a height-and-tilt base, below both :mod:`~geotex.heighttilt.base` and
-:mod:`~geotex.heighttilt.smoothing` (both validate their input with it; re-exported by
-:mod:`geotex.heighttilt.base`)."""
+"""Validation of a height-and-tilt base (re-exported by :mod:`geotex.heighttilt.base`).
+
+It sits below :mod:`~geotex.heighttilt.base` and :mod:`~geotex.heighttilt.smoothing`,
+which both validate their input with it, so neither imports the other lazily.
+"""
 
 from __future__ import annotations
 
