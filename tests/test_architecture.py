@@ -87,7 +87,7 @@ HEAVY_MODULES: dict[str, str] = {
     "vtkmodules": "part of pyvista's VTK",
     "dask": "~0.25 s",
     "distributed": "~0.6 s",
-    "playwright": "a browser driver, only for the viewer's screenshots",
+    "playwright": "a browser driver; today only tests/test_viewer.py uses it",
     "pymeshlab": "~0.2 s",
     "networkx": "~0.25 s",
     "scipy.spatial": "~0.1 s",
