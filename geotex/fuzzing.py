@@ -37,6 +37,13 @@ import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
+
+from geotex.cli import main
+from geotex.io import write_mesh
+from geotex.mesh.primitives import box
+from geotex.mesh.record import Mesh
+
 __all__ = ["FuzzCase", "Outcome", "make_cases", "run_cases", "verdict", "seed_files",
            "TIME_LIMIT", "MEMORY_LIMIT", "ADDRESS_LIMIT", "run_batch"]
 
@@ -72,12 +79,6 @@ class Outcome:
 
 def seed_files(folder) -> dict[str, Path]:
     """Write small valid files (a subdivided box, a texture for OBJ and GLB)."""
-    import numpy as np
-
-    from geotex.io import write_mesh
-    from geotex.mesh.primitives import box
-    from geotex.mesh.record import Mesh
-
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     V, F = box(divisions=2)
@@ -529,8 +530,6 @@ def verdict(outcome: Outcome) -> str | None:
 def _drive(files) -> int:  # pragma: no cover - runs in the batch subprocess
     """Run ``geotex check`` on each file in this process; one JSON line each."""
     import resource
-
-    from geotex.cli import main
 
     real_stdout = sys.stdout
     for name in files:

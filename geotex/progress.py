@@ -12,6 +12,8 @@ import threading
 from contextlib import contextmanager
 from typing import Callable, Iterator
 
+from tqdm import tqdm
+
 __all__ = ["ProgressCallback", "stage_bar", "report"]
 
 ProgressCallback = Callable[[str], None]
@@ -40,8 +42,6 @@ def stage_bar(total: int, desc: str, *, enabled: bool | None = None
     enabled : bool, optional
         Default: only when stderr is a terminal.
     """
-    from tqdm import tqdm
-
     if enabled is None:
         enabled = sys.stderr.isatty()
     bar = tqdm(total=total, desc=desc, unit="stage", leave=False, disable=not enabled,

@@ -12,9 +12,12 @@ import os
 from pathlib import Path
 
 import numpy as np
+from PIL import Image
 
 from geotex.errors import InputError
+from geotex.io.atomic import atomic_output
 from geotex.mesh.arrays import as_mesh_arrays
+from geotex.mesh.geometry import face_areas, face_normals
 
 __all__ = ["render_mesh", "render_panels", "Panel", "UP_AXES", "offscreen_pyvista",
            "split_by_uv", "view_direction"]
@@ -34,6 +37,7 @@ def offscreen_pyvista():
     """
     if not os.environ.get("DISPLAY"):
         os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
+    # lazy: pyvista/VTK take ~0.3 s to import (also the environment must be set first)
     import pyvista as pv
     pv.OFF_SCREEN = True
     try:
@@ -260,8 +264,6 @@ def _fit_camera(P: np.ndarray, direction: np.ndarray, up: np.ndarray, aspect: fl
 
 def _closeup_camera(V, F, point, radius, up, aspect):
     """Camera looking at ``point`` from outside, along the local surface normal."""
-    from geotex.mesh.geometry import face_areas, face_normals
-
     diag = float(np.linalg.norm(np.ptp(V, axis=0))) or 1.0
     r = 0.12 * diag if radius is None else radius
     default = view_direction(up)
@@ -375,10 +377,6 @@ def render_panels(panels: list[Panel], path, *, size=(1200, 900), up="z") -> Pat
     InputError
         On an empty panel list, a bad ``up`` or a non-PNG path.
     """
-    from PIL import Image
-
-    from geotex.io.atomic import atomic_output
-
     path = Path(path)
     if path.suffix.lower() != ".png":
         raise InputError(f"{path}: pictures are written as PNG; use a .png file name")

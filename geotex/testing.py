@@ -23,7 +23,9 @@ import numpy as np
 
 from geotex.check.intersections import self_intersecting_pairs
 from geotex.check.report import CheckReport, check_mesh
+from geotex.check.slicers import slicer_verdicts
 from geotex.errors import InputError
+from geotex.io import read_mesh, write_mesh
 from geotex.mesh.arrays import as_mesh_arrays
 from geotex.mesh.record import Mesh
 from geotex.mesh.topology import edge_topology, non_manifold_vertices, position_welded_faces
@@ -42,7 +44,6 @@ def _arrays(mesh, F=None) -> tuple[np.ndarray, np.ndarray, str]:
     if isinstance(mesh, Mesh):
         return mesh.vertices, mesh.faces, mesh.name or "mesh"
     if isinstance(mesh, (str, os.PathLike)):
-        from geotex.io import read_mesh
         m = read_mesh(mesh)
         return m.vertices, m.faces, str(mesh)
     if isinstance(mesh, tuple) and len(mesh) == 2:
@@ -140,14 +141,10 @@ def assert_slicer_accepts(path, *, expected_parts: int | None = 1, msg: str = ""
     geotex.errors.ToolNotFoundError
         If ``prusa-slicer`` or ``admesh`` is not installed.
     """
-    from geotex.check.slicers import slicer_verdicts
-
     if isinstance(path, (str, os.PathLike)):
         verdicts, label = slicer_verdicts(path, expected_parts=expected_parts), str(path)
     else:
         import tempfile
-
-        from geotex.io import write_mesh
 
         V, F, label = _arrays(path)
         with tempfile.TemporaryDirectory(prefix="geotex-test-") as tmp:

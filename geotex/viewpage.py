@@ -18,7 +18,12 @@ import html
 import io
 from pathlib import Path
 
+import numpy as np
+
 from geotex.errors import InputError, ToolNotFoundError
+from geotex.io.atomic import atomic_output
+from geotex.io.glb import write_glb
+from geotex.mesh import Mesh
 
 __all__ = ["viewer_bundle_path", "viewer_bundle", "viewer_element", "viewer_page",
            "write_viewer_page", "glb_bytes", "mesh_turned_y_up"]
@@ -84,8 +89,6 @@ def mesh_turned_y_up(mesh, *, up: str):
     InputError
         If ``up`` is not ``"x"``, ``"y"`` or ``"z"``.
     """
-    import numpy as np
-
     up = _up_name(up)
     V = mesh.vertices
     if up == "y":
@@ -118,9 +121,6 @@ def glb_bytes(mesh, *, up: str = "y") -> bytes:
     MeshFileError
         If the coordinates do not fit glTF's float32.
     """
-    from geotex.io.glb import write_glb
-    from geotex.mesh import Mesh
-
     if not isinstance(mesh, Mesh):
         raise InputError(f"mesh must be a geotex.mesh.Mesh, got {type(mesh).__name__}")
     buf = io.BytesIO()
@@ -235,8 +235,6 @@ def write_viewer_page(mesh, path, *, title: str | None = None, up: str = "z") ->
     ToolNotFoundError
         If the viewer bundle was not built.
     """
-    from geotex.io.atomic import atomic_output
-
     path = Path(path)
     if path.suffix.lower() not in (".html", ".htm"):
         raise InputError(f"{path}: viewer pages are HTML; use a .html file name")

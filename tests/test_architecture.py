@@ -9,7 +9,11 @@ The rules are checked on the source text with :mod:`ast`, so they cost no import
 * every ``raise`` raises a :class:`geotex.errors.GeotexError` subclass, or re-raises
   (a bare ``raise``, a variable holding a caught exception), except the documented
   ``ALLOWED_RAISES``, ``ALLOWED_FACTORIES`` and ``ALLOWED_IN_FILE``;
-* no ``assert`` statement (it vanishes under ``python -O``).
+* no ``assert`` statement (it vanishes under ``python -O``);
+* outside ``geotex/cli/``, geotex modules are imported at the top of a module, not
+  inside a function, except the documented ``ALLOWED_LAZY_IMPORTS``; a third-party
+  import inside a function is one of the slow ``HEAVY_MODULES`` (or the standard
+  library); ``import geotex`` and the ``geotex`` parser import none of them.
 """
 
 from __future__ import annotations
@@ -17,6 +21,8 @@ from __future__ import annotations
 import ast
 import builtins
 import inspect
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -53,6 +59,51 @@ ALLOWED_IN_FILE: dict[tuple[str, str], str] = {
         "pending: geotex/check is being reworked; the parsers' ValueError on unreadable "
         "slicer output is caught in the same module and becomes an ExternalToolError",
 }
+
+
+#: Function-level imports of geotex modules outside geotex/cli/ that stay lazy:
+#: (file, module) -> reason; ``module`` also covers its submodules.
+ALLOWED_LAZY_IMPORTS: dict[tuple[str, str], str] = {
+    ("geotex/batch/jobs.py", "geotex"):
+        "`geotex --help` loads the job table (the --job choices); each job imports the "
+        "libraries it runs (mapping, image, repair with pymeshlab, ...) when it runs",
+    ("geotex/batch/manifest.py", "geotex.io"):
+        "`geotex --help` imports geotex.batch; geotex.io (+ manifold3d) adds ~25-50 ms to it",
+    ("geotex/batch/summary.py", "geotex.io"):
+        "`geotex --help` imports geotex.batch; geotex.io (+ manifold3d) adds ~25-50 ms to it",
+    ("geotex/displace/api.py", "geotex.displace.seamless"):
+        "`geotex --help` imports geotex.displace (the --mapping choices); the pgp and lapped "
+        "mappings pull in the field, patch and image machinery (networkx) only when used",
+    ("geotex/displace/api.py", "geotex.displace.step"):
+        "STEP input only: gmsh and the repair steps (pymeshlab, ~0.2 s)",
+    ("geotex/heighttilt/refine.py", "geotex.mesh.meshlab"):
+        "imports pymeshlab (~0.2 s), needed only when a base is remeshed",
+    ("geotex/tiles/__init__.py", "geotex.tiles.catalog"):
+        "module __getattr__: the catalog is imported on first use so that "
+        "`python -m geotex.tiles.catalog` runs without a second copy of the module",
+    ("geotex/tiles/build.py", "geotex"): "pending: tiles/build.py is being reworked",
+}
+
+#: Third-party modules a function may import lazily (they are slow to import), with the
+#: cumulative ``python -X importtime`` cost measured after numpy and scipy.sparse.
+#: The standard library may be imported lazily too (e.g. ``resource``: POSIX only).
+HEAVY_MODULES: dict[str, str] = {
+    "pyvista": "~0.3 s (VTK)",
+    "vtkmodules": "part of pyvista's VTK",
+    "dask": "~0.25 s",
+    "distributed": "~0.6 s",
+    "playwright": "a browser driver; today only tests/test_viewer.py uses it",
+    "pymeshlab": "~0.2 s",
+    "networkx": "~0.25 s",
+    "scipy.spatial": "~0.1 s",
+    "scipy.ndimage": "~0.1 s",
+    "fast_simplification": "~50 ms, only when a relief is decimated",
+    "gmsh": "optional (the 'step' extra): STEP input only",
+}
+
+#: Modules that neither ``import geotex`` nor building the ``geotex`` parser may load.
+NOT_AT_STARTUP = ("pyvista", "vtkmodules", "dask", "distributed", "playwright", "pymeshlab",
+                  "networkx")
 
 
 def _modules():
@@ -98,6 +149,34 @@ def _imports(name: str, is_package: bool, tree: ast.Module):
                     yield sub, None, node.lineno
                 else:
                     yield module, alias.name, node.lineno
+
+
+def _function_level_imports(name: str, is_package: bool, tree: ast.Module):
+    """Yield ``(module, line)`` of every import statement inside a function body."""
+    base = name if is_package else name.rpartition(".")[0]
+
+    def visit(node, in_function):
+        for child in ast.iter_child_nodes(node):
+            inside = in_function or isinstance(child, (ast.FunctionDef, ast.AsyncFunctionDef))
+            if in_function and isinstance(child, ast.Import):
+                for alias in child.names:
+                    yield alias.name, child.lineno
+            elif in_function and isinstance(child, ast.ImportFrom):
+                module = child.module or ""
+                if child.level:
+                    pkg = base.split(".")
+                    pkg = pkg[: len(pkg) - child.level + 1]
+                    module = ".".join(pkg + ([module] if module else []))
+                for alias in child.names:  # ``from geotex.x import submodule``
+                    sub = f"{module}.{alias.name}"
+                    yield (sub if sub in MODULE_NAMES else module), child.lineno
+            yield from visit(child, inside)
+
+    yield from visit(tree, False)
+
+
+def _covered(module: str, prefix: str) -> bool:
+    return module == prefix or module.startswith(prefix + ".")
 
 
 def _private(module: str, symbol: str | None) -> bool:
@@ -289,3 +368,52 @@ def test_no_assert_for_validation():
 @pytest.mark.parametrize("name", sorted(ALLOWED_RAISES))
 def test_allowed_raises_are_builtin_exceptions(name):
     assert issubclass(getattr(builtins, name), BaseException)
+
+
+def _lazy_imports():
+    """``(file, module, line)`` of every function-level import outside geotex/cli/."""
+    for name, is_package, path, tree in MODULES:
+        rel = path.relative_to(PACKAGE_DIR.parent).as_posix()
+        if rel.startswith("geotex/cli/"):
+            continue  # subcommands import their library when they run: `geotex --help` stays fast
+        for module, line in _function_level_imports(name, is_package, tree):
+            yield rel, module, line
+
+
+def test_geotex_imports_at_module_top():
+    """A geotex import inside a function hides the dependency graph (and import cycles)."""
+    bad = [f"{rel}:{line} imports {module} inside a function"
+           for rel, module, line in _lazy_imports()
+           if module.split(".")[0] == "geotex"
+           and not any(f == rel and _covered(module, m) for f, m in ALLOWED_LAZY_IMPORTS)]
+    assert not bad, ("move these imports to the top of the module (or list them in "
+                     "ALLOWED_LAZY_IMPORTS with the reason):\n" + "\n".join(bad))
+
+
+def test_allowed_lazy_imports_are_used():
+    """A documented lazy import that no longer exists is removed from the list."""
+    used = {(f, m) for f, m in ALLOWED_LAZY_IMPORTS
+            for rel, module, _line in _lazy_imports() if f == rel and _covered(module, m)}
+    assert used == set(ALLOWED_LAZY_IMPORTS)
+
+
+def test_lazy_third_party_imports_are_heavy():
+    """Only slow third-party modules are imported inside functions; the rest at the top."""
+    bad = []
+    for rel, module, line in _lazy_imports():
+        top = module.split(".")[0]
+        if top == "geotex" or top in sys.stdlib_module_names:
+            continue
+        if not any(_covered(module, heavy) for heavy in HEAVY_MODULES):
+            bad.append(f"{rel}:{line} imports {module} inside a function")
+    assert not bad, ("import these at the top of the module (or add a slow module to "
+                     "HEAVY_MODULES with its measured import time):\n" + "\n".join(bad))
+
+
+def test_startup_imports_no_heavy_module():
+    """``import geotex`` and ``geotex --help`` (the parser) stay free of the heavy modules."""
+    code = ("import sys, geotex, geotex.cli; geotex.cli.build_parser(); "
+            f"print(sorted(m for m in {NOT_AT_STARTUP!r} if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, cwd=PACKAGE_DIR.parent)
+    assert out.stdout.strip() == "[]", f"heavy modules imported at startup: {out.stdout}"

@@ -17,6 +17,12 @@ with a one-line message when the part fails.
 Adding a job is one entry: write ``def NAME_part(part, shared, out) -> dict``
 and add ``Job("NAME", NAME_part, input="mesh", suffix=".stl", needs=(...),
 shared=(...), help="...")`` to :data:`JOBS`.
+
+The job functions import the libraries they run inside their bodies: ``geotex
+--help`` reads :data:`JOBS` (the ``--job`` choices), and importing every
+library at the top would make it load the whole package (mapping, image,
+repair with pymeshlab, ...); a worker imports them once up front
+(``Job.imports``).
 """
 
 from __future__ import annotations
@@ -89,6 +95,7 @@ class Job:
 
 def _scaled_mesh(part):
     """The part's mesh, scaled to ``size_mm`` when given."""
+    # lazy: `geotex --help` loads this table (module docstring)
     from geotex.io import read_mesh
 
     mesh = read_mesh(part.input)
@@ -105,6 +112,7 @@ def _coverage(shell) -> float | None:
 
 
 def _textured(part, shell, tiles, out) -> dict:
+    # lazy: `geotex --help` loads this table (module docstring)
     from geotex.mapping import texture_height, textured_solid
     from geotex.printing import export_printable
 
@@ -118,6 +126,7 @@ def _textured(part, shell, tiles, out) -> dict:
 
 def texture_part(part, shared, out) -> dict:
     """``geotex texture``: build the part's shell, lay the tile set over it, write the solid."""
+    # lazy: `geotex --help` loads this table (module docstring)
     from geotex.shells import build_shell
 
     mesh = _scaled_mesh(part)
@@ -131,6 +140,7 @@ def map_part(part, shared, out) -> dict:
     """``geotex map``: lay the tile set over a ready shell (scaled to ``size_mm``)."""
     shell = shared["shell"]
     if part.size_mm is not None:
+        # lazy: `geotex --help` loads this table (module docstring)
         from geotex.shells import scaled_shell
 
         shell = scaled_shell(shell, part.size_mm / float(np.ptp(shell.base_vertices,
@@ -140,6 +150,7 @@ def map_part(part, shared, out) -> dict:
 
 def lapped_part(part, shared, out) -> dict:
     """``geotex lapped``: a textured GLB, or with ``height`` a printable relief STL."""
+    # lazy: `geotex --help` loads this table (module docstring)
     from geotex.image.lapped import default_scale, lapped_texture
     from geotex.image.patches import texture_patches
 
@@ -151,11 +162,13 @@ def lapped_part(part, shared, out) -> dict:
     lapped = lapped_texture(V, F, patches, scale=default_scale(V), seed=part.seed)
     coverage = round(float(np.mean(np.minimum(lapped.coverage, 1.0))), 4)
     if part.height is None:
+        # lazy: `geotex --help` loads this table (module docstring)
         from geotex.image.atlas import textured_mesh
         from geotex.io import write_mesh
 
         write_mesh(out, textured_mesh(V, F, lapped, name=part.name))
         return {"faces": int(F.shape[0]), "coverage": coverage}
+    # lazy: `geotex --help` loads this table (module docstring)
     from geotex.check import check_mesh
     from geotex.image.displace import displace
     from geotex.printing import export_printable
@@ -186,6 +199,7 @@ def displace_part(part, shared, out) -> dict:
 
 def check_part(part, shared, out) -> dict:
     """``geotex check``: the validity report; a part that is not printable fails."""
+    # lazy: `geotex --help` loads this table (module docstring)
     from geotex.check import check_mesh
     from geotex.io import read_mesh
 
@@ -199,6 +213,7 @@ def check_part(part, shared, out) -> dict:
 
 def repair_part(part, shared, out) -> dict:
     """``geotex repair``: repair and write the result only when printable and faithful."""
+    # lazy: `geotex --help` loads this table (module docstring)
     from geotex.printing import export_printable
     from geotex.repair import repair_mesh
 
@@ -220,12 +235,14 @@ def _lapped_suffix(part) -> str:
 
 
 def _load_tiles(name):
+    # lazy: `geotex --help` loads this table (module docstring)
     from geotex.tiles.catalog import load_named
 
     return load_named(name)
 
 
 def _load_shell(name):
+    # lazy: `geotex --help` loads this table (module docstring)
     from geotex.shells import load_named
 
     return load_named(name)

@@ -40,6 +40,7 @@ import math
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
+from geotex.batch.jobs import JOBS
 from geotex.errors import InputError, MissingFileError
 
 __all__ = ["Part", "read_parts", "read_manifest", "folder_parts", "COLUMNS"]
@@ -155,8 +156,6 @@ def read_manifest(path, *, job: str = "texture", tiles: str | None = None,
         No ``input`` column, an unknown column or job, a bad number, an empty
         manifest or a name used twice; the message names the file and line.
     """
-    from geotex.batch.jobs import JOBS
-
     path = Path(path)
     if not path.is_file():
         raise MissingFileError(f"{path}: no such manifest file")
@@ -236,7 +235,7 @@ def folder_parts(folder, *, job: str = "texture", tiles: str | None = None, seed
     InputError
         Unknown job, no input file in the folder, or two files with the same stem.
     """
-    from geotex.batch.jobs import JOBS
+    # lazy: `geotex --help` imports geotex.batch; geotex.io would add ~25-50 ms to it
     from geotex.io import READ_FORMATS
 
     folder = Path(folder)

@@ -199,6 +199,7 @@ def local_cluster(workers: int | None = None, *, memory_limit="auto"):
     """
     import logging
 
+    # lazy: dask + distributed take ~0.8 s to import; `geotex --help` imports this module
     import dask
     from distributed import LocalCluster
 
@@ -346,6 +347,7 @@ def run(parts, *, job: str = "texture", outdir, tiles: str | None = None, client
 
 def _run_dask(parts, shared, outs, finish, rows, meta, *, client, workers, scheduler):
     """Submit one task per part to a Dask cluster and collect the rows as they finish."""
+    # lazy: distributed takes ~0.6 s to import; `geotex --help` imports this module
     from distributed import Client, as_completed
 
     own_cluster = own_client = None

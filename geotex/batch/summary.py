@@ -72,6 +72,7 @@ def write_summary(outdir, rows: list[dict], *, meta: dict | None = None) -> tupl
     tuple of 2 pathlib.Path
         The CSV and JSON paths.
     """
+    # lazy: `geotex --help` imports geotex.batch; geotex.io would add ~25-50 ms to it
     from geotex.io.atomic import atomic_group
 
     outdir = Path(outdir)

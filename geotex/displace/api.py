@@ -14,11 +14,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from geotex.check.report import check_mesh
 from geotex.displace.heightmap import filtered_height_map, load_height_map
 from geotex.displace.mappings import mapping_options, projected_heights
 from geotex.displace.masks import MaskOptions, mask_weights, selected_faces
 from geotex.errors import InputError
+from geotex.io import read_mesh
 from geotex.mesh.arrays import as_mesh_arrays
+from geotex.options import finite_number, positive_number
+from geotex.printing import export_printable, printable_stored_solid, stored_form, stored_precision
 from geotex.progress import report
 from geotex.relief import DEFAULT_MAX_FACES, displaced_solid, edge_length_for_faces
 
@@ -92,8 +96,6 @@ def stored_judge(precision):
     failures go through :func:`geotex.printing.printable_stored_solid` (its
     rebuild of what rounding broke).
     """
-    from geotex.check.report import check_mesh
-    from geotex.printing import printable_stored_solid, stored_form
 
     def judge(Vx, Fx):
         Vs, Fs = stored_form(Vx, Fx, precision=precision)
@@ -174,8 +176,6 @@ def displaced_mesh(V, F, image, *, depth: float, mapping: str = "triplanar", sca
         Bad options, an absurd depth, a mapping that cannot be made, or a
         result above ``max_faces``.
     """
-    from geotex.options import finite_number, positive_number
-
     V, F = as_mesh_arrays(V, F)
     if F.shape[0] == 0:
         raise InputError("the part has no faces")
@@ -211,6 +211,7 @@ def displaced_mesh(V, F, image, *, depth: float, mapping: str = "triplanar", sca
             raise InputError(f"uv must be per-corner coordinates of shape ({F.shape[0]}, 3, 2)")
         sampler = lambda p: projected_heights(p, H, opt, uv=uvc)  # noqa: E731
     elif mapping == "pgp":
+        # lazy: the PGP and lapped paths pull in the field, patch and image machinery
         from geotex.displace.seamless import pgp_corner_coordinates, pgp_heights
 
         field = (0.0, 0.0, 1.0) if field is None else field
@@ -222,11 +223,11 @@ def displaced_mesh(V, F, image, *, depth: float, mapping: str = "triplanar", sca
         sampler = lambda p: pgp_heights(p, H, coords, offset=off,  # noqa: E731
                                         rotation=opt.rotation + turn)
     elif mapping == "lapped":
-        from geotex.displace.seamless import lapped_height_texture, lapped_heights
-
         if isinstance(field, str):
             raise InputError(f"field {field!r}: the lapped mapping needs a direction X,Y,Z "
                              "for the image's up")
+        from geotex.displace.seamless import lapped_height_texture, lapped_heights  # lazy: see pgp
+
         up = (0.0, 0.0, 1.0) if field is None else field
         lt = lapped_height_texture(V, F, H, tile=opt.scale_u, up=up, seed=seed)
         sampler = lambda p: lapped_heights(p, lt)  # noqa: E731
@@ -260,12 +261,11 @@ def _read_part(path, *, step_quality: str = "standard"):
 
     p = Path(path)
     if p.suffix.lower() in (".step", ".stp"):
+        # lazy: STEP input pulls in gmsh and the repair steps (pymeshlab)
         from geotex.displace.step import read_step
 
         V, F = read_step(p, quality=step_quality)
         return V, F, None
-    from geotex.io import read_mesh
-
     mesh = read_mesh(p)
     uv = None
     if mesh.uv is not None:
@@ -312,14 +312,10 @@ def displace_file(base, image, output, *, depth: float, size_mm: float | None = 
     """
     from pathlib import Path
 
-    from geotex.printing import export_printable, stored_precision
-
     t = time.perf_counter()
     report(progress, "read")
     V, F, uv = _read_part(base, step_quality=step_quality)
     if size_mm is not None:
-        from geotex.options import positive_number
-
         s = positive_number(size_mm, name="size_mm") / float(np.ptp(V, axis=0).max())
         V = V * s
     read_s = time.perf_counter() - t

@@ -12,7 +12,9 @@ import math
 from pathlib import Path
 
 import numpy as np
+from PIL import Image
 
+from geotex.displace.library import library_height_map, library_names
 from geotex.errors import InputError
 
 __all__ = ["load_height_map", "filtered_height_map", "sample_periodic", "MAX_IMAGE_PIXELS"]
@@ -43,16 +45,12 @@ def load_height_map(source) -> np.ndarray:
         than 2 x 2 or larger than ``MAX_IMAGE_PIXELS``.
     """
     if isinstance(source, (str, Path)):
-        from geotex.displace.library import library_height_map, library_names
-
         p = Path(source)
         if not p.suffix and str(source) in library_names():
             return library_height_map(str(source))
         if not p.is_file():
             hint = "" if p.suffix else f"; library names: {', '.join(library_names())}"
             raise InputError(f"{source}: no such image file or library texture{hint}")
-        from PIL import Image
-
         Image.MAX_IMAGE_PIXELS = MAX_IMAGE_PIXELS
         try:
             with Image.open(p) as im:

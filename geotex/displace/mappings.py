@@ -35,6 +35,7 @@ import numpy as np
 
 from geotex.displace.heightmap import sample_periodic
 from geotex.errors import InputError
+from geotex.options import finite_number, positive_number
 
 __all__ = ["MAPPINGS", "MappingOptions", "mapping_options", "projected_heights"]
 
@@ -92,8 +93,6 @@ def mapping_options(name: str = "triplanar", *, scale_u=None, scale_v=None, offs
     InputError
         Unknown mapping or axis, non-positive scale, sharpness or angle out of range.
     """
-    from geotex.options import finite_number, positive_number
-
     if name not in MAPPINGS:
         raise InputError(f"mapping must be one of {', '.join(MAPPINGS)}, got {name!r}")
     if axis not in AXES:

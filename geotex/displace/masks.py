@@ -32,8 +32,13 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
 
 from geotex.errors import InputError
+from geotex.mesh.geometry import face_normals
+from geotex.mesh.topology import edge_topology
+from geotex.options import finite_number
 
 __all__ = ["MaskOptions", "mask_options", "selected_faces", "face_selection_file",
            "bucket_fill_faces", "mask_weights", "CURVES"]
@@ -94,8 +99,6 @@ def mask_options(*, bottom_angle=5.0, top_angle=0.0, faces=None, box=None, spher
         Angles outside [0, 90] (cone: [0, 180]), a box with lo > hi, a
         non-positive radius, a negative width, unknown mode or curve.
     """
-    from geotex.options import finite_number
-
     def angle(x, name, top=90.0):
         a = finite_number(x, name=name)
         if not (0.0 <= a <= top):
@@ -181,11 +184,6 @@ def bucket_fill_faces(V, F, seeds, *, max_angle: float) -> np.ndarray:
     -------
     numpy.ndarray, (m,) bool
     """
-    import scipy.sparse as sp
-    from scipy.sparse.csgraph import connected_components
-
-    from geotex.mesh.geometry import face_normals
-    from geotex.mesh.topology import edge_topology
 
     m = F.shape[0]
     seeds = np.asarray(seeds, dtype=np.int64)
@@ -211,8 +209,6 @@ def selected_faces(V, F, opt: MaskOptions) -> np.ndarray:
     -------
     numpy.ndarray, (m,) bool
     """
-    from geotex.mesh.geometry import face_normals
-
     m = F.shape[0]
     Nf = face_normals(V, F)
     C = V[F].mean(axis=1)

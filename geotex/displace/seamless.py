@@ -26,6 +26,12 @@ import numpy as np
 
 from geotex.displace.heightmap import sample_periodic
 from geotex.errors import InputError
+from geotex.fields.directions import (principal_direction_field, projected_direction_field,
+                                      smooth_direction_field)
+from geotex.image.composite import composite_at, luminance
+from geotex.image.lapped import lapped_texture
+from geotex.image.patches import texture_patches
+from geotex.param.pgp import periodic_parameterization
 
 __all__ = ["pgp_corner_coordinates", "pgp_heights", "lapped_height_texture", "lapped_heights",
            "direction_vectors"]
@@ -45,9 +51,6 @@ def direction_vectors(V, F, field="smooth"):
     -------
     DirectionField or numpy.ndarray, (m, 3)
     """
-    from geotex.fields.directions import (principal_direction_field,
-                                          projected_direction_field, smooth_direction_field)
-
     if isinstance(field, str):
         if field == "smooth":
             return smooth_direction_field(V, F, symmetry=4, constraints=[], seed=0)
@@ -78,8 +81,6 @@ def pgp_corner_coordinates(V, F, *, tile: float, field="smooth", seed: int = 0) 
     -------
     numpy.ndarray, (m, 3, 2) float64
     """
-    from geotex.param.pgp import periodic_parameterization
-
     p = periodic_parameterization(V, F, direction_vectors(V, F, field), scale=float(tile),
                                   seed=seed)
     return np.asarray(p.coords, dtype=np.float64)
@@ -129,8 +130,6 @@ def lapped_height_texture(V, F, H, *, tile: float, up=(0.0, 0.0, 1.0), seed: int
     -------
     LappedTexture
     """
-    from geotex.image.lapped import lapped_texture
-    from geotex.image.patches import texture_patches
 
     img = np.tile(np.asarray(H, dtype=np.float64), (2, 2))
     rgb = np.repeat((np.clip(img, 0, 1) * 255).round().astype(np.uint8)[..., None], 3, axis=2)
@@ -146,6 +145,4 @@ def lapped_heights(points, lapped) -> np.ndarray:
     -------
     numpy.ndarray, (p,) float64
     """
-    from geotex.image.composite import composite_at, luminance
-
     return luminance(composite_at(lapped, points.face, points.bary)[:, :3]).astype(np.float64)

@@ -16,6 +16,8 @@ from pathlib import Path
 import numpy as np
 
 from geotex.errors import InputError
+from geotex.mesh.topology import compacted
+from geotex.repair.orient import consistently_oriented, outward_oriented
 
 __all__ = ["read_step", "STEP_PRESETS"]
 
@@ -85,8 +87,6 @@ def read_step(path, *, quality: str = "standard") -> tuple[np.ndarray, np.ndarra
     index = np.full(int(tags.max()) + 1, -1, dtype=np.int64)
     index[tags] = np.arange(tags.size)
     F = index[np.concatenate(tri)]
-    from geotex.mesh.topology import compacted
-    from geotex.repair.orient import consistently_oriented, outward_oriented
 
     V, F = compacted(V, F)
     F, _ = consistently_oriented(F)

@@ -9,6 +9,7 @@ import numpy as np
 
 from geotex.errors import InputError, MeshFileError, MissingFileError
 from geotex.exemplars.record import Exemplar
+from geotex.io import read_mesh, write_mesh
 from geotex.io.records import read_record, write_record
 from geotex.mesh.topology import edge_topology
 
@@ -46,7 +47,6 @@ def save_exemplar(path, ex: Exemplar) -> Path:
         raise InputError(f"ex must be a geotex.exemplars.Exemplar, got {type(ex).__name__}")
     path = Path(path)
     if path.suffix.lower() != ".npz":
-        from geotex.io import write_mesh
         return write_mesh(path, ex.mesh())
     try:
         meta = json.dumps({"format": FORMAT_TAG, "size": list(ex.size), "height": ex.height,
@@ -100,7 +100,6 @@ def load_exemplar(path) -> Exemplar:
         raise MissingFileError(f"{path}: no such file")
     if path.suffix.lower() == ".npz":
         return _load_npz(path)
-    from geotex.io import read_mesh
     mesh = read_mesh(path)
     V, F = mesh.vertices, mesh.faces
     if F.shape[0] == 0:

@@ -48,6 +48,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.sparse.linalg import ArpackNoConvergence, LinearOperator, eigsh
 
 from geotex.errors import InputError
+from geotex.fields.scalar import scale_field
 from geotex.linalg import factor, single_threaded_blas
 from geotex.fields.frames import (FaceConnection, _checked_arrays, _connection, _frames,
                                   tangent_angles, vectors_from_angles)
@@ -667,8 +668,6 @@ def constraint_scale_field(V, F, constraints, *, epsilon: float | None = None,
     InputError
         On invalid constraints, or a connected component without any scale.
     """
-    from geotex.fields.scalar import scale_field
-
     V, F = _checked_arrays(V, F)
     res = _resolve_constraints(V, F, _connection(V, F), constraints,
                                max_snap_distance=max_snap_distance)

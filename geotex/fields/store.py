@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from geotex.errors import MeshFileError
+from geotex.fields.directions import DirectionField
 from geotex.io.records import read_record, write_record
 
 __all__ = ["save_direction_field", "load_direction_field", "FieldFile", "FIELD_FORMAT"]
@@ -71,8 +72,6 @@ def load_direction_field(path) -> FieldFile:
     MeshFileError
         If it is not a geotex field file or is damaged.
     """
-    from geotex.fields.directions import DirectionField
-
     path = Path(path)
     data, meta = read_record(path, kind="field", record="geotex direction field",
                              format=FIELD_FORMAT, optional=("scale",),

@@ -89,9 +89,11 @@ def refine_base(V, F, edge_length, *, method: str = "remesh") -> tuple[np.ndarra
     if expected > MAX_FACES:
         raise InputError(f"refining to edge length {L:.3g} needs about {int(expected)} faces "
                          f"(limit {MAX_FACES}); use a larger scale")
+    # lazy: pymeshlab (here and through geotex.mesh.meshlab) takes ~0.25 s to import
     import pymeshlab
 
     from geotex.mesh.meshlab import arrays_of, meshset_of
+
     ms = meshset_of(V, F)
     try:
         ms.meshing_isotropic_explicit_remeshing(iterations=REMESH_ITERATIONS,

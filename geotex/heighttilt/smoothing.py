@@ -7,6 +7,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from geotex.errors import InputError, SolverError
+from geotex.heighttilt.validation import check_base_mesh
 from geotex.linalg import factor
 from geotex.mesh.geometry import mean_edge_length
 
@@ -59,8 +60,6 @@ def smoothed_base(V, F, *, steps: int = 3, time_step: float | None = None) -> np
     >>> smoothed_base(V, F).shape
     (162, 3)
     """
-    from geotex.heighttilt.base import check_base_mesh
-
     V, F = check_base_mesh(V, F)
     if isinstance(steps, (bool, np.bool_)) or not isinstance(steps, (int, np.integer)) or steps < 0:
         raise InputError(f"steps must be a non-negative integer, got {steps!r}")

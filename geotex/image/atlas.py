@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.ndimage import distance_transform_edt
+import xatlas
 
 from geotex.errors import InputError
 from geotex.image.composite import composite_at
@@ -83,8 +84,6 @@ def build_atlas(V, F, *, resolution: int = 1024, padding: int = 2) -> Atlas:
     InputError
         On malformed or empty meshes or bad options.
     """
-    import xatlas
-
     V, F = as_mesh_arrays(V, F)
     if F.shape[0] == 0:
         raise InputError("F is empty: nothing to put in an atlas")

@@ -28,16 +28,17 @@ import math
 import igl
 import numpy as np
 
+from geotex.check.report import check_mesh
 from geotex.errors import InputError
 from geotex.image.composite import composite_at, luminance
 from geotex.image.records import LappedTexture
 from geotex.mesh.arrays import as_mesh_arrays
+from geotex.relief import displaced_solid
 
 __all__ = ["displace", "surface_points", "height_at"]
 
 #: Refined meshes are kept below this many faces by default.
 DEFAULT_MAX_FACES = 400_000
-
 
 def surface_points(V, F, P) -> tuple[np.ndarray, np.ndarray]:
     """Closest face and barycentric coordinates of points on a mesh.
@@ -71,7 +72,6 @@ def surface_points(V, F, P) -> tuple[np.ndarray, np.ndarray]:
     bary /= bary.sum(axis=1, keepdims=True)
     return I, bary
 
-
 def height_at(V, F, lapped: LappedTexture, P, *, invert: bool = False) -> np.ndarray:
     """Composited luminance of the lapped texture at points near the surface.
 
@@ -84,12 +84,9 @@ def height_at(V, F, lapped: LappedTexture, P, *, invert: bool = False) -> np.nda
     h = luminance(composite_at(lapped, faces, bary)[:, :3]).astype(np.float64)
     return 1.0 - h if invert else h
 
-
 def _judged(V, F):
-    from geotex.check.report import check_mesh
 
     return V, F, check_mesh(V, F, manifold3d=False)
-
 
 def displace(V, F, lapped: LappedTexture, *, depth: float, edge_length: float | None = None,
              refine: str = "split", smoothing: int = 1, invert: bool = False,
@@ -133,8 +130,6 @@ def displace(V, F, lapped: LappedTexture, *, depth: float, edge_length: float | 
         On a non-positive depth, a lapped texture of another mesh, or a
         length that needs more than ``max_faces`` faces.
     """
-    from geotex.relief import displaced_solid
-
     V, F = as_mesh_arrays(V, F)
     if F.shape[0] != lapped.n_faces or V.shape[0] != lapped.n_vertices:
         raise InputError(f"the lapped texture was made for {lapped.n_vertices} vertices and "

@@ -66,14 +66,17 @@ import heapq
 from dataclasses import dataclass, field
 
 import numpy as np
+from PIL import Image
 import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
-from geotex.errors import InputError
+from geotex.errors import InputError, MissingFileError
 from geotex.image.atlas import rasterize_triangles
 from geotex.image.fftmatch import match_energy, opponent_colors, texture_spectra
+from geotex.image.patches import load_image
 from geotex.mesh.arrays import as_mesh_arrays
 from geotex.mesh.geometry import face_areas
+from geotex.mesh.record import Mesh
 from geotex.mesh.topology import edge_topology
 from geotex.options import count, finite_number, positive_number
 from geotex.patches.clusters import cluster_hierarchy
@@ -890,11 +893,6 @@ def read_hpm_image(path) -> np.ndarray:
     """
     from pathlib import Path
 
-    from PIL import Image
-
-    from geotex.errors import MissingFileError
-    from geotex.image.patches import load_image
-
     p = Path(path)
     if not p.is_file():
         raise MissingFileError(f"{p}: no such image file")
@@ -929,8 +927,6 @@ def hpm_mesh(V, F, result: HPMResult, image, *, name: str = ""):
     -------
     geotex.mesh.record.Mesh
     """
-    from geotex.mesh.record import Mesh
-
     return Mesh(V, F, uv=result.uv, uv_faces=result.uv_faces,
                 texture=np.ascontiguousarray(image[:, :, :3]), name=name,
                 metadata={"hpm": result.report()})

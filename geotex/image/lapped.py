@@ -27,6 +27,7 @@ import numpy as np
 
 from geotex.errors import InputError
 from geotex.fields.frames import face_connection, tangent_angles, wrap_angle
+from geotex.fields.singularities import singularities
 from geotex.image.coverage import Coverage
 from geotex.image.paste import Paster
 from geotex.image.patches import TexturePatch
@@ -137,7 +138,6 @@ def placement_priority(V, F, *, up=None, symmetry: int = 1, scale=None,
         np.maximum.at(disc, f, turn)
         np.maximum.at(disc, g, turn)
         p = np.maximum(p, np.minimum(1.0, disc / (math.pi / (2.0 * N))))
-        from geotex.fields.singularities import singularities
         sing = np.array([v for v, _ in singularities(V, F, up, symmetry=N)], dtype=np.int64)
         if sing.size:
             near = np.isin(F, sing).any(axis=1)

@@ -21,10 +21,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from PIL import Image
 from scipy.ndimage import distance_transform_edt
 
 from geotex.errors import InputError, MissingFileError
 from geotex.image.hull import star_hull
+from geotex.io.images import load_texture_image
 
 __all__ = ["TexturePatch", "MASKS", "load_image", "circle_mask", "splotch_mask",
            "mask_from_image", "texture_patches", "sample_patch", "sample_alpha"]
@@ -83,8 +85,6 @@ def load_image(path) -> np.ndarray:
     InputError
         If it is not an image pillow can read.
     """
-    from geotex.io.images import load_texture_image
-
     p = Path(path)
     if not p.is_file():
         raise MissingFileError(f"{p}: no such image file")
@@ -258,7 +258,6 @@ def mask_from_image(mask, *, shape=None, falloff: float = 3.0) -> np.ndarray:
     if shape is not None:
         hh, ww = _shape(*shape)
         if grey.shape != (hh, ww):
-            from PIL import Image
             grey = np.asarray(Image.fromarray(grey.astype(np.float32), mode="F").resize(
                 (ww, hh), Image.BILINEAR), dtype=np.float32)
     inside = grey >= 0.5

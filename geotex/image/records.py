@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from geotex.errors import MeshFileError
+from geotex.image.patches import TexturePatch
 from geotex.io.records import read_record, write_record
 
 __all__ = ["Paste", "LappedTexture", "save_lapped", "load_lapped", "LAPPED_FORMAT"]
@@ -160,8 +161,6 @@ def load_lapped(path) -> LappedTexture:
     MeshFileError
         If it is not a lapped-texture file or is damaged.
     """
-    from geotex.image.patches import TexturePatch
-
     path = Path(path)
     d, meta = read_record(path, kind="lapped-texture", format=LAPPED_FORMAT,
                           arrays=_lapped_arrays, hint="write one with 'geotex lapped'")

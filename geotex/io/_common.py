@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from geotex.errors import InputError, MeshFileError
+from geotex.mesh.polygons import polygon_triangle_corners
 from geotex.mesh.record import Mesh
 
 __all__ = [
@@ -262,7 +263,6 @@ def triangulate_polygons(counts: np.ndarray, flat: np.ndarray,
     vertex = flat if flat.ndim == 1 else flat[:, 0]
     if vertex.size == 0 or vertex.min() < 0 or vertex.max() >= V.shape[0]:
         return fan_triangulate(counts, flat)
-    from geotex.mesh.polygons import polygon_triangle_corners
 
     corners, dropped = polygon_triangle_corners(counts, V[vertex])
     return flat[corners], dropped

@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import numpy as np
+from PIL import Image
+
+from geotex.io.limits import MAX_TEXTURE_PIXELS, RefusedInput
 
 __all__ = ["load_texture_image", "texture_to_png_bytes"]
 
@@ -14,10 +17,6 @@ def load_texture_image(source) -> np.ndarray:
     for an image above :data:`~geotex.io.limits.MAX_TEXTURE_PIXELS`; callers
     decide whether that is fatal.
     """
-    from PIL import Image
-
-    from geotex.io.limits import MAX_TEXTURE_PIXELS, RefusedInput
-
     with Image.open(source) as img:
         width, height = img.size
         if width * height > MAX_TEXTURE_PIXELS:
@@ -33,8 +32,6 @@ def load_texture_image(source) -> np.ndarray:
 def texture_to_png_bytes(texture: np.ndarray) -> bytes:
     """Encode an ``(h, w, 3 or 4)`` uint8 texture as PNG."""
     import io
-
-    from PIL import Image
 
     buf = io.BytesIO()
     Image.fromarray(np.ascontiguousarray(texture)).save(buf, format="PNG")

@@ -17,6 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from geotex.check.intersections import self_intersecting_pairs
+from geotex.mesh.topology import vertex_components
 from geotex.shells.locate import interpolated
 from geotex.tiles.tileset import TileSet
 
@@ -93,8 +95,6 @@ def _tile_components(tiles: TileSet) -> tuple[np.ndarray, np.ndarray]:
     count : numpy.ndarray, (T,) int64
         Elements per tile.
     """
-    from geotex.mesh.topology import vertex_components
-
     tile_of_face = np.repeat(np.arange(len(tiles)), np.diff(tiles.face_offsets))
     F = tiles.faces + tiles.vertex_offsets[tile_of_face][:, None]
     _, label = vertex_components(F, tiles.vertices.shape[0])
@@ -263,8 +263,6 @@ def reseated_elements(shell, mapped: "MappedTiles", label: np.ndarray, elements,
     still_folded : numpy.ndarray, (k,) int64
         Elements that could not be re-seated.
     """
-    from geotex.check.intersections import self_intersecting_pairs
-
     X = mapped.vertices.copy()
     G = mapped.faces
     order = np.argsort(label, kind="stable")

@@ -20,6 +20,7 @@ from geotex.errors import GeotexError, InputError
 from geotex.mapping.assign import edge_colors, tiles_for_quads
 from geotex.mapping.place import depth_scale, mapped_tiles, reseated_elements
 from geotex.mapping.union import UNION_STAGES, element_contacts, united_with_base
+from geotex.mesh.topology import face_components
 from geotex.printing.stored import printable_stored_solid
 from geotex.progress import report
 
@@ -185,9 +186,8 @@ def _defect_points(V, F, rep) -> np.ndarray:
 
 def _elements_near(points, X, G, exclude=None) -> np.ndarray:
     """Elements of ``(X, G)`` with a vertex among the 4 nearest to each point."""
+    # lazy: scipy.spatial takes ~0.1 s to import
     from scipy.spatial import cKDTree
-
-    from geotex.mesh.topology import face_components
 
     n_el, label = face_components(G, X.shape[0])
     out = np.zeros(n_el, dtype=bool) if exclude is None else exclude.copy()

@@ -17,11 +17,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import NamedTuple
 
+import manifold3d
 import numpy as np
 
 from geotex.check.intersections import self_intersecting_pairs
 from geotex.errors import GeotexError
 from geotex.mesh.needles import needle_free
+from geotex.mesh.solid import arrays_of_manifold, manifold_of
 from geotex.mesh.topology import compacted, face_components
 from geotex.progress import report
 
@@ -127,6 +129,7 @@ def element_groups(X: np.ndarray, G: np.ndarray, *, touching=None, moved=None
         Group of every element, ``0 .. n_groups - 1`` (greedy colouring, largest
         degree first, so deterministic).
     """
+    # lazy: networkx (~0.25 s) and scipy.spatial (~0.1 s) are slow to import
     import networkx as nx
     from scipy.spatial import cKDTree
 
@@ -195,10 +198,6 @@ def united_with_base(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray,
     GeotexError
         manifold3d rejects the base or the elements (open elements, a bug).
     """
-    import manifold3d
-
-    from geotex.mesh.solid import arrays_of_manifold, manifold_of
-
     base = manifold_of(V, F)
     if base.status() != manifold3d.Error.NoError:
         raise GeotexError(f"the base is not a valid solid for manifold3d ({base.status().name});"

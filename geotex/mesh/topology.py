@@ -28,6 +28,7 @@ __all__ = [
     "position_welded_faces",
     "neighbour_mean",
     "compacted",
+    "concatenated",
 ]
 
 
@@ -200,6 +201,27 @@ def compacted(V: np.ndarray, F: np.ndarray, *, return_index: bool = False):
         F2 = (np.cumsum(used) - 1)[F].astype(np.int64)
     V2 = V[kept]
     return (V2, F2, kept) if return_index else (V2, F2)
+
+
+def concatenated(parts) -> tuple[np.ndarray, np.ndarray]:
+    """Stack meshes ``[(V, F), ...]`` into one ``(V, F)`` (faces re-indexed, no welding).
+
+    Parameters
+    ----------
+    parts : iterable of (V (n_i, 3) float64, F (m_i, 3) int64)
+        Parts without faces are skipped.
+
+    Returns
+    -------
+    V : numpy.ndarray, (sum n_i, 3) float64
+    F : numpy.ndarray, (sum m_i, 3) int64
+    """
+    parts = [(V, F) for V, F in parts if len(F)]
+    if not parts:
+        return np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64)
+    offsets = np.cumsum([0] + [len(V) for V, _ in parts[:-1]])
+    return (np.vstack([V for V, _ in parts]),
+            np.vstack([F + o for (_, F), o in zip(parts, offsets)]).astype(np.int64))
 
 
 def neighbour_mean(F: np.ndarray, n_vertices: int) -> sp.csr_matrix:

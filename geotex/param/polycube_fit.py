@@ -23,6 +23,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import igl
 import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
@@ -79,8 +80,6 @@ class SurfaceProjector:
     """
 
     def __init__(self, V: np.ndarray, F: np.ndarray):
-        import igl
-
         self.V = np.ascontiguousarray(V, dtype=np.float64)
         self.F = np.ascontiguousarray(F, dtype=np.int64)
         self.normals = face_normals(self.V, self.F)

@@ -17,6 +17,7 @@ messages name that point.
 
 from __future__ import annotations
 
+import igl
 import numpy as np
 
 from geotex.mesh.geometry import face_normals
@@ -66,8 +67,6 @@ def face_thickness(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray
         First hit along the outward normal: the width of the gap in front of
         the face (``inf`` when the ray escapes).
     """
-    import igl
-
     V = np.ascontiguousarray(V, dtype=np.float64)
     F = np.ascontiguousarray(F, dtype=np.int64)
     tree = igl.AABB()

@@ -17,6 +17,7 @@ such configuration by flipping cells.
 
 from __future__ import annotations
 
+import igl
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
@@ -91,8 +92,6 @@ def occupancy(V: np.ndarray, F: np.ndarray, *, cell: float, origin: np.ndarray,
     winding : numpy.ndarray, shape float64
         The winding number at every cell centre.
     """
-    import igl
-
     axes = [np.arange(k, dtype=np.float64) + 0.5 for k in shape]
     gx, gy, gz = np.meshgrid(*axes, indexing="ij")
     Q = origin + cell * np.stack([gx.ravel(), gy.ravel(), gz.ravel()], axis=1)

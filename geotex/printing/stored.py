@@ -18,6 +18,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import manifold3d as m3d
 import numpy as np
 
 from geotex.check.report import CheckReport, check_mesh
@@ -153,8 +154,6 @@ def printable_stored_solid(V, F, *, precision=np.float32, rebuild: bool = False,
     InputError
         Malformed arrays or coordinates outside the float32 range.
     """
-    import manifold3d as m3d
-
     def judged(Vx, Fx):
         return check_mesh(Vx, Fx, manifold3d=manifold3d, max_examples=max_examples,
                           progress=progress)

@@ -10,14 +10,18 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import manifold3d
 import numpy as np
 
 from geotex.errors import InputError
 from geotex.mesh.arrays import as_faces, as_mesh_arrays
 from geotex.check.intersections import self_intersecting_pairs
 from geotex.mesh.geometry import degenerate_faces, face_areas, face_normals, signed_volume
+from geotex.mesh.polygons import without_flat_triangles
 from geotex.mesh.topology import (compacted, edge_topology, face_components,
                                   non_manifold_vertices)
+from geotex.quilting.icp import ClosestPoints
+from geotex.quilting.seam import boundary_loops
 
 __all__ = ["Element", "texture_arrays", "split_elements", "concatenate_elements",
            "closed_element_ok", "capped", "caps_like"]
@@ -64,7 +68,6 @@ class Element:
     def closest(self):
         """:class:`~geotex.quilting.icp.ClosestPoints` of the element (its AABB tree)."""
         if self._closest is None:
-            from geotex.quilting.icp import ClosestPoints
             self._closest = ClosestPoints(self.V, self.F)
         return self._closest
 
@@ -240,11 +243,6 @@ def capped(V: np.ndarray, F: np.ndarray, domain, *, rel_tol: float = 1e-9):
         If a boundary loop does not lie on one domain edge, or cannot be
         capped.
     """
-    import manifold3d
-
-    from geotex.mesh.polygons import without_flat_triangles
-    from geotex.quilting.seam import boundary_loops
-
     n = V.shape[0]
     on_cut = np.zeros(n, dtype=bool)
     loops = boundary_loops(F, n)

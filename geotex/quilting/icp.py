@@ -21,6 +21,7 @@ import numpy as np
 
 from geotex.errors import InputError
 from geotex.mesh.arrays import as_mesh_arrays, as_vertices
+from geotex.mesh.geometry import face_normals
 
 __all__ = ["IcpInfo", "icp_translation", "ClosestPoints"]
 
@@ -63,7 +64,6 @@ class ClosestPoints:
     def face_normals(self) -> np.ndarray:
         """Unit face normals, (m, 3) (computed on first use)."""
         if getattr(self, "_normals", None) is None:
-            from geotex.mesh.geometry import face_normals
             self._normals = face_normals(self.V, self.F)
         return self._normals
 

@@ -13,6 +13,9 @@ from __future__ import annotations
 import igl
 import numpy as np
 
+from geotex.mesh.geometry import signed_volume
+from geotex.mesh.primitives import box
+from geotex.mesh.solid import arrays_of_manifold, manifold_of
 from geotex.quilting.elements import Element, closed_element_ok, split_elements
 from geotex.quilting.merge import merge_elements
 
@@ -149,10 +152,6 @@ def clipped_to(p: Element, domain, *, min_fraction: float = 0.2) -> list[Element
     Parts holding less than ``min_fraction`` of the element's volume are left
     out (slivers along the border look like debris and skew the statistics).
     """
-    from geotex.mesh.geometry import signed_volume
-    from geotex.mesh.primitives import box
-    from geotex.mesh.solid import arrays_of_manifold, manifold_of
-
     x0, y0, x1, y1 = domain
     pad = float(p.hi[2] - p.lo[2]) + 1.0
     solid = manifold_of(p.V, p.F) ^ manifold_of(*box((x0, y0, p.lo[2] - pad),

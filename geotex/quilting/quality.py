@@ -11,10 +11,12 @@ from __future__ import annotations
 import json
 from dataclasses import asdict, dataclass, field
 
+import igl
 import numpy as np
 
 from geotex.check.intersections import self_intersecting_pairs
 from geotex.mesh.topology import compacted, edge_topology, face_components
+from geotex.quilting.elements import closed_element_ok
 
 __all__ = ["QuiltReport", "quilt_report", "element_stats", "coverage_fraction", "nested_pairs"]
 
@@ -177,8 +179,6 @@ def nested_pairs(V: np.ndarray, F: np.ndarray, element_ids: np.ndarray) -> np.nd
     -------
     numpy.ndarray, (p, 2) int64
     """
-    import igl
-
     k = int(element_ids.max()) + 1 if element_ids.size else 0
     if k < 2:
         return np.zeros((0, 2), np.int64)
@@ -253,8 +253,6 @@ def quilt_report(V, F, element_ids, *, exemplar, domain, merges, dropped, seams,
     a valid closed solid) replaces the per-element check, e.g. when some
     elements are open on the domain boundary and were checked with their caps.
     """
-    from geotex.quilting.elements import closed_element_ok
-
     rep = QuiltReport()
     k = int(element_ids.max()) + 1 if element_ids.size else 0
     rep.elements = k

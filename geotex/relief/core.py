@@ -36,8 +36,10 @@ import igl
 import numpy as np
 import scipy.sparse as sp
 
+from geotex.check.intersections import self_intersecting_pairs
 from geotex.errors import InputError
 from geotex.mesh.arrays import as_mesh_arrays
+from geotex.options import finite_number, positive_number
 from geotex.progress import report
 from geotex.relief.subdivide import refined_by_edge_splits
 
@@ -208,8 +210,6 @@ def _lowered_where_crossing(P, F, off, N, gain, pairs, precision):
     on the crossing faces and two rings around them; after ``RELIEF_ROUNDS``
     they flatten it on growing rings.
     """
-    from geotex.check.intersections import self_intersecting_pairs
-
     n = P.shape[0]
     gain = gain.copy()
     rounds = 0
@@ -306,8 +306,6 @@ def displaced_solid(V, F, heights: Callable[[ReliefPoints], np.ndarray] | None =
     InputError
         Bad depth, sizes, or heights of the wrong shape.
     """
-    from geotex.options import finite_number, positive_number
-
     d = positive_number(depth, name="depth")
     sec = {}
     t = time.perf_counter()
@@ -374,8 +372,6 @@ def displaced_solid(V, F, heights: Callable[[ReliefPoints], np.ndarray] | None =
             if ex is not None and len(ex) == rep.self_intersecting_pairs:
                 pairs = np.asarray(ex, dtype=np.int64).reshape(-1, 2)
             else:
-                from geotex.check.intersections import self_intersecting_pairs
-
                 pairs = self_intersecting_pairs(Vd.astype(precision).astype(np.float64), Fd)
             gain, r = _lowered_where_crossing(P, Fd, off, N, gain, pairs, precision)
             rounds += r

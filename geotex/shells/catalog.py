@@ -13,7 +13,12 @@ import hashlib
 from pathlib import Path
 
 from geotex.catalogs import Catalog
+from geotex.data import sample_path
 from geotex.errors import InputError, MissingFileError
+from geotex.io import read_mesh
+from geotex.mesh.primitives import torus
+from geotex.shells.build import build_shell
+from geotex.shells.store import load_shell, save_shell, shell_file_metadata
 
 __all__ = ["CATALOG_DIR", "recipes", "shell_path", "list_shells", "load_named", "rebuild",
            "source_mesh"]
@@ -26,15 +31,11 @@ shell_path = CATALOG.path
 
 def load_named(name_or_path):
     """Load a shell by catalog name or path."""
-    from geotex.shells.store import load_shell
-
     return load_shell(shell_path(name_or_path))
 
 
 def list_shells() -> list[dict]:
     """Catalog entries with the metadata stored in each shell file."""
-    from geotex.shells.store import shell_file_metadata
-
     out = CATALOG.entries()
     for entry in out:
         if entry["bytes"]:
@@ -54,12 +55,8 @@ def source_mesh(recipe: dict):
     """
     src = recipe["source"]
     if src.startswith("primitive:torus"):
-        from geotex.mesh.primitives import torus
-
         return torus(**recipe.get("args", {}))
     if src.startswith("sample:"):
-        from geotex.data import sample_path
-
         path = sample_path(src.split(":", 1)[1])
     else:
         path = Path(src)
@@ -68,7 +65,6 @@ def source_mesh(recipe: dict):
     digest = hashlib.sha256(path.read_bytes()).hexdigest()
     if recipe.get("sha256") and digest != recipe["sha256"]:
         raise InputError(f"{path}: its SHA-256 differs from the recipe's; not the same mesh")
-    from geotex.io import read_mesh
 
     m = read_mesh(path)
     return m.vertices, m.faces
@@ -81,9 +77,6 @@ def rebuild(name: str, path=None, *, progress=None):
     -------
     Shell
     """
-    from geotex.shells.build import build_shell
-    from geotex.shells.store import save_shell
-
     r = CATALOG.recipe(name)
     V, F = source_mesh(r)
     shell = build_shell(V, F, tile_size=r["tile_size"], name=name, source=r["source"],

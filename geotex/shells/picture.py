@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from geotex.render import Panel
 from geotex.shells.locate import quad_points_to_base
 
 __all__ = ["quad_grid_lines", "shell_panels"]
@@ -44,8 +45,6 @@ def quad_grid_lines(shell, *, samples: int = 8, lift: float = 0.0):
 
 def shell_panels(shell, *, title: str | None = None) -> list:
     """Three panels: the polycube, the base coloured by quad direction, the quad grid."""
-    from geotex.render import Panel
-
     pc = shell.polycube
     name = title or shell.name
     labels = pc.layout.quad_label[pc.layout.face_quad]

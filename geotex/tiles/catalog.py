@@ -13,6 +13,10 @@ import sys
 from pathlib import Path
 
 from geotex.catalogs import Catalog
+from geotex.exemplars import exemplar
+from geotex.tiles.build import build_tileset
+from geotex.tiles.tileset import load_tileset, save_tileset
+from geotex.tiles.verify import check_seams
 
 __all__ = ["CATALOG_DIR", "MAX_BYTES", "recipes", "tileset_path", "list_tilesets",
            "rebuild", "load_named", "main"]
@@ -31,8 +35,6 @@ def load_named(name_or_path):
     -------
     TileSet
     """
-    from geotex.tiles.tileset import load_tileset
-
     return load_tileset(tileset_path(name_or_path))
 
 
@@ -76,9 +78,6 @@ def rebuild(name: str, *, progress=None, table: dict | None = None):
     InputError
         Unknown name.
     """
-    from geotex.exemplars import exemplar
-    from geotex.tiles.build import build_tileset
-
     r = CATALOG.recipe(name, table)
     ex = exemplar(r["exemplar"]["name"], **r["exemplar"].get("params", {}))
     return build_tileset(ex, colors=r["colors"], planar=r.get("planar", False),
@@ -95,9 +94,6 @@ def main(argv=None) -> int:
     :data:`MAX_BYTES`. Returns 0 when every set passed, 1 otherwise.
     """
     import time
-
-    from geotex.tiles.tileset import save_tileset
-    from geotex.tiles.verify import check_seams
 
     names = list(argv if argv is not None else sys.argv[1:]) or sorted(recipes())
     status = 0

@@ -15,12 +15,11 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
-from geotex.mesh.topology import compacted
-
-from geotex.tiles.strips import GAP
+from geotex.mesh.topology import compacted, concatenated
 
 __all__ = ["PIXEL", "CLEAR", "footprint_pixels", "ExemplarPixels", "fill_gaps"]
 
+GAP = 0.02                   # clearance between elements (gap filling, interior)
 PIXEL = 1.0 / 160.0
 CLEAR = 0.5 * GAP            # clearance of added elements from the tile sides
 WINDOWS = 48                 # random exemplar windows tried
@@ -145,8 +144,6 @@ def fill_gaps(V: np.ndarray, F: np.ndarray, ex: ExemplarPixels, size,
     count : int
         How many.
     """
-    from geotex.tiles.frame import concatenated
-
     n = int(round(1.0 / PIXEL))
     occ = np.zeros((n, n), dtype=bool)
     if len(F):

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from geotex.errors import InputError
+from geotex.mesh.topology import concatenated
 from geotex.tiles.colors import EAST, NORTH, SOUTH, WEST
 from geotex.tiles.strips import Strip
 
@@ -43,16 +44,6 @@ def placed_half(strip: Strip, side: int) -> tuple[tuple[np.ndarray, np.ndarray],
     else:
         raise InputError(f"side must be 0..3, got {side}")
     return (out, F), boxes
-
-
-def concatenated(parts) -> tuple[np.ndarray, np.ndarray]:
-    """Stack meshes ``[(V, F), ...]`` into one ``(V, F)``."""
-    parts = [(V, F) for V, F in parts if len(F)]
-    if not parts:
-        return np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64)
-    offsets = np.cumsum([0] + [len(V) for V, _ in parts[:-1]])
-    return (np.vstack([V for V, _ in parts]),
-            np.vstack([F + o for (_, F), o in zip(parts, offsets)]).astype(np.int64))
 
 
 def frame_of(strips_ab, colors) -> tuple[tuple[np.ndarray, np.ndarray], np.ndarray]:

@@ -6,8 +6,12 @@ import io
 from pathlib import Path
 
 import numpy as np
+from PIL import Image
 
 from geotex.errors import InputError
+from geotex.io.atomic import atomic_output
+from geotex.mesh.primitives import box
+from geotex.render import offscreen_pyvista
 from geotex.tiles.frame import concatenated
 from geotex.tiles.tileset import TileSet
 from geotex.tiles.tiling import on_slab, planar_tiling, random_arrangement
@@ -37,8 +41,6 @@ def tiles_laid_out(tiles: TileSet, *, columns: int | None = None, spacing: float
         ``"elements"``, ``"plates"`` and one entry per side-bar colour
         (hex string).
     """
-    from geotex.mesh.primitives import box
-
     n = len(tiles)
     blocks = n % 16 == 0 and n > 16
     columns = columns or (None if blocks else int(np.ceil(np.sqrt(n))))
@@ -79,11 +81,6 @@ def _render(parts: dict, path, *, size, title: str = "", zoom: float = 1.0,
 
     Saved as a 256-colour PNG (the shading needs no more, the file is half the size).
     """
-    from PIL import Image
-
-    from geotex.io.atomic import atomic_output
-    from geotex.render import offscreen_pyvista
-
     path = Path(path)
     if path.suffix.lower() != ".png":
         raise InputError(f"{path}: pictures are written as PNG; use a .png file name")
@@ -131,8 +128,6 @@ def _render(parts: dict, path, *, size, title: str = "", zoom: float = 1.0,
 
 
 def _palette(im):
-    from PIL import Image
-
     return im.convert("RGB").quantize(colors=256, method=Image.Quantize.MEDIANCUT,
                                       dither=Image.Dither.NONE)
 
@@ -196,10 +191,6 @@ def render_tileset(tiles: TileSet, path, *, grid: int = 6, seed: int = 0) -> Pat
     pathlib.Path
     """
     import tempfile
-
-    from PIL import Image
-
-    from geotex.io.atomic import atomic_output
 
     path = Path(path)
     if path.suffix.lower() != ".png":

@@ -36,11 +36,11 @@ import numpy as np
 from geotex.errors import InputError
 from geotex.mesh.topology import face_components
 from geotex.tiles.clip import split_by_plane
+from geotex.tiles.fill import GAP, PIXEL, footprint_pixels
 
 __all__ = ["Strip", "element_boxes", "pick_strips", "largest_footprint", "lattice_phase",
            "lattice_corner", "corner_footprints", "corner_conflicts"]
 
-GAP = 0.02          # clearance between elements (gap filling, interior)
 CLEAR = 0.5 * GAP   # clearance of strip elements from the perpendicular tile sides
 CANDIDATES = 96     # random segment positions tried per colour
 SHORTLIST = 24      # best candidates (by covered length) pruned and compared
@@ -175,8 +175,6 @@ def corner_footprints(Vs: np.ndarray, Fs: np.ndarray, labels: np.ndarray, k: int
         the element is absent). The vertical cut makes a half's footprint the
         element's footprint on its side of the line.
     """
-    from geotex.tiles.fill import PIXEL, footprint_pixels
-
     n = int(round(CORNER_WINDOW / PIXEL))
     t, s = Vs[:, 0], Vs[:, 1]
     maps = {"above_start": (t, s), "below_start": (t, -s),

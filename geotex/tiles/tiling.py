@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import manifold3d
 import numpy as np
 
 from geotex.errors import InputError
-from geotex.mesh.topology import compacted
+from geotex.mesh.solid import arrays_of_manifold, manifold_of
+from geotex.mesh.topology import compacted, edge_topology, face_components
 from geotex.tiles.tileset import TileSet
 
 __all__ = ["random_arrangement", "planar_tiling", "welded", "closed_elements", "on_slab"]
@@ -82,8 +84,6 @@ def closed_elements(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarra
     V2, F2 : numpy.ndarray
         Compacted.
     """
-    from geotex.mesh.topology import edge_topology, face_components
-
     topo = edge_topology(F, len(V))
     _, labels = face_components(F, len(V))
     open_faces = np.zeros(len(F), dtype=bool)
@@ -138,10 +138,6 @@ def on_slab(V: np.ndarray, F: np.ndarray, size, *, thickness: float = 0.2
     V, F : numpy.ndarray
         One printable solid (manifold3d boolean union).
     """
-    import manifold3d
-
-    from geotex.mesh.solid import arrays_of_manifold, manifold_of
-
     slab = manifold3d.Manifold.cube([float(size[0]), float(size[1]), thickness]
                                     ).translate([0.0, 0.0, -thickness])
     return arrays_of_manifold(slab + manifold_of(V, F))

@@ -16,8 +16,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from geotex.errors import InputError
 from geotex.mesh.topology import edge_topology
 from geotex.tiles.colors import side_classes
+from geotex.tiles.fill import footprint_pixels
 from geotex.tiles.tileset import TileSet
 
 __all__ = ["SeamReport", "check_seams", "side_boundaries", "CornerDensity", "corner_density"]
@@ -172,9 +174,6 @@ def corner_density(V: np.ndarray, F: np.ndarray, grid, *, quarter: float = 0.25,
     InputError
         Grid smaller than 1 x 1, or ``quarter`` outside ``(0, 0.5)``.
     """
-    from geotex.errors import InputError
-    from geotex.tiles.fill import footprint_pixels
-
     w, h = (int(g) for g in grid)
     if w < 1 or h < 1:
         raise InputError(f"grid must be at least 1 x 1, got {grid!r}")

@@ -43,7 +43,7 @@ from geotex.image.atlas import Atlas, build_atlas, rasterize_triangles
 from geotex.image.material.tile import MaterialTile, sample_tile
 from geotex.mesh.arrays import as_mesh_arrays
 from geotex.mesh.record import Mesh
-from geotex.mesh.topology import compacted
+from geotex.mesh.topology import compacted, vertex_components
 from geotex.options import finite_number, positive_number
 from geotex.patches.effect import effect_area
 
@@ -85,6 +85,7 @@ def material_locks(V, F, constraints) -> tuple[np.ndarray, np.ndarray]:
         On a material value outside ``[0, 1]`` or an entry that names no
         place (naming the entry).
     """
+    # lazy: scipy.spatial takes ~0.1 s to import
     from scipy.spatial import cKDTree
 
     V, F = as_mesh_arrays(V, F)
@@ -200,8 +201,6 @@ def default_material(V, F, *, up=(0.0, 0.0, 1.0), band: float = DEFAULT_BAND) ->
 
 def _components_safe_material(V, F, locked, values, fallback) -> np.ndarray:
     """material_field, with components lacking a lock locked to the fallback at one vertex."""
-    from geotex.mesh.topology import vertex_components
-
     count, labels = vertex_components(F, V.shape[0])
     has = np.zeros(count, bool)
     lab = labels[locked]

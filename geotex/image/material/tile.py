@@ -273,6 +273,7 @@ def blend_weights(size: int, layers: int, *, blend: str = "linear", seed=None,
     m = np.linspace(0.0, 1.0, K)[:, None, None]
     if blend == "linear":
         return np.broadcast_to(m, (K, size, size)).copy()
+    # lazy: scipy.ndimage takes ~0.1 s to import (only the smooth blend needs it)
     from scipy.ndimage import gaussian_filter
 
     rng = np.random.default_rng(seed)

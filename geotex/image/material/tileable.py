@@ -34,6 +34,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from PIL import Image
 import scipy.sparse as sp
 from scipy.ndimage import median_filter
 from scipy.sparse.csgraph import breadth_first_order, maximum_flow
@@ -145,8 +146,6 @@ def feature_mask(colors, *, threshold: float | None = None, feature: str = "mino
 
 def _square_resized(img: np.ndarray, side: int, *, nearest: bool = False) -> np.ndarray:
     """Central square crop resized to ``side`` (float32, channels kept)."""
-    from PIL import Image
-
     h, w = img.shape[:2]
     k = min(h, w)
     y0, x0 = (h - k) // 2, (w - k) // 2
