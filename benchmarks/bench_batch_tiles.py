@@ -103,7 +103,8 @@ def main() -> None:
         f"{rp['load_before']:.1f} / {rp['load_after']:.1f} |",
         "",
         f"Speed-up {row['speedup']:.2f}x measured at that load (the 2 cores are shared "
-        "with other jobs, so 2 workers get far less than 2 cores). Byte-identical sets (every tile array and the "
+        "with other jobs, so 2 workers get far less than 2 cores). Byte-identical sets "
+        "(every tile array and the "
         f"metadata): {'yes' if identical else 'NO'}; same as the shipped file: "
         f"{'yes' if shipped else 'NO'}.",
         "",
