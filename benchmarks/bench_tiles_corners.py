@@ -16,7 +16,7 @@ With ``--baseline DIR`` the same measure is taken on the ``NAME.npz`` files of
 DIR (e.g. the catalog of an earlier commit, extracted with ``git show``) and
 shown as "before".
 
-Run:  python benchmarks/bench_tiles_corners.py [--baseline DIR]
+Run:  python benchmarks/bench_tiles_corners.py [--baseline DIR [--baseline-label TEXT]]
 """
 
 from __future__ import annotations
@@ -48,6 +48,8 @@ def measure(tiles) -> dict:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--baseline", type=Path, help="directory of earlier NAME.npz files")
+    ap.add_argument("--baseline-label", default="",
+                    help="what the baseline files are (one sentence for the results)")
     args = ap.parse_args()
     rows = []
     for entry in list_tilesets():
@@ -85,7 +87,8 @@ def main() -> None:
         "tile --grid 6 6` writes), welded; `corner_density` rasterizes the faces above the "
         "tile plane (1/40 tile pixels) and compares the covered fraction of the corner "
         "squares (within a quarter tile of a tile corner) with the rest. Target (issue 14): "
-        f"ratio at least {TARGET}.",
+        f"ratio at least {TARGET}." + (f" Before: {args.baseline_label}"
+                                       if args.baseline_label else ""),
         "",
         "| set | kind | tiles | MB | seamless | corner / elsewhere before | ratio before "
         "| corner / elsewhere after | ratio after | stitched seams | seam gap max | "

@@ -81,7 +81,6 @@ ALLOWED_LAZY_IMPORTS: dict[tuple[str, str], str] = {
     ("geotex/tiles/__init__.py", "geotex.tiles.catalog"):
         "module __getattr__: the catalog is imported on first use so that "
         "`python -m geotex.tiles.catalog` runs without a second copy of the module",
-    ("geotex/tiles/build.py", "geotex"): "pending: tiles/build.py is being reworked",
 }
 
 #: Third-party modules a function may import lazily (they are slow to import), with the

@@ -10,7 +10,7 @@ import pytest
 
 from geotex.check import check_mesh
 from geotex.cli import main
-from geotex.errors import InputError, MeshFileError
+from geotex.errors import GeotexError, InputError, MeshFileError
 from geotex.mesh.primitives import icosphere
 from geotex.mesh.topology import edge_topology
 from geotex.tiles import (TileSet, build_tileset, check_seams, load_tileset, on_slab,
@@ -445,3 +445,54 @@ def test_cli_build_isotropic_and_list(tmp_path, capsys):
     assert main(["tiles", "build", "studs", "-o", str(tmp_path / "y.npz"), "--interior",
                  "magic"]) == 2
     assert not (tmp_path / "y.npz").exists()
+
+
+def test_tiles_are_independent_of_build_order():
+    # every tile draws from its own generator: built last-to-first, the set is the same
+    def backwards(function, plan, n):
+        return ((t, function(plan, t)) for t in reversed(range(n)))
+
+    ex = studs()
+    a = build_tileset(ex, colors="2,1,1", planar=True, interior="paste", seed=3)
+    b = build_tileset(ex, colors="2,1,1", planar=True, interior="paste", seed=3,
+                      map_tiles=backwards)
+    assert len(a) == 4
+    for i in range(len(a)):
+        (Va, Fa), (Vb, Fb) = a.tile(i), b.tile(i)
+        assert np.array_equal(Va, Vb) and np.array_equal(Fa, Fb)
+    assert a.metadata == b.metadata
+    with pytest.raises(GeotexError, match="map_tiles"):
+        build_tileset(ex, colors="2,1,1", planar=True, interior="paste",
+                      map_tiles=lambda f, p, n: iter([(0, f(p, 0))]))
+
+
+def test_cli_build_on_two_dask_workers_is_byte_identical(tmp_path, capsys, monkeypatch):
+    pytest.importorskip("distributed")
+    import importlib
+
+    engine = importlib.import_module("geotex.batch.run")   # the module, not batch.run()
+
+    used = []
+
+    def counted(function, plan, n, **kw):
+        used.append(kw.get("workers"))
+        for t, result in engine_map(function, plan, n, **kw):
+            used.append(t)
+            yield t, result
+
+    engine_map = engine.map_tasks
+    monkeypatch.setattr(engine, "map_tasks", counted)
+    args = ["tiles", "build", "studs", "--colors", "2,1,1", "--planar", "--seed", "2"]
+    seq, par = tmp_path / "seq.npz", tmp_path / "par.npz"
+    assert main(args + ["-o", str(seq), "--workers", "0"]) == 0
+    assert main(args + ["-o", str(par), "--workers", "2"]) == 0
+    assert "planar set, 4 tiles" in capsys.readouterr().out
+    assert used[0] == 2 and sorted(used[1:]) == [0, 1, 2, 3]   # the tiles ran on Dask
+    assert seq.read_bytes() == par.read_bytes()
+    assert main(args + ["-o", str(tmp_path / "bad.npz"), "--workers", "-1"]) == 2
+    assert main(args + ["-o", str(tmp_path / "bad.npz"), "--scheduler", "localhost"]) == 2
+    assert main(args + ["-o", str(tmp_path / "bad.npz"), "--workers", "2",
+                        "--scheduler", "tcp://localhost:1"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("geotex: error:") == 3 and "--workers" in err and "--scheduler" in err
+    assert not (tmp_path / "bad.npz").exists()

@@ -16,6 +16,7 @@ import json
 import os
 import socket
 import time
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Callable
 
@@ -25,6 +26,7 @@ from geotex.batch.summary import read_summary, write_summary
 from geotex.errors import GeotexError, InputError
 
 __all__ = ["run", "run_part", "import_modules", "local_cluster", "default_workers",
+           "dask_client", "map_tasks",
            "SUMMARY_INTERVAL"]
 
 #: Seconds between two rewrites of the summary while a batch runs.
@@ -345,10 +347,32 @@ def run(parts, *, job: str = "texture", outdir, tiles: str | None = None, client
     return result
 
 
-def _run_dask(parts, shared, outs, finish, rows, meta, *, client, workers, scheduler):
-    """Submit one task per part to a Dask cluster and collect the rows as they finish."""
-    # lazy: distributed takes ~0.6 s to import; `geotex --help` imports this module
-    from distributed import Client, as_completed
+@contextmanager
+def dask_client(*, client=None, workers: int | None = None, scheduler: str | None = None):
+    """A Dask client: the one given, one connected to ``scheduler``, or a local cluster's.
+
+    A client or local cluster this function opened is closed on exit; a
+    given ``client`` is left open.
+
+    Parameters
+    ----------
+    client : distributed.Client, optional
+    workers : int, optional
+        Size of the local cluster (:func:`local_cluster`) when neither
+        ``client`` nor ``scheduler`` is given.
+    scheduler : str, optional
+        Address of a running ``dask scheduler`` (``tcp://host:8786``).
+
+    Yields
+    ------
+    distributed.Client
+
+    Raises
+    ------
+    InputError
+        The scheduler cannot be reached.
+    """
+    from distributed import Client
 
     own_cluster = own_client = None
     try:
@@ -360,21 +384,99 @@ def _run_dask(parts, shared, outs, finish, rows, meta, *, client, workers, sched
                     raise InputError(f"--scheduler {scheduler}: cannot connect "
                                      f"({_one_line(exc)}); start one with 'dask scheduler' "
                                      "and give its tcp:// address") from None
-                meta["scheduler"] = scheduler
             else:
                 own_cluster = local_cluster(workers)
                 client = own_client = Client(own_cluster)
-        meta["workers"] = len(client.scheduler_info().get("workers", {}))
-        if not meta["workers"]:
-            client.wait_for_workers(1, timeout=60)
-            meta["workers"] = len(client.scheduler_info().get("workers", {}))
-        # every worker imports the jobs' libraries once, before the first part
-        modules = sorted({m for p in parts for m in JOBS[p.job].imports})
+        yield client
+    finally:
+        if own_client is not None:
+            own_client.close()
+        if own_cluster is not None:
+            own_cluster.close()
+
+
+def _worker_count(client) -> int:
+    """Workers connected to ``client`` (waiting up to a minute for the first)."""
+    n = len(client.scheduler_info().get("workers", {}))
+    if not n:
+        client.wait_for_workers(1, timeout=60)
+        n = len(client.scheduler_info().get("workers", {}))
+    return n
+
+
+def _import_on_workers(client, modules) -> None:
+    try:
+        client.run(import_modules, sorted(modules))
+    except ImportError as exc:
+        raise GeotexError(f"the Dask workers cannot import geotex ({_one_line(exc)}); "
+                          "install the same geotex on every worker machine") from None
+
+
+def map_tasks(function, shared, n: int, *, client=None, workers: int | None = None,
+              scheduler: str | None = None, imports=("geotex",)):
+    """Run ``function(shared, i)`` for ``i`` in ``range(n)`` on Dask; yield results as they come.
+
+    ``shared`` is scattered to every worker once (tasks refer to it by
+    future); every task is retried once if it raises or its worker dies.
+    Used by :func:`geotex.tiles.build.build_tileset` (``map_tiles``) for
+    ``geotex tiles build --workers N``.
+
+    Parameters
+    ----------
+    function : callable
+        ``function(shared, i)``, importable on the workers (a module-level function).
+    shared : object
+        Picklable input common to every task.
+    n : int
+        Number of tasks.
+    client, workers, scheduler
+        Where to run, as for :func:`dask_client`.
+    imports : sequence of str
+        Modules every worker imports once before the first task.
+
+    Yields
+    ------
+    tuple (int, object)
+        ``(i, function(shared, i))``, in the order the tasks finish.
+
+    Raises
+    ------
+    InputError
+        The scheduler cannot be reached.
+    GeotexError
+        The workers cannot import geotex; an exception raised by a task (after
+        its retry) propagates as is.
+    """
+    from distributed import as_completed
+
+    with dask_client(client=client, workers=workers, scheduler=scheduler) as cl:
+        _worker_count(cl)
+        _import_on_workers(cl, imports)
+        future = cl.scatter(shared, broadcast=True, hash=False)
+        name = getattr(function, "__name__", "task")
+        stamp = f"{os.getpid()}-{time.time_ns()}"
+        futures = {cl.submit(function, future, i, retries=1, pure=False,
+                             key=f"geotex-{name}-{i}-{stamp}"): i for i in range(n)}
         try:
-            client.run(import_modules, modules)
-        except ImportError as exc:
-            raise GeotexError(f"the Dask workers cannot import geotex ({_one_line(exc)}); "
-                              "install the same geotex on every worker machine") from None
+            for fut in as_completed(futures):
+                yield futures[fut], fut.result()
+                fut.release()
+        finally:
+            for fut in futures:
+                fut.cancel()
+            future.release()
+
+
+def _run_dask(parts, shared, outs, finish, rows, meta, *, client, workers, scheduler):
+    """Submit one task per part to a Dask cluster and collect the rows as they finish."""
+    from distributed import as_completed
+
+    with dask_client(client=client, workers=workers, scheduler=scheduler) as client:
+        if scheduler is not None:
+            meta["scheduler"] = scheduler
+        meta["workers"] = _worker_count(client)
+        # every worker imports the jobs' libraries once, before the first part
+        _import_on_workers(client, {m for p in parts for m in JOBS[p.job].imports})
         # heavy shared inputs go to every worker once; tasks refer to them by future
         futures = {key: client.scatter(obj, broadcast=True, hash=False)
                    for key, obj in shared.items()}
@@ -410,11 +512,6 @@ def _run_dask(parts, shared, outs, finish, rows, meta, *, client, workers, sched
             submit_more()
         for fut in futures.values():
             fut.release()
-    finally:
-        if own_client is not None:
-            own_client.close()
-        if own_cluster is not None:
-            own_cluster.close()
 
 
 def _task_failure(part: Part, exc: BaseException) -> str:

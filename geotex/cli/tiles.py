@@ -33,6 +33,13 @@ def register(sub):
                    "the tile) in every tile: for regular textures such as knurl")
     b.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     b.add_argument("--name", help="set name (default: the exemplar's)")
+    b.add_argument("--workers", type=int, default=None, metavar="N",
+                   help="build the tiles on a local Dask cluster of N processes (0 or 1, "
+                   "the default: one after another in this process); the set is "
+                   "byte-identical either way")
+    b.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="build the tiles on a running Dask scheduler's cluster "
+                   "(tcp://host:8786) instead")
     b.set_defaults(run=run_build)
 
     c = ts.add_parser("check", help="verify that every legal neighbour pair is seamless",
@@ -77,6 +84,28 @@ def _exemplar(spec: str, seed: int):
                      f"({', '.join(exemplars.EXEMPLAR_KINDS)})")
 
 
+def _tile_mapper(workers, scheduler):
+    """``map_tiles`` for :func:`~geotex.tiles.build.build_tileset` from --workers/--scheduler."""
+    if workers is not None and workers < 0:
+        raise UsageError(f"--workers {workers}: give a number of workers >= 0")
+    if scheduler is not None and workers is not None:
+        raise UsageError("--workers and --scheduler exclude each other: the scheduler's "
+                         "cluster has its own workers")
+    if scheduler is not None and "://" not in scheduler:
+        raise UsageError(f"--scheduler {scheduler}: give an address such as "
+                         "tcp://host:8786")
+    if scheduler is None and (workers is None or workers <= 1):
+        return None
+
+    def map_tiles(function, plan, n):
+        from geotex.batch.run import map_tasks
+
+        return map_tasks(function, plan, n, workers=workers, scheduler=scheduler,
+                         imports=("geotex.tiles.build", "geotex.quilting"))
+
+    return map_tiles
+
+
 def run_build(args) -> int:
     import time
 
@@ -88,6 +117,7 @@ def run_build(args) -> int:
     out = guard_output(args.output, args.exemplar)
     if out.suffix.lower() != ".npz":
         raise UsageError(f"{out}: tile sets are written as .npz files")
+    map_tiles = _tile_mapper(args.workers, args.scheduler)
     ex = _exemplar(args.exemplar, args.seed)
     n_colors = parse_colors(args.colors, planar=args.planar)
     n = tile_count(n_colors, planar=args.planar, isotropic=args.isotropic)
@@ -96,7 +126,7 @@ def run_build(args) -> int:
         tiles = build_tileset(ex, colors=args.colors, planar=args.planar,
                               isotropic=args.isotropic, lattice=args.lattice,
                               interior=args.interior, seed=args.seed, name=args.name,
-                              progress=bar)
+                              progress=bar, map_tiles=map_tiles)
     elapsed = time.perf_counter() - start
     save_tileset(out, tiles)
     extra = ""

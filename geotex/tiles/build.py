@@ -20,18 +20,22 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from geotex.check.intersections import self_intersecting_pairs
 from geotex.errors import GeotexError, InputError
+from geotex.exemplars import exemplar as make
 from geotex.mesh.topology import compacted
 from geotex.progress import report
+from geotex.quilting import coverage_fraction, quilt_texture, split_elements
 from geotex.tiles.colors import COMPLETE_GROUPS, PLANAR_GROUPS, parse_colors, tile_keys
+from geotex.tiles.fill import ExemplarPixels, fill_gaps
 from geotex.tiles.frame import concatenated, frame_of
 from geotex.tiles.strips import (GAP, element_boxes, largest_footprint, lattice_corner,
                                  lattice_phase, pick_strips)
 from geotex.tiles.tileset import TileSet
 from geotex.tiles.verify import side_boundaries
 
-__all__ = ["build_tileset", "interior_quilt", "interior_paste", "INTERIOR_METHODS",
-           "BUILD_STAGES", "Source"]
+__all__ = ["build_tileset", "built_tile", "tile_rng", "TilePlan", "interior_quilt",
+           "interior_paste", "INTERIOR_METHODS", "BUILD_STAGES", "Source"]
 
 INTERIOR_METHODS = ("quilt", "paste")
 BUILD_STAGES = ("strips", "tiles")
@@ -90,7 +94,6 @@ def _subset(V, F, keep_faces, shift=None):
 def _exemplar_arrays(exemplar):
     """(Source, height, depth, recipe) of an exemplar object or name."""
     if isinstance(exemplar, str):
-        from geotex.exemplars import exemplar as make
         exemplar = make(exemplar)
     try:
         V = np.asarray(exemplar.vertices, dtype=np.float64)
@@ -136,8 +139,6 @@ def interior_paste(src: Source, frame, rng: np.random.Generator, *, pixels=None,
     stats : dict
         ``elements`` added.
     """
-    from geotex.tiles.fill import ExemplarPixels, fill_gaps
-
     pixels = pixels or ExemplarPixels(src.V, src.F, src.labels, src.lo, src.hi)
     added, count = fill_gaps(frame[0], frame[1], pixels, src.size, rng, lattice=lattice)
     return concatenated([frame, added]), {"elements": count}
@@ -189,13 +190,10 @@ def interior_quilt(src: Source, frame, frame_boxes: np.ndarray, rng: np.random.G
         counting merges that were undone afterwards) and, on failure, the last
         ``problem``.
     """
-    from geotex.quilting import quilt_texture
-
     wx, wy = min(window, src.size[0]), min(window, src.size[1])
     pitch = src.params.get("pitch")
     cell = float(pitch) if isinstance(pitch, (int, float)) and 0 < pitch <= min(wx, wy) \
         else None
-    from geotex.quilting import split_elements
 
     Vf = frame[0].astype(np.float32).astype(np.float64)
     want, _ = side_boundaries(Vf, frame[1])
@@ -254,8 +252,6 @@ def _accepted(res, want, frame_elements, max_foot):
     changes : dict
         ``dropped`` interior elements, ``reverted`` frame elements.
     """
-    from geotex.check.intersections import self_intersecting_pairs
-
     V = res.vertices.astype(np.float32).astype(np.float64)
     F, eids, fixed = res.faces, res.element_ids, res.fixed
     pre = np.asarray(res.element_prefilled, dtype=bool)
@@ -335,9 +331,91 @@ def _lattice(src: Source) -> tuple[float, float, float]:
     return (float(p),) + lattice_corner(src.lo, src.hi, float(p), phase)
 
 
+@dataclass(frozen=True)
+class TilePlan:
+    """Everything one tile's interior is built from, once the strips are drawn.
+
+    Attributes
+    ----------
+    src : Source
+        The exemplar.
+    frames : list of tuple ((V, F), boxes)
+        Frame and frame element footprints of every tile
+        (:func:`geotex.tiles.frame.frame_of`).
+    interior : {"quilt", "paste"}
+    lattice : tuple (pitch, phase_x, phase_y) or None
+    seed : int
+        The set seed; tile ``t`` uses :func:`tile_rng` of it.
+    pixels : ExemplarPixels
+        The exemplar's footprint rasters (:mod:`geotex.tiles.fill`).
+    """
+
+    src: Source
+    frames: list
+    interior: str
+    lattice: tuple | None
+    seed: int
+    pixels: object
+
+
+def tile_rng(seed: int, t: int) -> np.random.Generator:
+    """The random generator of tile ``t`` of a set built with ``seed``.
+
+    The ``t``-th child of ``SeedSequence(seed).spawn``: independent of the
+    strips' generator (``default_rng(seed)``) and of every other tile's.
+    """
+    return np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(int(t),)))
+
+
+def built_tile(plan: TilePlan, t: int) -> tuple[tuple[np.ndarray, np.ndarray], dict]:
+    """Tile ``t`` of a plan: its frame with the interior filled.
+
+    Depends only on the plan and ``t`` (its own generator, :func:`tile_rng`),
+    so the tiles of a set may be built in any order or in parallel.
+
+    Parameters
+    ----------
+    plan : TilePlan
+    t : int
+        Tile index.
+
+    Returns
+    -------
+    tile : tuple of (V (n, 3) float64, F (m, 3) int64)
+    stats : dict
+        ``coverage`` (covered fraction of the tile), ``pasted`` (1 when
+        quilting was not accepted and the tile was pasted), and for quilted
+        tiles ``merges``, ``filled`` (gap-fill elements), ``stitched`` and the
+        seam figures of :func:`interior_quilt`.
+    """
+
+    rng = tile_rng(plan.seed, t)
+    src, grid = plan.src, plan.lattice
+    frame, boxes = plan.frames[t]
+    tile, stats = None, {"pasted": 0}
+    if plan.interior == "quilt":
+        tile, q = interior_quilt(src, frame, boxes, rng, lattice=grid)
+        stats["merges"] = q.get("merges", 0)
+        stats["stitched"] = q.get("stitched", 0)
+        if stats["stitched"]:
+            stats.update({k: q[k] for k in ("seam_gap_max", "seam_normal_jump_mean",
+                                            "seam_normal_jump_max")})
+        if tile is not None:
+            added, count = fill_gaps(tile[0], tile[1], plan.pixels, src.size, rng,
+                                     lattice=grid)
+            tile = concatenated([tile, added])
+            stats["filled"] = count
+    if tile is None:
+        stats["pasted"] = int(plan.interior == "quilt")
+        tile, _ = interior_paste(src, frame, rng, pixels=plan.pixels, lattice=grid)
+    stats["coverage"] = coverage_fraction(tile[0], tile[1], (0.0, 0.0, 1.0, 1.0),
+                                          resolution=100)
+    return tile, stats
+
+
 def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool = False,
                   lattice: bool = False, seed: int = 0, interior: str = "quilt",
-                  name: str | None = None, progress=None) -> TileSet:
+                  name: str | None = None, progress=None, map_tiles=None) -> TileSet:
     """Build a planar, complete or isotropic geometric Wang tile set.
 
     Parameters
@@ -380,11 +458,25 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
     name : str, optional
         Set name (default: the exemplar's).
     progress : callable, optional
-        Called with ``"strips"`` and then ``"tile i/T"`` for every tile.
+        Called with ``"strips"`` and then ``"tile i/T"`` for every finished tile.
+    map_tiles : callable, optional
+        ``map_tiles(built_tile, plan, n)`` runs ``built_tile(plan, t)`` for
+        ``t`` in ``range(n)`` (in any order, anywhere: the tiles are
+        independent given the plan) and yields the pairs ``(t, result)``;
+        e.g. :func:`geotex.batch.run.map_tasks` on a Dask cluster. Default:
+        one after another in this process. The set is byte-identical either way.
 
     Returns
     -------
     TileSet
+
+    Notes
+    -----
+    Randomness: the strips are drawn from ``default_rng(seed)``; tile ``t``
+    draws its interior from its own generator,
+    ``default_rng(SeedSequence(seed, spawn_key=(t,)))`` (the ``t``-th child
+    of ``SeedSequence(seed).spawn``), so it depends only on the seed, the
+    strips and its index.
 
     Raises
     ------
@@ -392,6 +484,8 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
         Unknown interior method, bad colours (or unequal colours for an
         isotropic set, or ``planar`` with ``isotropic``), elements too large
         for a tile, or an exemplar with too few distinct strips.
+    GeotexError
+        ``map_tiles`` left out a tile.
 
     Examples
     --------
@@ -426,32 +520,28 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
         strips[1] = strips[2] = strips[0]
     groups, cols = tile_keys(n_colors, PLANAR_GROUPS if planar or isotropic
                              else COMPLETE_GROUPS)
-    from geotex.quilting import coverage_fraction
-    from geotex.tiles.fill import ExemplarPixels, fill_gaps
 
-    pixels = ExemplarPixels(src.V, src.F, src.labels, src.lo, src.hi)
-    tiles, coverage, fallbacks, merges, filled, seams = [], [], 0, 0, 0, []
-    for t, ((a, b), c) in enumerate(zip(groups.tolist(), cols.tolist())):
-        report(progress, f"tile {t + 1}/{len(groups)}")
-        frame, boxes = frame_of((strips[a], strips[b]), c)
-        tile = None
-        if interior == "quilt":
-            tile, stats = interior_quilt(src, frame, boxes, rng, lattice=grid)
-            merges += stats.get("merges", 0)
-            if stats.get("stitched", 0):
-                seams.append((stats["stitched"], stats["seam_gap_max"],
-                              stats["seam_normal_jump_mean"], stats["seam_normal_jump_max"]))
-            if tile is not None:
-                added, count = fill_gaps(tile[0], tile[1], pixels, src.size, rng,
-                                         lattice=grid)
-                tile = concatenated([tile, added])
-                filled += count
-        if tile is None:
-            fallbacks += interior == "quilt"
-            tile, _ = interior_paste(src, frame, rng, pixels=pixels, lattice=grid)
-        tiles.append(tile)
-        coverage.append(coverage_fraction(tile[0], tile[1], (0.0, 0.0, 1.0, 1.0),
-                                          resolution=100))
+    frames = [frame_of((strips[a], strips[b]), c)
+              for (a, b), c in zip(groups.tolist(), cols.tolist())]
+    plan = TilePlan(src=src, frames=frames, interior=interior, lattice=grid, seed=int(seed),
+                    pixels=ExemplarPixels(src.V, src.F, src.labels, src.lo, src.hi))
+    n = len(frames)
+    results = [None] * n
+    mapped = map_tiles(built_tile, plan, n) if map_tiles is not None \
+        else ((t, built_tile(plan, t)) for t in range(n))
+    for done, (t, result) in enumerate(mapped, 1):
+        results[t] = result
+        report(progress, f"tile {done}/{n}")
+    if any(r is None for r in results):
+        raise GeotexError("map_tiles did not return every tile")
+    tiles = [r[0] for r in results]
+    stats = [r[1] for r in results]
+    coverage = [s["coverage"] for s in stats]
+    fallbacks = sum(s["pasted"] for s in stats)
+    merges = sum(s.get("merges", 0) for s in stats)
+    filled = sum(s.get("filled", 0) for s in stats)
+    seams = [(s["stitched"], s["seam_gap_max"], s["seam_normal_jump_mean"],
+              s["seam_normal_jump_max"]) for s in stats if s.get("stitched", 0)]
     meta = {
         "exemplar": recipe,
         "recipe": {"exemplar": recipe, "colors": list(n_colors), "planar": bool(planar),

@@ -58,7 +58,7 @@ def list_tilesets() -> list[dict]:
     return out
 
 
-def rebuild(name: str, *, progress=None, table: dict | None = None):
+def rebuild(name: str, *, progress=None, table: dict | None = None, map_tiles=None):
     """Build the catalog set ``name`` from its recipe.
 
     Parameters
@@ -68,6 +68,9 @@ def rebuild(name: str, *, progress=None, table: dict | None = None):
         Passed to :func:`~geotex.tiles.build.build_tileset`.
     table : dict, optional
         Recipes to use instead of ``recipes.json``.
+    map_tiles : callable, optional
+        Where the tiles are built (:func:`~geotex.tiles.build.build_tileset`);
+        the set is the same byte for byte.
 
     Returns
     -------
@@ -83,7 +86,7 @@ def rebuild(name: str, *, progress=None, table: dict | None = None):
     return build_tileset(ex, colors=r["colors"], planar=r.get("planar", False),
                          isotropic=r.get("isotropic", False), lattice=r.get("lattice", False),
                          seed=r["seed"], interior=r.get("interior", "paste"), name=name,
-                         progress=progress)
+                         progress=progress, map_tiles=map_tiles)
 
 
 def main(argv=None) -> int:
