@@ -5,6 +5,7 @@ import json
 import numpy as np
 import pytest
 
+from geotex.check import check_mesh
 from geotex.cli import main
 from geotex.errors import InputError
 from geotex.fields.directions import projected_direction_field
@@ -309,6 +310,18 @@ def test_cli_tile_and_map(tmp_path, capsys):
     assert res["material_range"] == [0.0, 1.0]
     back = read_mesh(glb)
     assert back.texture is not None and back.n_faces == F.shape[0]
+    # the relief: the baked texture's luminance through the shared displacement path
+    stl = tmp_path / "relief.stl"
+    assert main(["material", "map", str(mesh_path), "--tile", str(tile), "--constraints",
+                 str(cons), "--scale", "0.5", "--resolution", "128", "--displace", "0.05",
+                 "--faces", "20000", "-o", str(stl)]) == 0
+    relief = read_mesh(stl)
+    assert check_mesh(relief.vertices, relief.faces).printable
+    assert np.linalg.norm(relief.vertices, axis=1).max() > 1.01
+    capsys.readouterr()
+    assert main(["material", "map", str(mesh_path), "--tile", str(tile), "--up", "0,0,1",
+                 "--scale", "0.5", "--displace", "0.05", "-o", str(tmp_path / "x.glb")]) == 2
+    assert "--displace" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("case, needle", [

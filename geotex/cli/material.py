@@ -67,7 +67,13 @@ def register(sub):
     m.add_argument("--wavelength", default=None, metavar="MM",
                    help="wavelength of the --hide-periodicity noise (default 3 x --scale)")
     m.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    m.add_argument("-o", "--output", required=True, help="OUT.glb or OUT.obj")
+    m.add_argument("--displace", type=float, default=None, metavar="MM",
+                   help="write a printable relief instead: the baked texture's luminance "
+                        "(light high) raised by up to MM (shared displacement path)")
+    m.add_argument("--faces", type=int, default=1_000_000, metavar="N",
+                   help="with --displace: about N refined faces (default 1000000)")
+    m.add_argument("-o", "--output", required=True,
+                   help="OUT.glb or OUT.obj, or OUT.stl / OUT.3mf with --displace")
     m.add_argument("--json", action="store_true", help="print one JSON object")
     m.set_defaults(run=run_map)
     p.set_defaults(run=_no_action(p))
@@ -197,8 +203,13 @@ def run_map(args) -> int:
     from geotex.progress import stage_bar
 
     out = guard_output(args.output, args.mesh, args.tile, args.constraints)
-    if out.suffix.lower() not in TEXTURED:
-        raise UsageError(f"{out}: write a textured .glb or .obj")
+    if args.displace is None and out.suffix.lower() not in TEXTURED:
+        raise UsageError(f"{out}: write a textured .glb or .obj (a relief needs --displace MM)")
+    if args.displace is not None:
+        if out.suffix.lower() not in (".stl", ".3mf"):
+            raise UsageError(f"{out}: --displace writes a relief as .stl or .3mf")
+        if not (math.isfinite(args.displace) and args.displace > 0):
+            raise UsageError(f"--displace {args.displace!r}: give a positive depth in mm")
     scale = _number(args.scale, "--scale", positive=True)
     res = _number(args.resolution, "--resolution", integer=True, lo=64)
     if res > 8192:
@@ -267,7 +278,12 @@ def run_map(args) -> int:
         textured = bake_material_texture(V, F, params, material, tile, field=field,
                                          resolution=res, name=Path(args.mesh).stem)
         bar("write")
-        write_mesh(out, textured)
+        if args.displace is None:
+            write_mesh(out, textured)
+    if args.displace is not None:
+        status = _relief(args, out, textured)
+        if status != EXIT_OK:
+            return status
     elapsed = time.perf_counter() - t0
     summary = {"mesh": str(args.mesh), "output": str(out), "faces": int(F.shape[0]),
                "field": method, "material": how,
@@ -282,4 +298,27 @@ def run_map(args) -> int:
               f"(m {material.min():.2f}..{material.max():.2f}), "
               f"{int(params.singular.sum())} singular faces blended; {elapsed:.1f} s")
         print(f"wrote {out}")
+    return EXIT_OK
+
+
+def _relief(args, out, textured) -> int:
+    """The baked texture's luminance as a printable relief (shared displacement path)."""
+    import sys
+
+    from geotex.cli._common import EXIT_NOT_PRINTABLE
+    from geotex.displace import DISPLACE_STAGES, displace_file
+    from geotex.errors import InputError, NotPrintableError
+    from geotex.progress import stage_bar
+
+    try:
+        with stage_bar(len(DISPLACE_STAGES), "relief") as bar:
+            displace_file(args.mesh, textured.texture, out, depth=args.displace, mapping="uv",
+                          uv=textured.uv[textured.uv_faces], target_faces=args.faces,
+                          progress=bar)
+    except NotPrintableError as exc:
+        print(f"geotex: error: {out}: not written, not printable as stored "
+              f"({'; '.join(exc.report.reasons)})", file=sys.stderr)
+        return EXIT_NOT_PRINTABLE
+    except InputError as exc:
+        raise flag_error(exc, {"depth": "--displace", "target_faces": "--faces"}) from None
     return EXIT_OK
