@@ -7,6 +7,7 @@ import math
 from pathlib import Path
 
 from geotex.cli._common import EXIT_OK, UsageError, flag_error, guard_output
+from geotex.cli.relief import add_relief_arguments, check_relief_output, write_relief
 
 HELP = ("texture a closed mesh with patches of one image, coarse to fine (hierarchical "
         "pattern mapping): GLB or OBJ+MTL+PNG with the image itself as texture")
@@ -33,13 +34,7 @@ def register(sub):
                         "subdivided (default 0.35; 1 = as bad as random pixels)")
     p.add_argument("--report", default=None, metavar="R.json",
                    help="also write per-level counts and matching errors")
-    p.add_argument("--displace", type=float, default=None, metavar="MM",
-                   help="write a printable relief instead: the image's luminance (white high) "
-                        "raised by up to MM through the mapping (shared displacement path)")
-    p.add_argument("--size-mm", type=float, default=None, metavar="L",
-                   help="with --displace: scale the part so its largest extent is L mm")
-    p.add_argument("--faces", type=int, default=1_000_000, metavar="N",
-                   help="with --displace: about N refined faces (default 1000000)")
+    add_relief_arguments(p, what="the mapped image's luminance")
     p.add_argument("-o", "--output", required=True,
                    help="OUT.glb or OUT.obj (textured), OUT.stl or OUT.3mf (with --displace)")
     p.set_defaults(run=run)
@@ -51,11 +46,7 @@ def _outputs(args) -> list[Path]:
     if args.displace is None and ext not in (".glb", ".obj"):
         raise UsageError(f"{out}: hpm writes a textured mesh; use .glb or .obj (a relief "
                          "needs --displace MM)")
-    if args.displace is not None:
-        if ext not in (".stl", ".3mf"):
-            raise UsageError(f"{out}: --displace writes a relief as .stl or .3mf")
-        if not (math.isfinite(args.displace) and args.displace > 0):
-            raise UsageError(f"--displace {args.displace!r}: give a positive depth in mm")
+    check_relief_output(args, out)
     written = [out]
     if ext == ".obj":
         written += [out.with_name(out.stem + ".mtl"), out.with_name(out.stem + ".png")]
@@ -117,7 +108,7 @@ def run(args) -> int:
             raise flag_error(exc, {"scale": "--scale"}) from None
         raise
     if args.displace is not None:
-        status = _relief(args, out, result)
+        status = write_relief(args, args.base, args.image, out, result.uv[result.uv_faces])
         if status != EXIT_OK:
             return status
     else:
@@ -136,26 +127,3 @@ def run(args) -> int:
     print("wrote " + " and ".join(str(p) for p in written))
     return EXIT_OK
 
-
-def _relief(args, out, result) -> int:
-    """The image's luminance read through the mapping: a printable relief."""
-    import sys
-
-    from geotex.cli._common import EXIT_NOT_PRINTABLE
-    from geotex.displace import DISPLACE_STAGES, displace_file
-    from geotex.errors import InputError, NotPrintableError
-    from geotex.progress import stage_bar
-
-    try:
-        with stage_bar(len(DISPLACE_STAGES), "relief") as bar:
-            displace_file(args.base, args.image, out, depth=args.displace, mapping="uv",
-                          uv=result.uv[result.uv_faces], target_faces=args.faces,
-                          size_mm=args.size_mm, progress=bar)
-    except NotPrintableError as exc:
-        print(f"geotex: error: {out}: not written, not printable as stored "
-              f"({'; '.join(exc.report.reasons)})", file=sys.stderr)
-        return EXIT_NOT_PRINTABLE
-    except InputError as exc:
-        raise flag_error(exc, {"depth": "--displace", "target_faces": "--faces",
-                               "size_mm": "--size-mm"}) from None
-    return EXIT_OK

@@ -8,6 +8,7 @@ import time
 from pathlib import Path
 
 from geotex.cli._common import EXIT_OK, UsageError, flag_error, guard_output
+from geotex.cli.relief import add_relief_arguments, check_relief_output, write_relief
 from geotex.cli.field import _constraints, add_field_source_arguments, field_from_args
 
 HELP = "material-space textures: build an (s, t, m) tile from two images, map it over a mesh"
@@ -67,11 +68,7 @@ def register(sub):
     m.add_argument("--wavelength", default=None, metavar="MM",
                    help="wavelength of the --hide-periodicity noise (default 3 x --scale)")
     m.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    m.add_argument("--displace", type=float, default=None, metavar="MM",
-                   help="write a printable relief instead: the baked texture's luminance "
-                        "(light high) raised by up to MM (shared displacement path)")
-    m.add_argument("--faces", type=int, default=1_000_000, metavar="N",
-                   help="with --displace: about N refined faces (default 1000000)")
+    add_relief_arguments(m, what="the baked texture's luminance", size=False)
     m.add_argument("-o", "--output", required=True,
                    help="OUT.glb or OUT.obj, or OUT.stl / OUT.3mf with --displace")
     m.add_argument("--json", action="store_true", help="print one JSON object")
@@ -205,11 +202,7 @@ def run_map(args) -> int:
     out = guard_output(args.output, args.mesh, args.tile, args.constraints)
     if args.displace is None and out.suffix.lower() not in TEXTURED:
         raise UsageError(f"{out}: write a textured .glb or .obj (a relief needs --displace MM)")
-    if args.displace is not None:
-        if out.suffix.lower() not in (".stl", ".3mf"):
-            raise UsageError(f"{out}: --displace writes a relief as .stl or .3mf")
-        if not (math.isfinite(args.displace) and args.displace > 0):
-            raise UsageError(f"--displace {args.displace!r}: give a positive depth in mm")
+    check_relief_output(args, out)
     scale = _number(args.scale, "--scale", positive=True)
     res = _number(args.resolution, "--resolution", integer=True, lo=64)
     if res > 8192:
@@ -281,7 +274,8 @@ def run_map(args) -> int:
         if args.displace is None:
             write_mesh(out, textured)
     if args.displace is not None:
-        status = _relief(args, out, textured)
+        status = write_relief(args, args.mesh, textured.texture, out,
+                              textured.uv[textured.uv_faces])
         if status != EXIT_OK:
             return status
     elapsed = time.perf_counter() - t0
@@ -300,25 +294,3 @@ def run_map(args) -> int:
         print(f"wrote {out}")
     return EXIT_OK
 
-
-def _relief(args, out, textured) -> int:
-    """The baked texture's luminance as a printable relief (shared displacement path)."""
-    import sys
-
-    from geotex.cli._common import EXIT_NOT_PRINTABLE
-    from geotex.displace import DISPLACE_STAGES, displace_file
-    from geotex.errors import InputError, NotPrintableError
-    from geotex.progress import stage_bar
-
-    try:
-        with stage_bar(len(DISPLACE_STAGES), "relief") as bar:
-            displace_file(args.mesh, textured.texture, out, depth=args.displace, mapping="uv",
-                          uv=textured.uv[textured.uv_faces], target_faces=args.faces,
-                          progress=bar)
-    except NotPrintableError as exc:
-        print(f"geotex: error: {out}: not written, not printable as stored "
-              f"({'; '.join(exc.report.reasons)})", file=sys.stderr)
-        return EXIT_NOT_PRINTABLE
-    except InputError as exc:
-        raise flag_error(exc, {"depth": "--displace", "target_faces": "--faces"}) from None
-    return EXIT_OK

@@ -8,11 +8,11 @@ coordinates), written only when printable as stored.
 
 from __future__ import annotations
 
-from geotex.cli._common import EXIT_NOT_PRINTABLE, EXIT_OK, UsageError, guard_output
+from geotex.cli._common import EXIT_OK, UsageError, guard_output
+from geotex.cli.relief import add_relief_arguments, check_relief_output, write_relief
 
 HELP = "lay a tileable image over a mesh through its periodic parameterization (geotex pgp)"
 TEXTURED = (".glb", ".obj")
-PRINTS = (".stl", ".3mf")
 
 
 def register(sub):
@@ -29,13 +29,7 @@ def register(sub):
     p.add_argument("--make-tileable", type=int, default=None, metavar="PX",
                    help="the image is not periodic: make a PX x PX periodic tile from its "
                         "central square first (graph-cut wrap, as for material-space tiles)")
-    p.add_argument("--displace", type=float, default=None, metavar="MM",
-                   help="write a printable relief instead: the image is a height map (white "
-                        "high) raised by up to MM along the surface (BASE in mm)")
-    p.add_argument("--size-mm", type=float, default=None, metavar="L",
-                   help="with --displace: scale the part so its largest extent is L mm")
-    p.add_argument("--faces", type=int, default=1_000_000, metavar="N",
-                   help="with --displace: about N refined faces (default 1000000)")
+    add_relief_arguments(p, what="the image as a height map through the PGP")
     p.add_argument("-o", "--output", required=True,
                    help="OUT.glb or OUT.obj (textured), OUT.stl or OUT.3mf (with --displace)")
     p.set_defaults(run=run)
@@ -53,11 +47,7 @@ def run(args) -> int:
     if args.displace is None and suffix not in TEXTURED:
         raise UsageError(f"{out}: a tiled image is written as .glb or .obj (+ .mtl + .png); "
                          f"got '{out.suffix}' (a relief needs --displace MM)")
-    if args.displace is not None and suffix not in PRINTS:
-        raise UsageError(f"{out}: --displace writes a relief as .stl or .3mf; got "
-                         f"'{out.suffix}'")
-    if args.displace is not None and not (0 < args.displace < float("inf")):
-        raise UsageError(f"--displace {args.displace}: give a positive depth in mm")
+    check_relief_output(args, out)
     mesh = read_mesh(args.base)
     try:
         pgp = load_parameterization(args.param)
@@ -81,7 +71,7 @@ def run(args) -> int:
             raise UsageError(f"--make-tileable {args.make_tileable}: {exc}") from None
         image = np.clip(np.rint(tile.colors * 255.0), 0, 255).astype(np.uint8)
     if args.displace is not None:
-        return _relief(args, out, pgp, image)
+        return write_relief(args, args.base, image, out, pgp.coords)
     textured = tiled_texture_mesh(mesh.vertices, mesh.faces, pgp.coords, image,
                                   name=mesh.name or "geotex")
     write_mesh(out, textured)
@@ -89,28 +79,3 @@ def run(args) -> int:
           f"image {image.shape[1]}x{image.shape[0]} per tile")
     return EXIT_OK
 
-
-def _relief(args, out, pgp, image) -> int:
-    """The tileable image as a height map through the PGP: a printable relief."""
-    import sys
-
-    from geotex.cli._common import flag_error
-    from geotex.displace import DISPLACE_STAGES, displace_file
-    from geotex.errors import InputError, NotPrintableError
-    from geotex.progress import stage_bar
-
-    try:
-        with stage_bar(len(DISPLACE_STAGES), "relief") as bar:
-            res = displace_file(args.base, image, out, depth=args.displace, mapping="uv",
-                                uv=pgp.coords, target_faces=args.faces, size_mm=args.size_mm,
-                                progress=bar)
-    except NotPrintableError as exc:
-        print(f"geotex: error: {out}: not written, not printable as stored "
-              f"({'; '.join(exc.report.reasons)})", file=sys.stderr)
-        return EXIT_NOT_PRINTABLE
-    except InputError as exc:
-        raise flag_error(exc, {"depth": "--displace", "target_faces": "--faces",
-                               "size_mm": "--size-mm"}) from None
-    print(f"wrote {out}: relief {args.displace:g} mm through the PGP, "
-          f"{res.faces.shape[0]} faces (printable as written)")
-    return EXIT_OK
