@@ -310,3 +310,27 @@ def test_lapped_mapping_is_printable_and_refuses_a_named_field():
     with pytest.raises(InputError, match="needs a direction"):
         displaced_mesh(V, F, "bricks", depth=0.4, mapping="lapped", field="smooth",
                        judge=False, target_faces=5000)
+
+
+def test_broken_bases_give_one_line_and_no_file(tmp_path):
+    """An empty file is refused (exit 2); degenerate faces leave vertices without a normal,
+    which do not move (no NaN coordinates): the verdict, not a crash, decides (exit 1)."""
+    from geotex.io import write_mesh
+    from geotex.mesh.record import Mesh
+
+    empty = tmp_path / "empty.stl"
+    empty.write_bytes(b"\0" * 80 + b"\0\0\0\0")
+    out = tmp_path / "x.stl"
+    res = _geotex("displace", empty, "--image", "dots", "--depth", "0.5", "-o", out)
+    assert res.returncode == 2 and "no faces" in res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1 and not out.exists()
+    V, F = box((0, 0, 0), (10, 10, 10), divisions=2)
+    V = np.vstack([V, V[:1]])                              # a zero-area face on a corner
+    F = np.vstack([F, [[0, V.shape[0] - 1, 0]]])
+    bad = tmp_path / "bad.obj"
+    write_mesh(bad, Mesh(V, F))
+    res = _geotex("displace", bad, "--image", "dots", "--depth", "0.5", "--faces", "5000",
+                  "-o", out)
+    assert res.returncode in (0, 1), res.stderr
+    assert "Traceback" not in res.stderr and "non-finite" not in res.stderr
+    assert len(res.stderr.strip().splitlines()) <= 2

@@ -315,6 +315,8 @@ def displace_file(base, image, output, *, depth: float, size_mm: float | None = 
     t = time.perf_counter()
     report(progress, "read")
     V, F, uv = _read_part(base, step_quality=step_quality)
+    if F.shape[0] == 0:
+        raise InputError(f"{base}: the mesh has no faces")
     if size_mm is not None:
         s = positive_number(size_mm, name="size_mm") / float(np.ptp(V, axis=0).max())
         V = V * s

@@ -147,7 +147,10 @@ def _vertex_normals(V, F, R, crease_angle: float) -> np.ndarray:
         fn = np.asarray(igl.per_vertex_normals(R.vertices, R.faces), dtype=np.float64)
         N[bad] = fn[bad]
         ln[bad] = np.linalg.norm(N[bad], axis=1)
-    return N / np.where(ln > 0, ln, 1.0)[:, None]
+    N = N / np.where(ln > 0, ln, 1.0)[:, None]
+    # degenerate base faces leave some vertices without a normal: they do not move
+    N[~np.isfinite(N).all(axis=1)] = 0.0
+    return N
 
 
 def relief_points(V, F, *, edge_length: float, crease_angle: float = 30.0,
