@@ -606,8 +606,10 @@ def _pair_tasks(faces: _FaceData):
     Over all tasks, every pair of active faces whose boxes overlap is
     examined exactly once.  A key is ``i * m + j`` with ``i < j``.
     """
-    box = faces.box32[faces.active]
-    extent = (box[:, 3:] - box[:, :3]).max(axis=1).astype(np.float64)
+    # one contiguous array per bound (low x, y, z, high x, y, z)
+    box = [np.ascontiguousarray(faces.box32[faces.active, k]) for k in range(6)]
+    extent = np.maximum(np.maximum(box[3] - box[0], box[4] - box[1]),
+                        box[5] - box[2]).astype(np.float64)
     cell0 = _CELL_RATIO * float(np.quantile(extent, _BASE_QUANTILE))
     # level L: cells of cell0 * 2**L, faces up to twice that size (<= 3 cells
     # per axis); an even mesh has all its faces on level 0
@@ -626,13 +628,13 @@ def _pair_tasks(faces: _FaceData):
         low = np.flatnonzero(level < lev)
         if low.size:
             # only smaller faces near the current level's faces can pair up
-            lo = box[cur, :3].min(axis=0)
-            hi = box[cur, 3:].max(axis=0)
-            bl = box[low]
-            near = ((bl[:, 0] <= hi[0]) & (bl[:, 3] >= lo[0]) & (bl[:, 1] <= hi[1])
-                    & (bl[:, 4] >= lo[1]) & (bl[:, 2] <= hi[2]) & (bl[:, 5] >= lo[2]))
+            near = np.ones(low.size, dtype=bool)
+            for axis in range(3):
+                lo = box[axis][cur].min()
+                hi = box[3 + axis][cur].max()
+                near &= (box[axis][low] <= hi) & (box[3 + axis][low] >= lo)
             low = low[near]
-            del bl, near
+            del near
         yield from _level_tasks(faces, box, cell, cur, low)
 
 
@@ -642,11 +644,10 @@ def _cell_bounds(box, rows, cell):
     The same monotone computation is used for every box, so boxes that
     overlap always have ``lo_j <= hi_i`` in cell coordinates too.
     """
-    b = box[rows]
     lo, hi = [], []
     for axis in range(3):
-        for out, col in ((lo, b[:, axis]), (hi, b[:, 3 + axis])):
-            out.append(np.floor(col.astype(np.float64) / cell).astype(np.int64))
+        for out, col in ((lo, box[axis]), (hi, box[3 + axis])):
+            out.append(np.floor(col[rows].astype(np.float64) / cell).astype(np.int64))
     return lo, hi
 
 
@@ -800,7 +801,7 @@ def _level_tasks(faces, box, cell, cur, low):
     face = act.astype(index)[rows]
     # the entries' boxes in entry order (one array per bound): the pairs of
     # a cell read nearby memory
-    ebox = [np.take(box[:, k], rows) for k in range(6)]
+    ebox = [np.take(col, rows) for col in box]
     if faces.masked_columns is not None:
         ebox += [np.take(col, face) for col in faces.masked_columns]
     del rows, is_low
@@ -816,26 +817,30 @@ def _pair_task(faces, level, s, e):
     cum, counts, first, face, ebox = level
     p0 = int(np.searchsorted(cum, s, side="right"))
     p1 = int(np.searchsorted(cum, e - 1, side="right")) + 1
+    index = np.int32 if first.size < 2 ** 31 else np.int64   # entry numbers
     b = cum[p0:p1] - counts[p0:p1]                  # first pair index of each entry
     a = np.maximum(b, s)
     n = np.minimum(cum[p0:p1], e) - a
-    e1 = np.repeat(np.arange(p0, p1), n)
-    e2 = np.repeat(a - b - (np.cumsum(n) - n) + 1 + np.arange(p0, p1), n)
-    e2 += np.arange(e2.size)
+    entries = np.arange(p0, p1, dtype=index)
+    e1 = np.repeat(entries, n)
+    e2 = np.repeat((a - b - (np.cumsum(n) - n) + 1).astype(index) + entries, n)
+    e2 += np.arange(e2.size, dtype=index)
     # keep a pair only in the cell holding the low corner of the boxes'
     # intersection: there, on every axis, one of the two entries is its box's
     # lowest cell
-    own = (np.take(first, e1) | np.take(first, e2)) == 7
-    e1 = e1[own]
-    e2 = e2[own]
-    overlap = np.ones(e1.size, dtype=bool)
-    for k in range(3):
+    keep = np.flatnonzero((np.take(first, e1) | np.take(first, e2)) == 7)
+    e1 = np.take(e1, keep)
+    e2 = np.take(e2, keep)
+    overlap = np.take(ebox[0], e1) <= np.take(ebox[3], e2)
+    overlap &= np.take(ebox[0], e2) <= np.take(ebox[3], e1)
+    for k in (1, 2):
         lo, hi = ebox[k], ebox[k + 3]
         overlap &= np.take(lo, e1) <= np.take(hi, e2)
         overlap &= np.take(lo, e2) <= np.take(hi, e1)
-    e1 = e1[overlap]
-    e2 = e2[overlap]
-    del own, overlap
+    keep = np.flatnonzero(overlap)
+    e1 = np.take(e1, keep)
+    e2 = np.take(e2, keep)
+    del keep, overlap
     if len(ebox) > 6:
         # faces sharing a vertex whose fan is separated cannot intersect
         B = [np.take(col, e2) for col in ebox[6:]]

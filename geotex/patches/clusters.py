@@ -40,7 +40,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import networkx as nx
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components, dijkstra
@@ -132,11 +131,13 @@ class ClusterLevel:
         c = int(cluster)
         return self.adjacency.indices[self.adjacency.indptr[c]:self.adjacency.indptr[c + 1]]
 
-    def graph(self) -> nx.Graph:
+    def graph(self) -> "networkx.Graph":
         """Return the cluster adjacency as a networkx graph.
 
         Nodes carry ``area``; edges carry ``shared_edges``.
         """
+        import networkx as nx       # lazy: ~0.25 s, and only this method needs it
+
         G = nx.Graph()
         G.add_nodes_from((int(c), {"area": float(a)}) for c, a in enumerate(self.area))
         A = self.adjacency.tocoo()
