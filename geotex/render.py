@@ -8,7 +8,9 @@ atomically.
 from __future__ import annotations
 
 import io
+import multiprocessing
 import os
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -20,7 +22,7 @@ from geotex.mesh.arrays import as_mesh_arrays
 from geotex.mesh.geometry import face_areas, face_normals
 
 __all__ = ["render_mesh", "render_panels", "Panel", "UP_AXES", "offscreen_pyvista",
-           "split_by_uv", "view_direction"]
+           "split_by_uv", "view_direction", "background_renderer"]
 
 UP_AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
 DEFAULT_COLOR = "#d9c7a3"
@@ -46,6 +48,32 @@ def offscreen_pyvista():
     except ImportError:  # pragma: no cover - older VTK
         pass
     return pv
+
+
+def _load_renderer() -> None:
+    offscreen_pyvista()
+    import pyvista.plotting  # noqa: F401  (the part of pyvista a picture needs)
+
+
+def background_renderer() -> ProcessPoolExecutor:
+    """A worker process for pictures, started now and already loading pyvista.
+
+    A picture of a large mesh takes seconds (loading VTK, drawing, supersampling);
+    submitting :func:`render_panels` or :func:`render_mesh` to this pool draws it
+    on another core while the caller goes on (writing and checking files), and
+    the import cost is paid while the caller is still computing. The process is
+    spawned (not forked), so it shares no threads or locks with the caller.
+
+    Returns
+    -------
+    concurrent.futures.ProcessPoolExecutor
+        One worker; shut it down (or use it as a context manager) when done.
+        ``submit(render_panels, panels, path, ...)`` returns a future whose
+        ``result()`` is the written path or raises the render's error.
+    """
+    pool = ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("spawn"))
+    pool.submit(_load_renderer)
+    return pool
 
 
 def _polydata(pv, V, F):

@@ -50,15 +50,7 @@ def print_ready(V: np.ndarray, *, size_mm: float, y_up: bool) -> np.ndarray:
 
 
 def run(args) -> int:
-    from geotex.data import sample_path
-    from geotex.errors import NotPrintableError
-    from geotex.io import read_mesh
-    from geotex.io.atomic import atomic_output
-    from geotex.mapping import MAP_PROGRESS, textured_solid
-    from geotex.printing import export_printable
-    from geotex.progress import stage_bar
-    from geotex.render import Panel, render_panels
-    from geotex.shells import SHELL_STAGES, build_shell
+    from geotex.render import background_renderer
     from geotex.tiles.catalog import load_named
 
     out = Path(args.output_dir)
@@ -71,6 +63,21 @@ def run(args) -> int:
     tiles = load_named(args.tiles)
     out.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
+    with background_renderer() as painter:
+        return _run(args, out, tiles, start, painter)
+
+
+def _run(args, out, tiles, start, painter) -> int:
+    from geotex.data import sample_path
+    from geotex.errors import NotPrintableError
+    from geotex.io import read_mesh
+    from geotex.io.atomic import atomic_output
+    from geotex.mapping import MAP_PROGRESS, textured_solid
+    from geotex.printing import export_printable
+    from geotex.progress import stage_bar
+    from geotex.render import Panel, render_panels
+    from geotex.shells import SHELL_STAGES, build_shell
+
     base = read_mesh(sample_path(DEMO_BASE))
     V = print_ready(base.vertices, size_mm=args.size_mm, y_up=True)
     tile_mm = args.size_mm / DEMO_TILES_ACROSS
@@ -80,16 +87,8 @@ def run(args) -> int:
         result = textured_solid(shell, tiles, seed=args.seed, progress=bar)
     rep, s = result.report, result.stats
     name = f"{DEMO_BASE}_{tiles.name}"
-    files = []
-    try:
-        for ext in (".stl", ".3mf"):
-            export_printable(out / f"{name}{ext}", result.vertices, result.faces, name=name,
-                             report=rep)
-            files.append(f"{name}{ext}")
-    except NotPrintableError as exc:
-        print(f"geotex: error: {exc}", file=sys.stderr)
-        return EXIT_NOT_PRINTABLE
-    render_panels([
+    # the picture is drawn in the worker process while the files are written here
+    picture = painter.submit(render_panels, [
         Panel(V, base.faces, color="#d9c7a3", title=f"{DEMO_BASE}: {base.n_faces} faces, "
               f"{args.size_mm:g} mm"),
         Panel(shell.polycube.Y, shell.polycube.F, scalars=shell.polycube.layout.quad_label[
@@ -98,6 +97,17 @@ def run(args) -> int:
         Panel(result.vertices, result.faces, color="#c9b38f",
               title=f"{tiles.name}: {s.elements} elements, printable"),
     ], out / f"{name}.png", size=(700, 700))
+    files = []
+    try:
+        for ext in (".stl", ".3mf"):
+            export_printable(out / f"{name}{ext}", result.vertices, result.faces, name=name,
+                             report=rep)
+            files.append(f"{name}{ext}")
+    except NotPrintableError as exc:
+        picture.cancel()
+        print(f"geotex: error: {exc}", file=sys.stderr)
+        return EXIT_NOT_PRINTABLE
+    picture.result()
     files.append(f"{name}.png")
     elapsed = time.perf_counter() - start
     summary = {"base": DEMO_BASE, "tiles": tiles.name, "size_mm": args.size_mm,

@@ -473,7 +473,9 @@ def write_3mf(fh, mesh, *, path=None, binary: bool = True) -> None:
     """Write ``mesh`` (millimetres) as a 3MF package to the open binary file ``fh``."""
     # deflate level 1: a quarter of the default level's time for a 20% larger file
     # (a 59 MB model: 0.43 s instead of 1.87 s, 14.9 MB instead of 12.2 MB)
+    # (zipfile takes the level of an entry given as a ZipInfo from writestr's own
+    # argument, not from the archive's)
     with zipfile.ZipFile(fh, "w", compression=zipfile.ZIP_DEFLATED, compresslevel=1) as archive:
-        archive.writestr(_entry("[Content_Types].xml"), _CONTENT_TYPES)
-        archive.writestr(_entry("_rels/.rels"), _RELS)
-        archive.writestr(_entry(_DEFAULT_PART), model_xml(mesh))
+        for entry, text in (("[Content_Types].xml", _CONTENT_TYPES), ("_rels/.rels", _RELS),
+                            (_DEFAULT_PART, model_xml(mesh))):
+            archive.writestr(_entry(entry), text, compresslevel=1)
