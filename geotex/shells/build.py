@@ -97,13 +97,40 @@ def offset_directions(V: np.ndarray, F: np.ndarray, *, smoothing: int = 3) -> np
 
 
 def _offset_ok(V, F, D, h, base_normals) -> bool:
+    return _offset_defects(V, F, D, h, base_normals, first=True).size == 0
+
+
+def _offset_defects(V, F, D, h, base_normals, *, first: bool = False) -> np.ndarray:
+    """Faces of ``F`` whose offset by ``h`` flips or crosses the surface or another offset.
+
+    Returns the sorted face indices; with ``first``, stops at the first defect
+    found (then any non-empty answer only says "not ok").
+    """
     Vo = V + h * D
-    if np.any(np.einsum("ij,ij->i", face_cross(Vo, F), base_normals) <= 0):
-        return False
-    n = V.shape[0]
-    Vc = np.vstack([V, Vo])
-    Fc = np.vstack([F, F[:, ::-1] + n])
-    return self_intersecting_pairs(Vc, Fc, max_pairs=1).shape[0] == 0
+    flipped = np.einsum("ij,ij->i", face_cross(Vo, F), base_normals) <= 0
+    if first and flipped.any():
+        return np.flatnonzero(flipped)[:1]
+    n, m = V.shape[0], F.shape[0]
+    pairs = self_intersecting_pairs(np.vstack([V, Vo]), np.vstack([F, F[:, ::-1] + n]),
+                                    max_pairs=1 if first else None)
+    return np.union1d(np.flatnonzero(flipped), pairs.ravel() % m)
+
+
+def _bisected_height(V, F, D, base_normals, hi: float, steps: int, *, shrink: bool = False
+                     ) -> float:
+    """Bisection on ``[0, hi]`` (``hi`` fails); with ``shrink``, each failed step keeps
+    testing only the faces that failed there."""
+    lo = 0.0
+    for _ in range(steps):
+        mid = 0.5 * (lo + hi)
+        bad = _offset_defects(V, F, D, mid, base_normals, first=not shrink)
+        if bad.size == 0:
+            lo = mid
+        else:
+            hi = mid
+            if shrink:
+                F, base_normals = F[bad], base_normals[bad]
+    return lo
 
 
 def max_offset_height(V: np.ndarray, F: np.ndarray, D: np.ndarray, *, steps: int = 10,
@@ -123,20 +150,26 @@ def max_offset_height(V: np.ndarray, F: np.ndarray, D: np.ndarray, *, steps: int
     Returns
     -------
     float
-        A height that passed the test, within ``upper / 2**steps`` of the limit.
+        A height that passed the test on the whole surface, within
+        ``upper / 2**steps`` of the limit.
+
+    Notes
+    -----
+    The bisection assumes that flips and crossings only spread as the height
+    grows. Each of its steps therefore tests only the faces that failed at the
+    last failing height (fewer and fewer), and the height found is tested once
+    more on the whole surface; should that fail, the bisection is redone on
+    the whole surface, so the answer never rests on the assumption.
     """
     base_normals = face_cross(V, F)
     hi = float(upper) if upper is not None else 0.25 * float(np.ptp(V, axis=0).max())
-    if _offset_ok(V, F, D, hi, base_normals):
+    bad = _offset_defects(V, F, D, hi, base_normals)
+    if bad.size == 0:
         return hi
-    lo = 0.0
-    for _ in range(steps):
-        mid = 0.5 * (lo + hi)
-        if _offset_ok(V, F, D, mid, base_normals):
-            lo = mid
-        else:
-            hi = mid
-    return lo
+    lo = _bisected_height(V, F[bad], D, base_normals[bad], hi, steps, shrink=True)
+    if lo == 0.0 or _offset_ok(V, F, D, lo, base_normals):
+        return lo
+    return _bisected_height(V, F, D, base_normals, hi, steps)
 
 
 PINCH_PROBE = 0.125
