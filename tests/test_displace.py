@@ -313,8 +313,10 @@ def test_lapped_mapping_is_printable_and_refuses_a_named_field():
 
 
 def test_broken_bases_give_one_line_and_no_file(tmp_path):
-    """An empty file is refused (exit 2); degenerate faces leave vertices without a normal,
-    which do not move (no NaN coordinates): the verdict, not a crash, decides (exit 1)."""
+    """An empty file and a part with a repeated-index face are refused at once (exit 2,
+    one line naming the problem, before any relief is built); through the Python API,
+    degenerate faces leave vertices without a normal, which do not move (no NaN
+    coordinates)."""
     from geotex.io import write_mesh
     from geotex.mesh.record import Mesh
 
@@ -331,6 +333,9 @@ def test_broken_bases_give_one_line_and_no_file(tmp_path):
     write_mesh(bad, Mesh(V, F))
     res = _geotex("displace", bad, "--image", "dots", "--depth", "0.5", "--faces", "5000",
                   "-o", out)
-    assert res.returncode in (0, 1), res.stderr
-    assert "Traceback" not in res.stderr and "non-finite" not in res.stderr
-    assert len(res.stderr.strip().splitlines()) <= 2
+    assert res.returncode == 2, res.stderr
+    assert "not a closed solid to displace: open" in res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1 and not out.exists()
+    from geotex.displace import displaced_mesh
+    r = displaced_mesh(V, F, "dots", depth=0.5, target_faces=5000, judge=False)
+    assert np.isfinite(r.vertices).all()

@@ -273,6 +273,29 @@ def _read_part(path, *, step_quality: str = "standard"):
     return mesh.vertices, mesh.faces, uv
 
 
+def _refuse_broken_part(V, F, name) -> None:
+    """Raise InputError when the part is not a closed, manifold, oriented, embedded solid.
+
+    Checked on the part as read, before any refinement, so that a broken file is
+    refused at once (a relief built on it would be judged not printable only after
+    all the work). Degenerate faces and several bodies are accepted: the relief
+    copes with both.
+    """
+    r = check_mesh(V, F, max_examples=1)
+    problems = []
+    if r.boundary_edges:
+        problems.append(f"open ({r.boundary_edges} boundary edges)")
+    if r.non_manifold_edges:
+        problems.append(f"non-manifold ({r.non_manifold_edges} edges)")
+    if not r.orientation_consistent:
+        problems.append(f"inconsistently oriented ({r.inconsistent_edges} edges)")
+    if r.self_intersecting_pairs:
+        problems.append(f"{r.self_intersecting_pairs} self-intersecting face pairs")
+    if problems:
+        raise InputError(f"{name}: not a closed solid to displace: " + ", ".join(problems)
+                         + "; run 'geotex repair' on it first")
+
+
 def displace_file(base, image, output, *, depth: float, size_mm: float | None = None,
                   step_quality: str = "standard", force: bool = False, progress=None,
                   **options) -> DisplaceResult:
@@ -317,6 +340,7 @@ def displace_file(base, image, output, *, depth: float, size_mm: float | None = 
     V, F, uv = _read_part(base, step_quality=step_quality)
     if F.shape[0] == 0:
         raise InputError(f"{base}: the mesh has no faces")
+    _refuse_broken_part(V, F, base)
     if size_mm is not None:
         s = positive_number(size_mm, name="size_mm") / float(np.ptp(V, axis=0).max())
         V = V * s
