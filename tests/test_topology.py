@@ -189,3 +189,24 @@ def test_grouped_half_edges_are_stable(ring):
     _, F = ring
     topo = edge_topology(F)
     assert np.array_equal(topo.half_order, np.argsort(topo.half_to_edge, kind="stable"))
+
+
+def test_greedy_colouring_matches_networkx_largest_first():
+    """Same colours as networkx's greedy_color(strategy="largest_first") on random graphs,
+    and no edge joins two nodes of one colour."""
+    import networkx as nx
+
+    from geotex.mesh.topology import greedy_colouring
+
+    rng = np.random.default_rng(7)
+    for _ in range(200):
+        n = int(rng.integers(1, 40))
+        pairs = rng.integers(0, n, size=(int(rng.integers(0, 90)), 2))
+        g = nx.Graph()
+        g.add_nodes_from(range(n))
+        g.add_edges_from((a, b) for a, b in pairs.tolist() if a != b)
+        ref = nx.greedy_color(g, strategy="largest_first")
+        got = greedy_colouring(n, pairs)
+        assert got.tolist() == [ref[i] for i in range(n)]
+        loops = pairs[:, 0] == pairs[:, 1]
+        assert not np.any(got[pairs[~loops, 0]] == got[pairs[~loops, 1]])

@@ -24,7 +24,7 @@ from geotex.check.intersections import self_intersecting_pairs
 from geotex.errors import GeotexError
 from geotex.mesh.needles import needle_free
 from geotex.mesh.solid import arrays_of_manifold, manifold_of
-from geotex.mesh.topology import compacted, face_components
+from geotex.mesh.topology import compacted, face_components, greedy_colouring
 from geotex.progress import report
 
 __all__ = ["united_with_base", "element_contacts", "ElementContacts", "element_groups",
@@ -102,7 +102,7 @@ def element_contacts(X: np.ndarray, G: np.ndarray) -> ElementContacts:
     return ElementContacts(label, np.unique(a[same]), touching.reshape(-1, 2))
 
 
-def element_groups(X: np.ndarray, G: np.ndarray, *, touching=None, moved=None
+def element_groups(X: np.ndarray, G: np.ndarray, *, touching=None, moved=None, label=None
                    ) -> tuple[np.ndarray, np.ndarray]:
     """Split elements into groups whose members do not meet.
 
@@ -120,6 +120,9 @@ def element_groups(X: np.ndarray, G: np.ndarray, *, touching=None, moved=None
     moved : array_like of int, optional
         Elements moved after ``touching`` was found (their contacts are
         judged by bounding boxes).
+    label : numpy.ndarray, (l,) int64, optional
+        Element of every face when already known
+        (:attr:`ElementContacts.label`); found here otherwise.
 
     Returns
     -------
@@ -129,11 +132,13 @@ def element_groups(X: np.ndarray, G: np.ndarray, *, touching=None, moved=None
         Group of every element, ``0 .. n_groups - 1`` (greedy colouring, largest
         degree first, so deterministic).
     """
-    # lazy: networkx (~0.25 s) and scipy.spatial (~0.1 s) are slow to import
-    import networkx as nx
+    # lazy: scipy.spatial (~0.1 s) is slow to import
     from scipy.spatial import cKDTree
 
-    n_el, label = face_components(G, X.shape[0])
+    if label is None:
+        n_el, label = face_components(G, X.shape[0])
+    else:
+        n_el = int(label.max()) + 1 if label.size else 0
     vlab = np.full(X.shape[0], -1, dtype=np.int64)
     vlab[G[:, 0]], vlab[G[:, 1]], vlab[G[:, 2]] = label, label, label
     used = vlab >= 0
@@ -155,11 +160,7 @@ def element_groups(X: np.ndarray, G: np.ndarray, *, touching=None, moved=None
             was_moved[np.asarray(moved, dtype=np.int64)] = True
         cand = np.concatenate([np.asarray(touching, dtype=np.int64).reshape(-1, 2),
                                cand[was_moved[cand].any(axis=1)]])
-    graph = nx.Graph()
-    graph.add_nodes_from(range(n_el))
-    graph.add_edges_from(map(tuple, cand.tolist()))
-    colour = nx.greedy_color(graph, strategy="largest_first")
-    return label, np.array([colour[i] for i in range(n_el)], dtype=np.int64)
+    return label, greedy_colouring(n_el, cand)
 
 
 def united_with_base(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray, *,
@@ -210,7 +211,8 @@ def united_with_base(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray,
         contacts = element_contacts(X, G)
     moved = np.zeros(0, dtype=np.int64) if moved is None else np.asarray(moved, np.int64)
     folded = np.setdiff1d(contacts.folded, moved)
-    label, group = element_groups(X, G, touching=contacts.touching, moved=moved)
+    label, group = element_groups(X, G, touching=contacts.touching, moved=moved,
+                                  label=contacts.label)
     group[folded] = -1
     if exclude is not None:
         group[np.asarray(exclude, dtype=bool)] = -1

@@ -16,6 +16,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 __all__ = [
+    "greedy_colouring",
     "EdgeTopology",
     "edge_topology",
     "half_edges",
@@ -506,3 +507,52 @@ def position_welded_faces(V: np.ndarray, F: np.ndarray) -> np.ndarray:
         return np.asarray(F, dtype=np.int64).copy()
     _, first, inv = np.unique(V, axis=0, return_index=True, return_inverse=True)
     return first[inv.ravel()][F]
+
+
+def greedy_colouring(n: int, pairs) -> np.ndarray:
+    """Colours of ``n`` graph nodes such that no pair of ``pairs`` shares one (greedy).
+
+    Nodes are coloured in order of decreasing degree (ties: ascending index),
+    each with the smallest colour none of its coloured neighbours has; nodes
+    without an edge get colour 0. (networkx's ``greedy_color`` with the
+    ``largest_first`` strategy gives the same colours; this avoids importing
+    networkx, ~0.25 s, on the main job's path for a graph of a few dozen edges.)
+
+    Parameters
+    ----------
+    n : int
+        Number of nodes.
+    pairs : array_like, (k, 2) int64
+        Edges (repeats and loops ignored).
+
+    Returns
+    -------
+    numpy.ndarray, (n,) int64
+        Colour of every node, ``0 .. max``.
+
+    Examples
+    --------
+    >>> greedy_colouring(4, [[0, 1], [1, 2], [0, 2]]).tolist()
+    [0, 1, 2, 0]
+    """
+    colour = np.zeros(n, dtype=np.int64)
+    pairs = np.unique(np.sort(np.asarray(pairs, dtype=np.int64).reshape(-1, 2), axis=1), axis=0)
+    pairs = pairs[pairs[:, 0] != pairs[:, 1]]
+    if pairs.size == 0:
+        return colour
+    degree = np.bincount(pairs.ravel(), minlength=n)
+    neighbours: dict[int, list[int]] = {}
+    for a, b in pairs.tolist():
+        neighbours.setdefault(a, []).append(b)
+        neighbours.setdefault(b, []).append(a)
+    order = np.flatnonzero(degree)
+    order = order[np.argsort(-degree[order], kind="stable")]
+    done = np.zeros(n, dtype=bool)
+    for u in order.tolist():
+        taken = {int(colour[v]) for v in neighbours[u] if done[v]}
+        c = 0
+        while c in taken:
+            c += 1
+        colour[u] = c
+        done[u] = True
+    return colour
