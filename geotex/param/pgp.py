@@ -111,6 +111,9 @@ def _rotation_blocks() -> np.ndarray:
 
 
 _P = _rotation_blocks()
+# cos and sin of k quarter turns
+_QCOS = np.array([1.0, 0.0, -1.0, 0.0])
+_QSIN = np.array([0.0, 1.0, 0.0, -1.0])
 # inverse permutation and the sign of the entry it hits: P_k[_PINV[k, d], d] = _PSIGN[k, d]
 _PINV = np.argsort(_PERM, axis=1)
 _PSIGN = np.take_along_axis(_SIGN, _PINV, axis=1)
@@ -220,20 +223,17 @@ def _field_vectors(field, m: int) -> np.ndarray:
     return vec
 
 
-def _corner_rotations(F: np.ndarray, n: int, conn, jump: np.ndarray
+def _corner_rotations(F: np.ndarray, conn, jump: np.ndarray, slots: np.ndarray
                       ) -> tuple[np.ndarray, np.ndarray]:
-    """``k`` per corner (m, 3) from fan walks, and a per-dual-edge 'does not close' mask."""
+    """``k`` per corner (m, 3) from fan walks, and a per-dual-edge 'does not close' mask.
+
+    A vertex's reference corner (``k = 0``) is its first corner in ``F``.
+    """
     m = F.shape[0]
     f, g = conn.faces[:, 0], conn.faces[:, 1]
-    a, b = [], []
-    steps = []
-    for vert in (conn.vertices[:, 0], conn.vertices[:, 1]):
-        ca = 3 * f + np.argmax(F[f] == vert[:, None], axis=1)
-        cb = 3 * g + np.argmax(F[g] == vert[:, None], axis=1)
-        a.append(ca)
-        b.append(cb)
-        steps.append(jump)
-    a, b, st = np.concatenate(a), np.concatenate(b), np.concatenate(steps)
+    a = np.concatenate([3 * f + slots[:, 0], 3 * f + slots[:, 1]])
+    b = np.concatenate([3 * g + slots[:, 2], 3 * g + slots[:, 3]])
+    st = np.concatenate([jump, jump])
     root = 3 * m
     _, ref = np.unique(F.ravel(), return_index=True)
     rows = np.concatenate([a, b, np.full(ref.size, root)])
@@ -424,11 +424,11 @@ def _solve_multilevel(A, vmass, V, I, J, T, n, rng, cell, sweeps):
 
 
 def _rotate(coords: np.ndarray, k: np.ndarray) -> np.ndarray:
-    """Apply ``U + i V = i^k (u + i v)`` to (..., 2) coordinates."""
+    """Apply ``U + i V = i^k (u + i v)`` to (..., 2) coordinates (exact: factors 0, +-1)."""
     u, v = coords[..., 0], coords[..., 1]
-    U = np.choose(k, [u, -v, -u, v])
-    W = np.choose(k, [v, u, -v, -u])
-    return np.stack([U, W], axis=-1)
+    k = np.mod(k, 4)
+    c, s = _QCOS[k], _QSIN[k]
+    return np.stack([c * u - s * v, s * u + c * v], axis=-1)
 
 
 def _weighted_quantile(x: np.ndarray, w: np.ndarray, q: float) -> float:
@@ -447,7 +447,18 @@ def _distortion(size_err: np.ndarray, angle: np.ndarray, area: np.ndarray) -> di
             "angle_p95_deg": _weighted_quantile(angle, area, 0.95)}
 
 
-def _shared_edge_prediction(F, conn, k, pred):
+def _edge_slots(F: np.ndarray, conn) -> np.ndarray:
+    """Per interior edge ``(lo, hi)`` of ``conn``: the slots of ``lo`` and ``hi`` in its
+    face ``f`` and in its face ``g``, (e, 4) int64 (``f`` holds ``lo -> hi``)."""
+    f, g = conn.faces[:, 0], conn.faces[:, 1]
+    lo, hi = conn.vertices[:, 0], conn.vertices[:, 1]
+    Ff, Fg = F[f], F[g]
+    return np.stack([np.argmax(Ff == lo[:, None], axis=1), np.argmax(Ff == hi[:, None], axis=1),
+                     np.argmax(Fg == lo[:, None], axis=1), np.argmax(Fg == hi[:, None], axis=1)],
+                    axis=1)
+
+
+def _shared_edge_prediction(conn, slots, k, pred):
     """Average the two faces' predicted steps of every interior edge (eq. 3's alpha_ij).
 
     ``pred[f, c]`` is the step from corner ``c`` to ``c + 1`` in ``f``'s
@@ -457,33 +468,111 @@ def _shared_edge_prediction(F, conn, k, pred):
     """
     out = pred.copy()
     f, g = conn.faces[:, 0], conn.faces[:, 1]
-    lo, hi = conn.vertices[:, 0], conn.vertices[:, 1]
-    cf = np.argmax(F[f] == lo[:, None], axis=1)          # f holds lo -> hi at slot cf
-    cg = np.argmax(F[g] == hi[:, None], axis=1)          # g holds hi -> lo at slot cg
+    cf = slots[:, 0]                                     # f holds lo -> hi at slot cf
+    cg = slots[:, 3]                                     # g holds hi -> lo at slot cg
     kf = k[f, cf]
-    kg = k[g, (cg + 1) % 3]                              # corner of lo in g
-    back_f = _rotate(pred[f, cf], (4 - kf) % 4)
-    back_g = _rotate(-pred[g, cg], (4 - kg) % 4)
+    kg = k[g, slots[:, 2]]                               # corner of lo in g
+    back_f = _rotate(pred[f, cf], -kf)
+    back_g = _rotate(-pred[g, cg], -kg)
     mean = 0.5 * (back_f + back_g)
     out[f, cf] = _rotate(mean, kf)
     out[g, cg] = -_rotate(mean, kg)
     return out
 
 
-def _seam_residual(coords, F, conn, ok_edge) -> float:
-    f, g = conn.faces[ok_edge, 0], conn.faces[ok_edge, 1]
-    if f.size == 0:
-        return 0.0
-    lohi = conn.vertices[ok_edge]
-    cf = np.stack([coords[f, np.argmax(F[f] == lohi[:, [s]], axis=1)] for s in (0, 1)], 1)
-    cg = np.stack([coords[g, np.argmax(F[g] == lohi[:, [s]], axis=1)] for s in (0, 1)], 1)
+def _edge_residuals(coords, conn, slots, edges) -> np.ndarray:
+    """Deviation from the nearest grid symmetry across each of ``edges`` (ids into ``conn``)."""
+    f, g = conn.faces[edges, 0], conn.faces[edges, 1]
+    sl = slots[edges]
+    cf = np.stack([coords[f, sl[:, 0]], coords[f, sl[:, 1]]], axis=1)      # (e, 2, 2)
+    cg = np.stack([coords[g, sl[:, 2]], coords[g, sl[:, 3]]], axis=1)
+    u, v = cf[..., 0], cf[..., 1]
     best = np.full(f.size, np.inf)
-    for r in range(4):
-        d = cg - _rotate(cf, np.full(cf.shape[:2], r))          # (e, 2, 2)
-        t = np.rint(0.5 * (d[:, 0] + d[:, 1]))
-        res = np.abs(d - t[:, None, :]).max(axis=(1, 2))
+    for ru, rv in ((u, v), (-v, u), (-u, -v), (v, -u)):             # i^r (u + i v)
+        du, dv = cg[..., 0] - ru, cg[..., 1] - rv                    # (e, 2)
+        tu = np.rint(0.5 * (du[:, 0] + du[:, 1]))
+        tv = np.rint(0.5 * (dv[:, 0] + dv[:, 1]))
+        res = np.maximum(np.abs(du - tu[:, None]).max(axis=1),
+                         np.abs(dv - tv[:, None]).max(axis=1))
         best = np.minimum(best, res)
-    return float(best.max())
+    return best
+
+
+def _seam_residual(coords, conn, slots, ok_edge) -> float:
+    edges = np.flatnonzero(ok_edge)
+    if edges.size == 0:
+        return 0.0
+    return float(_edge_residuals(coords, conn, slots, edges).max())
+
+
+def _face_measures(V, F, coords, axes, S_face, good) -> tuple[float, dict]:
+    """``gradient_error`` and ``distortion`` over the faces ``good`` (see the class).
+
+    Works in any orthonormal frame per face (both measures are invariant), so
+    it needs no face connection: the tiles' gradients from the corner
+    coordinates against the field's ``a / S`` and ``(n x a) / S``.
+    """
+    P = V[F[good]]
+    e1, e2 = P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]
+    nrm = np.cross(e1, e2)
+    area2 = np.linalg.norm(nrm, axis=1)
+    nrm /= area2[:, None]
+    t1 = e1 / np.linalg.norm(e1, axis=1)[:, None]
+    t2 = np.cross(nrm, t1)
+    a = axes[good]
+    b = np.cross(nrm, a)
+    S = S_face[good]
+    # edges in the frame: rows (e1, e2), columns (t1, t2); e1 lies along t1
+    x1 = np.linalg.norm(e1, axis=1)
+    x2, y2 = np.einsum("ij,ij->i", e2, t1), np.einsum("ij,ij->i", e2, t2)
+    C = coords[good]
+    dC1, dC2 = C[:, 1] - C[:, 0], C[:, 2] - C[:, 0]                   # (k, 2 coords)
+    # E grad = dC with E = [[x1, 0], [x2, y2]]
+    g1 = dC1 / x1[:, None]                                            # d/dt1 of (s, t)
+    g2 = (dC2 - x2[:, None] * g1) / y2[:, None]                       # d/dt2
+    want1 = np.stack([np.einsum("ij,ij->i", a, t1), np.einsum("ij,ij->i", b, t1)], 1) / S[:, None]
+    want2 = np.stack([np.einsum("ij,ij->i", a, t2), np.einsum("ij,ij->i", b, t2)], 1) / S[:, None]
+    err = (np.hypot(g1[:, 0] - want1[:, 0], g2[:, 0] - want2[:, 0])
+           + np.hypot(g1[:, 1] - want1[:, 1], g2[:, 1] - want2[:, 1])) * S
+    area = 0.5 * area2
+    gerr = float(np.average(err, weights=area)) if err.size else 0.0
+    size_err = np.maximum(np.abs(np.hypot(g1[:, 0], g2[:, 0]) * S - 1.0),
+                          np.abs(np.hypot(g1[:, 1], g2[:, 1]) * S - 1.0))
+    cross = g1[:, 0] * want2[:, 0] - g2[:, 0] * want1[:, 0]
+    dot = g1[:, 0] * want1[:, 0] + g2[:, 0] * want2[:, 0]
+    angle = np.degrees(np.abs(np.arctan2(cross, dot)))
+    return gerr, _distortion(size_err, angle, area)
+
+
+def _corner_coordinates(st, X):
+    """Eq. 4 on ``st``'s mesh: raw coordinates, predicted steps, coordinates, windings.
+
+    Returns ``raw`` (m, 3, 2) (per corner ``i^k arg X / 2 pi``), ``pred``
+    (m, 3, 2) (the field's local map from corner 0), ``coords`` (m, 3, 2)
+    (corners 1 and 2 placed from corner 0 with the edges' integers) and
+    ``wind`` (m, 2) int64.
+    """
+    V, F, k, arms, S_face = st.V, st.F, st.k, st.arms, st.S_face
+    raw_v = np.stack([np.arctan2(X[:, 1], X[:, 0]), np.arctan2(X[:, 3], X[:, 2])],
+                     axis=1) / (2.0 * np.pi)                            # (n, 2)
+    raw = _rotate(raw_v[F], k)                                          # (m, 3, 2)
+    P = V[F]
+    pred = np.einsum("fij,fcj->fci", arms, P - P[:, [0]]) / S_face[:, None, None]  # (m, 3, 2)
+    omega = _shared_edge_prediction(st.conn, st.slots, k, np.roll(pred, -1, axis=1) - pred)
+    step = np.rint(np.roll(raw, -1, axis=1) - raw - omega)          # slot c: corner c -> c+1
+    coords = raw.copy()
+    coords[:, 1] = raw[:, 1] - step[:, 0]
+    coords[:, 2] = raw[:, 2] + step[:, 2]
+    wind = step.sum(axis=1).astype(np.int64)                          # (m, 2)
+    return raw, pred, coords, wind
+
+
+def _vanishing(X: np.ndarray, vmass: np.ndarray) -> np.ndarray:
+    """Vertices whose periodic function has no reliable phase, (n,) bool."""
+    mu = np.hypot(X[:, 0], X[:, 1])
+    mv = np.hypot(X[:, 2], X[:, 3])
+    rms = np.sqrt(np.sum(vmass * (mu ** 2 + mv ** 2)) / max(2 * vmass.sum(), 1e-300))
+    return np.minimum(mu, mv) < VANISHING_MODULUS * rms
 
 
 def periodic_parameterization(V, F, field, *, scale, solver: str = "auto",
@@ -566,6 +655,7 @@ class _Setup:
     open_fan: np.ndarray      # dual edges whose fan matching does not close
     weight: np.ndarray        # (m,) relative face areas
     vmass: np.ndarray         # (n,)
+    slots: np.ndarray         # (e, 4) corner slots of the interior edges (_edge_slots)
 
 
 def _setup(V, F, field, scale) -> _Setup:
@@ -590,36 +680,20 @@ def _setup(V, F, field, scale) -> _Setup:
     theta = tangent_angles(conn.T1, conn.T2, combed.vectors)
     a = np.cos(theta)[:, None] * conn.T1 + np.sin(theta)[:, None] * conn.T2
     b = np.cross(conn.N, a)
-    k, open_fan = _corner_rotations(F, n, conn, jump)
+    slots = _edge_slots(F, conn)
+    k, open_fan = _corner_rotations(F, conn, jump, slots)
     weight = conn.areas / conn.areas.mean()
     vmass = np.bincount(F.ravel(), weights=np.repeat(weight / 3.0, 3), minlength=n)
     return _Setup(V, F, conn, combed, np.stack([a, b], axis=1), S, S[F].mean(axis=1), k,
-                  open_fan, weight, vmass)
+                  open_fan, weight, vmass, slots)
 
 
 def _extracted(st: _Setup, X: np.ndarray, lams) -> PeriodicParameterization:
     """Per-corner coordinates, singular faces and the measures (eq. 4)."""
-    V, F, conn, k, arms, S_face = st.V, st.F, st.conn, st.k, st.arms, st.S_face
-    m = F.shape[0]
-    vmass = st.vmass
-    # extraction (eq. 4)
-    zu, zv = X[:, 0] + 1j * X[:, 1], X[:, 2] + 1j * X[:, 3]
-    raw_v = np.stack([np.angle(zu), np.angle(zv)], axis=1) / (2.0 * np.pi)      # (n, 2)
-    raw = _rotate(raw_v[F], k)                                                  # (m, 3, 2)
-    P = V[F]
-    pred = np.einsum("fij,fcj->fci", arms, P - P[:, [0]]) / S_face[:, None, None]  # (m, 3, 2)
-    omega = _shared_edge_prediction(F, conn, k, np.roll(pred, -1, axis=1) - pred)
-    step = np.rint(np.roll(raw, -1, axis=1) - raw - omega)          # slot c: corner c -> c+1
-    coords = raw.copy()
-    coords[:, 1] = raw[:, 1] - step[:, 0]
-    coords[:, 2] = raw[:, 2] + step[:, 2]
-    wind = step.sum(axis=1).astype(np.int64)                          # (m, 2)
-
-    mod = np.minimum(np.abs(zu), np.abs(zv))
-    rms = np.sqrt(np.sum(vmass * (np.abs(zu) ** 2 + np.abs(zv) ** 2)) / max(2 * vmass.sum(),
-                                                                         1e-300))
-    vanish = mod < VANISHING_MODULUS * rms
-    index = vertex_indices(V, F, st.combed.vectors, symmetry=4, connection=conn)
+    F, conn = st.F, st.conn
+    raw, pred, coords, wind = _corner_coordinates(st, X)
+    vanish = _vanishing(X, st.vmass)
+    index = vertex_indices(st.V, F, st.combed.vectors, symmetry=4, connection=conn)
     cone = np.nan_to_num(index) != 0
     singular = (wind != 0).any(axis=1) | cone[F].any(axis=1) | vanish[F].any(axis=1)
     fo, go = conn.faces[st.open_fan, 0], conn.faces[st.open_fan, 1]
@@ -627,30 +701,13 @@ def _extracted(st: _Setup, X: np.ndarray, lams) -> PeriodicParameterization:
     singular[go] = True
 
     ok_edge = ~(singular[conn.faces[:, 0]] | singular[conn.faces[:, 1]])
-    residual = _seam_residual(coords, F, conn, ok_edge)
+    residual = _seam_residual(coords, conn, st.slots, ok_edge)
     # singular faces: the periodic functions cannot be followed there (a full
     # period can wind inside the face); lay the field's own local map instead,
     # anchored at corner 0, so the face shows one correctly sized, oriented
     # piece of the tile (a small jump at its edges) rather than a squeezed period
     coords[singular] = raw[singular, :1] + pred[singular]
-
-    # gradient error against the field's prediction, per face in its own frame
-    e1, e2 = P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]
-    E = np.stack([np.einsum("fj,fj->f", e, t) for e in (e1, e2) for t in (conn.T1, conn.T2)],
-                 axis=1).reshape(m, 2, 2)                     # rows: edges, cols: frame axes
-    dC = coords[:, 1:] - coords[:, [0]]                       # (m, 2 edges, 2 coords)
-    grad = np.linalg.solve(E, dC)                             # (m, 2 axes, 2 coords)
-    want = np.stack([np.einsum("fij,fj->fi", arms, t) for t in (conn.T1, conn.T2)],
-                    axis=1) / S_face[:, None, None]           # (m, 2 axes, 2 coords)
-    err = np.linalg.norm(grad - want, axis=1).sum(axis=1) * S_face
-    good = ~singular
-    gerr = float(np.average(err[good], weights=conn.areas[good])) if good.any() else 0.0
-    # distortion: tile size along s and t relative to S, angle of grad s to the field
-    size_err = np.abs(np.linalg.norm(grad, axis=1) * S_face[:, None] - 1.0).max(axis=1)
-    gs, ws = grad[:, :, 0], want[:, :, 0]
-    cross = gs[:, 0] * ws[:, 1] - gs[:, 1] * ws[:, 0]
-    angle = np.degrees(np.abs(np.arctan2(cross, np.einsum("fi,fi->f", gs, ws))))
-    dist = _distortion(size_err[good], angle[good], conn.areas[good])
+    gerr, dist = _face_measures(st.V, F, coords, st.arms[:, 0], st.S_face, ~singular)
 
     cv = np.flatnonzero(cone)
     disl = np.flatnonzero((wind != 0).any(axis=1))
@@ -661,7 +718,4 @@ def _extracted(st: _Setup, X: np.ndarray, lams) -> PeriodicParameterization:
         index_sum=float(np.sum(index[cv])) if cv.size else 0.0,
         seam_residual=residual, gradient_error=gerr, distortion=dist, scale=st.S,
         eigenvalues=tuple(lams), functions=np.ascontiguousarray(X),
-        axes=np.ascontiguousarray(arms[:, 0]))
-
-
-
+        axes=np.ascontiguousarray(st.arms[:, 0]))
