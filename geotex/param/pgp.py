@@ -505,42 +505,44 @@ def _seam_residual(coords, conn, slots, ok_edge) -> float:
     return float(_edge_residuals(coords, conn, slots, edges).max())
 
 
+def _cross(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Row-wise cross product of (k, 3) arrays (``np.cross`` without its overhead)."""
+    return np.stack([x[:, 1] * y[:, 2] - x[:, 2] * y[:, 1],
+                     x[:, 2] * y[:, 0] - x[:, 0] * y[:, 2],
+                     x[:, 0] * y[:, 1] - x[:, 1] * y[:, 0]], axis=1)
+
+
 def _face_measures(V, F, coords, axes, S_face, good) -> tuple[float, dict]:
     """``gradient_error`` and ``distortion`` over the faces ``good`` (see the class).
 
-    Works in any orthonormal frame per face (both measures are invariant), so
-    it needs no face connection: the tiles' gradients from the corner
-    coordinates against the field's ``a / S`` and ``(n x a) / S``.
+    Works in the frame ``(t1, t2)`` of each face with ``t1`` along its first
+    edge (both measures are frame-invariant), so it needs no face connection:
+    the tiles' gradients from the corner coordinates against the field's
+    ``a / S`` and ``(n x a) / S``.
     """
     P = V[F[good]]
     e1, e2 = P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]
-    nrm = np.cross(e1, e2)
-    area2 = np.linalg.norm(nrm, axis=1)
-    nrm /= area2[:, None]
-    t1 = e1 / np.linalg.norm(e1, axis=1)[:, None]
-    t2 = np.cross(nrm, t1)
+    x1 = np.sqrt(np.einsum("ij,ij->i", e1, e1))
+    t1 = e1 / x1[:, None]
+    nrm = _cross(e1, e2)
+    area2 = np.sqrt(np.einsum("ij,ij->i", nrm, nrm))
+    t2 = _cross(nrm / area2[:, None], t1)
     a = axes[good]
-    b = np.cross(nrm, a)
     S = S_face[good]
-    # edges in the frame: rows (e1, e2), columns (t1, t2); e1 lies along t1
-    x1 = np.linalg.norm(e1, axis=1)
+    # a = (a1, a2) and n x a = (-a2, a1) in the frame; e1 = (x1, 0), e2 = (x2, y2)
+    a1, a2 = np.einsum("ij,ij->i", a, t1) / S, np.einsum("ij,ij->i", a, t2) / S
     x2, y2 = np.einsum("ij,ij->i", e2, t1), np.einsum("ij,ij->i", e2, t2)
     C = coords[good]
     dC1, dC2 = C[:, 1] - C[:, 0], C[:, 2] - C[:, 0]                   # (k, 2 coords)
-    # E grad = dC with E = [[x1, 0], [x2, y2]]
     g1 = dC1 / x1[:, None]                                            # d/dt1 of (s, t)
     g2 = (dC2 - x2[:, None] * g1) / y2[:, None]                       # d/dt2
-    want1 = np.stack([np.einsum("ij,ij->i", a, t1), np.einsum("ij,ij->i", b, t1)], 1) / S[:, None]
-    want2 = np.stack([np.einsum("ij,ij->i", a, t2), np.einsum("ij,ij->i", b, t2)], 1) / S[:, None]
-    err = (np.hypot(g1[:, 0] - want1[:, 0], g2[:, 0] - want2[:, 0])
-           + np.hypot(g1[:, 1] - want1[:, 1], g2[:, 1] - want2[:, 1])) * S
+    err = (np.hypot(g1[:, 0] - a1, g2[:, 0] - a2) + np.hypot(g1[:, 1] + a2, g2[:, 1] - a1)) * S
     area = 0.5 * area2
     gerr = float(np.average(err, weights=area)) if err.size else 0.0
     size_err = np.maximum(np.abs(np.hypot(g1[:, 0], g2[:, 0]) * S - 1.0),
                           np.abs(np.hypot(g1[:, 1], g2[:, 1]) * S - 1.0))
-    cross = g1[:, 0] * want2[:, 0] - g2[:, 0] * want1[:, 0]
-    dot = g1[:, 0] * want1[:, 0] + g2[:, 0] * want2[:, 0]
-    angle = np.degrees(np.abs(np.arctan2(cross, dot)))
+    angle = np.degrees(np.abs(np.arctan2(g1[:, 0] * a2 - g2[:, 0] * a1,
+                                         g1[:, 0] * a1 + g2[:, 0] * a2)))
     return gerr, _distortion(size_err, angle, area)
 
 
@@ -672,8 +674,13 @@ def _setup(V, F, field, scale) -> _Setup:
     if bow.size:
         raise InputError(f"F has {bow.size} non-manifold vertex(es), first {int(bow[0])}; "
                          "repair the mesh first, e.g. with geotex repair")
-    S = _scale_per_vertex(scale, n)
-    vectors = _field_vectors(field, m)
+    return _prepared(V, F, conn, _field_vectors(field, m), _scale_per_vertex(scale, n))
+
+
+def _prepared(V, F, conn, vectors, S) -> _Setup:
+    """Comb the field and find the corner rotations on a checked mesh (``conn`` its
+    connection, ``vectors`` (m, 3) and ``S`` (n,) checked)."""
+    n = V.shape[0]
     combed = comb_direction_field(V, F, vectors, symmetry=4, connection=conn)
     jump = np.zeros(conn.edges.size, dtype=np.int64)
     jump[np.searchsorted(conn.edges, combed.cut_edges)] = combed.jumps
