@@ -284,24 +284,39 @@ def _transfers(V, F, k, arms, S_face):
 def _energy(I, J, T, weight, n):
     """The 4n x 4n symmetric energy: sum w |X_j - T X_i|^2 over directed face edges.
 
-    Assembled block-wise (4x4 blocks, duplicates summed after one sort of the
-    block keys) and returned as CSR without stored zeros.
+    The off-diagonal 4x4 block of every mesh edge ``(lo, hi)`` (row ``hi``)
+    sums ``-w T`` of its directed face edges ``lo -> hi`` and ``-w T^T`` of
+    those ``hi -> lo`` (one stable sort of the edge keys, then a segmented
+    sum); the diagonal blocks are ``w I``.  The blocks are laid out as a
+    block-sparse matrix in row order (a second sort, of one key per block)
+    and returned as CSR without stored zeros.
     """
     w = np.tile(weight, 3)
+    fwd = I < J
+    lo, hi = np.where(fwd, I, J), np.where(fwd, J, I)
+    key = lo * n + hi
+    order = np.argsort(key, kind="stable")
+    ks = key[order]
+    start = np.flatnonzero(np.diff(ks, prepend=-1))                  # keys are >= 0
+    Ts = T[order]
+    back = ~fwd[order]
+    Ts[back] = np.transpose(Ts[back], (0, 2, 1))
+    Ts *= -w[order][:, None, None]
+    L = np.add.reduceat(Ts, start, axis=0) if start.size else Ts      # (E, 4, 4) at (hi, lo)
+    elo, ehi = lo[order][start], hi[order][start]
     diag = np.bincount(I, weights=w, minlength=n) + np.bincount(J, weights=w, minlength=n)
-    Tt = np.transpose(T, (0, 2, 1))
+    E = start.size
     verts = np.arange(n)
-    br = np.concatenate([I, J, verts])
-    bc = np.concatenate([J, I, verts])
-    data = np.concatenate([-w[:, None, None] * Tt, -w[:, None, None] * T,
-                           diag[:, None, None] * np.eye(4)[None]])
-    ukey, inv = np.unique(br * n + bc, return_inverse=True)
-    flat = (inv.ravel()[:, None] * 16 + np.arange(16)).ravel()
-    blocks = np.bincount(flat, weights=data.ravel(), minlength=ukey.size * 16)
-    blocks = blocks.reshape(-1, 4, 4)
-    rows, cols = ukey // n, ukey % n
-    indptr = np.searchsorted(rows, np.arange(n + 1))
-    A = sp.bsr_matrix((blocks, cols, indptr), shape=(4 * n, 4 * n), blocksize=(4, 4)).tocsr()
+    br = np.concatenate([ehi, elo, verts])
+    bc = np.concatenate([elo, ehi, verts])
+    src = np.argsort(br * n + bc)                                    # keys are unique
+    blocks = np.empty((src.size, 4, 4))
+    lower, upper, own = src < E, (src >= E) & (src < 2 * E), src >= 2 * E
+    blocks[lower] = L[src[lower]]
+    blocks[upper] = np.transpose(L[src[upper] - E], (0, 2, 1))
+    blocks[own] = diag[src[own] - 2 * E][:, None, None] * np.eye(4)
+    indptr = np.searchsorted(br[src], np.arange(n + 1))
+    A = sp.bsr_matrix((blocks, bc[src], indptr), shape=(4 * n, 4 * n), blocksize=(4, 4)).tocsr()
     A.eliminate_zeros()          # exact zeros: u and v blocks that do not couple
     return A
 
