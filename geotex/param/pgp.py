@@ -374,8 +374,8 @@ def _solve_direct(A: sp.csr_matrix, vmass: np.ndarray, n: int, rng) -> tuple[np.
 def _clusters(V, I, J, n, size):
     """Vertex clusters: cells of a grid of step ``size``, split into edge-connected parts."""
     cell = np.floor((V - V.min(axis=0)) / size).astype(np.int64)
-    _, key = np.unique(cell, axis=0, return_inverse=True)
-    key = key.ravel()
+    dims = cell.max(axis=0) + 1
+    key = (cell[:, 0] * dims[1] + cell[:, 1]) * dims[2] + cell[:, 2]      # one id per cell
     same = key[I] == key[J]
     G = sp.csr_matrix((np.ones(int(same.sum()), np.int8), (I[same], J[same])), shape=(n, n))
     return connected_components(G, directed=False)
@@ -413,7 +413,7 @@ def _prolongation(I, J, T, n, label, count):
     anc = np.where(pred >= 0, pred, root)
     anc[root] = root
     while np.any(anc[:n] != root):
-        Q = np.einsum("vab,vbc->vac", Q, Q[anc])
+        Q = np.matmul(Q, Q[anc])
         anc = anc[anc]
     Q = Q[:n]
     r = (4 * np.arange(n)[:, None, None] + np.arange(4)[None, :, None]).repeat(4, axis=2)
@@ -499,17 +499,20 @@ def _edge_residuals(coords, conn, slots, edges) -> np.ndarray:
     """Deviation from the nearest grid symmetry across each of ``edges`` (ids into ``conn``)."""
     f, g = conn.faces[edges, 0], conn.faces[edges, 1]
     sl = slots[edges]
-    cf = np.stack([coords[f, sl[:, 0]], coords[f, sl[:, 1]]], axis=1)      # (e, 2, 2)
-    cg = np.stack([coords[g, sl[:, 2]], coords[g, sl[:, 3]]], axis=1)
-    u, v = cf[..., 0], cf[..., 1]
+    # the two corners (lo, hi) of the edge in f and in g, each (e, 2) = (s, t)
+    fl, fh = coords[f, sl[:, 0]], coords[f, sl[:, 1]]
+    gl, gh = coords[g, sl[:, 2]], coords[g, sl[:, 3]]
     best = np.full(f.size, np.inf)
-    for ru, rv in ((u, v), (-v, u), (-u, -v), (v, -u)):             # i^r (u + i v)
-        du, dv = cg[..., 0] - ru, cg[..., 1] - rv                    # (e, 2)
-        tu = np.rint(0.5 * (du[:, 0] + du[:, 1]))
-        tv = np.rint(0.5 * (dv[:, 0] + dv[:, 1]))
-        res = np.maximum(np.abs(du - tu[:, None]).max(axis=1),
-                         np.abs(dv - tv[:, None]).max(axis=1))
-        best = np.minimum(best, res)
+    for c, s in ((1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0)):    # i^r (s + i t)
+        dul = gl[:, 0] - (c * fl[:, 0] - s * fl[:, 1])
+        duh = gh[:, 0] - (c * fh[:, 0] - s * fh[:, 1])
+        dvl = gl[:, 1] - (s * fl[:, 0] + c * fl[:, 1])
+        dvh = gh[:, 1] - (s * fh[:, 0] + c * fh[:, 1])
+        tu = np.rint(0.5 * (dul + duh))
+        tv = np.rint(0.5 * (dvl + dvh))
+        res = np.maximum(np.maximum(np.abs(dul - tu), np.abs(duh - tu)),
+                         np.maximum(np.abs(dvl - tv), np.abs(dvh - tv)))
+        np.minimum(best, res, out=best)
     return best
 
 
