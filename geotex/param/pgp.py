@@ -259,23 +259,44 @@ def _corner_rotations(F: np.ndarray, conn, jump: np.ndarray, slots: np.ndarray
     return k.reshape(m, 3), bad[:half] | bad[half:]
 
 
+def _transfer_codes() -> np.ndarray:
+    """``T = P_kj^T D P_ki`` as codes: (16 = 4 kj + ki, 16 entries) indices into
+    ``[0, c0, s0, c1, s1, -c0, -s0, -c1, -s1]`` (``D``: the two rotations)."""
+    src = np.zeros((4, 4), dtype=np.int64)               # D's entries as codes
+    src[0, 0], src[0, 1], src[1, 0], src[1, 1] = 1, 6, 2, 1
+    src[2, 2], src[2, 3], src[3, 2], src[3, 3] = 3, 8, 4, 3
+    negate = np.array([0, 5, 6, 7, 8, 1, 2, 3, 4])
+    out = np.zeros((16, 16), dtype=np.intp)
+    for kj in range(4):
+        for ki in range(4):
+            # P signed permutations: T[a, d] = s_j(a) s_i(d) D[r_j(a), r_i(d)]
+            code = src[_PINV[kj][:, None], _PINV[ki][None, :]]
+            neg = (_PSIGN[kj][:, None] * _PSIGN[ki][None, :]) < 0
+            out[4 * kj + ki] = np.where(neg, negate[code], code).ravel()
+    return out
+
+
+_TCODES = _transfer_codes()
+
+
 def _transfers(V, F, k, arms, S_face):
-    """Per directed face edge ``i -> j``: ``(i, j, T)`` with ``X_j ~ T X_i`` (T orthogonal 4x4)."""
+    """Per directed face edge ``i -> j``: ``(i, j, T)`` with ``X_j ~ T X_i`` (T orthogonal 4x4).
+
+    ``canonical_j = D canonical_i`` with ``D`` the rotations by the field's
+    predicted phase steps and ``canonical = P_k X``, so ``T = P_kj^T D P_ki``;
+    its entries are gathered from ``(0, +-cos, +-sin)`` by :data:`_TCODES`.
+    """
     m = F.shape[0]
     I, J, T = [], [], []
+    vals = np.zeros((m, 9))
     for ca, cb in ((0, 1), (1, 2), (2, 0)):
         i, j = F[:, ca], F[:, cb]
         om = 2.0 * np.pi * np.einsum("fij,fj->fi", arms, V[j] - V[i]) / S_face[:, None]
         c, s = np.cos(om), np.sin(om)
-        D = np.zeros((m, 4, 4))
-        D[:, 0, 0], D[:, 0, 1], D[:, 1, 0], D[:, 1, 1] = c[:, 0], -s[:, 0], s[:, 0], c[:, 0]
-        D[:, 2, 2], D[:, 2, 3], D[:, 3, 2], D[:, 3, 3] = c[:, 1], -s[:, 1], s[:, 1], c[:, 1]
-        # canonical_j = D canonical_i, canonical = P_k X  =>  X_j = Pj^T D Pi X_i
-        # P are signed permutations: T[a, d] = s_j(a) s_i(d) D[r_j(a), r_i(d)]
-        kj, ki = k[:, cb], k[:, ca]
-        rows, cols = _PINV[kj], _PINV[ki]
-        sign = _PSIGN[kj][:, :, None] * _PSIGN[ki][:, None, :]
-        T.append(D[np.arange(m)[:, None, None], rows[:, :, None], cols[:, None, :]] * sign)
+        vals[:, 1], vals[:, 2], vals[:, 3], vals[:, 4] = c[:, 0], s[:, 0], c[:, 1], s[:, 1]
+        vals[:, 5:] = -vals[:, 1:5]
+        code = _TCODES[4 * k[:, cb] + k[:, ca]]
+        T.append(np.take_along_axis(vals, code, axis=1).reshape(m, 4, 4))
         I.append(i)
         J.append(j)
     return np.concatenate(I), np.concatenate(J), np.concatenate(T)
@@ -587,6 +608,11 @@ def _corner_coordinates(st, X):
     return raw, pred, coords, wind
 
 
+def _touching(mask: np.ndarray, F: np.ndarray) -> np.ndarray:
+    """Faces with a corner where the vertex ``mask`` holds, (m,) bool."""
+    return mask[F[:, 0]] | mask[F[:, 1]] | mask[F[:, 2]]
+
+
 def _vanishing(X: np.ndarray, vmass: np.ndarray) -> np.ndarray:
     """Vertices whose periodic function has no reliable phase, (n,) bool."""
     mu = np.hypot(X[:, 0], X[:, 1])
@@ -720,7 +746,7 @@ def _extracted(st: _Setup, X: np.ndarray, lams) -> PeriodicParameterization:
     vanish = _vanishing(X, st.vmass)
     index = vertex_indices(st.V, F, st.combed.vectors, symmetry=4, connection=conn)
     cone = np.nan_to_num(index) != 0
-    singular = (wind != 0).any(axis=1) | cone[F].any(axis=1) | vanish[F].any(axis=1)
+    singular = (wind != 0).any(axis=1) | _touching(cone, F) | _touching(vanish, F)
     fo, go = conn.faces[st.open_fan, 0], conn.faces[st.open_fan, 1]
     singular[fo] = True
     singular[go] = True

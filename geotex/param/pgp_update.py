@@ -48,9 +48,9 @@ from geotex.mesh.arrays import as_mesh_arrays
 from geotex.mesh.geometry import face_areas
 from geotex.param.pgp import (_P, CLUSTER_EDGES, SMOOTHING_SWEEPS, PeriodicParameterization,
                               _clusters, _corner_coordinates, _edge_residuals, _edge_slots,
-                              _energy,
-                              _face_measures, _field_vectors, _prepared, _prolongation,
-                              _rotate, _scale_per_vertex, _transfers, _vanishing)
+                              _energy, _face_measures, _field_vectors, _prepared,
+                              _prolongation, _rotate, _scale_per_vertex, _touching,
+                              _transfers, _vanishing)
 
 __all__ = ["updated_parameterization", "LOCAL_MULTILEVEL_VERTICES"]
 
@@ -219,10 +219,10 @@ def updated_parameterization(V, F, previous, field, *, scale,
     in_area[F[area]] = True
     outside = np.zeros(n, dtype=bool)
     outside[F[~area]] = True
-    core = in_area[F].any(axis=1) | old_singular
+    core = _touching(in_area, F) | old_singular
     core_v = np.zeros(n, dtype=bool)
     core_v[F[core]] = True
-    sub = np.flatnonzero(core_v[F].any(axis=1))           # increasing: first corners kept
+    sub = np.flatnonzero(_touching(core_v, F))           # increasing: first corners kept
     verts, Fs = np.unique(F[sub], return_inverse=True)
     Fs = Fs.reshape(-1, 3)
     Vs = V[verts]
@@ -241,7 +241,7 @@ def updated_parameterization(V, F, previous, field, *, scale,
     fi = np.flatnonzero(free_s)
     if fi.size:
         # the energy of the faces around free vertices: all of them lie in the area
-        near = np.flatnonzero(area_s & free_s[Fs].any(axis=1))
+        near = np.flatnonzero(area_s & _touching(free_s, Fs))
         I, J, T = _transfers(Vs, Fs[near], st.k[near], st.arms[near], st.S_face[near])
         A = _energy(I, J, T, st.weight[near], ns)
         idx = (4 * fi[:, None] + np.arange(4)).ravel()
@@ -283,10 +283,10 @@ def updated_parameterization(V, F, previous, field, *, scale,
             cone[v], index[v] = True, k
     cone[verts[known]] = np.nan_to_num(index_s[known]) != 0
     index[verts[known]] = np.nan_to_num(index_s[known])
-    sing_s = (wind != 0).any(axis=1) | cone[verts][Fs].any(axis=1)
+    sing_s = (wind != 0).any(axis=1) | _touching(cone[verts], Fs)
     sing_s[conn.faces[st.open_fan].ravel()] = True
-    singular = old_singular | vanish[F].any(axis=1)
-    singular[sub[core_s]] = sing_s[core_s] | vanish[F[sub[core_s]]].any(axis=1)
+    singular = old_singular | _touching(vanish, F)
+    singular[sub[core_s]] = sing_s[core_s] | _touching(vanish, F[sub[core_s]])
     sing_s = singular[sub]
     cs[sing_s] = raw[sing_s, :1] + pred[sing_s]             # the field's local map
     # into the final frames: the area's faces are in them already; the others
