@@ -259,6 +259,14 @@ def _corner_rotations(F: np.ndarray, conn, jump: np.ndarray, slots: np.ndarray
     return k.reshape(m, 3), bad[:half] | bad[half:]
 
 
+def _arm_steps(arms: np.ndarray, d: np.ndarray, S_face: np.ndarray) -> np.ndarray:
+    """``(<a_f, d_f>, <b_f, d_f>) / S_f`` per face, (m, 2): a step in tile units."""
+    a, b = arms[:, 0], arms[:, 1]
+    return np.stack([d[:, 0] * a[:, 0] + d[:, 1] * a[:, 1] + d[:, 2] * a[:, 2],
+                     d[:, 0] * b[:, 0] + d[:, 1] * b[:, 1] + d[:, 2] * b[:, 2]], axis=1) \
+        / S_face[:, None]
+
+
 def _transfer_codes() -> np.ndarray:
     """``T = P_kj^T D P_ki`` as codes: (16 = 4 kj + ki, 16 entries) indices into
     ``[0, c0, s0, c1, s1, -c0, -s0, -c1, -s1]`` (``D``: the two rotations)."""
@@ -291,7 +299,7 @@ def _transfers(V, F, k, arms, S_face):
     vals = np.zeros((m, 9))
     for ca, cb in ((0, 1), (1, 2), (2, 0)):
         i, j = F[:, ca], F[:, cb]
-        om = 2.0 * np.pi * np.einsum("fij,fj->fi", arms, V[j] - V[i]) / S_face[:, None]
+        om = (2.0 * np.pi) * _arm_steps(arms, V[j] - V[i], S_face)
         c, s = np.cos(om), np.sin(om)
         vals[:, 1], vals[:, 2], vals[:, 3], vals[:, 4] = c[:, 0], s[:, 0], c[:, 1], s[:, 1]
         vals[:, 5:] = -vals[:, 1:5]
@@ -431,15 +439,25 @@ def _prolongation(I, J, T, n, label, count):
     step = T[eidx]
     step[~fwd] = np.transpose(step[~fwd], (0, 2, 1))            # inverse = transpose
     Q[cc] = step
+    # depth below the cluster's first vertex (pointer jumping on integers), then
+    # Q_v = step_v Q_parent level by level: every vertex is multiplied once
     anc = np.where(pred >= 0, pred, root)
     anc[root] = root
+    depth = np.zeros(n + 1, dtype=np.int64)
+    depth[cc] = 1
     while np.any(anc[:n] != root):
-        Q = np.matmul(Q, Q[anc])
+        depth = depth + depth[anc]
         anc = anc[anc]
+    order = cc[np.argsort(depth[cc], kind="stable")]
+    bounds = np.searchsorted(depth[order], np.arange(1, int(depth.max()) + 2))
+    for lo, hi in zip(bounds[:-1], bounds[1:]):
+        v = order[lo:hi]
+        Q[v] = np.matmul(Q[v], Q[pred[v]])
     Q = Q[:n]
-    r = (4 * np.arange(n)[:, None, None] + np.arange(4)[None, :, None]).repeat(4, axis=2)
-    c = (4 * label[:, None, None] + np.arange(4)[None, None, :]).repeat(4, axis=1)
-    return sp.csr_matrix((Q.ravel(), (r.ravel(), c.ravel())), shape=(4 * n, 4 * count))
+    # CSR directly: row 4v + a holds Q_v[a, :] in the columns of v's cluster
+    cols = np.broadcast_to(4 * label[:, None, None] + np.arange(4), (n, 4, 4))
+    return sp.csr_matrix((Q.ravel(), cols.ravel(), np.arange(0, 16 * n + 1, 4)),
+                         shape=(4 * n, 4 * count))
 
 
 def _solve_multilevel(A, vmass, V, I, J, T, n, rng, cell, sweeps):
@@ -598,7 +616,9 @@ def _corner_coordinates(st, X):
                      axis=1) / (2.0 * np.pi)                            # (n, 2)
     raw = _rotate(raw_v[F], k)                                          # (m, 3, 2)
     P = V[F]
-    pred = np.einsum("fij,fcj->fci", arms, P - P[:, [0]]) / S_face[:, None, None]  # (m, 3, 2)
+    pred = np.zeros((F.shape[0], 3, 2))                                  # (m, 3, 2)
+    pred[:, 1] = _arm_steps(arms, P[:, 1] - P[:, 0], S_face)
+    pred[:, 2] = _arm_steps(arms, P[:, 2] - P[:, 0], S_face)
     omega = _shared_edge_prediction(st.conn, st.slots, k, np.roll(pred, -1, axis=1) - pred)
     step = np.rint(np.roll(raw, -1, axis=1) - raw - omega)          # slot c: corner c -> c+1
     coords = raw.copy()
