@@ -246,7 +246,12 @@ def _corner_rotations(F: np.ndarray, conn, jump: np.ndarray, slots: np.ndarray
     pred = pred.astype(np.int64)
     child = np.flatnonzero(pred[:root] >= 0)
     step = np.zeros(root + 1, dtype=np.int64)
-    step[child] = np.asarray(G[pred[child], child]).ravel().astype(np.int64) - 1
+    # the stored value of every tree edge (pred -> child): G is canonical CSR,
+    # so its entries' (row, column) keys are sorted
+    gkey = np.repeat(np.arange(root + 1, dtype=np.int64), np.diff(G.indptr)) * (root + 1)
+    gkey += G.indices
+    pos = np.searchsorted(gkey, pred[child] * (root + 1) + child)
+    step[child] = G.data[pos].astype(np.int64) - 1
     anc = np.where(pred >= 0, pred, root)
     anc[root] = root
     acc = step.copy()
@@ -624,7 +629,7 @@ def _corner_coordinates(st, X):
     coords = raw.copy()
     coords[:, 1] = raw[:, 1] - step[:, 0]
     coords[:, 2] = raw[:, 2] + step[:, 2]
-    wind = step.sum(axis=1).astype(np.int64)                          # (m, 2)
+    wind = (step[:, 0] + step[:, 1] + step[:, 2]).astype(np.int64)    # (m, 2)
     return raw, pred, coords, wind
 
 
@@ -766,7 +771,8 @@ def _extracted(st: _Setup, X: np.ndarray, lams) -> PeriodicParameterization:
     vanish = _vanishing(X, st.vmass)
     index = vertex_indices(st.V, F, st.combed.vectors, symmetry=4, connection=conn)
     cone = np.nan_to_num(index) != 0
-    singular = (wind != 0).any(axis=1) | _touching(cone, F) | _touching(vanish, F)
+    winds = (wind[:, 0] != 0) | (wind[:, 1] != 0)
+    singular = winds | _touching(cone, F) | _touching(vanish, F)
     fo, go = conn.faces[st.open_fan, 0], conn.faces[st.open_fan, 1]
     singular[fo] = True
     singular[go] = True
@@ -781,7 +787,7 @@ def _extracted(st: _Setup, X: np.ndarray, lams) -> PeriodicParameterization:
     gerr, dist = _face_measures(st.V, F, coords, st.arms[:, 0], st.S_face, ~singular)
 
     cv = np.flatnonzero(cone)
-    disl = np.flatnonzero((wind != 0).any(axis=1))
+    disl = np.flatnonzero(winds)
     return PeriodicParameterization(
         coords=np.ascontiguousarray(coords), singular=singular,
         cones=tuple((int(v), float(index[v])) for v in cv),

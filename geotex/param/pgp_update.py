@@ -283,7 +283,8 @@ def updated_parameterization(V, F, previous, field, *, scale,
             cone[v], index[v] = True, k
     cone[verts[known]] = np.nan_to_num(index_s[known]) != 0
     index[verts[known]] = np.nan_to_num(index_s[known])
-    sing_s = (wind != 0).any(axis=1) | _touching(cone[verts], Fs)
+    winds = (wind[:, 0] != 0) | (wind[:, 1] != 0)
+    sing_s = winds | _touching(cone[verts], Fs)
     sing_s[conn.faces[st.open_fan].ravel()] = True
     singular = old_singular | _touching(vanish, F)
     singular[sub[core_s]] = sing_s[core_s] | _touching(vanish, F[sub[core_s]])
@@ -310,7 +311,7 @@ def updated_parameterization(V, F, previous, field, *, scale,
     gerr, dist = _face_measures(V, F, coords, axes, S_face, ~singular)
 
     cv = np.flatnonzero(cone)
-    dl = np.flatnonzero(core_s & (wind != 0).any(axis=1))
+    dl = np.flatnonzero(core_s & winds)
     return PeriodicParameterization(
         coords=coords, singular=singular,
         cones=tuple((int(v), float(index[v])) for v in cv),
