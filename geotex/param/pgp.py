@@ -344,11 +344,8 @@ def _energy(I, J, T, weight, n):
     br = np.concatenate([ehi, elo, verts])
     bc = np.concatenate([elo, ehi, verts])
     src = np.argsort(br * n + bc)                                    # keys are unique
-    blocks = np.empty((src.size, 4, 4))
-    lower, upper, own = src < E, (src >= E) & (src < 2 * E), src >= 2 * E
-    blocks[lower] = L[src[lower]]
-    blocks[upper] = np.transpose(L[src[upper] - E], (0, 2, 1))
-    blocks[own] = diag[src[own] - 2 * E][:, None, None] * np.eye(4)
+    blocks = np.concatenate([L, np.transpose(L, (0, 2, 1)),
+                             diag[:, None, None] * np.eye(4)])[src]
     indptr = np.searchsorted(br[src], np.arange(n + 1))
     A = sp.bsr_matrix((blocks, bc[src], indptr), shape=(4 * n, 4 * n), blocksize=(4, 4)).tocsr()
     A.eliminate_zeros()          # exact zeros: u and v blocks that do not couple
