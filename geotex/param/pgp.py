@@ -300,19 +300,16 @@ def _transfers(V, F, k, arms, S_face):
     its entries are gathered from ``(0, +-cos, +-sin)`` by :data:`_TCODES`.
     """
     m = F.shape[0]
-    I, J, T = [], [], []
+    T = np.empty((3 * m, 4, 4))
     vals = np.zeros((m, 9))
-    for ca, cb in ((0, 1), (1, 2), (2, 0)):
-        i, j = F[:, ca], F[:, cb]
-        om = (2.0 * np.pi) * _arm_steps(arms, V[j] - V[i], S_face)
+    for e, (ca, cb) in enumerate(((0, 1), (1, 2), (2, 0))):
+        om = (2.0 * np.pi) * _arm_steps(arms, V[F[:, cb]] - V[F[:, ca]], S_face)
         c, s = np.cos(om), np.sin(om)
         vals[:, 1], vals[:, 2], vals[:, 3], vals[:, 4] = c[:, 0], s[:, 0], c[:, 1], s[:, 1]
         vals[:, 5:] = -vals[:, 1:5]
         code = _TCODES[4 * k[:, cb] + k[:, ca]]
-        T.append(np.take_along_axis(vals, code, axis=1).reshape(m, 4, 4))
-        I.append(i)
-        J.append(j)
-    return np.concatenate(I), np.concatenate(J), np.concatenate(T)
+        T[e * m:(e + 1) * m] = np.take_along_axis(vals, code, axis=1).reshape(m, 4, 4)
+    return F.T.ravel(), F[:, [1, 2, 0]].T.ravel(), T
 
 
 def _energy(I, J, T, weight, n):
