@@ -132,7 +132,7 @@ def _area_mask(faces, m: int) -> np.ndarray:
     return area
 
 
-def _previous_residual(previous, V, F, m) -> float:
+def _previous_residual(previous, V, F) -> float:
     """The previous parameterization's seam residual (recomputed when not stored)."""
     value = getattr(previous, "seam_residual", None)
     if value is None:
@@ -306,7 +306,7 @@ def updated_parameterization(V, F, previous, field, *, scale,
     ef, eg = conn.faces[:, 0], conn.faces[:, 1]
     edges = np.flatnonzero((core_s[ef] | core_s[eg]) & ~(sing_s[ef] | sing_s[eg]))
     residual = float(_edge_residuals(fin, conn, st.slots, edges).max()) if edges.size else 0.0
-    residual = max(residual, _previous_residual(previous, V, F, m))
+    residual = max(residual, _previous_residual(previous, V, F))
     S_face = S[F].mean(axis=1)
     gerr, dist = _face_measures(V, F, coords, axes, S_face, ~singular)
 
