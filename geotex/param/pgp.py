@@ -572,22 +572,25 @@ def _face_measures(V, F, coords, axes, S_face, good) -> tuple[float, dict]:
     """``gradient_error`` and ``distortion`` over the faces ``good`` (see the class).
 
     Works in the frame ``(t1, t2)`` of each face with ``t1`` along its first
-    edge (both measures are frame-invariant), so it needs no face connection:
-    the tiles' gradients from the corner coordinates against the field's
-    ``a / S`` and ``(n x a) / S``.
+    edge ``e1`` and ``t2 = n x t1`` (both measures are frame-invariant), from
+    dot products only, so it needs no face connection: the tiles' gradients
+    from the corner coordinates against the field's ``a / S`` and
+    ``(n x a) / S``.  With ``e1 = (x1, 0)``, ``e2 = (x2, y2)`` and
+    ``(e1 x e2) x e1 = e2 |e1|^2 - e1 (e1 . e2)``.
     """
     P = V[F[good]]
     e1, e2 = P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]
-    x1 = np.sqrt(np.einsum("ij,ij->i", e1, e1))
-    t1 = e1 / x1[:, None]
     nrm = _cross(e1, e2)
     area2 = np.sqrt(np.einsum("ij,ij->i", nrm, nrm))
-    t2 = _cross(nrm / area2[:, None], t1)
+    e11, e12 = np.einsum("ij,ij->i", e1, e1), np.einsum("ij,ij->i", e1, e2)
     a = axes[good]
+    ae1, ae2 = np.einsum("ij,ij->i", a, e1), np.einsum("ij,ij->i", a, e2)
     S = S_face[good]
-    # a = (a1, a2) and n x a = (-a2, a1) in the frame; e1 = (x1, 0), e2 = (x2, y2)
-    a1, a2 = np.einsum("ij,ij->i", a, t1) / S, np.einsum("ij,ij->i", a, t2) / S
-    x2, y2 = np.einsum("ij,ij->i", e2, t1), np.einsum("ij,ij->i", e2, t2)
+    x1 = np.sqrt(e11)
+    x2, y2 = e12 / x1, area2 / x1
+    # a = (a1, a2) and n x a = (-a2, a1) in the frame, over S
+    a1 = ae1 / (x1 * S)
+    a2 = (ae2 * e11 - ae1 * e12) / (area2 * x1 * S)
     C = coords[good]
     dC1, dC2 = C[:, 1] - C[:, 0], C[:, 2] - C[:, 0]                   # (k, 2 coords)
     g1 = dC1 / x1[:, None]                                            # d/dt1 of (s, t)
