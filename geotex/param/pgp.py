@@ -561,14 +561,7 @@ def _seam_residual(coords, conn, slots, ok_edge) -> float:
     return float(_edge_residuals(coords, conn, slots, edges).max())
 
 
-def _cross(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """Row-wise cross product of (k, 3) arrays (``np.cross`` without its overhead)."""
-    return np.stack([x[:, 1] * y[:, 2] - x[:, 2] * y[:, 1],
-                     x[:, 2] * y[:, 0] - x[:, 0] * y[:, 2],
-                     x[:, 0] * y[:, 1] - x[:, 1] * y[:, 0]], axis=1)
-
-
-def _face_measures(V, F, coords, axes, S_face, good) -> tuple[float, dict]:
+def _face_measures(V, F, coords, axes, S_face, good, areas) -> tuple[float, dict]:
     """``gradient_error`` and ``distortion`` over the faces ``good`` (see the class).
 
     Works in the frame ``(t1, t2)`` of each face with ``t1`` along its first
@@ -576,12 +569,12 @@ def _face_measures(V, F, coords, axes, S_face, good) -> tuple[float, dict]:
     dot products only, so it needs no face connection: the tiles' gradients
     from the corner coordinates against the field's ``a / S`` and
     ``(n x a) / S``.  With ``e1 = (x1, 0)``, ``e2 = (x2, y2)`` and
-    ``(e1 x e2) x e1 = e2 |e1|^2 - e1 (e1 . e2)``.
+    ``(e1 x e2) x e1 = e2 |e1|^2 - e1 (e1 . e2)``.  ``areas`` (m,): the face areas.
     """
     P = V[F[good]]
     e1, e2 = P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]
-    nrm = _cross(e1, e2)
-    area2 = np.sqrt(np.einsum("ij,ij->i", nrm, nrm))
+    area = areas[good]
+    area2 = 2.0 * area
     e11, e12 = np.einsum("ij,ij->i", e1, e1), np.einsum("ij,ij->i", e1, e2)
     a = axes[good]
     ae1, ae2 = np.einsum("ij,ij->i", a, e1), np.einsum("ij,ij->i", a, e2)
@@ -596,7 +589,6 @@ def _face_measures(V, F, coords, axes, S_face, good) -> tuple[float, dict]:
     g1 = dC1 / x1[:, None]                                            # d/dt1 of (s, t)
     g2 = (dC2 - x2[:, None] * g1) / y2[:, None]                       # d/dt2
     err = (np.hypot(g1[:, 0] - a1, g2[:, 0] - a2) + np.hypot(g1[:, 1] + a2, g2[:, 1] - a1)) * S
-    area = 0.5 * area2
     gerr = float(np.average(err, weights=area)) if err.size else 0.0
     size_err = np.maximum(np.abs(np.hypot(g1[:, 0], g2[:, 0]) * S - 1.0),
                           np.abs(np.hypot(g1[:, 1], g2[:, 1]) * S - 1.0))
@@ -781,7 +773,7 @@ def _extracted(st: _Setup, X: np.ndarray, lams) -> PeriodicParameterization:
     # anchored at corner 0, so the face shows one correctly sized, oriented
     # piece of the tile (a small jump at its edges) rather than a squeezed period
     coords[singular] = raw[singular, :1] + pred[singular]
-    gerr, dist = _face_measures(st.V, F, coords, st.arms[:, 0], st.S_face, ~singular)
+    gerr, dist = _face_measures(st.V, F, coords, st.arms[:, 0], st.S_face, ~singular, conn.areas)
 
     cv = np.flatnonzero(cone)
     disl = np.flatnonzero(winds)

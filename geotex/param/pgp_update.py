@@ -269,7 +269,8 @@ def updated_parameterization(V, F, previous, field, *, scale,
     functions = np.array(previous.functions, dtype=np.float64)
     new_frame = area[sub[ref]]
     functions[verts[new_frame]] = X[new_frame]
-    vmass = np.bincount(F.ravel(), weights=np.repeat(face_areas(V, F) / 3.0, 3), minlength=n)
+    areas = face_areas(V, F)
+    vmass = np.bincount(F.ravel(), weights=np.repeat(areas / 3.0, 3), minlength=n)
     vanish = _vanishing(functions, vmass)
 
     # extraction on the submesh; kept for the recomputed faces
@@ -308,7 +309,7 @@ def updated_parameterization(V, F, previous, field, *, scale,
     residual = float(_edge_residuals(fin, conn, st.slots, edges).max()) if edges.size else 0.0
     residual = max(residual, _previous_residual(previous, V, F))
     S_face = S[F].mean(axis=1)
-    gerr, dist = _face_measures(V, F, coords, axes, S_face, ~singular)
+    gerr, dist = _face_measures(V, F, coords, axes, S_face, ~singular, areas)
 
     cv = np.flatnonzero(cone)
     dl = np.flatnonzero(core_s & winds)
