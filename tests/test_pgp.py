@@ -327,6 +327,59 @@ def test_local_update_keeps_the_outside_and_follows_the_new_field_inside():
     assert r.gradient_error < max(2 * full.gradient_error, 0.3)
 
 
+@pytest.mark.parametrize("multilevel", [False, True])
+def test_local_update_is_local_and_agrees_with_a_global_check(monkeypatch, multilevel, tmp_path):
+    import geotex.param.pgp_update as pgp_update
+    from geotex.fields.singularities import vertex_indices
+    from geotex.param.pgp_store import load_parameterization, save_parameterization
+    from geotex.patches.effect import effect_area
+
+    if multilevel:
+        monkeypatch.setattr(pgp_update, "LOCAL_MULTILEVEL_VERTICES", 0)
+    V, F = torus(n_major=64, n_minor=26)
+    field = smooth_direction_field(V, F, symmetry=4)
+    p = periodic_parameterization(V, F, field, scale=0.15)
+    area = effect_area(V, F, [0], max_distance=0.9)
+    inside = np.zeros(len(F), bool)
+    inside[area] = True
+    vec = field.vectors.copy()
+    N = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    N /= np.linalg.norm(N, axis=1, keepdims=True)
+    vec[inside] = 0.6 * vec[inside] + 0.8 * np.cross(N[inside], vec[inside])
+    scale = np.full(len(V), 0.15)
+    scale[F[area]] = 0.12                                  # a new tile size in the area
+    q = pgp_update.updated_parameterization(V, F, p, vec, scale=scale, faces=area)
+    # every interior edge without a singular face, checked independently
+    assert _edge_residuals(q, V, F).max() <= 1e-6
+    assert q.seam_residual <= 1e-6
+    # the cones are those of the field the update uses (new inside, previous outside)
+    used = np.where(inside[:, None], vec, p.axes)
+    index = np.nan_to_num(vertex_indices(V, F, used, symmetry=4))
+    assert [v for v, _ in q.cones] == np.flatnonzero(index).tolist()
+    assert q.index_sum == pytest.approx(0.0)
+    # outside the area and its ring nothing moves; the axes inside follow the field
+    ring = np.zeros(len(V), bool)
+    ring[F[area]] = True
+    far = ~ring[F].any(axis=1)
+    assert np.array_equal(q.coords[far], p.coords[far])
+    assert np.array_equal(q.singular[far], p.singular[far])
+    assert np.array_equal(q.axes[~inside], p.axes[~inside])
+    turn = np.degrees(np.arccos(np.clip(np.abs(np.einsum("ij,ij->i", q.axes, vec)
+                                               / np.linalg.norm(vec, axis=1)), 0, 1)))
+    assert (np.minimum(turn, 90 - turn)[inside] < 1e-3).all()
+    assert q.gradient_error < 0.3
+    # the functions are in the frames of the returned axes: a second update with
+    # the same field changes nothing
+    r = pgp_update.updated_parameterization(V, F, q, vec, scale=scale, faces=area)
+    assert np.array_equal(r.coords[~inside], q.coords[~inside])
+    assert np.abs(r.coords - q.coords).max() < 0.05
+    # a PGP file (no residual stored in it) gives the same update
+    save_parameterization(tmp_path / "p.npz", p)
+    f = load_parameterization(tmp_path / "p.npz")
+    qf = pgp_update.updated_parameterization(V, F, f, vec, scale=scale, faces=area)
+    assert np.array_equal(qf.coords, q.coords) and qf.seam_residual == q.seam_residual
+
+
 def test_local_update_errors():
     from geotex.param.pgp_update import updated_parameterization
 

@@ -111,6 +111,9 @@ def _rotation_blocks() -> np.ndarray:
 
 
 _P = _rotation_blocks()
+# cos and sin of k quarter turns
+_QCOS = np.array([1.0, 0.0, -1.0, 0.0])
+_QSIN = np.array([0.0, 1.0, 0.0, -1.0])
 # inverse permutation and the sign of the entry it hits: P_k[_PINV[k, d], d] = _PSIGN[k, d]
 _PINV = np.argsort(_PERM, axis=1)
 _PSIGN = np.take_along_axis(_SIGN, _PINV, axis=1)
@@ -220,20 +223,17 @@ def _field_vectors(field, m: int) -> np.ndarray:
     return vec
 
 
-def _corner_rotations(F: np.ndarray, n: int, conn, jump: np.ndarray
+def _corner_rotations(F: np.ndarray, conn, jump: np.ndarray, slots: np.ndarray
                       ) -> tuple[np.ndarray, np.ndarray]:
-    """``k`` per corner (m, 3) from fan walks, and a per-dual-edge 'does not close' mask."""
+    """``k`` per corner (m, 3) from fan walks, and a per-dual-edge 'does not close' mask.
+
+    A vertex's reference corner (``k = 0``) is its first corner in ``F``.
+    """
     m = F.shape[0]
     f, g = conn.faces[:, 0], conn.faces[:, 1]
-    a, b = [], []
-    steps = []
-    for vert in (conn.vertices[:, 0], conn.vertices[:, 1]):
-        ca = 3 * f + np.argmax(F[f] == vert[:, None], axis=1)
-        cb = 3 * g + np.argmax(F[g] == vert[:, None], axis=1)
-        a.append(ca)
-        b.append(cb)
-        steps.append(jump)
-    a, b, st = np.concatenate(a), np.concatenate(b), np.concatenate(steps)
+    a = np.concatenate([3 * f + slots[:, 0], 3 * f + slots[:, 1]])
+    b = np.concatenate([3 * g + slots[:, 2], 3 * g + slots[:, 3]])
+    st = np.concatenate([jump, jump])
     root = 3 * m
     _, ref = np.unique(F.ravel(), return_index=True)
     rows = np.concatenate([a, b, np.full(ref.size, root)])
@@ -246,7 +246,12 @@ def _corner_rotations(F: np.ndarray, n: int, conn, jump: np.ndarray
     pred = pred.astype(np.int64)
     child = np.flatnonzero(pred[:root] >= 0)
     step = np.zeros(root + 1, dtype=np.int64)
-    step[child] = np.asarray(G[pred[child], child]).ravel().astype(np.int64) - 1
+    # the stored value of every tree edge (pred -> child): G is canonical CSR,
+    # so its entries' (row, column) keys are sorted
+    gkey = np.repeat(np.arange(root + 1, dtype=np.int64), np.diff(G.indptr)) * (root + 1)
+    gkey += G.indices
+    pos = np.searchsorted(gkey, pred[child] * (root + 1) + child)
+    step[child] = G.data[pos].astype(np.int64) - 1
     anc = np.where(pred >= 0, pred, root)
     anc[root] = root
     acc = step.copy()
@@ -259,49 +264,87 @@ def _corner_rotations(F: np.ndarray, n: int, conn, jump: np.ndarray
     return k.reshape(m, 3), bad[:half] | bad[half:]
 
 
+def _arm_steps(arms: np.ndarray, d: np.ndarray, S_face: np.ndarray) -> np.ndarray:
+    """``(<a_f, d_f>, <b_f, d_f>) / S_f`` per face, (m, 2): a step in tile units."""
+    a, b = arms[:, 0], arms[:, 1]
+    return np.stack([d[:, 0] * a[:, 0] + d[:, 1] * a[:, 1] + d[:, 2] * a[:, 2],
+                     d[:, 0] * b[:, 0] + d[:, 1] * b[:, 1] + d[:, 2] * b[:, 2]], axis=1) \
+        / S_face[:, None]
+
+
+def _transfer_codes() -> np.ndarray:
+    """``T = P_kj^T D P_ki`` as codes: (16 = 4 kj + ki, 16 entries) indices into
+    ``[0, c0, s0, c1, s1, -c0, -s0, -c1, -s1]`` (``D``: the two rotations)."""
+    src = np.zeros((4, 4), dtype=np.int64)               # D's entries as codes
+    src[0, 0], src[0, 1], src[1, 0], src[1, 1] = 1, 6, 2, 1
+    src[2, 2], src[2, 3], src[3, 2], src[3, 3] = 3, 8, 4, 3
+    negate = np.array([0, 5, 6, 7, 8, 1, 2, 3, 4])
+    out = np.zeros((16, 16), dtype=np.intp)
+    for kj in range(4):
+        for ki in range(4):
+            # P signed permutations: T[a, d] = s_j(a) s_i(d) D[r_j(a), r_i(d)]
+            code = src[_PINV[kj][:, None], _PINV[ki][None, :]]
+            neg = (_PSIGN[kj][:, None] * _PSIGN[ki][None, :]) < 0
+            out[4 * kj + ki] = np.where(neg, negate[code], code).ravel()
+    return out
+
+
+_TCODES = _transfer_codes()
+
+
 def _transfers(V, F, k, arms, S_face):
-    """Per directed face edge ``i -> j``: ``(i, j, T)`` with ``X_j ~ T X_i`` (T orthogonal 4x4)."""
+    """Per directed face edge ``i -> j``: ``(i, j, T)`` with ``X_j ~ T X_i`` (T orthogonal 4x4).
+
+    ``canonical_j = D canonical_i`` with ``D`` the rotations by the field's
+    predicted phase steps and ``canonical = P_k X``, so ``T = P_kj^T D P_ki``;
+    its entries are gathered from ``(0, +-cos, +-sin)`` by :data:`_TCODES`.
+    """
     m = F.shape[0]
-    I, J, T = [], [], []
-    for ca, cb in ((0, 1), (1, 2), (2, 0)):
-        i, j = F[:, ca], F[:, cb]
-        om = 2.0 * np.pi * np.einsum("fij,fj->fi", arms, V[j] - V[i]) / S_face[:, None]
+    T = np.empty((3 * m, 4, 4))
+    vals = np.zeros((m, 9))
+    for e, (ca, cb) in enumerate(((0, 1), (1, 2), (2, 0))):
+        om = (2.0 * np.pi) * _arm_steps(arms, V[F[:, cb]] - V[F[:, ca]], S_face)
         c, s = np.cos(om), np.sin(om)
-        D = np.zeros((m, 4, 4))
-        D[:, 0, 0], D[:, 0, 1], D[:, 1, 0], D[:, 1, 1] = c[:, 0], -s[:, 0], s[:, 0], c[:, 0]
-        D[:, 2, 2], D[:, 2, 3], D[:, 3, 2], D[:, 3, 3] = c[:, 1], -s[:, 1], s[:, 1], c[:, 1]
-        # canonical_j = D canonical_i, canonical = P_k X  =>  X_j = Pj^T D Pi X_i
-        # P are signed permutations: T[a, d] = s_j(a) s_i(d) D[r_j(a), r_i(d)]
-        kj, ki = k[:, cb], k[:, ca]
-        rows, cols = _PINV[kj], _PINV[ki]
-        sign = _PSIGN[kj][:, :, None] * _PSIGN[ki][:, None, :]
-        T.append(D[np.arange(m)[:, None, None], rows[:, :, None], cols[:, None, :]] * sign)
-        I.append(i)
-        J.append(j)
-    return np.concatenate(I), np.concatenate(J), np.concatenate(T)
+        vals[:, 1], vals[:, 2], vals[:, 3], vals[:, 4] = c[:, 0], s[:, 0], c[:, 1], s[:, 1]
+        vals[:, 5:] = -vals[:, 1:5]
+        code = _TCODES[4 * k[:, cb] + k[:, ca]]
+        T[e * m:(e + 1) * m] = np.take_along_axis(vals, code, axis=1).reshape(m, 4, 4)
+    return F.T.ravel(), F[:, [1, 2, 0]].T.ravel(), T
 
 
 def _energy(I, J, T, weight, n):
     """The 4n x 4n symmetric energy: sum w |X_j - T X_i|^2 over directed face edges.
 
-    Assembled block-wise (4x4 blocks, duplicates summed after one sort of the
-    block keys) and returned as CSR without stored zeros.
+    The off-diagonal 4x4 block of every mesh edge ``(lo, hi)`` (row ``hi``)
+    sums ``-w T`` of its directed face edges ``lo -> hi`` and ``-w T^T`` of
+    those ``hi -> lo`` (one stable sort of the edge keys, then a segmented
+    sum); the diagonal blocks are ``w I``.  The blocks are laid out as a
+    block-sparse matrix in row order (a second sort, of one key per block)
+    and returned as CSR without stored zeros.
     """
     w = np.tile(weight, 3)
+    fwd = I < J
+    lo, hi = np.where(fwd, I, J), np.where(fwd, J, I)
+    key = lo * n + hi
+    order = np.argsort(key, kind="stable")
+    ks = key[order]
+    start = np.flatnonzero(np.diff(ks, prepend=-1))                  # keys are >= 0
+    Ts = T[order]
+    back = ~fwd[order]
+    Ts[back] = np.transpose(Ts[back], (0, 2, 1))
+    Ts *= -w[order][:, None, None]
+    L = np.add.reduceat(Ts, start, axis=0) if start.size else Ts      # (E, 4, 4) at (hi, lo)
+    elo, ehi = lo[order][start], hi[order][start]
     diag = np.bincount(I, weights=w, minlength=n) + np.bincount(J, weights=w, minlength=n)
-    Tt = np.transpose(T, (0, 2, 1))
+    E = start.size
     verts = np.arange(n)
-    br = np.concatenate([I, J, verts])
-    bc = np.concatenate([J, I, verts])
-    data = np.concatenate([-w[:, None, None] * Tt, -w[:, None, None] * T,
-                           diag[:, None, None] * np.eye(4)[None]])
-    ukey, inv = np.unique(br * n + bc, return_inverse=True)
-    flat = (inv.ravel()[:, None] * 16 + np.arange(16)).ravel()
-    blocks = np.bincount(flat, weights=data.ravel(), minlength=ukey.size * 16)
-    blocks = blocks.reshape(-1, 4, 4)
-    rows, cols = ukey // n, ukey % n
-    indptr = np.searchsorted(rows, np.arange(n + 1))
-    A = sp.bsr_matrix((blocks, cols, indptr), shape=(4 * n, 4 * n), blocksize=(4, 4)).tocsr()
+    br = np.concatenate([ehi, elo, verts])
+    bc = np.concatenate([elo, ehi, verts])
+    src = np.argsort(br * n + bc)                                    # keys are unique
+    blocks = np.concatenate([L, np.transpose(L, (0, 2, 1)),
+                             diag[:, None, None] * np.eye(4)])[src]
+    indptr = np.searchsorted(br[src], np.arange(n + 1))
+    A = sp.bsr_matrix((blocks, bc[src], indptr), shape=(4 * n, 4 * n), blocksize=(4, 4)).tocsr()
     A.eliminate_zeros()          # exact zeros: u and v blocks that do not couple
     return A
 
@@ -359,8 +402,8 @@ def _solve_direct(A: sp.csr_matrix, vmass: np.ndarray, n: int, rng) -> tuple[np.
 def _clusters(V, I, J, n, size):
     """Vertex clusters: cells of a grid of step ``size``, split into edge-connected parts."""
     cell = np.floor((V - V.min(axis=0)) / size).astype(np.int64)
-    _, key = np.unique(cell, axis=0, return_inverse=True)
-    key = key.ravel()
+    dims = cell.max(axis=0) + 1
+    key = (cell[:, 0] * dims[1] + cell[:, 1]) * dims[2] + cell[:, 2]      # one id per cell
     same = key[I] == key[J]
     G = sp.csr_matrix((np.ones(int(same.sum()), np.int8), (I[same], J[same])), shape=(n, n))
     return connected_components(G, directed=False)
@@ -395,15 +438,25 @@ def _prolongation(I, J, T, n, label, count):
     step = T[eidx]
     step[~fwd] = np.transpose(step[~fwd], (0, 2, 1))            # inverse = transpose
     Q[cc] = step
+    # depth below the cluster's first vertex (pointer jumping on integers), then
+    # Q_v = step_v Q_parent level by level: every vertex is multiplied once
     anc = np.where(pred >= 0, pred, root)
     anc[root] = root
+    depth = np.zeros(n + 1, dtype=np.int64)
+    depth[cc] = 1
     while np.any(anc[:n] != root):
-        Q = np.einsum("vab,vbc->vac", Q, Q[anc])
+        depth = depth + depth[anc]
         anc = anc[anc]
+    order = cc[np.argsort(depth[cc], kind="stable")]
+    bounds = np.searchsorted(depth[order], np.arange(1, int(depth.max()) + 2))
+    for lo, hi in zip(bounds[:-1], bounds[1:]):
+        v = order[lo:hi]
+        Q[v] = np.matmul(Q[v], Q[pred[v]])
     Q = Q[:n]
-    r = (4 * np.arange(n)[:, None, None] + np.arange(4)[None, :, None]).repeat(4, axis=2)
-    c = (4 * label[:, None, None] + np.arange(4)[None, None, :]).repeat(4, axis=1)
-    return sp.csr_matrix((Q.ravel(), (r.ravel(), c.ravel())), shape=(4 * n, 4 * count))
+    # CSR directly: row 4v + a holds Q_v[a, :] in the columns of v's cluster
+    cols = np.broadcast_to(4 * label[:, None, None] + np.arange(4), (n, 4, 4))
+    return sp.csr_matrix((Q.ravel(), cols.ravel(), np.arange(0, 16 * n + 1, 4)),
+                         shape=(4 * n, 4 * count))
 
 
 def _solve_multilevel(A, vmass, V, I, J, T, n, rng, cell, sweeps):
@@ -424,11 +477,11 @@ def _solve_multilevel(A, vmass, V, I, J, T, n, rng, cell, sweeps):
 
 
 def _rotate(coords: np.ndarray, k: np.ndarray) -> np.ndarray:
-    """Apply ``U + i V = i^k (u + i v)`` to (..., 2) coordinates."""
+    """Apply ``U + i V = i^k (u + i v)`` to (..., 2) coordinates (exact: factors 0, +-1)."""
     u, v = coords[..., 0], coords[..., 1]
-    U = np.choose(k, [u, -v, -u, v])
-    W = np.choose(k, [v, u, -v, -u])
-    return np.stack([U, W], axis=-1)
+    k = np.mod(k, 4)
+    c, s = _QCOS[k], _QSIN[k]
+    return np.stack([c * u - s * v, s * u + c * v], axis=-1)
 
 
 def _weighted_quantile(x: np.ndarray, w: np.ndarray, q: float) -> float:
@@ -447,7 +500,18 @@ def _distortion(size_err: np.ndarray, angle: np.ndarray, area: np.ndarray) -> di
             "angle_p95_deg": _weighted_quantile(angle, area, 0.95)}
 
 
-def _shared_edge_prediction(F, conn, k, pred):
+def _edge_slots(F: np.ndarray, conn) -> np.ndarray:
+    """Per interior edge ``(lo, hi)`` of ``conn``: the slots of ``lo`` and ``hi`` in its
+    face ``f`` and in its face ``g``, (e, 4) int64 (``f`` holds ``lo -> hi``)."""
+    f, g = conn.faces[:, 0], conn.faces[:, 1]
+    lo, hi = conn.vertices[:, 0], conn.vertices[:, 1]
+    Ff, Fg = F[f], F[g]
+    return np.stack([np.argmax(Ff == lo[:, None], axis=1), np.argmax(Ff == hi[:, None], axis=1),
+                     np.argmax(Fg == lo[:, None], axis=1), np.argmax(Fg == hi[:, None], axis=1)],
+                    axis=1)
+
+
+def _shared_edge_prediction(conn, slots, k, pred):
     """Average the two faces' predicted steps of every interior edge (eq. 3's alpha_ij).
 
     ``pred[f, c]`` is the step from corner ``c`` to ``c + 1`` in ``f``'s
@@ -457,33 +521,118 @@ def _shared_edge_prediction(F, conn, k, pred):
     """
     out = pred.copy()
     f, g = conn.faces[:, 0], conn.faces[:, 1]
-    lo, hi = conn.vertices[:, 0], conn.vertices[:, 1]
-    cf = np.argmax(F[f] == lo[:, None], axis=1)          # f holds lo -> hi at slot cf
-    cg = np.argmax(F[g] == hi[:, None], axis=1)          # g holds hi -> lo at slot cg
+    cf = slots[:, 0]                                     # f holds lo -> hi at slot cf
+    cg = slots[:, 3]                                     # g holds hi -> lo at slot cg
     kf = k[f, cf]
-    kg = k[g, (cg + 1) % 3]                              # corner of lo in g
-    back_f = _rotate(pred[f, cf], (4 - kf) % 4)
-    back_g = _rotate(-pred[g, cg], (4 - kg) % 4)
+    kg = k[g, slots[:, 2]]                               # corner of lo in g
+    back_f = _rotate(pred[f, cf], -kf)
+    back_g = _rotate(-pred[g, cg], -kg)
     mean = 0.5 * (back_f + back_g)
     out[f, cf] = _rotate(mean, kf)
     out[g, cg] = -_rotate(mean, kg)
     return out
 
 
-def _seam_residual(coords, F, conn, ok_edge) -> float:
-    f, g = conn.faces[ok_edge, 0], conn.faces[ok_edge, 1]
-    if f.size == 0:
-        return 0.0
-    lohi = conn.vertices[ok_edge]
-    cf = np.stack([coords[f, np.argmax(F[f] == lohi[:, [s]], axis=1)] for s in (0, 1)], 1)
-    cg = np.stack([coords[g, np.argmax(F[g] == lohi[:, [s]], axis=1)] for s in (0, 1)], 1)
+def _edge_residuals(coords, conn, slots, edges) -> np.ndarray:
+    """Deviation from the nearest grid symmetry across each of ``edges`` (ids into ``conn``)."""
+    f, g = conn.faces[edges, 0], conn.faces[edges, 1]
+    sl = slots[edges]
+    # the two corners (lo, hi) of the edge in f and in g, each (e, 2) = (s, t)
+    fl, fh = coords[f, sl[:, 0]], coords[f, sl[:, 1]]
+    gl, gh = coords[g, sl[:, 2]], coords[g, sl[:, 3]]
     best = np.full(f.size, np.inf)
-    for r in range(4):
-        d = cg - _rotate(cf, np.full(cf.shape[:2], r))          # (e, 2, 2)
-        t = np.rint(0.5 * (d[:, 0] + d[:, 1]))
-        res = np.abs(d - t[:, None, :]).max(axis=(1, 2))
-        best = np.minimum(best, res)
-    return float(best.max())
+    for c, s in ((1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0)):    # i^r (s + i t)
+        dul = gl[:, 0] - (c * fl[:, 0] - s * fl[:, 1])
+        duh = gh[:, 0] - (c * fh[:, 0] - s * fh[:, 1])
+        dvl = gl[:, 1] - (s * fl[:, 0] + c * fl[:, 1])
+        dvh = gh[:, 1] - (s * fh[:, 0] + c * fh[:, 1])
+        tu = np.rint(0.5 * (dul + duh))
+        tv = np.rint(0.5 * (dvl + dvh))
+        res = np.maximum(np.maximum(np.abs(dul - tu), np.abs(duh - tu)),
+                         np.maximum(np.abs(dvl - tv), np.abs(dvh - tv)))
+        np.minimum(best, res, out=best)
+    return best
+
+
+def _seam_residual(coords, conn, slots, ok_edge) -> float:
+    edges = np.flatnonzero(ok_edge)
+    if edges.size == 0:
+        return 0.0
+    return float(_edge_residuals(coords, conn, slots, edges).max())
+
+
+def _face_measures(V, F, coords, axes, S_face, good, areas) -> tuple[float, dict]:
+    """``gradient_error`` and ``distortion`` over the faces ``good`` (see the class).
+
+    Works in the frame ``(t1, t2)`` of each face with ``t1`` along its first
+    edge ``e1`` and ``t2 = n x t1`` (both measures are frame-invariant), from
+    dot products only, so it needs no face connection: the tiles' gradients
+    from the corner coordinates against the field's ``a / S`` and
+    ``(n x a) / S``.  With ``e1 = (x1, 0)``, ``e2 = (x2, y2)`` and
+    ``(e1 x e2) x e1 = e2 |e1|^2 - e1 (e1 . e2)``.  ``areas`` (m,): the face areas.
+    """
+    P = V[F[good]]
+    e1, e2 = P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]
+    area = areas[good]
+    area2 = 2.0 * area
+    e11, e12 = np.einsum("ij,ij->i", e1, e1), np.einsum("ij,ij->i", e1, e2)
+    a = axes[good]
+    ae1, ae2 = np.einsum("ij,ij->i", a, e1), np.einsum("ij,ij->i", a, e2)
+    S = S_face[good]
+    x1 = np.sqrt(e11)
+    x2, y2 = e12 / x1, area2 / x1
+    # a = (a1, a2) and n x a = (-a2, a1) in the frame, over S
+    a1 = ae1 / (x1 * S)
+    a2 = (ae2 * e11 - ae1 * e12) / (area2 * x1 * S)
+    C = coords[good]
+    dC1, dC2 = C[:, 1] - C[:, 0], C[:, 2] - C[:, 0]                   # (k, 2 coords)
+    g1 = dC1 / x1[:, None]                                            # d/dt1 of (s, t)
+    g2 = (dC2 - x2[:, None] * g1) / y2[:, None]                       # d/dt2
+    err = (np.hypot(g1[:, 0] - a1, g2[:, 0] - a2) + np.hypot(g1[:, 1] + a2, g2[:, 1] - a1)) * S
+    gerr = float(np.average(err, weights=area)) if err.size else 0.0
+    size_err = np.maximum(np.abs(np.hypot(g1[:, 0], g2[:, 0]) * S - 1.0),
+                          np.abs(np.hypot(g1[:, 1], g2[:, 1]) * S - 1.0))
+    angle = np.degrees(np.abs(np.arctan2(g1[:, 0] * a2 - g2[:, 0] * a1,
+                                         g1[:, 0] * a1 + g2[:, 0] * a2)))
+    return gerr, _distortion(size_err, angle, area)
+
+
+def _corner_coordinates(st, X):
+    """Eq. 4 on ``st``'s mesh: raw coordinates, predicted steps, coordinates, windings.
+
+    Returns ``raw`` (m, 3, 2) (per corner ``i^k arg X / 2 pi``), ``pred``
+    (m, 3, 2) (the field's local map from corner 0), ``coords`` (m, 3, 2)
+    (corners 1 and 2 placed from corner 0 with the edges' integers) and
+    ``wind`` (m, 2) int64.
+    """
+    V, F, k, arms, S_face = st.V, st.F, st.k, st.arms, st.S_face
+    raw_v = np.stack([np.arctan2(X[:, 1], X[:, 0]), np.arctan2(X[:, 3], X[:, 2])],
+                     axis=1) / (2.0 * np.pi)                            # (n, 2)
+    raw = _rotate(raw_v[F], k)                                          # (m, 3, 2)
+    P = V[F]
+    pred = np.zeros((F.shape[0], 3, 2))                                  # (m, 3, 2)
+    pred[:, 1] = _arm_steps(arms, P[:, 1] - P[:, 0], S_face)
+    pred[:, 2] = _arm_steps(arms, P[:, 2] - P[:, 0], S_face)
+    omega = _shared_edge_prediction(st.conn, st.slots, k, np.roll(pred, -1, axis=1) - pred)
+    step = np.rint(np.roll(raw, -1, axis=1) - raw - omega)          # slot c: corner c -> c+1
+    coords = raw.copy()
+    coords[:, 1] = raw[:, 1] - step[:, 0]
+    coords[:, 2] = raw[:, 2] + step[:, 2]
+    wind = (step[:, 0] + step[:, 1] + step[:, 2]).astype(np.int64)    # (m, 2)
+    return raw, pred, coords, wind
+
+
+def _touching(mask: np.ndarray, F: np.ndarray) -> np.ndarray:
+    """Faces with a corner where the vertex ``mask`` holds, (m,) bool."""
+    return mask[F[:, 0]] | mask[F[:, 1]] | mask[F[:, 2]]
+
+
+def _vanishing(X: np.ndarray, vmass: np.ndarray) -> np.ndarray:
+    """Vertices whose periodic function has no reliable phase, (n,) bool."""
+    mu = np.hypot(X[:, 0], X[:, 1])
+    mv = np.hypot(X[:, 2], X[:, 3])
+    rms = np.sqrt(np.sum(vmass * (mu ** 2 + mv ** 2)) / max(2 * vmass.sum(), 1e-300))
+    return np.minimum(mu, mv) < VANISHING_MODULUS * rms
 
 
 def periodic_parameterization(V, F, field, *, scale, solver: str = "auto",
@@ -566,6 +715,7 @@ class _Setup:
     open_fan: np.ndarray      # dual edges whose fan matching does not close
     weight: np.ndarray        # (m,) relative face areas
     vmass: np.ndarray         # (n,)
+    slots: np.ndarray         # (e, 4) corner slots of the interior edges (_edge_slots)
 
 
 def _setup(V, F, field, scale) -> _Setup:
@@ -582,78 +732,51 @@ def _setup(V, F, field, scale) -> _Setup:
     if bow.size:
         raise InputError(f"F has {bow.size} non-manifold vertex(es), first {int(bow[0])}; "
                          "repair the mesh first, e.g. with geotex repair")
-    S = _scale_per_vertex(scale, n)
-    vectors = _field_vectors(field, m)
+    return _prepared(V, F, conn, _field_vectors(field, m), _scale_per_vertex(scale, n))
+
+
+def _prepared(V, F, conn, vectors, S) -> _Setup:
+    """Comb the field and find the corner rotations on a checked mesh (``conn`` its
+    connection, ``vectors`` (m, 3) and ``S`` (n,) checked)."""
+    n = V.shape[0]
     combed = comb_direction_field(V, F, vectors, symmetry=4, connection=conn)
     jump = np.zeros(conn.edges.size, dtype=np.int64)
     jump[np.searchsorted(conn.edges, combed.cut_edges)] = combed.jumps
     theta = tangent_angles(conn.T1, conn.T2, combed.vectors)
     a = np.cos(theta)[:, None] * conn.T1 + np.sin(theta)[:, None] * conn.T2
     b = np.cross(conn.N, a)
-    k, open_fan = _corner_rotations(F, n, conn, jump)
+    slots = _edge_slots(F, conn)
+    k, open_fan = _corner_rotations(F, conn, jump, slots)
     weight = conn.areas / conn.areas.mean()
     vmass = np.bincount(F.ravel(), weights=np.repeat(weight / 3.0, 3), minlength=n)
     return _Setup(V, F, conn, combed, np.stack([a, b], axis=1), S, S[F].mean(axis=1), k,
-                  open_fan, weight, vmass)
+                  open_fan, weight, vmass, slots)
 
 
 def _extracted(st: _Setup, X: np.ndarray, lams) -> PeriodicParameterization:
     """Per-corner coordinates, singular faces and the measures (eq. 4)."""
-    V, F, conn, k, arms, S_face = st.V, st.F, st.conn, st.k, st.arms, st.S_face
-    m = F.shape[0]
-    vmass = st.vmass
-    # extraction (eq. 4)
-    zu, zv = X[:, 0] + 1j * X[:, 1], X[:, 2] + 1j * X[:, 3]
-    raw_v = np.stack([np.angle(zu), np.angle(zv)], axis=1) / (2.0 * np.pi)      # (n, 2)
-    raw = _rotate(raw_v[F], k)                                                  # (m, 3, 2)
-    P = V[F]
-    pred = np.einsum("fij,fcj->fci", arms, P - P[:, [0]]) / S_face[:, None, None]  # (m, 3, 2)
-    omega = _shared_edge_prediction(F, conn, k, np.roll(pred, -1, axis=1) - pred)
-    step = np.rint(np.roll(raw, -1, axis=1) - raw - omega)          # slot c: corner c -> c+1
-    coords = raw.copy()
-    coords[:, 1] = raw[:, 1] - step[:, 0]
-    coords[:, 2] = raw[:, 2] + step[:, 2]
-    wind = step.sum(axis=1).astype(np.int64)                          # (m, 2)
-
-    mod = np.minimum(np.abs(zu), np.abs(zv))
-    rms = np.sqrt(np.sum(vmass * (np.abs(zu) ** 2 + np.abs(zv) ** 2)) / max(2 * vmass.sum(),
-                                                                         1e-300))
-    vanish = mod < VANISHING_MODULUS * rms
-    index = vertex_indices(V, F, st.combed.vectors, symmetry=4, connection=conn)
+    F, conn = st.F, st.conn
+    raw, pred, coords, wind = _corner_coordinates(st, X)
+    vanish = _vanishing(X, st.vmass)
+    index = vertex_indices(st.V, F, st.combed.vectors, symmetry=4, connection=conn)
     cone = np.nan_to_num(index) != 0
-    singular = (wind != 0).any(axis=1) | cone[F].any(axis=1) | vanish[F].any(axis=1)
+    winds = (wind[:, 0] != 0) | (wind[:, 1] != 0)
+    singular = winds | _touching(cone, F) | _touching(vanish, F)
     fo, go = conn.faces[st.open_fan, 0], conn.faces[st.open_fan, 1]
     singular[fo] = True
     singular[go] = True
 
     ok_edge = ~(singular[conn.faces[:, 0]] | singular[conn.faces[:, 1]])
-    residual = _seam_residual(coords, F, conn, ok_edge)
+    residual = _seam_residual(coords, conn, st.slots, ok_edge)
     # singular faces: the periodic functions cannot be followed there (a full
     # period can wind inside the face); lay the field's own local map instead,
     # anchored at corner 0, so the face shows one correctly sized, oriented
     # piece of the tile (a small jump at its edges) rather than a squeezed period
     coords[singular] = raw[singular, :1] + pred[singular]
-
-    # gradient error against the field's prediction, per face in its own frame
-    e1, e2 = P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]
-    E = np.stack([np.einsum("fj,fj->f", e, t) for e in (e1, e2) for t in (conn.T1, conn.T2)],
-                 axis=1).reshape(m, 2, 2)                     # rows: edges, cols: frame axes
-    dC = coords[:, 1:] - coords[:, [0]]                       # (m, 2 edges, 2 coords)
-    grad = np.linalg.solve(E, dC)                             # (m, 2 axes, 2 coords)
-    want = np.stack([np.einsum("fij,fj->fi", arms, t) for t in (conn.T1, conn.T2)],
-                    axis=1) / S_face[:, None, None]           # (m, 2 axes, 2 coords)
-    err = np.linalg.norm(grad - want, axis=1).sum(axis=1) * S_face
-    good = ~singular
-    gerr = float(np.average(err[good], weights=conn.areas[good])) if good.any() else 0.0
-    # distortion: tile size along s and t relative to S, angle of grad s to the field
-    size_err = np.abs(np.linalg.norm(grad, axis=1) * S_face[:, None] - 1.0).max(axis=1)
-    gs, ws = grad[:, :, 0], want[:, :, 0]
-    cross = gs[:, 0] * ws[:, 1] - gs[:, 1] * ws[:, 0]
-    angle = np.degrees(np.abs(np.arctan2(cross, np.einsum("fi,fi->f", gs, ws))))
-    dist = _distortion(size_err[good], angle[good], conn.areas[good])
+    gerr, dist = _face_measures(st.V, F, coords, st.arms[:, 0], st.S_face, ~singular, conn.areas)
 
     cv = np.flatnonzero(cone)
-    disl = np.flatnonzero((wind != 0).any(axis=1))
+    disl = np.flatnonzero(winds)
     return PeriodicParameterization(
         coords=np.ascontiguousarray(coords), singular=singular,
         cones=tuple((int(v), float(index[v])) for v in cv),
@@ -661,7 +784,4 @@ def _extracted(st: _Setup, X: np.ndarray, lams) -> PeriodicParameterization:
         index_sum=float(np.sum(index[cv])) if cv.size else 0.0,
         seam_residual=residual, gradient_error=gerr, distortion=dist, scale=st.S,
         eigenvalues=tuple(lams), functions=np.ascontiguousarray(X),
-        axes=np.ascontiguousarray(arms[:, 0]))
-
-
-
+        axes=np.ascontiguousarray(st.arms[:, 0]))
