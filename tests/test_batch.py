@@ -9,6 +9,7 @@ import sys
 import pytest
 
 from geotex.batch import JOBS, Job, Part, read_manifest, read_parts, run
+from geotex.batch.affinity import available_cpus, decode_plan, encode_plan, split_cpus
 from geotex.batch.summary import read_summary
 from geotex.check import check_mesh
 from geotex.cli import main
@@ -207,6 +208,62 @@ def client():
     cluster.close()
 
 
+@pytest.mark.parametrize("cpus, n, groups", [
+    ([0, 1], 2, [[0], [1]]), ([0, 1], 1, [[0, 1]]), ([0, 1], 3, None),
+    ([4, 2, 3], 2, [[2, 3], [4]]), (range(8), 3, [[0, 1, 2], [3, 4, 5], [6, 7]]),
+])
+def test_split_cpus(cpus, n, groups):
+    got = split_cpus(list(cpus), n)
+    assert got == groups
+    if got is not None:
+        assert decode_plan(encode_plan(got)) == got
+
+
+def test_split_cpus_errors():
+    with pytest.raises(InputError, match="at least 1"):
+        split_cpus([0, 1], 0)
+    with pytest.raises(InputError, match="CPU lists"):
+        decode_plan("0,a;1")
+
+
+def _thread_affinities():
+    """Affinity masks of every thread of this (worker) process."""
+    masks = set()
+    for tid in os.listdir("/proc/self/task"):
+        try:
+            masks.add(frozenset(os.sched_getaffinity(int(tid))))
+        except ProcessLookupError:
+            pass
+    return masks
+
+
+def _assert_pinned(client):
+    import cloudpickle
+
+    cloudpickle.register_pickle_by_value(sys.modules[__name__])
+    cpus = available_cpus()
+    workers = client.run(_thread_affinities)
+    assert len(workers) == 2
+    masks = []
+    for addr, per_thread in workers.items():
+        assert len(per_thread) == 1, (addr, per_thread)     # every thread pinned alike
+        masks.append(set(next(iter(per_thread))))
+    # a task runs in a worker thread, which must have the same mask
+    tasks = client.gather([client.submit(_thread_affinities, pure=False, workers=[a])
+                           for a in workers])
+    assert [set(next(iter(t))) for t in tasks] == masks
+    if len(cpus) >= 2:      # pinned: disjoint, together every CPU of this process
+        assert not masks[0] & masks[1]
+        assert masks[0] | masks[1] == set(cpus)
+    else:                   # more workers than CPUs: not pinned
+        assert masks[0] == masks[1] == set(cpus)
+
+
+@pytest.mark.skipif(not hasattr(os, "sched_setaffinity"), reason="no CPU affinity here")
+def test_local_cluster_workers_are_pinned(client):
+    _assert_pinned(client)
+
+
 def test_local_cluster_batch(client, manifest, tmp_path):
     out = tmp_path / "out"
     seen = []
@@ -260,6 +317,8 @@ def test_dead_worker_is_retried_once_then_reported(client, tmp_path, monkeypatch
     assert _statuses(rows) == {"a": "ok", "boom": "failed", "b": "ok"}, rows
     assert "worker running this part died 2 times" in rows[1]["reason"]
     client.wait_for_workers(2, timeout=60)
+    if hasattr(os, "sched_setaffinity"):
+        _assert_pinned(client)          # the restarted worker is pinned again
 
 
 def test_scheduler_address(client, folder, tmp_path):

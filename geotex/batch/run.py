@@ -20,6 +20,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Callable
 
+from geotex.batch.affinity import PLAN_VARIABLE, available_cpus, encode_plan, split_cpus
 from geotex.batch.jobs import JOBS, SHARED_LOADERS
 from geotex.batch.manifest import Part, read_parts
 from geotex.batch.summary import read_summary, write_summary
@@ -39,6 +40,8 @@ ALLOWED_WORKER_DEATHS = 1
 #: eagerly made a 100k-face texture part 1.6x slower here (10.6-11.8 s in a worker
 #: against 6.4-6.7 s in this process; 6.9-8.2 s without it).
 WORKER_ENVIRON = {"OMP_NUM_THREADS": 1, "MKL_NUM_THREADS": 1, "OPENBLAS_NUM_THREADS": 1}
+#: Worker preload of the local cluster: pins each worker process to its CPUs.
+PRELOAD = "geotex.batch.affinity"
 
 
 def default_workers() -> int:
@@ -180,7 +183,7 @@ def _guard_outputs(parts: list[Part], outs: dict) -> None:
                              f"{inputs[os.path.realpath(out)]}; choose another output folder")
 
 
-def local_cluster(workers: int | None = None, *, memory_limit="auto"):
+def local_cluster(workers: int | None = None, *, memory_limit="auto", pin: bool = True):
     """A local Dask cluster of ``workers`` single-threaded processes.
 
     The scheduler allows one worker death per task (the part is rescheduled
@@ -188,12 +191,22 @@ def local_cluster(workers: int | None = None, *, memory_limit="auto"):
     statistical profiler (it samples every thread's stack every 10 ms for a
     dashboard the local cluster does not start).
 
+    With ``pin`` (Linux, and no more workers than CPUs) every worker process is
+    pinned to its own share of the CPUs of this process
+    (:func:`geotex.batch.affinity.split_cpus`: 2 workers on 2 CPUs get one
+    each, 1 worker keeps them all) as it starts, before any task: one part
+    already runs thread pools sized to the CPUs it may use (manifold3d's TBB,
+    the self-intersection test), and unpinned workers would oversubscribe the
+    cores.  A worker restarted after a crash is pinned again.
+
     Parameters
     ----------
     workers : int, optional
         Default: :func:`default_workers`.
     memory_limit : str or int, optional
         Per worker (Dask's default splits the machine's memory between them).
+    pin : bool, optional
+        Pin the workers to disjoint CPUs (default ``True``).
 
     Returns
     -------
@@ -206,12 +219,18 @@ def local_cluster(workers: int | None = None, *, memory_limit="auto"):
     from distributed import LocalCluster
 
     n = default_workers() if workers is None else int(workers)
+    environ = dict(WORKER_ENVIRON)
+    cpus = available_cpus() if pin else None
+    groups = split_cpus(cpus, n) if cpus and n >= 1 else None
+    if groups is not None and n > 1:
+        environ[PLAN_VARIABLE] = encode_plan(groups)
     with dask.config.set({"distributed.scheduler.allowed-failures": ALLOWED_WORKER_DEATHS,
-                          "distributed.nanny.pre-spawn-environ": WORKER_ENVIRON,
+                          "distributed.nanny.pre-spawn-environ": environ,
                           "distributed.worker.profile.enabled": False}):
         return LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
                             dashboard_address=None, memory_limit=memory_limit,
-                            silence_logs=logging.ERROR)
+                            silence_logs=logging.ERROR,
+                            preload=[PRELOAD] if PLAN_VARIABLE in environ else None)
 
 
 def _load_shared(parts: list[Part]) -> tuple[dict, dict]:
