@@ -26,8 +26,10 @@ instead of ``(m, 3, 3)`` temporaries; the edge topology is
 from __future__ import annotations
 
 import numpy as np
+import scipy.linalg.blas as blas
 import scipy.sparse as sp
 
+from geotex.linalg import single_threaded_blas
 from geotex.mesh.topology import EdgeTopology, edge_topology
 
 __all__ = ["cross", "dot", "axis_frames", "edge_encode", "lsq_encode", "BaseGeometry",
@@ -65,13 +67,21 @@ def axis_frames(nrm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     normal component, has no ties on axis-aligned meshes, where round-off would
     otherwise pick the axis.  Fixed in space (not rotation invariant).
     """
-    ca = nrm @ _FRAME_AXIS
-    alt = np.abs(ca) > 0.8
-    X1 = np.broadcast_to(_FRAME_AXIS, nrm.shape).copy()
-    X1[alt] = _FRAME_AXIS_ALT
-    c = np.where(alt, nrm @ _FRAME_AXIS_ALT, ca)
-    X1 -= c[:, None] * nrm
-    X1 /= np.sqrt(dot(X1, X1))[:, None]
+    cols = [np.ascontiguousarray(nrm[:, d]) for d in range(3)]
+    ca = cols[0] * _FRAME_AXIS[0] + cols[1] * _FRAME_AXIS[1] + cols[2] * _FRAME_AXIS[2]
+    alt = np.flatnonzero(np.abs(ca) > 0.8)
+    c = ca
+    c[alt] = (cols[0][alt] * _FRAME_AXIS_ALT[0] + cols[1][alt] * _FRAME_AXIS_ALT[1]
+              + cols[2][alt] * _FRAME_AXIS_ALT[2])
+    X1 = np.empty(nrm.shape)
+    len2 = np.zeros(nrm.shape[0])
+    for d in range(3):
+        x = X1[:, d]
+        np.multiply(c, cols[d], out=x)
+        np.subtract(_FRAME_AXIS[d], x, out=x)
+        x[alt] = _FRAME_AXIS_ALT[d] - c[alt] * cols[d][alt]
+        len2 += x * x
+    X1 /= np.sqrt(len2)[:, None]
     return X1, cross(nrm, X1)
 
 
@@ -80,6 +90,12 @@ def edge_encode(V: np.ndarray, E: np.ndarray, t: np.ndarray) -> np.ndarray:
 
     Coordinates are gathered column by column (contiguous 1-D gathers).
     """
+    return edge_encode_and_lengths(V, E, t)[0]
+
+
+def edge_encode_and_lengths(V: np.ndarray, E: np.ndarray, t: np.ndarray
+                            ) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`edge_encode` and the edge lengths ``|p_j - p_i|`` (its bounds), ``(e,)`` each."""
     a = np.ascontiguousarray(E[:, 0])
     b = np.ascontiguousarray(E[:, 1])
     c = np.zeros(E.shape[0])
@@ -92,7 +108,7 @@ def edge_encode(V: np.ndarray, E: np.ndarray, t: np.ndarray) -> np.ndarray:
         len2 += ed * ed
     c *= 0.5
     lim = np.sqrt(len2)
-    return np.clip(c, -lim, lim, out=c)
+    return np.clip(c, -lim, lim, out=c), lim
 
 
 class BaseGeometry:
@@ -132,6 +148,8 @@ class BaseGeometry:
         self._topo = topo
         self._normals = None
         self._transpose = None
+        self._gradients = None
+        self._forward = None
 
     @property
     def topo(self) -> EdgeTopology:
@@ -158,6 +176,27 @@ class BaseGeometry:
     def set_normals(self, normals: np.ndarray) -> None:
         self._normals = normals
 
+    def gradients(self) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+        """``G_k = N x e_k / |N|^2`` of every face (the gradient of the hat function
+        of corner ``k``), three coordinate columns ``(m,)`` per corner; cached."""
+        if self._gradients is None:
+            inv = 1.0 / self.N2
+            G = []
+            for k in range(3):
+                (n0, n1, n2), (x0, x1, x2) = self.N, self.e[k]
+                G.append(((n1 * x2 - n2 * x1) * inv, (n2 * x0 - n0 * x2) * inv,
+                          (n0 * x1 - n1 * x0) * inv))
+            self._gradients = G
+        return self._gradients
+
+    def forward(self) -> np.ndarray:
+        """``(3, m)`` bool: half-edge ``k`` of face ``f`` runs from the lower to the
+        higher vertex index (along its unique edge); cached."""
+        if self._forward is None:
+            FT = self.FT
+            self._forward = np.stack([FT[k] < FT[(k + 1) % 3] for k in range(3)])
+        return self._forward
+
     def decode(self, c: np.ndarray) -> np.ndarray:
         """Uniform vertex average of the Whitney corner vectors of ``c``, (n, 3).
 
@@ -168,22 +207,29 @@ class BaseGeometry:
         m = self.F.shape[0]
         h2e = self.topo.half_to_edge.reshape(m, 3)
         FT = self.FT
+        fwd = self.forward()
         s = []
         for k in range(3):
             sk = c[h2e[:, k]]
-            s.append(np.where(FT[k] < FT[(k + 1) % 3], sk, -sk))
-        inv = 1.0 / self.N2
-        G = []
-        for k in range(3):
-            (n0, n1, n2), (x0, x1, x2) = self.N, self.e[k]
-            G.append(((n1 * x2 - n2 * x1) * inv, (n2 * x0 - n0 * x2) * inv,
-                      (n0 * x1 - n1 * x0) * inv))
+            np.negative(sk, out=sk, where=~fwd[k])
+            s.append(sk)
+        G = self.gradients()
         out = np.empty((n, 3))
+        w = np.empty(m)
+        tmp = np.empty(m)
         for d in range(3):
-            acc = np.bincount(FT[0], weights=s[0] * G[1][d] - s[2] * G[2][d], minlength=n)
-            acc += np.bincount(FT[1], weights=s[1] * G[2][d] - s[0] * G[0][d], minlength=n)
-            acc += np.bincount(FT[2], weights=s[2] * G[0][d] - s[1] * G[1][d], minlength=n)
-            out[:, d] = acc / self.valence
+            acc = None
+            for k in range(3):
+                # corner k: s_k G_{k+1} - s_{k+2} G_{k+2}
+                np.multiply(s[k], G[(k + 1) % 3][d], out=w)
+                np.multiply(s[(k + 2) % 3], G[(k + 2) % 3][d], out=tmp)
+                w -= tmp
+                b = np.bincount(FT[k], weights=w, minlength=n)
+                if acc is None:
+                    acc = b
+                else:
+                    acc += b
+            np.divide(acc, self.valence, out=out[:, d])
         return out
 
     def decoder_transpose(self) -> tuple[sp.csr_matrix, np.ndarray, np.ndarray]:
@@ -194,61 +240,76 @@ class BaseGeometry:
         edge's two endpoints, and the frames ``X1, X2`` (n, 3) of
         :func:`axis_frames`.  Half-edge ``k`` of a face (``F_k -> F_{k+1}``)
         enters corner ``k`` with ``+G_{k+1}`` and corner ``k+1`` with ``-G_k``
-        (signed by its orientation against the edge), so the two vectors of
-        every edge are sums over its (one or two) half-edges, gathered
-        through the topology's grouped half-edges, then projected on the
-        frames of the endpoints; the rows are built directly (no sort).
-        ``AT.T`` (CSC, no copy) applies ``P D`` to coefficients and gives the
-        two frame components of every vertex vector.
+        (signed by its orientation against the edge).  Both vectors are
+        projected on the frames (divided by the valence) of their corner's
+        vertex, face by face; the four numbers of an edge are then the sums
+        over its (one or two: the base is manifold) half-edges, read through
+        the topology's grouped half-edges in half-edge order.  The rows are
+        built directly (no sort).  ``AT.T`` (CSC, no copy) applies ``P D`` to
+        coefficients and gives the two frame components of every vertex vector.
         """
         if self._transpose is None:
             m = self.F.shape[0]
             n = self.V.shape[0]
-            E = self.topo.edges
+            topo = self.topo
+            E = topo.edges
             e = E.shape[0]
             X1, X2 = axis_frames(self.normals)
-            # G_k of face f = N x e_k / |N|^2, coordinate by coordinate
-            inv = 1.0 / self.N2
-            G = []
-            for k in range(3):
-                (n0, n1, n2), (x0, x1, x2) = self.N, self.e[k]
-                G.append(((n1 * x2 - n2 * x1) * inv, (n2 * x0 - n0 * x2) * inv,
-                          (n0 * x1 - n1 * x0) * inv))
-            # half-edge h = 3 f + k runs F_k -> F_{k+1}; the edge's first vertex gets
-            # +G_{k+1} if h runs along the edge (a -> b), else +G_k; the second -G_k,
-            # else -G_{k+1}: summed over the edge's half-edges (in half-edge order)
-            FT = self.FT
-            fwd = [FT[k] < FT[(k + 1) % 3] for k in range(3)]
-            h2e = self.topo.half_to_edge
-            ea, eb = np.ascontiguousarray(E[:, 0]), np.ascontiguousarray(E[:, 1])
             iv = 1.0 / self.valence
-            wa, wb = iv[ea], iv[eb]
-            # data row e: a_e . X1(a), a_e . X2(a), b_e . X1(b), b_e . X2(b), scaled by
-            # 1 / valence; accumulated coordinate by coordinate on contiguous columns
-            data = np.zeros((4, e))
-            w = np.empty((m, 3))
-            for d in range(3):
-                for k in range(3):
-                    np.copyto(w[:, k], np.where(fwd[k], G[(k + 1) % 3][d], G[k][d]))
-                a_d = np.bincount(h2e, weights=w.ravel(), minlength=e)
-                for k in range(3):
-                    np.copyto(w[:, k], np.where(fwd[k], G[k][d], G[(k + 1) % 3][d]))
-                b_d = np.bincount(h2e, weights=w.ravel(), minlength=e)
-                x1, x2 = np.ascontiguousarray(X1[:, d]), np.ascontiguousarray(X2[:, d])
-                data[0] += a_d * x1[ea]
-                data[1] += a_d * x2[ea]
-                data[2] -= b_d * x1[eb]
-                data[3] -= b_d * x2[eb]
-            data[:2] *= wa
-            data[2:] *= wb
+            Y = [np.ascontiguousarray(X[:, d]) * iv for X in (X1, X2) for d in range(3)]
+            G = self.gradients()
+            FT = self.FT
+            fwd = self.forward()
+            rev = ~fwd
+            # W[i, k, f]: part i of half-edge k of face f -- parts 0, 1 at the
+            # edge's first vertex a, 2, 3 at its second vertex b.  Corner k (vertex
+            # F_k) is the tail of half-edge k, which puts +G_{k+1} there, and the
+            # head of half-edge k+2, which puts -G_{k+2} there; a forward half-edge
+            # (F_k < F_{k+1}) has a at its tail, a reversed one at its head and
+            # enters with the opposite sign.  Entry 3m stays zero.
+            W = np.zeros((4, 3 * m + 1))
+            Wk = W[:, :3 * m].reshape(4, 3, m)
+            y = [np.empty(m) for _ in range(6)]
+            acc = np.empty(m)
+            tmp = np.empty(m)
+            for k in range(3):
+                k1, k2 = (k + 1) % 3, (k + 2) % 3
+                for i in range(6):
+                    np.take(Y[i], FT[k], out=y[i])
+                for j in range(2):
+                    _dot_into(G[k1], y[3 * j:3 * j + 3], acc, tmp)     # tail of k
+                    np.copyto(Wk[j, k], acc, where=fwd[k])
+                    np.negative(acc, out=Wk[2 + j, k], where=rev[k])
+                    _dot_into(G[k2], y[3 * j:3 * j + 3], acc, tmp)     # -head of k+2
+                    np.negative(acc, out=Wk[2 + j, k2], where=fwd[k2])
+                    np.copyto(Wk[j, k2], acc, where=rev[k2])
+            del y, acc, tmp
+            # an edge's four numbers: the sum over its one or two half-edges (the
+            # base is manifold), in half-edge order; half-edge 3 f + k is W[:, k, f]
+            order = topo.grouped_half_edges()
+            start = topo.edge_starts()
+            h0 = order[start]
+            h1 = np.full(e, 3 * m, dtype=np.int64)
+            two = topo.face_count == 2
+            h1[two] = order[start[two] + 1]
+            for h in (h0, h1):
+                f, k = np.divmod(h, 3)
+                k *= m
+                np.add(f, k, out=h, where=h < 3 * m)
+            data = np.empty((e, 4))
+            for i in range(4):
+                np.add(np.take(W[i], h0), np.take(W[i], h1), out=data[:, i])
+            del W
             index = np.int32 if 2 * n < 2 ** 31 else np.int64
             cols = np.empty((e, 4), dtype=index)
-            cols[:, 0] = 2 * ea
+            cols[:, 0] = E[:, 0]
+            cols[:, 0] *= 2
             cols[:, 1] = cols[:, 0] + 1
-            cols[:, 2] = 2 * eb
+            cols[:, 2] = E[:, 1]
+            cols[:, 2] *= 2
             cols[:, 3] = cols[:, 2] + 1
-            AT = sp.csr_matrix((data.T.ravel(), cols.ravel(),
-                                4 * np.arange(e + 1, dtype=index)), shape=(e, 2 * n))
+            AT = sp.csr_matrix((data.reshape(-1), cols.reshape(-1),
+                                np.arange(0, 4 * e + 1, 4, dtype=index)), shape=(e, 2 * n))
             self._transpose = (AT, X1, X2)
         return self._transpose
 
@@ -256,6 +317,15 @@ class BaseGeometry:
         """``X`` minus its component along the base normals."""
         nrm = self.normals
         return X - dot(X, nrm)[:, None] * nrm
+
+
+def _dot_into(g, y, out: np.ndarray, tmp: np.ndarray) -> None:
+    """``out = g . y`` for two vectors given as three coordinate columns."""
+    np.multiply(g[0], y[0], out=out)
+    np.multiply(g[1], y[1], out=tmp)
+    out += tmp
+    np.multiply(g[2], y[2], out=tmp)
+    out += tmp
 
 
 def _norm2(v) -> np.ndarray:
@@ -300,66 +370,74 @@ def lsq_encode(g: BaseGeometry, t: np.ndarray) -> np.ndarray:
     numpy.ndarray, (e,) float64
     """
     E = g.topo.edges
-    c0 = edge_encode(g.V, E, t)
+    c0, lim = edge_encode_and_lengths(g.V, E, t)
     if E.shape[0] == 0:
         return c0
     AT, X1, X2 = g.decoder_transpose()
     A = AT.T
-    lim = np.sqrt(np.einsum("ed,ed->e", g.V[E[:, 1]] - g.V[E[:, 0]],
-                            g.V[E[:, 1]] - g.V[E[:, 0]]))
-    diag = np.asarray(AT.multiply(AT).sum(axis=1)).ravel()
+    diag = np.einsum("ij,ij->i", AT.data.reshape(-1, 4), AT.data.reshape(-1, 4))
     reg = LSQ_DAMPING * diag
     Kd = diag + reg
     Kd[Kd <= 0] = 1.0
+    inv_kd = 1.0 / Kd
+    tmp = np.empty_like(c0)
 
     def K(x):
-        return AT @ (A @ x) + reg * x
+        y = AT @ (A @ x)
+        np.multiply(reg, x, out=tmp)
+        y += tmp
+        return y
 
     t2 = np.empty((t.shape[0], 2))
     t2[:, 0] = dot(t, X1)
     t2[:, 1] = dot(t, X2)
     rhs = AT @ (t2.ravel() - A @ c0)
     lo, hi = -lim - c0, lim - c0
-    d = _pcg(K, rhs, np.zeros_like(c0), Kd, None, LSQ_ITERATIONS, LSQ_RTOL)
-    free = np.ones(c0.shape, dtype=bool)
-    for _ in range(LSQ_ROUNDS):
-        out = free & ((d > hi) | (d < lo))
-        if not out.any():
-            break
-        np.clip(d, lo, hi, out=d)
-        free &= ~out
-        d = _pcg(K, rhs, d, Kd, free, LSQ_ROUND_ITERATIONS, 0.0)
+    with single_threaded_blas():
+        d = _pcg(K, rhs, None, inv_kd, None, LSQ_ITERATIONS, LSQ_RTOL)
+        free = np.ones(c0.shape, dtype=bool)
+        for _ in range(LSQ_ROUNDS):
+            out = free & ((d > hi) | (d < lo))
+            if not out.any():
+                break
+            np.clip(d, lo, hi, out=d)
+            free &= ~out
+            d = _pcg(K, rhs, d, inv_kd, free, LSQ_ROUND_ITERATIONS, 0.0)
     c = c0 + d
     return np.clip(c, -lim, lim, out=c)
 
 
-def _pcg(K, rhs, x, Kd, free, iterations, rtol):
-    """Jacobi-preconditioned CG on ``K x = rhs`` over the ``free`` unknowns."""
+def _pcg(K, rhs, x, inv_kd, free, iterations, rtol):
+    """Jacobi-preconditioned CG on ``K x = rhs`` over the ``free`` unknowns.
+
+    ``x`` is the start (updated in place), None for zero; ``inv_kd`` the
+    inverse of the diagonal of ``K``.  In-place BLAS updates on preallocated
+    vectors (call with BLAS limited to one thread: deterministic sums).
+    """
     mask = None if free is None else free.astype(np.float64)
-    r = rhs - K(x)
+    if x is None:
+        x = np.zeros_like(rhs)
+        r = rhs.copy()
+    else:
+        r = rhs - K(x)
     if mask is not None:
         r *= mask
-    z = r / Kd
+    z = r * inv_kd
     p = z.copy()
-    rz = _vdot(r, z)
-    stop = rtol * rtol * _vdot(rhs, rhs)
+    rz = blas.ddot(r, z)
+    stop = rtol * rtol * blas.ddot(rhs, rhs)
     for _ in range(iterations):
-        if rz <= 0.0 or _vdot(r, r) <= stop:
+        if rz <= 0.0 or (rtol > 0.0 and blas.ddot(r, r) <= stop):
             break
         Kp = K(p)
         if mask is not None:
             Kp *= mask
-        alpha = rz / _vdot(p, Kp)
-        x += alpha * p
-        r -= alpha * Kp
-        z = r / Kd
-        rz_new = _vdot(r, z)
-        p *= rz_new / rz
-        p += z
+        alpha = rz / blas.ddot(p, Kp)
+        blas.daxpy(p, x, a=alpha)
+        blas.daxpy(Kp, r, a=-alpha)
+        np.multiply(r, inv_kd, out=z)
+        rz_new = blas.ddot(r, z)
+        blas.daxpy(p, z, a=rz_new / rz)        # z <- z + beta p: the new direction
+        p, z = z, p
         rz = rz_new
     return x
-
-
-def _vdot(x: np.ndarray, y: np.ndarray) -> float:
-    # einsum's own loop: BLAS ddot may spawn threads, slow on a busy machine
-    return float(np.einsum("i,i->", x, y))

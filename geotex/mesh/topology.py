@@ -139,25 +139,33 @@ def edge_topology(F: np.ndarray, n_vertices: int | None = None) -> EdgeTopology:
     key = np.minimum(a, b)
     key *= N
     key += np.maximum(a, b)
-    order = np.argsort(key)             # one 1-D sort of int64 keys
-    ks = key[order]
-    del key
-    new = np.empty(ks.shape[0], dtype=bool)
-    if ks.shape[0]:
-        new[0] = True
-        np.not_equal(ks[1:], ks[:-1], out=new[1:])
-    first = np.flatnonzero(new)
-    run = np.cumsum(new, dtype=np.int64)
-    run -= 1
-    counts = np.diff(np.append(first, ks.shape[0])).astype(np.int64)
-    # make the order ascending within every edge (the sort is not stable)
-    two = first[counts == 2]
-    swap = two[order[two] > order[two + 1]]
-    order[swap], order[swap + 1] = order[swap + 1], order[swap].copy()
-    if np.any(counts > 2):
-        sel = np.flatnonzero(np.repeat(counts > 2, counts))
-        sub = order[sel]
-        order[sel] = sub[np.lexsort((sub, run[sel]))]
+    h = key.shape[0]
+    shift = max(h - 1, 0).bit_length()
+    if (N * N - 1).bit_length() + shift <= 63:
+        # the half-edge index in the low bits makes every key unique: one sort of
+        # int64 values (much faster than an argsort) gives the edges in order and
+        # the half-edges ascending within every edge
+        key <<= shift
+        key |= np.arange(h, dtype=np.int64)
+        key.sort()
+        order = key & ((1 << shift) - 1)
+        key >>= shift
+        ks = key
+        del key
+        new, first, run, counts = _runs(ks)
+    else:
+        order = np.argsort(key)         # one 1-D sort of int64 keys
+        ks = key[order]
+        del key
+        new, first, run, counts = _runs(ks)
+        # make the order ascending within every edge (the sort is not stable)
+        two = first[counts == 2]
+        swap = two[order[two] > order[two + 1]]
+        order[swap], order[swap + 1] = order[swap + 1], order[swap].copy()
+        if np.any(counts > 2):
+            sel = np.flatnonzero(np.repeat(counts > 2, counts))
+            sub = order[sel]
+            order[sel] = sub[np.lexsort((sub, run[sel]))]
     inv = np.empty(ks.shape[0], dtype=np.int64)
     inv[order] = run
     del run
@@ -167,6 +175,19 @@ def edge_topology(F: np.ndarray, n_vertices: int | None = None) -> EdgeTopology:
     forward = np.bincount(inv[fwd], minlength=first.shape[0]).astype(np.int64)
     return EdgeTopology(edges=edges, half_to_edge=inv, face_count=counts,
                         forward_count=forward, half_order=order)
+
+
+def _runs(ks: np.ndarray):
+    """Runs of equal values in sorted ``ks``: starts mask, first indices, run ids, lengths."""
+    new = np.empty(ks.shape[0], dtype=bool)
+    if ks.shape[0]:
+        new[0] = True
+        np.not_equal(ks[1:], ks[:-1], out=new[1:])
+    first = np.flatnonzero(new)
+    run = np.cumsum(new, dtype=np.int64)
+    run -= 1
+    counts = np.diff(np.append(first, ks.shape[0])).astype(np.int64)
+    return new, first, run, counts
 
 
 def compacted(V: np.ndarray, F: np.ndarray, *, return_index: bool = False):
