@@ -4,13 +4,16 @@ Everything here works on already validated arrays and is written for large
 meshes: one pass of per-face geometry and column-wise float64 arithmetic
 instead of ``(m, 3, 3)`` temporaries; the edge topology is
 :func:`geotex.mesh.topology.edge_topology` (one sort of int64 half-edge keys).
+Large temporaries are few: buffers are reused through ``out=`` and the
+conjugate-gradient updates are in-place BLAS calls (fresh memory costs page
+faults, which on a busy machine weigh as much as the arithmetic).
 
 * :meth:`BaseGeometry.decode` is :func:`geotex.fields.oneforms.decode_one_form_at_vertices`
   with ``weighting="uniform"`` on meshes without degenerate faces (the only
   meshes a height-and-tilt base may be): the mean over the incident faces of
-  the Whitney corner vectors ``T_k = s_k G_{k+1} - s_{k+2} G_{k+2}``, written
-  as ``N x (s_k e_{k+1} - s_{k+2} e_{k+2}) / |N|^2`` (one cross product per
-  corner).
+  the Whitney corner vectors ``T_k = s_k G_{k+1} - s_{k+2} G_{k+2}`` with the
+  face gradients ``G_k = N x e_k / |N|^2`` computed once per base
+  (:meth:`BaseGeometry.gradients`, shared with the decoder transpose).
 * :func:`edge_encode` is the direct per-edge encoding
   ``c_ij = <(t_i + t_j) / 2, p_j - p_i>`` clipped to ``|c_ij| <= |p_j - p_i|``.
 * :meth:`BaseGeometry.decoder_transpose` writes the projected decoder ``P D``
@@ -351,7 +354,9 @@ def lsq_encode(g: BaseGeometry, t: np.ndarray) -> np.ndarray:
     damping target: there are more edges than tangential equations) and
     ``K_ee`` the diagonal of the normal matrix (scale-free damping).  Solved by
     Jacobi-preconditioned conjugate gradients on the normal equations through
-    :meth:`BaseGeometry.decoder_transpose` (four entries per edge)
+    :meth:`BaseGeometry.decoder_transpose` (four entries per edge), written as
+    plain CG on the diagonally rescaled system (the same iterates, one pass
+    over the edges less per iteration)
     (at most ``LSQ_ITERATIONS``, stopping at relative residual ``LSQ_RTOL``),
     then ``LSQ_ROUNDS`` active-set rounds: coefficients past their bound are
     fixed at it and the free ones re-fitted (``LSQ_ROUND_ITERATIONS`` each);
@@ -374,45 +379,61 @@ def lsq_encode(g: BaseGeometry, t: np.ndarray) -> np.ndarray:
     if E.shape[0] == 0:
         return c0
     AT, X1, X2 = g.decoder_transpose()
-    A = AT.T
-    diag = np.einsum("ij,ij->i", AT.data.reshape(-1, 4), AT.data.reshape(-1, 4))
+    data = AT.data.reshape(-1, 4)
+    diag = np.einsum("ij,ij->i", data, data)
     reg = LSQ_DAMPING * diag
     Kd = diag + reg
     Kd[Kd <= 0] = 1.0
-    inv_kd = 1.0 / Kd
-    tmp = np.empty_like(c0)
+    # Jacobi preconditioning as a change of variables: with S = Kd^(-1/2) and
+    # c = c0 + S x, plain CG on S K S x = S rhs makes the same iterates as
+    # Jacobi-preconditioned CG on K d = rhs, with one pass less per iteration
+    # (no division by Kd) and the damping a scalar where every diag > 0
+    sq = np.sqrt(Kd)
+    scale = 1.0 / sq
+    ATs = sp.csr_matrix((np.multiply(data, scale[:, None]).reshape(-1), AT.indices, AT.indptr),
+                        shape=AT.shape)
+    As = ATs.T
+    if (diag > 0).all():
+        mu = LSQ_DAMPING / (1.0 + LSQ_DAMPING)
 
-    def K(x):
-        y = AT @ (A @ x)
-        np.multiply(reg, x, out=tmp)
-        y += tmp
-        return y
+        def K(x):
+            y = ATs @ (As @ x)
+            blas.daxpy(x, y, a=mu)
+            return y
+    else:
+        mu_v = reg / Kd
+
+        def K(x):
+            y = ATs @ (As @ x)
+            y += mu_v * x
+            return y
 
     t2 = np.empty((t.shape[0], 2))
     t2[:, 0] = dot(t, X1)
     t2[:, 1] = dot(t, X2)
-    rhs = AT @ (t2.ravel() - A @ c0)
-    lo, hi = -lim - c0, lim - c0
+    rhs = ATs @ (t2.ravel() - As @ (sq * c0))
+    lo, hi = (-lim - c0) * sq, (lim - c0) * sq
     with single_threaded_blas():
-        d = _pcg(K, rhs, None, inv_kd, None, LSQ_ITERATIONS, LSQ_RTOL)
+        x = _cg(K, rhs, None, None, LSQ_ITERATIONS, LSQ_RTOL, Kd)
         free = np.ones(c0.shape, dtype=bool)
         for _ in range(LSQ_ROUNDS):
-            out = free & ((d > hi) | (d < lo))
+            out = free & ((x > hi) | (x < lo))
             if not out.any():
                 break
-            np.clip(d, lo, hi, out=d)
+            np.clip(x, lo, hi, out=x)
             free &= ~out
-            d = _pcg(K, rhs, d, inv_kd, free, LSQ_ROUND_ITERATIONS, 0.0)
-    c = c0 + d
+            x = _cg(K, rhs, x, free, LSQ_ROUND_ITERATIONS, 0.0, Kd)
+    c = c0 + scale * x
     return np.clip(c, -lim, lim, out=c)
 
 
-def _pcg(K, rhs, x, inv_kd, free, iterations, rtol):
-    """Jacobi-preconditioned CG on ``K x = rhs`` over the ``free`` unknowns.
+def _cg(K, rhs, x, free, iterations, rtol, weight):
+    """CG on ``K x = rhs`` over the ``free`` unknowns (all when None).
 
-    ``x`` is the start (updated in place), None for zero; ``inv_kd`` the
-    inverse of the diagonal of ``K``.  In-place BLAS updates on preallocated
-    vectors (call with BLAS limited to one thread: deterministic sums).
+    ``x`` is the start (updated in place), None for zero.  Stops early when
+    ``sum(weight r^2) <= rtol^2 sum(weight rhs^2)`` (the residual of the
+    unscaled system when ``K`` is Jacobi-scaled by ``weight^(-1/2)``).  In-place
+    BLAS updates (call with BLAS limited to one thread: deterministic sums).
     """
     mask = None if free is None else free.astype(np.float64)
     if x is None:
@@ -422,22 +443,20 @@ def _pcg(K, rhs, x, inv_kd, free, iterations, rtol):
         r = rhs - K(x)
     if mask is not None:
         r *= mask
-    z = r * inv_kd
-    p = z.copy()
-    rz = blas.ddot(r, z)
-    stop = rtol * rtol * blas.ddot(rhs, rhs)
+    p = r.copy()
+    rr = blas.ddot(r, r)
+    stop = rtol * rtol * float(np.einsum("i,i,i->", rhs, rhs, weight))
     for _ in range(iterations):
-        if rz <= 0.0 or (rtol > 0.0 and blas.ddot(r, r) <= stop):
+        if rr <= 0.0 or (rtol > 0.0 and float(np.einsum("i,i,i->", r, r, weight)) <= stop):
             break
         Kp = K(p)
         if mask is not None:
             Kp *= mask
-        alpha = rz / blas.ddot(p, Kp)
+        alpha = rr / blas.ddot(p, Kp)
         blas.daxpy(p, x, a=alpha)
         blas.daxpy(Kp, r, a=-alpha)
-        np.multiply(r, inv_kd, out=z)
-        rz_new = blas.ddot(r, z)
-        blas.daxpy(p, z, a=rz_new / rz)        # z <- z + beta p: the new direction
-        p, z = z, p
-        rz = rz_new
+        rr_new = blas.ddot(r, r)
+        blas.dscal(rr_new / rr, p)
+        blas.daxpy(r, p)
+        rr = rr_new
     return x
