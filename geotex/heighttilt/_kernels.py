@@ -138,15 +138,30 @@ class BaseGeometry:
         n = V.shape[0]
         self.FT = np.ascontiguousarray(F.T)
         cols = [np.ascontiguousarray(V[:, d]) for d in range(3)]
-        P = [tuple(c[f] for c in cols) for f in self.FT]
-        self.e = [tuple(a - b for a, b in zip(P[(k + 2) % 3], P[(k + 1) % 3]))
-                  for k in range(3)]
+        P0, P1, P2 = ([np.take(c, f) for c in cols] for f in self.FT)
+        # e_k = p_{k+2} - p_{k+1}, written over the gathered corners once they are used
+        e0 = [b - a for a, b in zip(P1, P2)]
+        e1 = [np.subtract(a, b, out=b) for a, b in zip(P0, P2)]
+        e2 = [np.subtract(b, a, out=b) for a, b in zip(P0, P1)]
+        del P0
+        self.e = [tuple(e0), tuple(e1), tuple(e2)]
         (a0, a1, a2), (b0, b1, b2) = self.e[1], self.e[2]
-        self.N = (a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0)
-        self.N2 = self.N[0] ** 2 + self.N[1] ** 2 + self.N[2] ** 2
-        lmax2 = np.maximum(np.maximum(_norm2(self.e[0]), _norm2(self.e[1])), _norm2(self.e[2]))
+        tmp = np.empty(F.shape[0])
+        N = []
+        for (p, q), (r, u) in (((a1, b2), (a2, b1)), ((a2, b0), (a0, b2)), ((a0, b1), (a1, b0))):
+            x = p * q
+            x -= np.multiply(r, u, out=tmp)
+            N.append(x)
+        self.N = tuple(N)
+        self.N2 = _norm2(self.N, tmp)
+        lmax2 = _norm2(self.e[0], tmp)
+        for k in (1, 2):
+            np.maximum(lmax2, _norm2(self.e[k], tmp), out=lmax2)
         with np.errstate(over="ignore", invalid="ignore"):
-            self.flat = ~(np.sqrt(self.N2) > 1e-12 * lmax2)
+            np.sqrt(self.N2, out=tmp)
+            lmax2 *= 1e-12
+            self.flat = ~(tmp > lmax2)
+        del tmp, lmax2
         self.valence = np.bincount(F.ravel(), minlength=n).astype(np.float64)
         self._topo = topo
         self._normals = None
@@ -331,8 +346,14 @@ def _dot_into(g, y, out: np.ndarray, tmp: np.ndarray) -> None:
     out += tmp
 
 
-def _norm2(v) -> np.ndarray:
-    return v[0] * v[0] + v[1] * v[1] + v[2] * v[2]
+def _norm2(v, tmp: np.ndarray | None = None) -> np.ndarray:
+    """``|v|^2`` of a vector given as three coordinate columns (``tmp``: scratch)."""
+    out = v[0] * v[0]
+    if tmp is None:
+        tmp = np.empty_like(out)
+    out += np.multiply(v[1], v[1], out=tmp)
+    out += np.multiply(v[2], v[2], out=tmp)
+    return out
 
 
 #: Relative Tikhonov weight of :func:`lsq_encode` (towards the edge encoding).
