@@ -307,16 +307,24 @@ class BaseGeometry:
             order = topo.grouped_half_edges()
             start = topo.edge_starts()
             h0 = order[start]
-            h1 = np.full(e, 3 * m, dtype=np.int64)
+            h1 = h0.copy()
             two = topo.face_count == 2
             h1[two] = order[start[two] + 1]
-            for h in (h0, h1):
-                f, k = np.divmod(h, 3)
-                k *= m
-                np.add(f, k, out=h, where=h < 3 * m)
+            rem = np.empty(e, dtype=np.int64)
+            for h in (h0, h1):                  # 3 f + k -> k m + f, in place
+                np.remainder(h, 3, out=rem)
+                h //= 3
+                rem *= m
+                h += rem
+            h1[~two] = 3 * m
+            del rem
             data = np.empty((e, 4))
+            b0, b1 = np.empty(e), np.empty(e)
             for i in range(4):
-                np.add(np.take(W[i], h0), np.take(W[i], h1), out=data[:, i])
+                np.take(W[i], h0, out=b0)
+                np.take(W[i], h1, out=b1)
+                np.add(b0, b1, out=data[:, i])
+            del b0, b1
             del W
             index = np.int32 if 2 * n < 2 ** 31 else np.int64
             cols = np.empty((e, 4), dtype=index)
