@@ -16,7 +16,13 @@ The stored 1-form alone is also measured on the issue-22 test shape,
 ``spiky_sphere(subdivisions=3, spikes=12)`` (seeds 0-2).
 
 Run:  python benchmarks/bench_heighttilt.py [--vertices N] [--repeat R]
-Writes benchmarks/results/heighttilt_speed.md and .json.
+           [--reference DIR [--reference-label TEXT] [--rounds K]]
+Writes benchmarks/results/heighttilt_speed.md and .json.  With ``--reference``
+(a directory holding another geotex source tree, e.g. ``git archive`` of an
+older commit) the default extract + reconstruct is also timed in child
+processes that alternate between that tree and this one, K rounds of R
+repeats each, so that both see the same machine load; user and system CPU
+seconds are reported beside wall seconds.
 """
 
 from __future__ import annotations
@@ -25,6 +31,9 @@ import argparse
 import json
 import os
 import platform
+import resource
+import subprocess
+import sys
 import time
 from pathlib import Path
 
@@ -37,6 +46,7 @@ from geotex.heighttilt.extract import displacement_to_height_tilt
 from geotex.mesh.primitives import torus
 
 RESULTS = Path(__file__).parent / "results" / "heighttilt_speed.md"
+ROOT = Path(__file__).resolve().parent.parent
 
 
 def textured_torus(n_vertices: int):
@@ -101,12 +111,62 @@ def spiky_form_errors():
     return out
 
 
+def child_timing(vertices: int, repeat: int) -> None:
+    """Print (JSON) wall, user and system seconds of ``repeat`` default round trips."""
+    V0, F, Vs = textured_torus(vertices)
+    runs = []
+    for _ in range(repeat):
+        r0, w = resource.getrusage(resource.RUSAGE_SELF), time.perf_counter()
+        tex, _ = extract_texture(V0, F, base=Vs)
+        apply_texture(Vs, F, tex)
+        r1 = resource.getrusage(resource.RUSAGE_SELF)
+        runs.append({"wall": time.perf_counter() - w, "user": r1.ru_utime - r0.ru_utime,
+                     "sys": r1.ru_stime - r0.ru_stime})
+    print(json.dumps(runs))
+
+
+def compare(reference: str, vertices: int, repeat: int, rounds: int) -> dict:
+    """Alternate child processes on the reference tree and on this one."""
+    out = {"reference": [], "this tree": []}
+    for _ in range(rounds):
+        for label, path in (("reference", reference), ("this tree", str(ROOT))):
+            env = dict(os.environ, PYTHONPATH=path)
+            done = subprocess.run([sys.executable, __file__, "--child", "--vertices",
+                                   str(vertices), "--repeat", str(repeat)],
+                                  env=env, capture_output=True, text=True, check=True)
+            out[label] += json.loads(done.stdout.strip().splitlines()[-1])
+    return out
+
+
+def comparison_lines(runs: dict, reference_label: str, rounds: int, repeat: int) -> list[str]:
+    def med(v):
+        return float(np.median(v))
+    lines = [f"Same-load comparison (default encoding, extract + reconstruct): child processes "
+             f"alternating between the reference ({reference_label}) and this tree, {rounds} "
+             f"rounds of {repeat}; seconds.", "",
+             "| tree | best wall | median wall | best user + sys | median user | median sys |",
+             "|---|---|---|---|---|---|"]
+    for label, rs in runs.items():
+        lines.append(f"| {label} | {min(r['wall'] for r in rs):.2f} | "
+                     f"{med([r['wall'] for r in rs]):.2f} | "
+                     f"{min(r['user'] + r['sys'] for r in rs):.2f} | "
+                     f"{med([r['user'] for r in rs]):.2f} | {med([r['sys'] for r in rs]):.2f} |")
+    return lines
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--vertices", type=int, default=1_000_000)
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--no-record", action="store_true")
+    ap.add_argument("--reference", help="another geotex source tree to compare with")
+    ap.add_argument("--reference-label", default="reference tree")
+    ap.add_argument("--rounds", type=int, default=2)
+    ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
+    if args.child:
+        child_timing(args.vertices, args.repeat)
+        return
     load_start = os.getloadavg()
     fresh, again = first_touch_cost()
     V0, F, Vs = textured_torus(args.vertices)
@@ -145,6 +205,11 @@ def main():
     record["height_field_peer_s"] = t_hf
     record["height_field_max_error_over_diag"] = err_hf
     spiky = spiky_form_errors()
+    compared = None
+    if args.reference:
+        compared = compare(args.reference, args.vertices, args.repeat, args.rounds)
+        record["comparison"] = {"reference": args.reference_label, "rounds": args.rounds,
+                                "runs": compared}
     record["spiky_sphere_form_rel_l2"] = spiky
     record["fresh_24MB_fill_s"], record["refill_24MB_s"] = fresh, again
     load_end = os.getloadavg()
@@ -189,6 +254,9 @@ def main():
         "(relative L2 tilt error; issue 22 asks for at most 0.05 by default): "
         + "; ".join(f"{k}: " + ", ".join(f"{v:.3f}" for v in spiky[k]) for k in spiky) + ".",
     ]
+    if compared is not None:
+        lines += ["", *comparison_lines(compared, args.reference_label, args.rounds,
+                                        args.repeat)]
     text = "\n".join(lines) + "\n"
     print(text)
     if not args.no_record:
