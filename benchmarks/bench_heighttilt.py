@@ -125,12 +125,19 @@ def child_timing(vertices: int, repeat: int) -> None:
     print(json.dumps(runs))
 
 
+#: glibc settings that keep freed memory in the process (no page faults on reuse)
+KEEP_MEMORY = {"MALLOC_MMAP_THRESHOLD_": str(2 ** 32), "MALLOC_TRIM_THRESHOLD_": str(2 ** 33)}
+
+
 def compare(reference: str, vertices: int, repeat: int, rounds: int) -> dict:
-    """Alternate child processes on the reference tree and on this one."""
-    out = {"reference": [], "this tree": []}
+    """Alternate child processes on the reference tree and on this one (also with
+    glibc keeping freed memory, :data:`KEEP_MEMORY`, to show the page-fault share)."""
+    variants = (("reference", reference, {}), ("this tree", str(ROOT), {}),
+                ("this tree, freed memory kept", str(ROOT), KEEP_MEMORY))
+    out = {label: [] for label, _, _ in variants}
     for _ in range(rounds):
-        for label, path in (("reference", reference), ("this tree", str(ROOT))):
-            env = dict(os.environ, PYTHONPATH=path)
+        for label, path, extra in variants:
+            env = dict(os.environ, PYTHONPATH=path, **extra)
             done = subprocess.run([sys.executable, __file__, "--child", "--vertices",
                                    str(vertices), "--repeat", str(repeat)],
                                   env=env, capture_output=True, text=True, check=True)
@@ -143,7 +150,10 @@ def comparison_lines(runs: dict, reference_label: str, rounds: int, repeat: int)
         return float(np.median(v))
     lines = [f"Same-load comparison (default encoding, extract + reconstruct): child processes "
              f"alternating between the reference ({reference_label}) and this tree, {rounds} "
-             f"rounds of {repeat}; seconds.", "",
+             f"rounds of {repeat}; seconds. The last row sets "
+             + ", ".join(f"`{k}={v}`" for k, v in KEEP_MEMORY.items())
+             + " (glibc keeps freed memory, so large temporaries are not page-faulted "
+             "again): its system time is what fresh memory costs the others.", "",
              "| tree | best wall | median wall | best user + sys | median user | median sys |",
              "|---|---|---|---|---|---|"]
     for label, rs in runs.items():
