@@ -210,3 +210,25 @@ def test_greedy_colouring_matches_networkx_largest_first():
         assert got.tolist() == [ref[i] for i in range(n)]
         loops = pairs[:, 0] == pairs[:, 1]
         assert not np.any(got[pairs[~loops, 0]] == got[pairs[~loops, 1]])
+
+
+def test_packed_key_sort_matches_the_general_path_and_a_reference():
+    # edge_topology sorts int64 keys with the half-edge index packed into the low
+    # bits when they fit in 63 bits, else argsorts the keys; both must agree with
+    # each other and with np.unique, also on repeated, non-manifold and
+    # inconsistently oriented faces
+    rng = np.random.default_rng(7)
+    for _ in range(50):
+        n = int(rng.integers(3, 30))
+        F = rng.integers(0, n, size=(int(rng.integers(1, 60)), 3))
+        packed = edge_topology(F, n)
+        general = edge_topology(F, 2 ** 40)           # (2^40)^2 needs 80 bits: argsort path
+        for name in ("edges", "half_to_edge", "face_count", "forward_count", "half_order"):
+            assert np.array_equal(getattr(packed, name), getattr(general, name)), name
+        a, b = F.ravel(), np.roll(F, -1, axis=1).ravel()
+        pairs = np.stack([np.minimum(a, b), np.maximum(a, b)], axis=1)
+        edges, inv, counts = np.unique(pairs, axis=0, return_inverse=True, return_counts=True)
+        assert np.array_equal(packed.edges, edges)
+        assert np.array_equal(packed.half_to_edge, inv.ravel())
+        assert np.array_equal(packed.face_count, counts)
+        assert np.array_equal(packed.half_order, np.argsort(inv.ravel(), kind="stable"))

@@ -4,13 +4,16 @@ Everything here works on already validated arrays and is written for large
 meshes: one pass of per-face geometry and column-wise float64 arithmetic
 instead of ``(m, 3, 3)`` temporaries; the edge topology is
 :func:`geotex.mesh.topology.edge_topology` (one sort of int64 half-edge keys).
+Large temporaries are few: buffers are reused through ``out=`` and the
+conjugate-gradient updates are in-place BLAS calls (fresh memory costs page
+faults, which on a busy machine weigh as much as the arithmetic).
 
 * :meth:`BaseGeometry.decode` is :func:`geotex.fields.oneforms.decode_one_form_at_vertices`
   with ``weighting="uniform"`` on meshes without degenerate faces (the only
   meshes a height-and-tilt base may be): the mean over the incident faces of
-  the Whitney corner vectors ``T_k = s_k G_{k+1} - s_{k+2} G_{k+2}``, written
-  as ``N x (s_k e_{k+1} - s_{k+2} e_{k+2}) / |N|^2`` (one cross product per
-  corner).
+  the Whitney corner vectors ``T_k = s_k G_{k+1} - s_{k+2} G_{k+2}`` with the
+  face gradients ``G_k = N x e_k / |N|^2`` computed once per base
+  (:meth:`BaseGeometry.gradients`, shared with the decoder transpose).
 * :func:`edge_encode` is the direct per-edge encoding
   ``c_ij = <(t_i + t_j) / 2, p_j - p_i>`` clipped to ``|c_ij| <= |p_j - p_i|``.
 * :meth:`BaseGeometry.decoder_transpose` writes the projected decoder ``P D``
@@ -26,8 +29,10 @@ instead of ``(m, 3, 3)`` temporaries; the edge topology is
 from __future__ import annotations
 
 import numpy as np
+import scipy.linalg.blas as blas
 import scipy.sparse as sp
 
+from geotex.linalg import single_threaded_blas
 from geotex.mesh.topology import EdgeTopology, edge_topology
 
 __all__ = ["cross", "dot", "axis_frames", "edge_encode", "lsq_encode", "BaseGeometry",
@@ -65,13 +70,21 @@ def axis_frames(nrm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     normal component, has no ties on axis-aligned meshes, where round-off would
     otherwise pick the axis.  Fixed in space (not rotation invariant).
     """
-    ca = nrm @ _FRAME_AXIS
-    alt = np.abs(ca) > 0.8
-    X1 = np.broadcast_to(_FRAME_AXIS, nrm.shape).copy()
-    X1[alt] = _FRAME_AXIS_ALT
-    c = np.where(alt, nrm @ _FRAME_AXIS_ALT, ca)
-    X1 -= c[:, None] * nrm
-    X1 /= np.sqrt(dot(X1, X1))[:, None]
+    cols = [np.ascontiguousarray(nrm[:, d]) for d in range(3)]
+    ca = cols[0] * _FRAME_AXIS[0] + cols[1] * _FRAME_AXIS[1] + cols[2] * _FRAME_AXIS[2]
+    alt = np.flatnonzero(np.abs(ca) > 0.8)
+    c = ca
+    c[alt] = (cols[0][alt] * _FRAME_AXIS_ALT[0] + cols[1][alt] * _FRAME_AXIS_ALT[1]
+              + cols[2][alt] * _FRAME_AXIS_ALT[2])
+    X1 = np.empty(nrm.shape)
+    len2 = np.zeros(nrm.shape[0])
+    for d in range(3):
+        x = X1[:, d]
+        np.multiply(c, cols[d], out=x)
+        np.subtract(_FRAME_AXIS[d], x, out=x)
+        x[alt] = _FRAME_AXIS_ALT[d] - c[alt] * cols[d][alt]
+        len2 += x * x
+    X1 /= np.sqrt(len2)[:, None]
     return X1, cross(nrm, X1)
 
 
@@ -80,6 +93,12 @@ def edge_encode(V: np.ndarray, E: np.ndarray, t: np.ndarray) -> np.ndarray:
 
     Coordinates are gathered column by column (contiguous 1-D gathers).
     """
+    return edge_encode_and_lengths(V, E, t)[0]
+
+
+def edge_encode_and_lengths(V: np.ndarray, E: np.ndarray, t: np.ndarray
+                            ) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`edge_encode` and the edge lengths ``|p_j - p_i|`` (its bounds), ``(e,)`` each."""
     a = np.ascontiguousarray(E[:, 0])
     b = np.ascontiguousarray(E[:, 1])
     c = np.zeros(E.shape[0])
@@ -92,7 +111,7 @@ def edge_encode(V: np.ndarray, E: np.ndarray, t: np.ndarray) -> np.ndarray:
         len2 += ed * ed
     c *= 0.5
     lim = np.sqrt(len2)
-    return np.clip(c, -lim, lim, out=c)
+    return np.clip(c, -lim, lim, out=c), lim
 
 
 class BaseGeometry:
@@ -119,19 +138,36 @@ class BaseGeometry:
         n = V.shape[0]
         self.FT = np.ascontiguousarray(F.T)
         cols = [np.ascontiguousarray(V[:, d]) for d in range(3)]
-        P = [tuple(c[f] for c in cols) for f in self.FT]
-        self.e = [tuple(a - b for a, b in zip(P[(k + 2) % 3], P[(k + 1) % 3]))
-                  for k in range(3)]
+        P0, P1, P2 = ([np.take(c, f) for c in cols] for f in self.FT)
+        # e_k = p_{k+2} - p_{k+1}, written over the gathered corners once they are used
+        e0 = [b - a for a, b in zip(P1, P2)]
+        e1 = [np.subtract(a, b, out=b) for a, b in zip(P0, P2)]
+        e2 = [np.subtract(b, a, out=b) for a, b in zip(P0, P1)]
+        del P0
+        self.e = [tuple(e0), tuple(e1), tuple(e2)]
         (a0, a1, a2), (b0, b1, b2) = self.e[1], self.e[2]
-        self.N = (a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0)
-        self.N2 = self.N[0] ** 2 + self.N[1] ** 2 + self.N[2] ** 2
-        lmax2 = np.maximum(np.maximum(_norm2(self.e[0]), _norm2(self.e[1])), _norm2(self.e[2]))
+        tmp = np.empty(F.shape[0])
+        N = []
+        for (p, q), (r, u) in (((a1, b2), (a2, b1)), ((a2, b0), (a0, b2)), ((a0, b1), (a1, b0))):
+            x = p * q
+            x -= np.multiply(r, u, out=tmp)
+            N.append(x)
+        self.N = tuple(N)
+        self.N2 = _norm2(self.N, tmp)
+        lmax2 = _norm2(self.e[0], tmp)
+        for k in (1, 2):
+            np.maximum(lmax2, _norm2(self.e[k], tmp), out=lmax2)
         with np.errstate(over="ignore", invalid="ignore"):
-            self.flat = ~(np.sqrt(self.N2) > 1e-12 * lmax2)
+            np.sqrt(self.N2, out=tmp)
+            lmax2 *= 1e-12
+            self.flat = ~(tmp > lmax2)
+        del tmp, lmax2
         self.valence = np.bincount(F.ravel(), minlength=n).astype(np.float64)
         self._topo = topo
         self._normals = None
         self._transpose = None
+        self._gradients = None
+        self._forward = None
 
     @property
     def topo(self) -> EdgeTopology:
@@ -158,6 +194,27 @@ class BaseGeometry:
     def set_normals(self, normals: np.ndarray) -> None:
         self._normals = normals
 
+    def gradients(self) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+        """``G_k = N x e_k / |N|^2`` of every face (the gradient of the hat function
+        of corner ``k``), three coordinate columns ``(m,)`` per corner; cached."""
+        if self._gradients is None:
+            inv = 1.0 / self.N2
+            G = []
+            for k in range(3):
+                (n0, n1, n2), (x0, x1, x2) = self.N, self.e[k]
+                G.append(((n1 * x2 - n2 * x1) * inv, (n2 * x0 - n0 * x2) * inv,
+                          (n0 * x1 - n1 * x0) * inv))
+            self._gradients = G
+        return self._gradients
+
+    def forward(self) -> np.ndarray:
+        """``(3, m)`` bool: half-edge ``k`` of face ``f`` runs from the lower to the
+        higher vertex index (along its unique edge); cached."""
+        if self._forward is None:
+            FT = self.FT
+            self._forward = np.stack([FT[k] < FT[(k + 1) % 3] for k in range(3)])
+        return self._forward
+
     def decode(self, c: np.ndarray) -> np.ndarray:
         """Uniform vertex average of the Whitney corner vectors of ``c``, (n, 3).
 
@@ -168,22 +225,29 @@ class BaseGeometry:
         m = self.F.shape[0]
         h2e = self.topo.half_to_edge.reshape(m, 3)
         FT = self.FT
+        fwd = self.forward()
         s = []
         for k in range(3):
             sk = c[h2e[:, k]]
-            s.append(np.where(FT[k] < FT[(k + 1) % 3], sk, -sk))
-        inv = 1.0 / self.N2
-        G = []
-        for k in range(3):
-            (n0, n1, n2), (x0, x1, x2) = self.N, self.e[k]
-            G.append(((n1 * x2 - n2 * x1) * inv, (n2 * x0 - n0 * x2) * inv,
-                      (n0 * x1 - n1 * x0) * inv))
+            np.negative(sk, out=sk, where=~fwd[k])
+            s.append(sk)
+        G = self.gradients()
         out = np.empty((n, 3))
+        w = np.empty(m)
+        tmp = np.empty(m)
         for d in range(3):
-            acc = np.bincount(FT[0], weights=s[0] * G[1][d] - s[2] * G[2][d], minlength=n)
-            acc += np.bincount(FT[1], weights=s[1] * G[2][d] - s[0] * G[0][d], minlength=n)
-            acc += np.bincount(FT[2], weights=s[2] * G[0][d] - s[1] * G[1][d], minlength=n)
-            out[:, d] = acc / self.valence
+            acc = None
+            for k in range(3):
+                # corner k: s_k G_{k+1} - s_{k+2} G_{k+2}
+                np.multiply(s[k], G[(k + 1) % 3][d], out=w)
+                np.multiply(s[(k + 2) % 3], G[(k + 2) % 3][d], out=tmp)
+                w -= tmp
+                b = np.bincount(FT[k], weights=w, minlength=n)
+                if acc is None:
+                    acc = b
+                else:
+                    acc += b
+            np.divide(acc, self.valence, out=out[:, d])
         return out
 
     def decoder_transpose(self) -> tuple[sp.csr_matrix, np.ndarray, np.ndarray]:
@@ -194,61 +258,84 @@ class BaseGeometry:
         edge's two endpoints, and the frames ``X1, X2`` (n, 3) of
         :func:`axis_frames`.  Half-edge ``k`` of a face (``F_k -> F_{k+1}``)
         enters corner ``k`` with ``+G_{k+1}`` and corner ``k+1`` with ``-G_k``
-        (signed by its orientation against the edge), so the two vectors of
-        every edge are sums over its (one or two) half-edges, gathered
-        through the topology's grouped half-edges, then projected on the
-        frames of the endpoints; the rows are built directly (no sort).
-        ``AT.T`` (CSC, no copy) applies ``P D`` to coefficients and gives the
-        two frame components of every vertex vector.
+        (signed by its orientation against the edge).  Both vectors are
+        projected on the frames (divided by the valence) of their corner's
+        vertex, face by face; the four numbers of an edge are then the sums
+        over its (one or two: the base is manifold) half-edges, read through
+        the topology's grouped half-edges in half-edge order.  The rows are
+        built directly (no sort).  ``AT.T`` (CSC, no copy) applies ``P D`` to
+        coefficients and gives the two frame components of every vertex vector.
         """
         if self._transpose is None:
             m = self.F.shape[0]
             n = self.V.shape[0]
-            E = self.topo.edges
+            topo = self.topo
+            E = topo.edges
             e = E.shape[0]
             X1, X2 = axis_frames(self.normals)
-            # G_k of face f = N x e_k / |N|^2, coordinate by coordinate
-            inv = 1.0 / self.N2
-            G = []
-            for k in range(3):
-                (n0, n1, n2), (x0, x1, x2) = self.N, self.e[k]
-                G.append(((n1 * x2 - n2 * x1) * inv, (n2 * x0 - n0 * x2) * inv,
-                          (n0 * x1 - n1 * x0) * inv))
-            # half-edge h = 3 f + k runs F_k -> F_{k+1}; the edge's first vertex gets
-            # +G_{k+1} if h runs along the edge (a -> b), else +G_k; the second -G_k,
-            # else -G_{k+1}: summed over the edge's half-edges (in half-edge order)
-            FT = self.FT
-            fwd = [FT[k] < FT[(k + 1) % 3] for k in range(3)]
-            h2e = self.topo.half_to_edge
-            ea, eb = np.ascontiguousarray(E[:, 0]), np.ascontiguousarray(E[:, 1])
             iv = 1.0 / self.valence
-            wa, wb = iv[ea], iv[eb]
-            # data row e: a_e . X1(a), a_e . X2(a), b_e . X1(b), b_e . X2(b), scaled by
-            # 1 / valence; accumulated coordinate by coordinate on contiguous columns
-            data = np.zeros((4, e))
-            w = np.empty((m, 3))
-            for d in range(3):
-                for k in range(3):
-                    np.copyto(w[:, k], np.where(fwd[k], G[(k + 1) % 3][d], G[k][d]))
-                a_d = np.bincount(h2e, weights=w.ravel(), minlength=e)
-                for k in range(3):
-                    np.copyto(w[:, k], np.where(fwd[k], G[k][d], G[(k + 1) % 3][d]))
-                b_d = np.bincount(h2e, weights=w.ravel(), minlength=e)
-                x1, x2 = np.ascontiguousarray(X1[:, d]), np.ascontiguousarray(X2[:, d])
-                data[0] += a_d * x1[ea]
-                data[1] += a_d * x2[ea]
-                data[2] -= b_d * x1[eb]
-                data[3] -= b_d * x2[eb]
-            data[:2] *= wa
-            data[2:] *= wb
+            Y = [np.ascontiguousarray(X[:, d]) * iv for X in (X1, X2) for d in range(3)]
+            G = self.gradients()
+            FT = self.FT
+            fwd = self.forward()
+            rev = ~fwd
+            # W[i, k, f]: part i of half-edge k of face f -- parts 0, 1 at the
+            # edge's first vertex a, 2, 3 at its second vertex b.  Corner k (vertex
+            # F_k) is the tail of half-edge k, which puts +G_{k+1} there, and the
+            # head of half-edge k+2, which puts -G_{k+2} there; a forward half-edge
+            # (F_k < F_{k+1}) has a at its tail, a reversed one at its head and
+            # enters with the opposite sign.  Entry 3m stays zero.
+            W = np.zeros((4, 3 * m + 1))
+            Wk = W[:, :3 * m].reshape(4, 3, m)
+            y = [np.empty(m) for _ in range(6)]
+            acc = np.empty(m)
+            tmp = np.empty(m)
+            for k in range(3):
+                k1, k2 = (k + 1) % 3, (k + 2) % 3
+                for i in range(6):
+                    np.take(Y[i], FT[k], out=y[i])
+                for j in range(2):
+                    _dot_into(G[k1], y[3 * j:3 * j + 3], acc, tmp)     # tail of k
+                    np.copyto(Wk[j, k], acc, where=fwd[k])
+                    np.negative(acc, out=Wk[2 + j, k], where=rev[k])
+                    _dot_into(G[k2], y[3 * j:3 * j + 3], acc, tmp)     # -head of k+2
+                    np.negative(acc, out=Wk[2 + j, k2], where=fwd[k2])
+                    np.copyto(Wk[j, k2], acc, where=rev[k2])
+            del y, acc, tmp
+            # an edge's four numbers: the sum over its one or two half-edges (the
+            # base is manifold), in half-edge order; half-edge 3 f + k is W[:, k, f]
+            order = topo.grouped_half_edges()
+            start = topo.edge_starts()
+            h0 = order[start]
+            h1 = h0.copy()
+            two = topo.face_count == 2
+            h1[two] = order[start[two] + 1]
+            rem = np.empty(e, dtype=np.int64)
+            for h in (h0, h1):                  # 3 f + k -> k m + f, in place
+                np.remainder(h, 3, out=rem)
+                h //= 3
+                rem *= m
+                h += rem
+            h1[~two] = 3 * m
+            del rem
+            data = np.empty((e, 4))
+            b0, b1 = np.empty(e), np.empty(e)
+            for i in range(4):
+                np.take(W[i], h0, out=b0)
+                np.take(W[i], h1, out=b1)
+                np.add(b0, b1, out=data[:, i])
+            del b0, b1
+            del W
             index = np.int32 if 2 * n < 2 ** 31 else np.int64
             cols = np.empty((e, 4), dtype=index)
-            cols[:, 0] = 2 * ea
+            cols[:, 0] = E[:, 0]
+            cols[:, 0] *= 2
             cols[:, 1] = cols[:, 0] + 1
-            cols[:, 2] = 2 * eb
+            cols[:, 2] = E[:, 1]
+            cols[:, 2] *= 2
             cols[:, 3] = cols[:, 2] + 1
-            AT = sp.csr_matrix((data.T.ravel(), cols.ravel(),
-                                4 * np.arange(e + 1, dtype=index)), shape=(e, 2 * n))
+            AT = sp.csr_matrix((data.reshape(-1), cols.reshape(-1),
+                                np.arange(0, 4 * e + 1, 4, dtype=index)), shape=(e, 2 * n))
             self._transpose = (AT, X1, X2)
         return self._transpose
 
@@ -258,8 +345,23 @@ class BaseGeometry:
         return X - dot(X, nrm)[:, None] * nrm
 
 
-def _norm2(v) -> np.ndarray:
-    return v[0] * v[0] + v[1] * v[1] + v[2] * v[2]
+def _dot_into(g, y, out: np.ndarray, tmp: np.ndarray) -> None:
+    """``out = g . y`` for two vectors given as three coordinate columns."""
+    np.multiply(g[0], y[0], out=out)
+    np.multiply(g[1], y[1], out=tmp)
+    out += tmp
+    np.multiply(g[2], y[2], out=tmp)
+    out += tmp
+
+
+def _norm2(v, tmp: np.ndarray | None = None) -> np.ndarray:
+    """``|v|^2`` of a vector given as three coordinate columns (``tmp``: scratch)."""
+    out = v[0] * v[0]
+    if tmp is None:
+        tmp = np.empty_like(out)
+    out += np.multiply(v[1], v[1], out=tmp)
+    out += np.multiply(v[2], v[2], out=tmp)
+    return out
 
 
 #: Relative Tikhonov weight of :func:`lsq_encode` (towards the edge encoding).
@@ -281,7 +383,9 @@ def lsq_encode(g: BaseGeometry, t: np.ndarray) -> np.ndarray:
     damping target: there are more edges than tangential equations) and
     ``K_ee`` the diagonal of the normal matrix (scale-free damping).  Solved by
     Jacobi-preconditioned conjugate gradients on the normal equations through
-    :meth:`BaseGeometry.decoder_transpose` (four entries per edge)
+    :meth:`BaseGeometry.decoder_transpose` (four entries per edge), written as
+    plain CG on the diagonally rescaled system (the same iterates, one pass
+    over the edges less per iteration)
     (at most ``LSQ_ITERATIONS``, stopping at relative residual ``LSQ_RTOL``),
     then ``LSQ_ROUNDS`` active-set rounds: coefficients past their bound are
     fixed at it and the free ones re-fitted (``LSQ_ROUND_ITERATIONS`` each);
@@ -300,66 +404,88 @@ def lsq_encode(g: BaseGeometry, t: np.ndarray) -> np.ndarray:
     numpy.ndarray, (e,) float64
     """
     E = g.topo.edges
-    c0 = edge_encode(g.V, E, t)
+    c0, lim = edge_encode_and_lengths(g.V, E, t)
     if E.shape[0] == 0:
         return c0
     AT, X1, X2 = g.decoder_transpose()
-    A = AT.T
-    lim = np.sqrt(np.einsum("ed,ed->e", g.V[E[:, 1]] - g.V[E[:, 0]],
-                            g.V[E[:, 1]] - g.V[E[:, 0]]))
-    diag = np.asarray(AT.multiply(AT).sum(axis=1)).ravel()
+    data = AT.data.reshape(-1, 4)
+    diag = np.einsum("ij,ij->i", data, data)
     reg = LSQ_DAMPING * diag
     Kd = diag + reg
     Kd[Kd <= 0] = 1.0
+    # Jacobi preconditioning as a change of variables: with S = Kd^(-1/2) and
+    # c = c0 + S x, plain CG on S K S x = S rhs makes the same iterates as
+    # Jacobi-preconditioned CG on K d = rhs, with one pass less per iteration
+    # (no division by Kd) and the damping a scalar where every diag > 0
+    sq = np.sqrt(Kd)
+    scale = 1.0 / sq
+    ATs = sp.csr_matrix((np.multiply(data, scale[:, None]).reshape(-1), AT.indices, AT.indptr),
+                        shape=AT.shape)
+    As = ATs.T
+    if (diag > 0).all():
+        mu = LSQ_DAMPING / (1.0 + LSQ_DAMPING)
 
-    def K(x):
-        return AT @ (A @ x) + reg * x
+        def K(x):
+            y = ATs @ (As @ x)
+            blas.daxpy(x, y, a=mu)
+            return y
+    else:
+        mu_v = reg / Kd
+
+        def K(x):
+            y = ATs @ (As @ x)
+            y += mu_v * x
+            return y
 
     t2 = np.empty((t.shape[0], 2))
     t2[:, 0] = dot(t, X1)
     t2[:, 1] = dot(t, X2)
-    rhs = AT @ (t2.ravel() - A @ c0)
-    lo, hi = -lim - c0, lim - c0
-    d = _pcg(K, rhs, np.zeros_like(c0), Kd, None, LSQ_ITERATIONS, LSQ_RTOL)
-    free = np.ones(c0.shape, dtype=bool)
-    for _ in range(LSQ_ROUNDS):
-        out = free & ((d > hi) | (d < lo))
-        if not out.any():
-            break
-        np.clip(d, lo, hi, out=d)
-        free &= ~out
-        d = _pcg(K, rhs, d, Kd, free, LSQ_ROUND_ITERATIONS, 0.0)
-    c = c0 + d
+    rhs = ATs @ (t2.ravel() - As @ (sq * c0))
+    lo, hi = (-lim - c0) * sq, (lim - c0) * sq
+    with single_threaded_blas():
+        x = _cg(K, rhs, None, None, LSQ_ITERATIONS, LSQ_RTOL, Kd)
+        free = np.ones(c0.shape, dtype=bool)
+        for _ in range(LSQ_ROUNDS):
+            out = free & ((x > hi) | (x < lo))
+            if not out.any():
+                break
+            np.clip(x, lo, hi, out=x)
+            free &= ~out
+            x = _cg(K, rhs, x, free, LSQ_ROUND_ITERATIONS, 0.0, Kd)
+    c = c0 + scale * x
     return np.clip(c, -lim, lim, out=c)
 
 
-def _pcg(K, rhs, x, Kd, free, iterations, rtol):
-    """Jacobi-preconditioned CG on ``K x = rhs`` over the ``free`` unknowns."""
+def _cg(K, rhs, x, free, iterations, rtol, weight):
+    """CG on ``K x = rhs`` over the ``free`` unknowns (all when None).
+
+    ``x`` is the start (updated in place), None for zero.  Stops early when
+    ``sum(weight r^2) <= rtol^2 sum(weight rhs^2)`` (the residual of the
+    unscaled system when ``K`` is Jacobi-scaled by ``weight^(-1/2)``).  In-place
+    BLAS updates (call with BLAS limited to one thread: deterministic sums).
+    """
     mask = None if free is None else free.astype(np.float64)
-    r = rhs - K(x)
+    if x is None:
+        x = np.zeros_like(rhs)
+        r = rhs.copy()
+    else:
+        r = rhs - K(x)
     if mask is not None:
         r *= mask
-    z = r / Kd
-    p = z.copy()
-    rz = _vdot(r, z)
-    stop = rtol * rtol * _vdot(rhs, rhs)
+    p = r.copy()
+    rr = blas.ddot(r, r)
+    stop = rtol * rtol * float(np.einsum("i,i,i->", rhs, rhs, weight))
     for _ in range(iterations):
-        if rz <= 0.0 or _vdot(r, r) <= stop:
+        if rr <= 0.0 or (rtol > 0.0 and float(np.einsum("i,i,i->", r, r, weight)) <= stop):
             break
         Kp = K(p)
         if mask is not None:
             Kp *= mask
-        alpha = rz / _vdot(p, Kp)
-        x += alpha * p
-        r -= alpha * Kp
-        z = r / Kd
-        rz_new = _vdot(r, z)
-        p *= rz_new / rz
-        p += z
-        rz = rz_new
+        alpha = rr / blas.ddot(p, Kp)
+        blas.daxpy(p, x, a=alpha)
+        blas.daxpy(Kp, r, a=-alpha)
+        rr_new = blas.ddot(r, r)
+        blas.dscal(rr_new / rr, p)
+        blas.daxpy(r, p)
+        rr = rr_new
     return x
-
-
-def _vdot(x: np.ndarray, y: np.ndarray) -> float:
-    # einsum's own loop: BLAS ddot may spawn threads, slow on a busy machine
-    return float(np.einsum("i,i->", x, y))

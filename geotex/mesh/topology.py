@@ -135,14 +135,59 @@ def edge_topology(F: np.ndarray, n_vertices: int | None = None) -> EdgeTopology:
     n = int(n_vertices if n_vertices is not None else (F.max() + 1 if F.size else 0))
     N = max(n, 1)
     a = F.ravel()                       # half-edge 3f + k runs a -> b
-    b = F[:, [1, 2, 0]].ravel()
+    b = F[:, [1, 2, 0]].ravel()         # a copy: overwritten below
     fwd = a < b
     key = np.minimum(a, b)
     key *= N
-    key += np.maximum(a, b)
-    order = np.argsort(key)             # one 1-D sort of int64 keys
-    ks = key[order]
-    del key
+    np.maximum(a, b, out=b)
+    key += b
+    del b
+    h = key.shape[0]
+    shift = max(h - 1, 0).bit_length()
+    if (N * N - 1).bit_length() + shift <= 63:
+        # the half-edge index in the low bits makes every key unique: one sort of
+        # int64 values (much faster than an argsort) gives the edges in order and
+        # the half-edges ascending within every edge
+        order = np.arange(h, dtype=np.int64)
+        key <<= shift
+        key |= order
+        key.sort()
+        np.bitwise_and(key, (1 << shift) - 1, out=order)
+        key >>= shift
+        ks = key
+        del key
+        new, first, run, counts = _runs(ks)
+    else:
+        order = np.argsort(key)         # one 1-D sort of int64 keys
+        ks = key[order]
+        del key
+        new, first, run, counts = _runs(ks)
+        # make the order ascending within every edge (the sort is not stable)
+        two = first[counts == 2]
+        swap = two[order[two] > order[two + 1]]
+        order[swap], order[swap + 1] = order[swap + 1], order[swap].copy()
+        if np.any(counts > 2):
+            sel = np.flatnonzero(np.repeat(counts > 2, counts))
+            sub = order[sel]
+            order[sel] = sub[np.lexsort((sub, run[sel]))]
+    del new
+    inv = np.empty(ks.shape[0], dtype=np.int64)
+    inv[order] = run
+    del run
+    uniq = ks[first]
+    del ks
+    edges = np.empty((uniq.shape[0], 2), dtype=np.int64)
+    np.floor_divide(uniq, N, out=edges[:, 0])
+    uniq -= edges[:, 0] * N
+    edges[:, 1] = uniq
+    del uniq
+    forward = np.bincount(inv[fwd], minlength=first.shape[0]).astype(np.int64, copy=False)
+    return EdgeTopology(edges=edges, half_to_edge=inv, face_count=counts,
+                        forward_count=forward, half_order=order)
+
+
+def _runs(ks: np.ndarray):
+    """Runs of equal values in sorted ``ks``: starts mask, first indices, run ids, lengths."""
     new = np.empty(ks.shape[0], dtype=bool)
     if ks.shape[0]:
         new[0] = True
@@ -150,24 +195,8 @@ def edge_topology(F: np.ndarray, n_vertices: int | None = None) -> EdgeTopology:
     first = np.flatnonzero(new)
     run = np.cumsum(new, dtype=np.int64)
     run -= 1
-    counts = np.diff(np.append(first, ks.shape[0])).astype(np.int64)
-    # make the order ascending within every edge (the sort is not stable)
-    two = first[counts == 2]
-    swap = two[order[two] > order[two + 1]]
-    order[swap], order[swap + 1] = order[swap + 1], order[swap].copy()
-    if np.any(counts > 2):
-        sel = np.flatnonzero(np.repeat(counts > 2, counts))
-        sub = order[sel]
-        order[sel] = sub[np.lexsort((sub, run[sel]))]
-    inv = np.empty(ks.shape[0], dtype=np.int64)
-    inv[order] = run
-    del run
-    uniq = ks[first]
-    lo = uniq // N
-    edges = np.stack([lo, uniq - lo * N], axis=1)
-    forward = np.bincount(inv[fwd], minlength=first.shape[0]).astype(np.int64)
-    return EdgeTopology(edges=edges, half_to_edge=inv, face_count=counts,
-                        forward_count=forward, half_order=order)
+    counts = np.diff(np.append(first, ks.shape[0])).astype(np.int64, copy=False)
+    return new, first, run, counts
 
 
 def compacted(V: np.ndarray, F: np.ndarray, *, return_index: bool = False):
