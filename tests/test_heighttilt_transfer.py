@@ -304,8 +304,12 @@ def test_transfer_between_shapes_keeps_element_heights_and_lean_directions():
     Vd, Fd = _ellipsoid()
     out, rep = transfer_between_shapes(Vs, F, tex, Vd, Fd)
     assert out.height.shape == (len(Vd),) and out.metadata["map"] == "sphere"
-    assert rep.target.elements == rep.source.elements
-    # measured: 7 elements, mean element height 0.281 -> 0.261, tilt direction median 3.2 deg
+    # one of the 7 spikes peaks near the fixed 0.25 element threshold: resampled on the
+    # ellipsoid its peak lands just above or below it depending on the last bits of the
+    # map (6 or 7 found on different CPUs); losing more than that one is a failure
+    assert rep.source.elements - 1 <= rep.target.elements <= rep.source.elements
+    # measured: 7 elements, mean element height 0.281 -> 0.261-0.267, tilt direction
+    # median 2.6-3.2 deg
     assert abs(rep.target.mean_element_height / rep.source.mean_element_height - 1) < 0.1
     assert rep.tilt_direction_error_deg[0] < 10.0
     assert rep.distortion.angle.mean < 0.02            # near-conformal map
