@@ -155,7 +155,7 @@ def run_check(args) -> int:
 
 def run_tile(args) -> int:
     from geotex.errors import NotPrintableError
-    from geotex.printing import export_printable
+    from geotex.printing import export_printable, printable_stored_solid, stored_precision
     from geotex.tiles.catalog import load_named, tileset_path
     from geotex.tiles.tiling import on_slab, planar_tiling, random_arrangement
 
@@ -166,13 +166,15 @@ def run_tile(args) -> int:
     w, h = args.grid
     arrangement = random_arrangement(tiles, w, h, seed=args.seed)
     V, F = on_slab(*planar_tiling(tiles, arrangement), (w, h), thickness=args.slab)
-    V = V * args.tile_size
+    # judged as the file stores it, what the rounding breaks rebuilt (as the main job does)
+    solid = printable_stored_solid(V * args.tile_size, F, precision=stored_precision(out.suffix))
     try:
-        export_printable(out, V, F, name=f"{tiles.name} {w}x{h}")
+        export_printable(out, solid.vertices, solid.faces, name=f"{tiles.name} {w}x{h}",
+                         report=solid.report)
     except NotPrintableError as exc:
         print(f"geotex: error: {exc}", file=sys.stderr)
         return EXIT_NOT_PRINTABLE
-    print(f"{out}: {len(F)} faces, {w} x {h} tiles of {args.tile_size:g}, printable")
+    print(f"{out}: {len(solid.faces)} faces, {w} x {h} tiles of {args.tile_size:g}, printable")
     return EXIT_OK
 
 

@@ -22,7 +22,7 @@ import numpy as np
 
 from geotex.check.intersections import self_intersecting_pairs
 from geotex.errors import GeotexError
-from geotex.mesh.needles import needle_free
+from geotex.mesh.needles import SLIVER_TOLERANCE, needle_free
 from geotex.mesh.solid import arrays_of_manifold, manifold_of
 from geotex.mesh.topology import compacted, face_components, greedy_colouring
 from geotex.progress import report
@@ -33,12 +33,6 @@ __all__ = ["united_with_base", "element_contacts", "ElementContacts", "element_g
 #: Stage names passed to the ``progress`` callback of :func:`united_with_base`.
 UNION_STAGES = ("union: folded elements", "union: boolean", "union: slivers")
 
-#: Needle triangles of the union lower than this fraction of the bounding-box
-#: diagonal are removed (:func:`geotex.mesh.needles.needle_free`). 1e-6 (0.1
-#: micrometre on a 100 mm part) is about ten float32 steps, so what remains
-#: survives the rounding to float32 of an STL file; at 1e-7 the rounding broke
-#: hundreds of slivers on chain mail.
-SLIVER_TOLERANCE = 1e-6
 
 
 @dataclass(frozen=True)

@@ -123,7 +123,7 @@ def printable_stored_solid(V, F, *, precision=np.float32, rebuild: bool = False,
     judged as stored. Vertices only move onto other vertices' rounded
     positions. Needle triangles that rounding would fold are best removed
     before rounding (the union simplifies at a small tolerance,
-    :data:`geotex.mapping.union.SLIVER_TOLERANCE`).
+    :data:`geotex.mesh.needles.SLIVER_TOLERANCE`).
 
     Parameters
     ----------

@@ -6,6 +6,7 @@ import manifold3d
 import numpy as np
 
 from geotex.errors import InputError
+from geotex.mesh.needles import SLIVER_TOLERANCE, needle_free
 from geotex.mesh.solid import arrays_of_manifold, manifold_of
 from geotex.mesh.topology import compacted, edge_topology, face_components
 from geotex.tiles.tileset import TileSet
@@ -133,6 +134,11 @@ def on_slab(V: np.ndarray, F: np.ndarray, size, *, thickness: float = 0.2
             ) -> tuple[np.ndarray, np.ndarray]:
     """Union a planar texture with the slab ``[0, w] x [0, h] x [-thickness, 0]``.
 
+    The needle triangles the boolean leaves where elements graze the slab's
+    top are removed (:func:`geotex.mesh.needles.needle_free` at
+    :data:`~geotex.mesh.needles.SLIVER_TOLERANCE` of the diagonal), as after the
+    main job's union: rounded to float32 they would fold onto their neighbours.
+
     Returns
     -------
     V, F : numpy.ndarray
@@ -140,4 +146,7 @@ def on_slab(V: np.ndarray, F: np.ndarray, size, *, thickness: float = 0.2
     """
     slab = manifold3d.Manifold.cube([float(size[0]), float(size[1]), thickness]
                                     ).translate([0.0, 0.0, -thickness])
-    return arrays_of_manifold(slab + manifold_of(V, F))
+    U, G = arrays_of_manifold(slab + manifold_of(V, F))
+    diag = float(np.linalg.norm(np.ptp(U, axis=0))) if len(U) else 0.0
+    U, G, _ = needle_free(U, G, tolerance=SLIVER_TOLERANCE * diag)
+    return U, G
