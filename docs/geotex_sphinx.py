@@ -137,13 +137,38 @@ def _module_page(name: str, public: set[str]) -> str:
     return "\n".join(lines)
 
 
-def write_api_page() -> None:
-    """Write ``docs/generated/api.rst`` and one page per public module under ``api/``."""
+def write_api_page(only: str = "") -> None:
+    """Write ``docs/generated/api.rst`` and one page per public module under ``api/``.
+
+    Parameters
+    ----------
+    only : str, optional
+        A regular expression; when given, only the modules whose name it
+        matches at the start get a page (``GEOTEX_DOCS_API`` in ``conf.py``:
+        a quick partial build, e.g. for the test of the built site). Pages
+        of modules left out, written by an earlier build, are removed so
+        that no page stands outside the toctree.
+
+    Raises
+    ------
+    re.error
+        If ``only`` is not a regular expression.
+    """
     names = public_modules()
     public = set(names)
+    if only:
+        pattern = re.compile(only)
+        names = [n for n in names if pattern.match(n)]
     for name in names:
         _write_if_changed(GENERATED / "api" / f"{name}.rst", _module_page(name, public))
+    for stale in (GENERATED / "api").glob("*.rst"):
+        if stale.stem not in names:
+            stale.unlink()
     head = (DOCS / "api.rst").read_text(encoding="utf-8")
+    if only:
+        note = (".. note::\n\n   A partial build: only the modules whose name "
+                f"matches ``{only}`` (``GEOTEX_DOCS_API``).\n\n")
+        head = head.replace(".. toctree::", note + ".. toctree::", 1)
     body = "".join(f"   api/{name}\n" for name in names)
     _write_if_changed(GENERATED / "api.rst", head + body)
 
