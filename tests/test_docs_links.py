@@ -50,3 +50,28 @@ def test_local_links_point_to_committed_files(page):
         elif tracked is not None and path.is_file() and rel not in tracked:
             missing.append(f"{target} (not committed)")
     assert missing == []
+
+
+def test_the_site_shows_the_pictures_of_its_own_build(tmp_path):
+    import sys
+    sys.path.insert(0, str(ROOT / "docs"))
+    try:
+        import geotex_sphinx
+    finally:
+        sys.path.remove(str(ROOT / "docs"))
+    out = tmp_path / "_build" / "gallery-out"
+    for stem, name in (("pgp_relief", "pgp_relief.png"), ("tiles", "tiles_knurl_tiling.png"),
+                       ("tiles", "notes.txt")):
+        (out / stem).mkdir(parents=True, exist_ok=True)
+        (out / stem / name).write_bytes(b"")
+    pictures = geotex_sphinx.built_pictures(out)
+    assert sorted(pictures) == ["pgp_relief.png", "tiles_knurl_tiling.png"]
+    text = ("![pgp relief](gallery/pgp_relief.png)\n![q](gallery/quilting.png)\n"
+            ".. image:: gallery/tiles_knurl_tiling.png\n")
+    new = geotex_sphinx.use_built_pictures(text, "guide", pictures, tmp_path)
+    assert new.splitlines() == [
+        "![pgp relief](_build/gallery-out/pgp_relief/pgp_relief.png)",
+        "![q](gallery/quilting.png)",                 # not made in this build: committed
+        ".. image:: _build/gallery-out/tiles/tiles_knurl_tiling.png"]
+    deeper = geotex_sphinx.use_built_pictures(text, "api/geotex", pictures, tmp_path)
+    assert "](../_build/gallery-out/pgp_relief/pgp_relief.png)" in deeper
