@@ -30,7 +30,7 @@ from geotex.mesh.primitives import closed_cylinder
 from geotex.mesh.topology import compacted
 from geotex.render import Panel, render_panels
 
-HERE = Path(__file__).resolve().parent
+HERE = Path(sys.argv[0]).resolve().parent      # the script's folder (no __file__ in the gallery build)
 sys.path.insert(0, str(HERE))
 QUICK = bool(os.environ.get("GEOTEX_EXAMPLES_QUICK"))
 

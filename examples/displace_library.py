@@ -19,7 +19,7 @@ from PIL import Image, ImageDraw
 
 from geotex.displace.library import library_height_map, library_names
 
-HERE = Path(__file__).resolve().parent
+HERE = Path(sys.argv[0]).resolve().parent      # the script's folder (no __file__ in the gallery build)
 
 
 def main(out_dir=None):

@@ -29,7 +29,7 @@ from geotex.displace import displaced_mesh
 from geotex.io import read_mesh
 from geotex.render import Panel, render_panels
 
-HERE = Path(__file__).resolve().parent
+HERE = Path(sys.argv[0]).resolve().parent      # the script's folder (no __file__ in the gallery build)
 SHARED = next((p / "shared" / "data" for p in HERE.parents[1:3]
                if (p / "shared" / "data").is_dir()), HERE.parents[1] / "shared" / "data")
 SPOT_UV = SHARED / "base" / "spot_uv" / "spot.obj"

@@ -24,3 +24,20 @@ def test_example_writes_pictures(script, tmp_path):
     for f in pictures:
         with Image.open(f) as im:
             assert im.size[0] >= 200 and im.size[1] >= 150
+
+
+@pytest.mark.parametrize("script", EXAMPLES, ids=[p.stem for p in EXAMPLES])
+def test_example_runs_without_file_variable(script):
+    """sphinx-gallery runs an example without ``__file__``: only the ``__main__``
+    block's default output folder may use it (docs/gallery-examples.md)."""
+    import ast
+
+    tree = ast.parse(script.read_text(encoding="utf-8"))
+    allowed = set()
+    for node in tree.body:
+        if (isinstance(node, ast.If) and isinstance(node.test, ast.Compare)
+                and getattr(node.test.left, "id", None) == "__name__"):
+            allowed.update(id(n) for n in ast.walk(node))
+    uses = [n.lineno for n in ast.walk(tree)
+            if isinstance(n, ast.Name) and n.id == "__file__" and id(n) not in allowed]
+    assert uses == [], f"__file__ at lines {uses}: use Path(sys.argv[0])"
