@@ -1,4 +1,6 @@
-"""geotex displace: bricks on a cylinder and on Spot, projected (triplanar) vs seamless (pgp).
+"""
+Displace close-ups: bricks on a cylinder and on Spot, triplanar vs pgp
+======================================================================
 
 Pictures (written to OUT_DIR):
 

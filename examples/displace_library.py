@@ -1,4 +1,6 @@
-"""geotex displace: contact sheet of the procedural height-map library.
+"""
+Displace: the procedural height-map library
+===========================================
 
 Pictures (written to OUT_DIR):
 

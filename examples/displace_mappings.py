@@ -1,4 +1,6 @@
-"""geotex displace: the library's bricks on Spot (89 mm) under every mapping.
+"""
+Displace mappings: the library's bricks on Spot (89 mm) under every mapping
+===========================================================================
 
 Pictures (written to OUT_DIR):
 
