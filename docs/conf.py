@@ -8,7 +8,10 @@ Generated at build time (not committed): the CLI reference (walked from
 ``geotex.cli.build_parser``), one page per benchmark result in
 ``benchmarks/results/``, the API pages (autosummary) and the gallery
 (sphinx-gallery runs every script in ``examples/``; set
-``GEOTEX_EXAMPLES_QUICK=1`` for the quick mode, small inputs).  The 3D viewer
+``GEOTEX_EXAMPLES_QUICK=1`` for the quick mode, small inputs).  Partial builds
+(quick checks, tests/test_docs_site.py): ``GEOTEX_EXAMPLES_ONLY=REGEX`` runs only
+the examples whose file name matches, ``GEOTEX_DOCS_API=REGEX`` writes API pages
+only for the modules whose name matches (e.g. ``geotex.viewpage``).  The 3D viewer
 bundle is built from the npm registry when missing (``viewer/README.md``).
 """
 
@@ -101,5 +104,5 @@ def _build_viewer_bundle():
 
 
 _build_viewer_bundle()
-geotex_sphinx.write_api_page()
+geotex_sphinx.write_api_page(only=os.environ.get("GEOTEX_DOCS_API", ""))
 os.environ.setdefault("COLUMNS", "88")      # argparse help wraps at a fixed width

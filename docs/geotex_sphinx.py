@@ -4,7 +4,9 @@
   from :func:`geotex.cli.build_parser`, and one page per benchmark result in
   ``benchmarks/results/*.md`` (included with myst).
 * ``source-read``: links from ``docs/*.md`` to ``../benchmarks/results/X.md``
-  (right on GitHub) point to the generated pages in the site.
+  (right on GitHub) point to the generated pages in the site, and the
+  committed pictures ``gallery/NAME.png`` a page shows are replaced by the
+  ones the examples wrote in this build (:func:`use_built_pictures`).
 * :func:`output_scraper`: a sphinx-gallery image scraper that picks up the
   PNG pictures an example wrote into its output folder, and embeds every GLB
   it wrote in the interactive 3D viewer (``geotex.viewpage``).
@@ -79,9 +81,75 @@ def _generate(app) -> None:
 _RESULT_LINK = re.compile(r"\]\(\.\./benchmarks/results/([\w.-]+)\.md\)")
 
 
+#: a committed picture shown by a page: Markdown ``](gallery/NAME.png)`` or
+#: reStructuredText ``image::``/``figure:: gallery/NAME.png``
+_PICTURE = re.compile(r"(\]\(|\.\. (?:image|figure):: )gallery/([\w.-]+\.png)")
+
+
+def built_pictures(out: Path = GALLERY_OUT) -> dict[str, Path]:
+    """Return the pictures the gallery examples wrote in this build, by file name.
+
+    Parameters
+    ----------
+    out : pathlib.Path, optional
+        The examples' output folders (one per example).
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+        ``NAME.png`` -> the file an example wrote (the first in sorted
+        order when two wrote the same name).
+    """
+    found: dict[str, Path] = {}
+    for png in sorted(out.glob("*/*.png")):
+        found.setdefault(png.name, png)
+    return found
+
+
+def use_built_pictures(text: str, docname: str, pictures: dict[str, Path],
+                       srcdir: Path = DOCS) -> str:
+    """Point a page's ``gallery/NAME.png`` pictures to the ones this build made.
+
+    ``docs/gallery`` keeps the few pictures that the README and the pages
+    show (readable on GitHub too); in the site a page shows the picture its
+    example wrote in this build, so that it is never older than the code.
+    A picture no example wrote in this build (a partial build) stays the
+    committed one.
+
+    Parameters
+    ----------
+    text : str
+        The page's source.
+    docname : str
+        The page's name (``guide``, ``api/geotex.render``): links are
+        relative to its folder.
+    pictures : dict of str to pathlib.Path
+        :func:`built_pictures`.
+    srcdir : pathlib.Path, optional
+        The documentation's source folder.
+
+    Returns
+    -------
+    str
+        The source with the links replaced.
+    """
+    up = "../" * docname.count("/")
+
+    def replace(m):
+        built = pictures.get(m.group(2))
+        if built is None or not built.is_relative_to(srcdir):
+            return m.group(0)
+        return m.group(1) + up + built.relative_to(srcdir).as_posix()
+
+    return _PICTURE.sub(replace, text)
+
+
 def _rewrite_links(app, docname, source) -> None:
     if docname == "benchmarks":
         source[0] = _RESULT_LINK.sub(r"](generated/benchmarks/\1.md)", source[0])
+    if "gallery/" in source[0]:
+        source[0] = use_built_pictures(source[0], docname, built_pictures(),
+                                       Path(app.srcdir))
 
 
 def public_modules() -> list[str]:
@@ -137,13 +205,38 @@ def _module_page(name: str, public: set[str]) -> str:
     return "\n".join(lines)
 
 
-def write_api_page() -> None:
-    """Write ``docs/generated/api.rst`` and one page per public module under ``api/``."""
+def write_api_page(only: str = "") -> None:
+    """Write ``docs/generated/api.rst`` and one page per public module under ``api/``.
+
+    Parameters
+    ----------
+    only : str, optional
+        A regular expression; when given, only the modules whose name it
+        matches at the start get a page (``GEOTEX_DOCS_API`` in ``conf.py``:
+        a quick partial build, e.g. for the test of the built site). Pages
+        of modules left out, written by an earlier build, are removed so
+        that no page stands outside the toctree.
+
+    Raises
+    ------
+    re.error
+        If ``only`` is not a regular expression.
+    """
     names = public_modules()
     public = set(names)
+    if only:
+        pattern = re.compile(only)
+        names = [n for n in names if pattern.match(n)]
     for name in names:
         _write_if_changed(GENERATED / "api" / f"{name}.rst", _module_page(name, public))
+    for stale in (GENERATED / "api").glob("*.rst"):
+        if stale.stem not in names:
+            stale.unlink()
     head = (DOCS / "api.rst").read_text(encoding="utf-8")
+    if only:
+        note = (".. note::\n\n   A partial build: only the modules whose name "
+                f"matches ``{only}`` (``GEOTEX_DOCS_API``).\n\n")
+        head = head.replace(".. toctree::", note + ".. toctree::", 1)
     body = "".join(f"   api/{name}\n" for name in names)
     _write_if_changed(GENERATED / "api.rst", head + body)
 

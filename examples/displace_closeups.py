@@ -1,4 +1,6 @@
-"""geotex displace: bricks on a cylinder and on Spot, projected (triplanar) vs seamless (pgp).
+"""
+Displace close-ups: bricks on a cylinder and on Spot, triplanar vs pgp
+======================================================================
 
 Pictures (written to OUT_DIR):
 
@@ -30,7 +32,7 @@ from geotex.mesh.primitives import closed_cylinder
 from geotex.mesh.topology import compacted
 from geotex.render import Panel, render_panels
 
-HERE = Path(__file__).resolve().parent
+HERE = Path(sys.argv[0]).resolve().parent      # the script's folder (no __file__ in the gallery build)
 sys.path.insert(0, str(HERE))
 QUICK = bool(os.environ.get("GEOTEX_EXAMPLES_QUICK"))
 

@@ -1,4 +1,6 @@
-"""geotex displace: contact sheet of the procedural height-map library.
+"""
+Displace: the procedural height-map library
+===========================================
 
 Pictures (written to OUT_DIR):
 
@@ -19,7 +21,7 @@ from PIL import Image, ImageDraw
 
 from geotex.displace.library import library_height_map, library_names
 
-HERE = Path(__file__).resolve().parent
+HERE = Path(sys.argv[0]).resolve().parent      # the script's folder (no __file__ in the gallery build)
 
 
 def main(out_dir=None):

@@ -1,4 +1,6 @@
-"""geotex displace: the library's bricks on Spot (89 mm) under every mapping.
+"""
+Displace mappings: the library's bricks on Spot (89 mm) under every mapping
+===========================================================================
 
 Pictures (written to OUT_DIR):
 
@@ -29,7 +31,7 @@ from geotex.displace import displaced_mesh
 from geotex.io import read_mesh
 from geotex.render import Panel, render_panels
 
-HERE = Path(__file__).resolve().parent
+HERE = Path(sys.argv[0]).resolve().parent      # the script's folder (no __file__ in the gallery build)
 SHARED = next((p / "shared" / "data" for p in HERE.parents[1:3]
                if (p / "shared" / "data").is_dir()), HERE.parents[1] / "shared" / "data")
 SPOT_UV = SHARED / "base" / "spot_uv" / "spot.obj"

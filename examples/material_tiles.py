@@ -38,7 +38,7 @@ from geotex.param.pgp import periodic_parameterization
 from geotex.render import Panel, render_panels
 
 SHARED = Path(os.environ.get("GEOTEX_SHARED_DATA",
-                             Path(__file__).resolve().parents[2] / "shared" / "data"))
+                             Path(sys.argv[0]).resolve().parents[2] / "shared" / "data"))
 IMAGES = SHARED / "images" / "quilting_classic"
 QUICK = bool(os.environ.get("GEOTEX_EXAMPLES_QUICK"))
 

@@ -290,8 +290,13 @@ def _fit_camera(P: np.ndarray, direction: np.ndarray, up: np.ndarray, aspect: fl
     return [tuple(center + direction * dist + shift), tuple(center + shift), tuple(vup)]
 
 
-def _closeup_camera(V, F, point, radius, up, aspect):
-    """Camera looking at ``point`` from outside, along the local surface normal."""
+def _closeup_camera(V, F, point, radius, up, aspect, top: float = 0.0):
+    """Camera looking at ``point`` from outside, along the local surface normal.
+
+    ``top`` is the fraction of the picture's height covered by the caption
+    band: the region of ``radius`` around the point fits in the part below
+    it, centred there.
+    """
     diag = float(np.linalg.norm(np.ptp(V, axis=0))) or 1.0
     r = 0.12 * diag if radius is None else radius
     default = view_direction(up)
@@ -314,8 +319,43 @@ def _closeup_camera(V, F, point, radius, up, aspect):
         right = np.cross(default, up)
     right /= np.linalg.norm(right)
     vup = np.cross(right, direction)
-    dist = r / np.tan(np.radians(_VIEW_ANGLE) / 2) / min(aspect, 1.0)
-    return [tuple(point + direction * dist), tuple(point), tuple(vup)]
+    t = np.tan(np.radians(_VIEW_ANGLE) / 2)
+    top = min(max(top, 0.0), 0.4)
+    dist = r / t / min(aspect, 1.0) / (1.0 - top)
+    # a translation: the point shows in the middle of the part below the band
+    shift = vup * top * dist * t
+    return [tuple(point + direction * dist + shift), tuple(point + shift), tuple(vup)]
+
+
+#: colour of the caption band of a close-up: the top colour of the background
+CAPTION_BAND = "#dfe6ee"
+
+
+def _caption_band(pv, plotter, top: float) -> None:
+    """Cover the top ``top`` of the current panel with an opaque band (under its caption).
+
+    A close-up's surface fills the whole panel; the band keeps the caption
+    readable, on the same colour as the other panels' captions, with a thin
+    line at its lower edge.
+    """
+    # lazy: VTK's 2D classes load with pyvista (see offscreen_pyvista)
+    from vtkmodules.vtkRenderingCore import vtkActor2D, vtkCoordinate, vtkPolyDataMapper2D
+
+    y0 = 1.0 - top
+    band = pv.PolyData(np.array([[0.0, y0, 0.0], [1.0, y0, 0.0], [1.0, 1.0, 0.0],
+                                 [0.0, 1.0, 0.0]]), faces=np.array([4, 0, 1, 2, 3]))
+    edge = pv.PolyData(np.array([[0.0, y0, 0.0], [1.0, y0, 0.0]]), lines=np.array([2, 0, 1]))
+    for poly, color, width in ((band, CAPTION_BAND, 1.0), (edge, "#9aa6b2", 1.5)):
+        coordinate = vtkCoordinate()
+        coordinate.SetCoordinateSystemToNormalizedViewport()
+        mapper = vtkPolyDataMapper2D()
+        mapper.SetInputData(poly)
+        mapper.SetTransformCoordinate(coordinate)
+        actor = vtkActor2D()
+        actor.SetMapper(mapper)
+        actor.GetProperty().SetColor(pv.Color(color).float_rgb)
+        actor.GetProperty().SetLineWidth(width)
+        plotter.renderer.AddViewProp(actor)
 
 
 def _draw(pv, plotter, panel: Panel, up: np.ndarray, aspect: float):
@@ -364,19 +404,23 @@ def _draw(pv, plotter, panel: Panel, up: np.ndarray, aspect: float):
     if legend:
         plotter.add_legend(legend, bcolor="white", face="line", loc="lower left",
                            size=(0.45, 0.07 * len(legend)))
+    lines = panel.title.count("\n") + 1 if panel.title else 0
+    top = (lines * 26.0 + 8.0) / plotter.window_size[1] if lines else 0.0
+    closeup = panel.closeup is not None and V.shape[0] > 0
+    if closeup and top:
+        top += 8.0 / plotter.window_size[1]      # a little air under the last line
+        _caption_band(pv, plotter, top)          # under the caption, drawn before it
     if panel.title:
         plotter.add_text(panel.title, position="upper_edge", font_size=12, color="#222222")
     if V.shape[0]:
-        if panel.closeup is not None:
+        if closeup:
             plotter.camera_position = _closeup_camera(V, F, panel.closeup,
-                                                      panel.closeup_radius, up, aspect)
+                                                      panel.closeup_radius, up, aspect,
+                                                      top=top)
         else:
             # fit the mesh's own points (not its bounding sphere): it fills the panel
-            lines = panel.title.count("\n") + 1 if panel.title else 0
-            h = plotter.window_size[1]
             plotter.camera_position = _fit_camera(
-                V, view_direction(up), up, aspect,
-                top=(lines * 26.0 + 8.0) / h if lines else 0.0,
+                V, view_direction(up), up, aspect, top=top,
                 bottom=0.07 * len(legend) + 0.02 if legend else 0.0)
         plotter.reset_camera_clipping_range()
 

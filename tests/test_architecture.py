@@ -91,7 +91,7 @@ HEAVY_MODULES: dict[str, str] = {
     "vtkmodules": "part of pyvista's VTK",
     "dask": "~0.25 s",
     "distributed": "~0.6 s",
-    "playwright": "a browser driver; today only tests/test_viewer.py uses it",
+    "playwright": "a browser driver; only tests/test_viewer.py and test_docs_site.py use it",
     "pymeshlab": "~0.2 s",
     "networkx": "~0.25 s",
     "scipy.spatial": "~0.1 s",

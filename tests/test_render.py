@@ -177,3 +177,19 @@ def test_split_by_uv():
     np.testing.assert_array_equal(uv2[F2], uv[FT])
     with pytest.raises(InputError, match="uv_faces"):
         split_by_uv(V, F, uv, FT[:1])
+
+
+def test_closeup_keeps_its_caption_free(tmp_path):
+    from geotex.mesh.primitives import icosphere
+    V, F = icosphere(4, radius=30.0)
+    top = V[np.argmax(V[:, 2] - V[:, 1])]
+    out = render_panels([Panel(V, F, color="#c8a27a", closeup=top, closeup_radius=6.0,
+                               title="a close-up\nwith two caption lines")],
+                        tmp_path / "c.png", size=(500, 400))
+    img = np.asarray(Image.open(out).convert("RGB")).astype(int)
+    beige = (img[..., 0] - img[..., 2]) > 40            # the surface (text is grey)
+    band = 2 * 26 + 8                                    # the caption's two lines, px
+    assert beige[:band].mean() < 0.002                   # nothing of the surface under it
+    assert beige[band + 10:].mean() > 0.95               # the surface fills the rest
+    text = img[:band].sum(axis=2) < 300
+    assert text.mean() > 0.01                            # the caption is drawn

@@ -1,0 +1,170 @@
+"""The built documentation site, opened in headless Chromium.
+
+A small site is built once per run (``sphinx-build -W`` on a copy of
+``docs/``, so that the source tree is left alone): one gallery example
+(``GEOTEX_EXAMPLES_ONLY``, an example that writes a textured GLB) and the API
+page of one module (``GEOTEX_DOCS_API``); every hand-written page, the CLI
+reference and the benchmark pages are in it. The gallery page must show its
+model in the embedded 3D viewer, and the home page must load without a
+console error or a missing local file.
+
+Like tests/test_viewer.py: under CI (``CI`` set) Sphinx, Chromium, playwright
+and the viewer bundle are required (.ci/run installs them, the ``test`` extra
+pulls in Sphinx); elsewhere the tests skip when one is missing.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from urllib.parse import unquote, urlparse
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from geotex.viewpage import viewer_bundle_path
+from test_viewer import CHROMIUM, FLAGS, UNDER_CI
+
+ROOT = Path(__file__).resolve().parents[1]
+#: the example of the small site: a textured torus written as GLB (and OBJ), quick
+EXAMPLE = "textured_export"
+#: the one module that gets an API page
+API_MODULE = "geotex.viewpage"
+DOCS_PACKAGES = ("sphinx", "sphinx_gallery", "numpydoc", "myst_parser", "furo")
+
+pytestmark = pytest.mark.slow      # the build: ~15-30 s on 2 cores
+
+
+def _need(what: str, ok: bool):
+    if ok:
+        return
+    if UNDER_CI:
+        pytest.fail(f"{what} is required under CI (.ci/run installs it)")
+    pytest.skip(f"{what} is not available")
+
+
+def _installed(module: str) -> bool:
+    try:
+        __import__(module)
+    except ImportError:
+        return False
+    return True
+
+
+@pytest.fixture(scope="module")
+def site(tmp_path_factory) -> Path:
+    """Build the small site; return its HTML folder."""
+    missing = [m for m in DOCS_PACKAGES if not _installed(m)]
+    _need(f"the docs extra ({', '.join(missing)})", not missing)
+    _need("the viewer bundle (npm --prefix viewer run build)", viewer_bundle_path().exists())
+    top = tmp_path_factory.mktemp("site")
+    # conf.py finds the package, the examples and the benchmark results next to
+    # docs/: a copy of docs/ beside links to the rest, so that what the build
+    # generates (docs/generated, docs/auto_examples, docs/_build) stays here
+    shutil.copytree(ROOT / "docs", top / "docs",
+                    ignore=shutil.ignore_patterns("_build", "generated", "auto_examples",
+                                                  "sg_execution_times.rst"))
+    for name in ("geotex", "examples", "benchmarks", "README.md"):
+        (top / name).symlink_to(ROOT / name)
+    env = dict(os.environ, GEOTEX_EXAMPLES_ONLY=EXAMPLE, GEOTEX_DOCS_API=API_MODULE,
+               PYTHONPATH=str(top))
+    env.pop("GEOTEX_EXAMPLES_QUICK", None)
+    html = top / "docs" / "_build" / "html"
+    start = time.perf_counter()
+    p = subprocess.run([sys.executable, "-m", "sphinx", "-W", "--keep-going", "-q",
+                        str(top / "docs"), str(html)],
+                       capture_output=True, text=True, timeout=900, env=env, cwd=top)
+    print(f"sphinx-build of the small site: {time.perf_counter() - start:.1f} s")
+    assert p.returncode == 0, (p.stdout + p.stderr)[-4000:]
+    return html
+
+
+def _open(page_path: Path, *, wait_for_viewer: bool):
+    """Open a built page; return (canvas screenshot or None, console errors, page facts)."""
+    _need("chromium", CHROMIUM is not None)
+    if not UNDER_CI:
+        pytest.importorskip("playwright")
+    from playwright.sync_api import sync_playwright
+
+    errors, failed = [], []
+    with tempfile.TemporaryDirectory() as profile, sync_playwright() as p:
+        browser = p.chromium.launch_persistent_context(
+            profile, executable_path=CHROMIUM, headless=True, args=FLAGS,
+            viewport={"width": 1100, "height": 900})
+        try:
+            page = browser.new_page()
+            page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+            page.on("pageerror", lambda e: errors.append(str(e)))
+            page.on("requestfailed", lambda r: failed.append(r.url))
+            page.goto(page_path.resolve().as_uri(), wait_until="load")
+            shot, state = None, None
+            if wait_for_viewer:
+                viewer = page.locator(".geotex-viewer").first
+                viewer.scroll_into_view_if_needed()
+                page.wait_for_selector(".geotex-viewer[data-state=loaded], "
+                                       ".geotex-viewer[data-state=error]", timeout=90_000)
+                state = viewer.get_attribute("data-state")
+                if state == "loaded":
+                    shot = viewer.locator("canvas").screenshot()
+            facts = page.evaluate("""() => ({
+                images: [...document.images].map(i => [i.src, i.complete && i.naturalWidth > 0]),
+                scripts: [...document.scripts].filter(s => s.src).map(s => s.src),
+                styles: [...document.querySelectorAll('link[rel=stylesheet]')].map(l => l.href),
+                links: [...document.querySelectorAll('a[href]')].map(a => a.href),
+                viewers: document.querySelectorAll('.geotex-viewer').length,
+            })""")
+            facts["state"] = state
+            facts["failed"] = failed
+        finally:
+            browser.close()
+    img = np.asarray(Image.open(io.BytesIO(shot)).convert("RGB")).astype(int) if shot else None
+    return img, errors, facts
+
+
+def _local_file(url: str) -> Path | None:
+    u = urlparse(url)
+    return Path(unquote(u.path)) if u.scheme == "file" else None
+
+
+def test_gallery_page_shows_the_model(site, tmp_path):
+    page = site / "auto_examples" / f"{EXAMPLE}.html"
+    assert page.exists(), sorted(p.name for p in (site / "auto_examples").iterdir())
+    img, errors, facts = _open(page, wait_for_viewer=True)
+    assert errors == [] and facts["failed"] == []
+    assert facts["viewers"] >= 1 and facts["state"] == "loaded"
+    Image.fromarray(img.astype(np.uint8)).save(tmp_path / f"{EXAMPLE}.png")
+    # the canvas is not blank: a good part differs from the background colour
+    background = np.array([0xee, 0xf1, 0xf5])
+    model = np.abs(img - background).sum(axis=2) > 40
+    assert 0.03 < model.mean() < 0.97, model.mean()
+    # the checkerboard texture shows (yellow and blue squares), not a plain colour
+    r, g, b = img[..., 0], img[..., 1], img[..., 2]
+    assert ((r > b + 60) & (g > b + 30)).mean() > 0.01
+    assert ((b > r + 50) & (b > g + 20)).mean() > 0.01
+    # the example's picture is on the page too
+    pictures = [src for src, ok in facts["images"] if EXAMPLE in src]
+    assert pictures and all(ok for src, ok in facts["images"])
+
+
+def test_home_page_loads_without_errors_or_missing_files(site):
+    img, errors, facts = _open(site / "index.html", wait_for_viewer=False)
+    assert errors == [] and facts["failed"] == []
+    broken = [src for src, ok in facts["images"] if not ok]
+    assert broken == []
+    assert facts["scripts"] and facts["styles"]
+    assert facts["images"], "the home page shows a picture"
+    outside = [src for src, _ in facts["images"] if _local_file(src) is None]
+    assert outside == [], "pictures are part of the site"
+    local = [_local_file(u) for u in facts["scripts"] + facts["styles"] + facts["links"]]
+    missing = sorted(str(p) for p in local if p is not None and not p.exists())
+    assert missing == []
+    # the scripts are the site's own (no CDN: the site works offline)
+    assert all(_local_file(u) is not None for u in facts["scripts"])
+    assert any(_local_file(u).name == "geotex-viewer.js" for u in facts["scripts"])
