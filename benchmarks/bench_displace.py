@@ -1,4 +1,4 @@
-"""Benchmark: ``geotex displace`` against Blender's displace modifier (issue #23).
+"""Benchmark: ``geotex displace`` against Blender's displace modifier and BumpMesh (issue #23).
 
 Inputs (the issue's): Spot (Keenan Crane, public domain) scaled so its
 largest extent is 89 mm, and a closed cylinder r 20 x h 40 mm with 67,600
@@ -23,11 +23,28 @@ cover the whole process (start-up, read, work, write):
   an empty scaled to one tile = 20 mm, i.e. a planar x-y projection like
   ``planar-xy``, strength 1 mm, mid-level 0, along vertex normals), STL
   export with modifiers applied.
+* BumpMesh (CNCKitchen/stlTexturizer, AGPL-3.0-only), its export pipeline
+  run headless in Node by ``benchmarks/bumpmesh_displace.mjs`` (geotex's own
+  driver; BumpMesh's modules are loaded from an external checkout given with
+  ``--bumpmesh DIR``, never copied into geotex; the row is skipped with a note
+  when the option is missing or the directory is not a prepared checkout, see
+  the driver's header for the set-up). Settings: the app's defaults except
+  triplanar mapping, 20 mm tile, 1 mm amplitude, no bottom angle mask (geotex
+  runs with ``--mask-bottom 0`` and Blender displaces everything too), and
+  either (a) refine length = geotex's edge length and a 2,000,000 triangle
+  target ("2M") or (b) the app's default resolution (refine length = diagonal
+  / 250, 750,000 triangle target). The depth map is handed over as an 8-bit
+  grey PNG (converted from the JPEG before timing; the browser decodes it
+  through a canvas).
+
+Each process's CPU seconds (user + system, ``/usr/bin/time -v``) are recorded
+beside wall seconds, with the 1-minute load average when it started: the
+machine is shared.
 
 Verdicts on every written file: ``geotex check`` (the full check, including
 manifold3d), ``prusa-slicer --info`` and ``admesh``.
 
-Run:  python benchmarks/bench_displace.py [--repeat 1]
+Run:  python benchmarks/bench_displace.py [--repeat 1] [--bumpmesh /tmp/bumpmesh]
 """
 
 from __future__ import annotations
@@ -61,6 +78,7 @@ BRICKS = SHARED / "texture_exemplars" / "heightmaps" / "godot_texture_bricks_dep
 TILE_MM = 20.0
 DEPTH_MM = 1.0
 TARGET = 2_000_000
+BUMPMESH_DRIVER = HERE / "bumpmesh_displace.mjs"
 
 BLENDER_SCRIPT = r"""
 import bpy, sys
@@ -94,16 +112,42 @@ bpy.ops.export_mesh.stl(filepath=out, use_selection=True, use_mesh_modifiers=Tru
 """
 
 
-def timed_process(cmd, env=None):
-    """Wall seconds and peak RSS (MB) of a command, via /usr/bin/time -v."""
-    p = subprocess.run(["/usr/bin/time", "-v", *cmd], capture_output=True, text=True, env=env)
+def timed_process(cmd, env=None, cwd=None):
+    """Wall seconds, peak RSS (MB) and CPU seconds of a command, via /usr/bin/time -v."""
+    p = subprocess.run(["/usr/bin/time", "-v", *cmd], capture_output=True, text=True, env=env,
+                       cwd=cwd)
     if p.returncode not in (0, 1):
         raise RuntimeError(f"{cmd[0]} failed ({p.returncode}): {p.stderr[-2000:]}")
     wall = re.search(r"Elapsed \(wall clock\) time.*: (?:(\d+):)?(\d+):([\d.]+)", p.stderr)
     h, m, s = wall.groups()
     secs = (int(h) * 3600 if h else 0) + int(m) * 60 + float(s)
     rss = int(re.search(r"Maximum resident set size \(kbytes\): (\d+)", p.stderr).group(1))
+    cpu = sum(float(re.search(rf"{k} time \(seconds\): ([\d.]+)", p.stderr).group(1))
+              for k in ("User", "System"))
+    p.cpu_seconds = cpu
     return secs, rss / 1024.0, p
+
+
+def bumpmesh_ready(path):
+    """None when ``path`` is a prepared BumpMesh checkout, else why it is skipped."""
+    if path is None:
+        return "BumpMesh not run: no --bumpmesh DIR given"
+    d = Path(path)
+    missing = [x for x in ("js/exportPipeline.js", "node_modules/three", "node_modules/fflate",
+                           "node_modules/pngjs") if not (d / x).exists()]
+    if missing:
+        return f"BumpMesh not run: {d} lacks {', '.join(missing)}"
+    if subprocess.run(["node", "--version"], capture_output=True).returncode != 0:
+        return "BumpMesh not run: node is not installed"
+    return None
+
+
+def bumpmesh_version(path):
+    try:
+        txt = (Path(path) / "js" / "version.js").read_text()
+        return re.search(r"['\"](\d+\.\d+\.\d+)['\"]", txt).group(1)
+    except Exception:  # noqa: BLE001
+        return "?"
 
 
 def inputs(tmp: Path):
@@ -192,22 +236,62 @@ def blender_levels(faces):
     return best
 
 
+def run_row(rows, cmd, base_row, out, closeup_label, *, env=None, cwd=None, repeat=1,
+            name=None, parse=None):
+    """Run ``cmd`` ``repeat`` times as fresh processes; the last run's file gets the verdicts."""
+    for r in range(repeat):
+        load1 = os.getloadavg()[0]
+        secs, mb, p = timed_process(cmd, env, cwd)
+        row = dict(base_row, seconds=secs, cpu_seconds=round(p.cpu_seconds, 2), peak_mb=mb,
+                   exit=p.returncode, run=r, load1_at_start=round(load1, 2))
+        if parse is not None:
+            row.update(parse(p))
+        if r == repeat - 1 and out.exists():
+            row.update(verdicts(out))
+            closeup(out, name, closeup_label)
+        rows.append(row)
+        print(json.dumps({k: v for k, v in row.items() if k not in ("prusaslicer", "admesh")}),
+              flush=True)
+
+
+def parse_bumpmesh(p):
+    try:
+        doc = json.loads(p.stdout.strip().splitlines()[-1])
+    except (ValueError, IndexError):
+        return {"bumpmesh_error": p.stderr[-500:]}
+    return {"stages": doc["stages"], "refine_mm": doc["refine_mm"],
+            "max_triangles": doc["max_triangles"], "stage_triangles": doc["stage_triangles"],
+            "bumpmesh_repair": doc["repair"]}
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser()
     ap.add_argument("--markdown-only", action="store_true",
                     help="rewrite results/displace.md from results/displace.json")
     ap.add_argument("--repeat", type=int, default=1)
     ap.add_argument("--no-blender", action="store_true")
+    ap.add_argument("--bumpmesh", metavar="DIR", default=None,
+                    help="prepared stlTexturizer checkout (see benchmarks/bumpmesh_displace.mjs);"
+                         " BumpMesh is skipped with a note without it")
     args = ap.parse_args(argv)
     if args.markdown_only:
         doc = json.loads((HERE / "results" / "displace.json").read_text())
         write_markdown(HERE / "results" / "displace.md", doc["meta"], doc["rows"])
         return
     env = dict(os.environ, PYTHONPATH=str(HERE.parent))
+    skip_bumpmesh = bumpmesh_ready(args.bumpmesh)
+    if skip_bumpmesh:
+        print(skip_bumpmesh, file=sys.stderr, flush=True)
+    bm_version = None if skip_bumpmesh else bumpmesh_version(args.bumpmesh)
     rows = []
     with tempfile.TemporaryDirectory() as td:
         tmp = Path(td)
         bases = inputs(tmp)
+        bricks_png = tmp / "bricks.png"
+        if not skip_bumpmesh:
+            from PIL import Image
+
+            Image.open(BRICKS).convert("L").save(bricks_png)
         for name, base in bases.items():
             L, n_ref, n_base = edge_for_target(base)
             runs = [("geotex displace (triplanar)", "triplanar"),
@@ -219,20 +303,15 @@ def main(argv=None):
                        str(BRICKS), "--depth", str(DEPTH_MM), "--mapping", mapping,
                        "--scale-u", str(TILE_MM), "--edge-mm", f"{L:.6g}",
                        "--mask-bottom", "0", "-o", str(out), "--report", str(rep)]
-                for r in range(args.repeat):
-                    secs, mb, p = timed_process(cmd, env)
+
+                def parse_geotex(p, rep=rep):
                     doc = json.loads(rep.read_text())["stats"] if rep.exists() else {}
-                    stages = doc.get("seconds", {})
-                    row = {"base": name, "base_faces": n_base, "tool": label, "seconds": secs,
-                           "peak_mb": mb, "exit": p.returncode, "stages": stages,
-                           "edge_mm": L, "run": r,
-                           "relief_reduced_rounds": doc.get("relief_reduced_rounds")}
-                    if r == args.repeat - 1 and out.exists():
-                        row.update(verdicts(out))
-                        closeup(out, name, label)
-                    rows.append(row)
-                    print(json.dumps({k: v for k, v in row.items()
-                                      if k not in ("prusaslicer", "admesh")}), flush=True)
+                    return {"stages": doc.get("seconds", {}),
+                            "relief_reduced_rounds": doc.get("relief_reduced_rounds")}
+
+                run_row(rows, cmd, {"base": name, "base_faces": n_base, "tool": label,
+                                    "edge_mm": L}, out, label, env=env, repeat=args.repeat,
+                        name=name, parse=parse_geotex)
             if not args.no_blender:
                 levels, tris = blender_levels(n_base)
                 out = tmp / f"{name}_blender.stl"
@@ -241,36 +320,59 @@ def main(argv=None):
                 cmd = ["blender", "-b", "--factory-startup", "--python", str(script), "--",
                        str(base), str(BRICKS), str(out), str(levels), str(TILE_MM),
                        str(DEPTH_MM)]
-                for r in range(args.repeat):
-                    secs, mb, p = timed_process(cmd)
-                    row = {"base": name, "base_faces": n_base,
-                           "tool": f"Blender {blender_version()} displace modifier + STL export",
-                           "seconds": secs, "peak_mb": mb, "exit": p.returncode,
-                           "subdivision_levels": levels, "run": r}
-                    if r == args.repeat - 1 and out.exists():
-                        row.update(verdicts(out))
-                        closeup(out, name, "Blender displace modifier")
-                    rows.append(row)
-                    print(json.dumps({k: v for k, v in row.items()
-                                      if k not in ("prusaslicer", "admesh")}), flush=True)
+                run_row(rows, cmd, {"base": name, "base_faces": n_base,
+                                    "tool": f"Blender {blender_version()} displace modifier "
+                                            "+ STL export",
+                                    "subdivision_levels": levels}, out,
+                        "Blender displace modifier", repeat=args.repeat, name=name)
+            if not skip_bumpmesh:
+                for tag, refine, maxtri in (("2M", f"{L:.6g}", str(TARGET)),
+                                            ("default resolution", "default", "default")):
+                    out = tmp / f"{name}_bumpmesh_{tag.split()[0]}.stl"
+                    cmd = ["node", str(BUMPMESH_DRIVER), "--bumpmesh", str(args.bumpmesh),
+                           "--stl", str(base), "--image", str(bricks_png), "--out", str(out),
+                           "--tile-mm", str(TILE_MM), "--depth-mm", str(DEPTH_MM),
+                           "--mapping", "5", "--refine-mm", refine, "--max-triangles", maxtri]
+                    label = f"BumpMesh {bm_version} pipeline in Node, triplanar, {tag}"
+                    run_row(rows, cmd, {"base": name, "base_faces": n_base, "tool": label},
+                            out, f"BumpMesh {tag}", repeat=args.repeat, name=name,
+                            parse=parse_bumpmesh)
     if CLOSEUPS:
-        from geotex.render import Panel, render_panels
-
-        panels = [Panel(V, F, color="#c9b38f", title=f"{n}: {label}")
-                  for n, label, V, F in CLOSEUPS]
-        gallery = HERE.parent / "docs" / "gallery"
-        gallery.mkdir(parents=True, exist_ok=True)
-        render_panels(panels, gallery / "displace_bench_closeups.png", size=(520, 520),
-                      up="z")
+        render_closeups(HERE.parent / "docs" / "gallery" / "displace_bench_closeups.png")
     load = os.getloadavg()
     meta = {"date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
             "machine": f"{platform.machine()}, {os.cpu_count()} cores, shared",
             "load_average_at_end": [round(x, 2) for x in load],
-            "tile_mm": TILE_MM, "depth_mm": DEPTH_MM, "target_triangles": TARGET}
+            "tile_mm": TILE_MM, "depth_mm": DEPTH_MM, "target_triangles": TARGET,
+            "bumpmesh": skip_bumpmesh or f"stlTexturizer {bm_version} from {args.bumpmesh}"}
     res = HERE / "results"
     (res / "displace.json").write_text(json.dumps({"meta": meta, "rows": rows}, indent=2,
                                                   default=str))
     write_markdown(res / "displace.md", meta, rows)
+
+
+def render_closeups(path):
+    """One row of close-ups per base (every tool side by side), rows stacked in one PNG."""
+    from PIL import Image
+
+    from geotex.render import Panel, render_panels
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    names = list(dict.fromkeys(n for n, *_ in CLOSEUPS))
+    strips = []
+    with tempfile.TemporaryDirectory() as td:
+        for n in names:
+            panels = [Panel(V, F, color="#c9b38f", title=f"{n}: {label}")
+                      for m, label, V, F in CLOSEUPS if m == n]
+            strip = render_panels(panels, Path(td) / f"{n}.png", size=(420, 420), up="z")
+            strips.append(Image.open(strip).convert("RGB"))
+    W = max(im.width for im in strips)
+    sheet = Image.new("RGB", (W, sum(im.height for im in strips)), "white")
+    y = 0
+    for im in strips:
+        sheet.paste(im, (0, y))
+        y += im.height
+    sheet.save(path)
 
 
 def blender_version():
@@ -281,29 +383,85 @@ def blender_version():
         return "?"
 
 
+def _median_by(rows, pred, key="seconds"):
+    vals = [r[key] for r in rows if pred(r) and r.get(key) is not None]
+    return float(np.median(vals)) if vals else None
+
+
+def targets(rows):
+    """Per base: best geotex speed-up over Blender and over BumpMesh (2M), geotex peak memory."""
+    out = {}
+    for base in dict.fromkeys(r["base"] for r in rows):
+        mine = [r for r in rows if r["base"] == base]
+        geo = {t: _median_by(mine, lambda r, t=t: r["tool"] == t)
+               for t in dict.fromkeys(r["tool"] for r in mine if r["tool"].startswith("geotex"))}
+        geo_cpu = {t: _median_by(mine, lambda r, t=t: r["tool"] == t, "cpu_seconds") for t in geo}
+        best = min(geo, key=geo.get) if geo else None
+        blender = _median_by(mine, lambda r: r["tool"].startswith("Blender"))
+        bump = _median_by(mine, lambda r: r["tool"].startswith("BumpMesh") and r["tool"].endswith("2M"))
+        bump_cpu = _median_by(mine, lambda r: r["tool"].startswith("BumpMesh")
+                              and r["tool"].endswith("2M"), "cpu_seconds")
+        blender_cpu = _median_by(mine, lambda r: r["tool"].startswith("Blender"), "cpu_seconds")
+        peak = max((r["peak_mb"] for r in mine if r["tool"].startswith("geotex")), default=None)
+        out[base] = {
+            "fastest_geotex": best, "geotex_seconds": geo.get(best) if best else None,
+            "vs_blender": blender / geo[best] if best and blender else None,
+            "vs_blender_cpu": (blender_cpu / geo_cpu[best]
+                               if best and blender_cpu and geo_cpu.get(best) else None),
+            "vs_bumpmesh": bump / geo[best] if best and bump else None,
+            "vs_bumpmesh_cpu": (bump_cpu / geo_cpu[best]
+                                if best and bump_cpu and geo_cpu.get(best) else None),
+            "geotex_peak_mb": peak}
+    return out
+
+
 def write_markdown(path, meta, rows):
-    lines = ["# geotex displace vs Blender's displace modifier (issue #23)", "",
+    bm = meta.get("bumpmesh", "BumpMesh not run (older run)")
+    lines = ["# geotex displace vs Blender's displace modifier and BumpMesh (issue #23)", "",
              f"Run {meta['date']} on {meta['machine']} (load average at the end "
-             f"{meta['load_average_at_end']}: other jobs shared the 2 cores, so absolute times "
-             "are inflated; both tools ran in the same conditions, interleaved). "
+             f"{meta['load_average_at_end']}; other jobs shared the 2 cores, so wall times "
+             "are inflated and CPU seconds (user + system of the process) are given beside "
+             "them; the 1-minute load average when each process started is in the table). "
              f"Bricks depth map, {meta['tile_mm']:g} mm per tile, {meta['depth_mm']:g} mm depth, "
-             "STL written. Produced by `benchmarks/bench_displace.py`.", "",
-             "| base | tool | triangles | time (s) | Blender time / this time | peak memory (MB) "
-             "| geotex check "
-             "| PrusaSlicer | admesh | geotex stages (s) |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
+             "STL written, every tool a fresh process on the same STL input. "
+             f"BumpMesh: {bm}. Produced by `benchmarks/bench_displace.py`.", "",
+             "| base | tool | triangles | wall (s) | CPU (s) | load 1 min | Blender / this "
+             "| BumpMesh 2M / this | peak memory (MB) | geotex check | PrusaSlicer | admesh "
+             "| stages (s) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     blender = {r["base"]: r["seconds"] for r in rows if r["tool"].startswith("Blender")}
+    bump = {r["base"]: r["seconds"] for r in rows
+            if r["tool"].startswith("BumpMesh") and r["tool"].endswith("2M")}
+    ok = lambda x: "-" if x is None else ("yes" if x else "NO")  # noqa: E731
     for r in rows:
-        b = blender.get(r["base"])
-        ratio = f"{b / r['seconds']:.2f}" if b and not r["tool"].startswith("Blender") else ""
+        b, m = blender.get(r["base"]), bump.get(r["base"])
+        rb = f"{b / r['seconds']:.2f}" if b and not r["tool"].startswith("Blender") else ""
+        rm = (f"{m / r['seconds']:.2f}" if m and not (r["tool"].startswith("BumpMesh")
+                                                       and r["tool"].endswith("2M")) else "")
         st = ", ".join(f"{k} {v:.1f}" for k, v in r.get("stages", {}).items())
         if r.get("relief_reduced_rounds"):
             st += f"; relief lowered in {r['relief_reduced_rounds']} round(s)"
-        ok = lambda x: "-" if x is None else ("yes" if x else "NO")  # noqa: E731
+        if r.get("refine_mm") is not None:
+            st += f"; refine {r['refine_mm']:.3g} mm, target {r['max_triangles']}"
+        cpu = f"{r['cpu_seconds']:.1f}" if r.get("cpu_seconds") is not None else "?"
+        load = f"{r['load1_at_start']:.1f}" if r.get("load1_at_start") is not None else "?"
         lines.append(f"| {r['base']} ({r['base_faces']} faces) | {r['tool']} | "
-                     f"{r.get('triangles', '?')} | {r['seconds']:.1f} | {ratio} | "
-                     f"{r['peak_mb']:.0f} | {ok(r.get('geotex_check'))} | "
+                     f"{r.get('triangles', '?')} | {r['seconds']:.1f} | {cpu} | {load} | {rb} | "
+                     f"{rm} | {r['peak_mb']:.0f} | {ok(r.get('geotex_check'))} | "
                      f"{ok(r.get('prusaslicer_ok'))} | {ok(r.get('admesh_ok'))} | {st} |")
+    lines += ["", "## Issue #23 targets (fastest geotex mapping per base, medians of the runs)", "",
+              "| base | fastest geotex | wall (s) | x Blender (wall / CPU) | target >= 4.5 "
+              "| x BumpMesh 2M (wall / CPU) | target >= 15 | geotex peak (MB) | target < 1024 |",
+              "|---|---|---|---|---|---|---|---|---|"]
+    f = lambda x: "-" if x is None else f"{x:.2f}"  # noqa: E731
+    met = lambda x, t, ge=True: "-" if x is None else (  # noqa: E731
+        ("met" if (x >= t if ge else x < t) else "NOT met"))
+    for base, t in targets(rows).items():
+        lines.append(f"| {base} | {t['fastest_geotex']} | {f(t['geotex_seconds'])} | "
+                     f"{f(t['vs_blender'])} / {f(t['vs_blender_cpu'])} | "
+                     f"{met(t['vs_blender'], 4.5)} | {f(t['vs_bumpmesh'])} / "
+                     f"{f(t['vs_bumpmesh_cpu'])} | {met(t['vs_bumpmesh'], 15)} | "
+                     f"{f(t['geotex_peak_mb'])} | {met(t['geotex_peak_mb'], 1024, ge=False)} |")
     lines += ["", "PrusaSlicer and admesh verdicts are `geotex.check.slicers.prusaslicer_verdict` / "
               "`admesh_verdict` (manifold, nothing repaired, one part, positive volume). "
               "geotex check is "
