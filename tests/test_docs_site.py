@@ -20,7 +20,6 @@ import os
 import shutil
 import subprocess
 import sys
-import tempfile
 import time
 from pathlib import Path
 from urllib.parse import unquote, urlparse
@@ -30,7 +29,7 @@ import pytest
 from PIL import Image
 
 from geotex.viewpage import viewer_bundle_path
-from test_viewer import CHROMIUM, FLAGS, UNDER_CI
+from test_viewer import CHROMIUM, UNDER_CI, chromium_page
 
 ROOT = Path(__file__).resolve().parents[1]
 #: the example of the small site: a textured torus written as GLB (and OBJ), quick
@@ -89,41 +88,26 @@ def site(tmp_path_factory) -> Path:
 def _open(page_path: Path, *, wait_for_viewer: bool):
     """Open a built page; return (canvas screenshot or None, console errors, page facts)."""
     _need("chromium", CHROMIUM is not None)
-    if not UNDER_CI:
-        pytest.importorskip("playwright")
-    from playwright.sync_api import sync_playwright
-
-    errors, failed = [], []
-    with tempfile.TemporaryDirectory() as profile, sync_playwright() as p:
-        browser = p.chromium.launch_persistent_context(
-            profile, executable_path=CHROMIUM, headless=True, args=FLAGS,
-            viewport={"width": 1100, "height": 900})
-        try:
-            page = browser.new_page()
-            page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
-            page.on("pageerror", lambda e: errors.append(str(e)))
-            page.on("requestfailed", lambda r: failed.append(r.url))
-            page.goto(page_path.resolve().as_uri(), wait_until="load")
-            shot, state = None, None
-            if wait_for_viewer:
-                viewer = page.locator(".geotex-viewer").first
-                viewer.scroll_into_view_if_needed()
-                page.wait_for_selector(".geotex-viewer[data-state=loaded], "
-                                       ".geotex-viewer[data-state=error]", timeout=90_000)
-                state = viewer.get_attribute("data-state")
-                if state == "loaded":
-                    shot = viewer.locator("canvas").screenshot()
-            facts = page.evaluate("""() => ({
-                images: [...document.images].map(i => [i.src, i.complete && i.naturalWidth > 0]),
-                scripts: [...document.scripts].filter(s => s.src).map(s => s.src),
-                styles: [...document.querySelectorAll('link[rel=stylesheet]')].map(l => l.href),
-                links: [...document.querySelectorAll('a[href]')].map(a => a.href),
-                viewers: document.querySelectorAll('.geotex-viewer').length,
-            })""")
-            facts["state"] = state
-            facts["failed"] = failed
-        finally:
-            browser.close()
+    with chromium_page((1100, 900)) as (page, errors, failed):
+        page.goto(page_path.resolve().as_uri(), wait_until="load")
+        shot, state = None, None
+        if wait_for_viewer:
+            viewer = page.locator(".geotex-viewer").first
+            viewer.scroll_into_view_if_needed()
+            page.wait_for_selector(".geotex-viewer[data-state=loaded], "
+                                   ".geotex-viewer[data-state=error]", timeout=90_000)
+            state = viewer.get_attribute("data-state")
+            if state == "loaded":
+                shot = viewer.locator("canvas").screenshot()
+        facts = page.evaluate("""() => ({
+            images: [...document.images].map(i => [i.src, i.complete && i.naturalWidth > 0]),
+            scripts: [...document.scripts].filter(s => s.src).map(s => s.src),
+            styles: [...document.querySelectorAll('link[rel=stylesheet]')].map(l => l.href),
+            links: [...document.querySelectorAll('a[href]')].map(a => a.href),
+            viewers: document.querySelectorAll('.geotex-viewer').length,
+        })""")
+        facts["state"] = state
+        facts["failed"] = failed
     img = np.asarray(Image.open(io.BytesIO(shot)).convert("RGB")).astype(int) if shot else None
     return img, errors, facts
 

@@ -7,6 +7,7 @@ skipped when one is missing, like tests/test_slicers.py.
 
 from __future__ import annotations
 
+import contextlib
 import io
 import os
 import shutil
@@ -71,28 +72,40 @@ def test_view_writes_a_page_next_to_the_file(tmp_path, capsys):
     assert not (tmp_path / "r.png").exists()
 
 
-def _open_in_chromium(page_path):
-    """Return (canvas screenshot as array, console errors, element state) for a page."""
+@contextlib.contextmanager
+def chromium_page(viewport=(800, 600)):
+    """A page of headless Chromium (fresh profile) and the lists its errors go into.
+
+    Yields ``(page, errors, failed)``: console errors and page errors are appended to
+    ``errors``, URLs of failed requests to ``failed``. Shared with test_docs_site.
+    """
     if not UNDER_CI:                      # under CI a missing playwright is a failure
         pytest.importorskip("playwright")
     from playwright.sync_api import sync_playwright
 
-    errors = []
+    errors, failed = [], []
     with tempfile.TemporaryDirectory() as profile, sync_playwright() as p:
         browser = p.chromium.launch_persistent_context(
             profile, executable_path=CHROMIUM, headless=True, args=FLAGS,
-            viewport={"width": 800, "height": 600})
+            viewport={"width": viewport[0], "height": viewport[1]})
         try:
             page = browser.new_page()
             page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
             page.on("pageerror", lambda e: errors.append(str(e)))
-            page.goto(page_path.resolve().as_uri())
-            page.wait_for_selector(".geotex-viewer[data-state=loaded], "
-                                   ".geotex-viewer[data-state=error]", timeout=60_000)
-            state = page.get_attribute(".geotex-viewer", "data-state")
-            shot = page.locator(".geotex-viewer canvas").screenshot() if state == "loaded" else b""
+            page.on("requestfailed", lambda r: failed.append(r.url))
+            yield page, errors, failed
         finally:
             browser.close()
+
+
+def _open_in_chromium(page_path):
+    """Return (canvas screenshot as array, console errors, element state) for a page."""
+    with chromium_page() as (page, errors, _):
+        page.goto(page_path.resolve().as_uri())
+        page.wait_for_selector(".geotex-viewer[data-state=loaded], "
+                               ".geotex-viewer[data-state=error]", timeout=60_000)
+        state = page.get_attribute(".geotex-viewer", "data-state")
+        shot = page.locator(".geotex-viewer canvas").screenshot() if state == "loaded" else b""
     img = np.asarray(Image.open(io.BytesIO(shot)).convert("RGB")).astype(int) if shot else None
     return img, errors, state
 
