@@ -214,6 +214,7 @@ def main(argv=None) -> int:
 
     data = Path(args.data)
     parts = _parts(data)
+    start_load = os.getloadavg()[0]
     cpus = available_cpus()
     groups = split_cpus(cpus, args.workers) if cpus else None
     one_core = groups[0] if groups else None
@@ -225,6 +226,7 @@ def main(argv=None) -> int:
               "tile_mm": TILE_MM, "excluded": EXCLUDED, "repeats": args.repeats,
               "workers": args.workers, "cpus": cpus, "python": platform.python_version(),
               "machine": platform.machine(), "sched_autogroup": autogroup,
+              "load_at_start": round(start_load, 2),
               "inputs": [p.input.replace(str(data), "DATA") for p in parts]}
     rounds = []
     with tempfile.TemporaryDirectory(prefix="geotex-bench-batch-") as tmp:
@@ -349,11 +351,13 @@ def main(argv=None) -> int:
         "self-intersection test use both cores: the user-facing comparison). Libraries are "
         "imported before the clock in every process.",
         "",
-        f"**The machine is shared**: {len(cpus or [])} CPUs, other jobs running (load below)"
-        + (", and the kernel shares CPU time between sessions (`sched_autogroup_enabled` = 1)"
-           if autogroup else "")
-        + ", so wall times are noisy; CPU seconds are given beside them. The lead re-runs "
-        "this on a quiet machine later.",
+        (f"**Machine**: {len(cpus or [])} CPUs, no other jobs running (1-min load "
+         f"{start_load:.2f} before the first run; the load in the table is the benchmark's own)."
+         if start_load < 0.5 else
+         f"**The machine is shared**: {len(cpus or [])} CPUs, other jobs running (load below)"
+         + (", and the kernel shares CPU time between sessions (`sched_autogroup_enabled` = 1)"
+            if autogroup else "")
+         + ", so wall times are noisy; CPU seconds are given beside them."),
         "",
         "| run | wall s (median) | CPU s (median) | per round: wall s (load 1-min before -> after) |",
         "|---|---:|---:|---|",
