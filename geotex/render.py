@@ -626,10 +626,12 @@ def _render_insets(pv, panels: list[Panel], up: np.ndarray, width: int,
         (c,), (depth,) = _project(camera, panel.closeup, width, height)
         t = np.tan(np.radians(_VIEW_ANGLE) / 2)
         rp = max(r / (max(depth, 1e-12) * t) * 0.5 * height, 2.5 * line)
-        draw.ellipse([c[0] - rp, c[1] - rp, c[0] + rp, c[1] + rp], outline=INSET_MARKER,
-                     width=line)
-        dot = 1.2 * line
-        draw.ellipse([c[0] - dot, c[1] - dot, c[0] + dot, c[1] + dot], fill=INSET_MARKER)
+        # a white halo under the red circle and dot: visible on dark and red surfaces
+        for color, grow in (("white", 1), (INSET_MARKER, 0)):
+            draw.ellipse([c[0] - rp - grow, c[1] - rp - grow, c[0] + rp + grow,
+                          c[1] + rp + grow], outline=color, width=line + 2 * grow)
+            dot = 1.2 * line + grow
+            draw.ellipse([c[0] - dot, c[1] - dot, c[0] + dot, c[1] + dot], fill=color)
         draw.rectangle([0, 0, width - 1, height - 1], outline=INSET_FRAME,
                        width=max(1, line // 2 + 1))
         out.append(np.asarray(picture))
