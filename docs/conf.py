@@ -12,7 +12,9 @@ Generated at build time (not committed): the CLI reference (walked from
 (quick checks, tests/test_docs_site.py): ``GEOTEX_EXAMPLES_ONLY=REGEX`` runs only
 the examples whose file name matches, ``GEOTEX_DOCS_API=REGEX`` writes API pages
 only for the modules whose name matches (e.g. ``geotex.viewpage``).  The 3D viewer
-bundle is built from the npm registry when missing (``viewer/README.md``).
+bundle is built from the npm registry when missing (``viewer/README.md``), and so
+is MathJax (``npm --prefix docs ci``, pinned in ``docs/package.json``): the site
+serves both itself and loads nothing from a CDN, so it works offline.
 """
 
 from __future__ import annotations
@@ -48,7 +50,7 @@ extensions = [
 
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
 root_doc = "index"
-exclude_patterns = ["_build", "gallery/*.md", "README.md", "api.rst",
+exclude_patterns = ["_build", "node_modules", "gallery/*.md", "README.md", "api.rst",
                     "auto_examples/*.ipynb", "auto_examples/*.py", "auto_examples/*.zip",
                     "auto_examples/*.md5", "auto_examples/*.codeobj.json"]
 html_theme = "furo"
@@ -87,6 +89,8 @@ sphinx_gallery_conf = {
     "abort_on_example_error": True,
     "plot_gallery": "True",
     "show_memory": False,
+    # the timing pages load jQuery and DataTables from a CDN (and differ in every build)
+    "write_computation_times": False,
 }
 
 
@@ -104,5 +108,35 @@ def _build_viewer_bundle():
 
 
 _build_viewer_bundle()
+
+# --- MathJax, served from the site (no CDN) ---------------------------------------------
+#: the MathJax 3 component the pages load: TeX input with every extension built in (no
+#: extension fetched later) and SVG output (no font files)
+MATHJAX_FILE = "tex-svg-full.js"
+
+
+def _mathjax_static_dir() -> Path:
+    """Install MathJax from the npm registry when missing; return a static folder holding it."""
+    source = DOCS / "node_modules" / "mathjax" / "es5" / MATHJAX_FILE
+    how = ("npm --prefix docs ci (MathJax is pinned in docs/package.json and "
+           "docs/package-lock.json; the site serves it, no CDN)")
+    if not source.exists():
+        npm = shutil.which("npm")
+        if npm is None:
+            raise RuntimeError(f"MathJax is missing ({source}) and npm is not installed; "
+                               f"install Node.js and run {how}")
+        done = subprocess.run([npm, "--prefix", str(DOCS), "ci", "--no-audit", "--no-fund"],
+                              capture_output=True, text=True)
+        if done.returncode != 0 or not source.exists():
+            raise RuntimeError(f"MathJax is missing ({source}) and {how} failed: "
+                               + (done.stderr.strip().splitlines() or ["no output"])[-1])
+    static = DOCS / "generated" / "static"
+    (static / "mathjax").mkdir(parents=True, exist_ok=True)
+    shutil.copyfile(source, static / "mathjax" / MATHJAX_FILE)
+    return static
+
+
+html_static_path.append(str(_mathjax_static_dir()))
+mathjax_path = f"mathjax/{MATHJAX_FILE}"         # relative: _static/mathjax/...
 geotex_sphinx.write_api_page(only=os.environ.get("GEOTEX_DOCS_API", ""))
 os.environ.setdefault("COLUMNS", "88")      # argparse help wraps at a fixed width

@@ -4,9 +4,10 @@ Displace close-ups: bricks on a cylinder and on Spot, triplanar vs pgp
 
 Pictures (written to OUT_DIR):
 
-* ``displace_closeups.png`` - top row: a closed cylinder (r 20 x h 40 mm)
+* ``displace_closeups.png`` - left: a closed cylinder (r 20 x h 40 mm)
   with the library's bricks (20 mm per tile, 1 mm relief) under triplanar,
-  cylindrical and pgp; bottom row: their close-ups at the cap edge.
+  cylindrical and pgp; right: their close-ups at the cap edge (8 mm around
+  it; the inset circles where).
 * ``displace_closeups_spot.png`` - Spot at 89 mm: triplanar and pgp, whole
   and the flank close up.  Triplanar's blend zones (where the normal is
   about 45 degrees from two axes) mix two projections of the bricks; pgp
@@ -29,17 +30,11 @@ import numpy as np
 
 from geotex.displace import displaced_mesh
 from geotex.mesh.primitives import closed_cylinder
-from geotex.mesh.topology import compacted
 from geotex.render import Panel, render_panels
 
 HERE = Path(sys.argv[0]).resolve().parent      # the script's folder (no __file__ in the gallery build)
 sys.path.insert(0, str(HERE))
 QUICK = bool(os.environ.get("GEOTEX_EXAMPLES_QUICK"))
-
-
-def crop(V, F, center, radius):
-    sel = np.linalg.norm(V[F].mean(axis=1) - center, axis=1) < radius
-    return compacted(V, F[sel])
 
 
 def run(V, F, mapping, faces):
@@ -66,8 +61,8 @@ def main(out_dir=None):
         r, verdict = run(V, F, m, faces)
         top.append(Panel(r.vertices, r.faces, color="#c9b38f",
                          title=f"cylinder, {m}: {r.faces.shape[0] // 1000}k faces, {verdict}"))
-        bottom.append(Panel(*crop(r.vertices, r.faces, edge, 8.0), color="#c9b38f",
-                            title=f"{m}: cap edge"))
+        bottom.append(Panel(r.vertices, r.faces, color="#c9b38f", closeup=edge,
+                            closeup_radius=8.0, title=f"{m}: cap edge"))
     path = out / "displace_closeups.png"
     render_panels(top + bottom, path, size=(620, 620), up="z")
     print(f"wrote {path}")
@@ -81,8 +76,8 @@ def main(out_dir=None):
                                        axis=1))]
         panels.append(Panel(r.vertices, r.faces, color="#c9b38f",
                             title=f"Spot, {m}: {r.faces.shape[0] // 1000}k faces, {verdict}"))
-        panels.append(Panel(*crop(r.vertices, r.faces, c, 12.0), color="#c9b38f",
-                            title=f"{m}: flank"))
+        panels.append(Panel(r.vertices, r.faces, color="#c9b38f", closeup=c,
+                            closeup_radius=12.0, title=f"{m}: flank"))
     path = out / "displace_closeups_spot.png"
     render_panels(panels, path, size=(620, 620), up="z")
     print(f"wrote {path}")

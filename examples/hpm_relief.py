@@ -73,7 +73,7 @@ def main(out: Path) -> None:
     write_mesh(out / "hpm_relief.glb", mesh_turned_y_up(Mesh(res.vertices, res.faces), up="z"))
     Vc = V[F].reshape(-1, 3)
     Fc = np.arange(Vc.shape[0], dtype=np.int64).reshape(-1, 3)
-    near = V[int(np.argmin(np.linalg.norm(V - (V.min(0) + np.ptp(V, 0) * [0.5, 0.1, 0.55]),
+    near = V[int(np.argmin(np.linalg.norm(V - (V.min(0) + np.ptp(V, 0) * [0.8, 0.12, 0.65]),
                                            axis=1)))]
     render_panels([
         Panel(Vc, Fc, uv=uv.reshape(-1, 2), texture=img,

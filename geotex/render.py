@@ -121,6 +121,11 @@ class Panel:
     closeup_radius : float, optional
         Radius of the region shown around ``closeup`` (default: 12% of the
         bounding-box diagonal).
+    inset : bool, optional
+        With ``closeup``: draw a small picture of the whole object in the
+        lower right corner of the panel, with a red circle marking the
+        close-up point and its radius (default True).  The close-up region is
+        framed beside it, clear of the inset and of the caption.
 
     Raises
     ------
@@ -133,8 +138,9 @@ class Panel:
                  scalars=None, cmap: str = "viridis", highlight: dict | None = None,
                  show_edges: bool = False, arrows=None, markers: dict | None = None,
                  uv=None, texture=None, uv_faces=None, closeup=None,
-                 closeup_radius: float | None = None):
+                 closeup_radius: float | None = None, inset: bool = True):
         self.V, self.F = as_mesh_arrays(V, F)
+        self.inset = bool(inset)
         self.title = title
         self.color = color
         self.scalars = None if scalars is None else np.asarray(scalars, dtype=np.float64)
@@ -290,41 +296,124 @@ def _fit_camera(P: np.ndarray, direction: np.ndarray, up: np.ndarray, aspect: fl
     return [tuple(center + direction * dist + shift), tuple(center + shift), tuple(vup)]
 
 
-def _closeup_camera(V, F, point, radius, up, aspect, top: float = 0.0):
+def _closeup_radius(V, radius) -> float:
+    diag = float(np.linalg.norm(np.ptp(V, axis=0))) or 1.0
+    return 0.12 * diag if radius is None else float(radius)
+
+
+def _local_normal(V, F, point, r) -> np.ndarray:
+    """Area-weighted unit normal of the faces within ``r`` of ``point`` (zero if none)."""
+    if not F.shape[0]:
+        return np.zeros(3)
+    C = V[F].mean(axis=1)
+    dist_c = np.linalg.norm(C - point, axis=1)
+    near = dist_c <= r
+    if not near.any():
+        near = dist_c == dist_c.min()
+    n = (face_normals(V, F[near]) * face_areas(V, F[near])[:, None]).sum(axis=0)
+    length = np.linalg.norm(n)
+    return n / length if length > 0 else np.zeros(3)
+
+
+#: width of a close-up's inset as a fraction of the panel's width, and its margin
+INSET_FRACTION = 0.28
+_INSET_MARGIN = 0.015
+
+
+def _closeup_region(aspect: float, top: float, bottom: float, inset: bool):
+    """Where in the panel a close-up's region goes: centre and radius.
+
+    The region is a disc in the part of the panel that the caption band
+    (``top``), the legend (``bottom``) and the inset (lower right corner, when
+    ``inset``) leave free: the largest disc of the free rectangle left of the
+    inset or of the one above it.
+
+    Returns ``(cx, cy, radius)``: the centre in panel fractions (x from the
+    left, y from the bottom) and the radius as a fraction of the panel height.
+    """
+    y1 = 1.0 - top
+    rects = [(0.0, bottom, 1.0, y1)]
+    if inset:
+        # the inset has the panel's aspect; its margin is a fraction of the width
+        sx = INSET_FRACTION + 2 * _INSET_MARGIN
+        sy = INSET_FRACTION + 2 * _INSET_MARGIN * aspect
+        rects = [(0.0, bottom, 1.0 - sx, y1), (0.0, max(bottom, sy), 1.0, y1)]
+    best = max(rects, key=lambda q: min((q[2] - q[0]) * aspect, q[3] - q[1]))
+    x0, y0, x1, y1 = best
+    radius = 0.5 * min((x1 - x0) * aspect, y1 - y0)
+    return 0.5 * (x0 + x1), 0.5 * (y0 + y1), max(radius, 0.05)
+
+
+def _closeup_camera(V, F, point, radius, up, aspect, top: float = 0.0, bottom: float = 0.0,
+                    inset: bool = False):
     """Camera looking at ``point`` from outside, along the local surface normal.
 
     ``top`` is the fraction of the picture's height covered by the caption
-    band: the region of ``radius`` around the point fits in the part below
-    it, centred there.
+    band and ``bottom`` the one of the legend; with ``inset`` the lower right
+    corner holds the inset.  The region of ``radius`` around the point fills
+    the largest disc of what they leave free (:func:`_closeup_region`).
     """
-    diag = float(np.linalg.norm(np.ptp(V, axis=0))) or 1.0
-    r = 0.12 * diag if radius is None else radius
+    r = _closeup_radius(V, radius)
     default = view_direction(up)
     direction = default
-    if F.shape[0]:
-        C = V[F].mean(axis=1)
-        dist_c = np.linalg.norm(C - point, axis=1)
-        near = dist_c <= r
-        if not near.any():
-            near = dist_c == dist_c.min()
-        n = (face_normals(V, F[near]) * face_areas(V, F[near])[:, None]).sum(axis=0)
-        if np.linalg.norm(n) > 0:
-            # the local outward normal, bent toward the default view so the relief
-            # is lit from the side
-            d = n / np.linalg.norm(n) + 0.35 * default
-            if np.linalg.norm(d) > 0:
-                direction = d / np.linalg.norm(d)
-    right = np.cross(direction, up)
+    n = _local_normal(V, F, point, r)
+    if np.linalg.norm(n) > 0:
+        # the local outward normal, bent toward the default view so the relief
+        # is lit from the side
+        d = n + 0.35 * default
+        if np.linalg.norm(d) > 0:
+            direction = d / np.linalg.norm(d)
+    view = -direction
+    right = np.cross(view, up)
     if np.linalg.norm(right) < 1e-6:            # looking straight down or up
-        right = np.cross(default, up)
-    right /= np.linalg.norm(right)
-    vup = np.cross(right, direction)
+        right = np.cross(-default, up)
+    right /= np.linalg.norm(right)             # points to the right in the picture
+    vup = np.cross(right, view)
     t = np.tan(np.radians(_VIEW_ANGLE) / 2)
     top = min(max(top, 0.0), 0.4)
-    dist = r / t / min(aspect, 1.0) / (1.0 - top)
-    # a translation: the point shows in the middle of the part below the band
-    shift = vup * top * dist * t
+    bottom = min(max(bottom, 0.0), 0.3)
+    cx, cy, rh = _closeup_region(aspect, top, bottom, inset)
+    dist = r / (2.0 * rh * t)
+    # a translation: the point shows at (cx, cy) of the panel, not in its middle
+    shift = -(right * (cx - 0.5) * 2.0 * aspect + vup * (cy - 0.5) * 2.0) * dist * t
     return [tuple(point + direction * dist + shift), tuple(point + shift), tuple(vup)]
+
+
+def _inset_direction(V, F, point, radius, up) -> np.ndarray:
+    """View direction of a close-up's inset: the default view, unless it sees the point's back.
+
+    When the surface at the point faces away from the default view (e.g. a
+    point on the back of the model), the inset looks from the point's side
+    instead: the default view turned about the up axis toward the local
+    normal, at the same elevation.
+    """
+    default = view_direction(up)
+    n = _local_normal(V, F, point, _closeup_radius(V, radius))
+    if n @ default >= 0.1:
+        return default
+    h = n - up * (n @ up)
+    d_h = default - up * (default @ up)
+    if np.linalg.norm(h) < 1e-6:                # facing straight down: the default view
+        return default
+    d = h / np.linalg.norm(h) * np.linalg.norm(d_h) + up * (default @ up)
+    return d / np.linalg.norm(d)
+
+
+def _project(camera, P, width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
+    """Pixel positions (column, row) and depths of points P seen by a perspective camera."""
+    pos, focal, vup = (np.asarray(c, dtype=np.float64) for c in camera)
+    view = focal - pos
+    view /= np.linalg.norm(view)
+    right = np.cross(view, vup)
+    right /= np.linalg.norm(right)
+    upv = np.cross(right, view)
+    Q = np.atleast_2d(P) - pos
+    depth = Q @ view
+    t = np.tan(np.radians(_VIEW_ANGLE) / 2)
+    half = 0.5 * height
+    scale = half / (np.maximum(depth, 1e-12) * t)
+    return np.column_stack([0.5 * width + (Q @ right) * scale,
+                            half - (Q @ upv) * scale]), depth
 
 
 #: colour of the caption band of a close-up: the top colour of the background
@@ -358,7 +447,8 @@ def _caption_band(pv, plotter, top: float) -> None:
         plotter.renderer.AddViewProp(actor)
 
 
-def _draw(pv, plotter, panel: Panel, up: np.ndarray, aspect: float):
+def _add_surface(pv, plotter, panel: Panel) -> None:
+    """The panel's surface (textured, coloured by scalars or plain) or its points."""
     V, F = panel.V, panel.F
     if F.shape[0]:
         poly = _polydata(pv, V, F)
@@ -375,6 +465,11 @@ def _draw(pv, plotter, panel: Panel, up: np.ndarray, aspect: float):
             plotter.add_mesh(poly, color=panel.color, **kwargs)
     elif V.shape[0]:
         plotter.add_points(V, color=panel.color, point_size=4)
+
+
+def _draw(pv, plotter, panel: Panel, up: np.ndarray, aspect: float):
+    V, F = panel.V, panel.F
+    _add_surface(pv, plotter, panel)
     legend = []
     diag = float(np.linalg.norm(np.ptp(V, axis=0))) if V.shape[0] else 1.0
     if panel.arrows is not None and panel.arrows[0].shape[0]:
@@ -414,9 +509,9 @@ def _draw(pv, plotter, panel: Panel, up: np.ndarray, aspect: float):
         plotter.add_text(panel.title, position="upper_edge", font_size=12, color="#222222")
     if V.shape[0]:
         if closeup:
-            plotter.camera_position = _closeup_camera(V, F, panel.closeup,
-                                                      panel.closeup_radius, up, aspect,
-                                                      top=top)
+            plotter.camera_position = _closeup_camera(
+                V, F, panel.closeup, panel.closeup_radius, up, aspect, top=top,
+                bottom=0.07 * len(legend) + 0.02 if legend else 0.0, inset=panel.inset)
         else:
             # fit the mesh's own points (not its bounding sphere): it fills the panel
             plotter.camera_position = _fit_camera(
@@ -469,6 +564,17 @@ def render_panels(panels: list[Panel], path, *, size=(1200, 900), up="z") -> Pat
         image = plotter.screenshot(return_img=True)
     finally:
         plotter.close()
+    with_inset = [i for i, p in enumerate(panels)
+                  if p.closeup is not None and p.inset and p.V.shape[0]]
+    if with_inset:
+        image = np.array(image, copy=True)
+        iw = max(int(round(INSET_FRACTION * w)), 8)
+        ih = max(int(round(iw * h / w)), 8)
+        insets = _render_insets(pv, [panels[i] for i in with_inset], upv, iw, ih)
+        margin = int(round(_INSET_MARGIN * w))
+        for i, inset in zip(with_inset, insets):
+            x0, y0 = (i + 1) * w - margin - iw, h - margin - ih
+            image[y0:y0 + ih, x0:x0 + iw] = inset
     buf = io.BytesIO()
     Image.fromarray(np.asarray(image)).save(buf, format="PNG")
     with atomic_output(path, "wb") as fh:
@@ -476,16 +582,73 @@ def render_panels(panels: list[Panel], path, *, size=(1200, 900), up="z") -> Pat
     return path
 
 
+#: colour of the circle marking a close-up in its inset, and of the inset's frame
+INSET_MARKER = "#e4202a"
+INSET_FRAME = "#6b7785"
+
+
+def _render_insets(pv, panels: list[Panel], up: np.ndarray, width: int,
+                   height: int) -> list[np.ndarray]:
+    """Pictures of the whole objects of close-up panels, each with its close-up marked.
+
+    One small picture per panel (``height`` x ``width`` RGB): the whole mesh from
+    the default view (or from the close-up's side, see :func:`_inset_direction`),
+    a red circle of the close-up radius around the close-up point and a frame.
+    """
+    # lazy: PIL's drawing module is only needed for insets
+    from PIL import ImageDraw
+
+    plotter = pv.Plotter(off_screen=True, shape=(1, len(panels)),
+                         window_size=(width * len(panels), height), border=False)
+    cameras = []
+    try:
+        for i, panel in enumerate(panels):
+            plotter.subplot(0, i)
+            plotter.set_background("white")
+            plotter.enable_lightkit()
+            _add_surface(pv, plotter, panel)
+            direction = _inset_direction(panel.V, panel.F, panel.closeup,
+                                         panel.closeup_radius, up)
+            camera = _fit_camera(panel.V, direction, up, width / height, margin=1.12)
+            plotter.camera_position = camera
+            plotter.reset_camera_clipping_range()
+            cameras.append(camera)
+        plotter.enable_anti_aliasing("ssaa", all_renderers=True)
+        image = np.asarray(plotter.screenshot(return_img=True))
+    finally:
+        plotter.close()
+    line = max(2, int(round(width / 110)))
+    out = []
+    for i, (panel, camera) in enumerate(zip(panels, cameras)):
+        picture = Image.fromarray(np.ascontiguousarray(image[:, i * width:(i + 1) * width, :3]))
+        draw = ImageDraw.Draw(picture)
+        r = _closeup_radius(panel.V, panel.closeup_radius)
+        (c,), (depth,) = _project(camera, panel.closeup, width, height)
+        t = np.tan(np.radians(_VIEW_ANGLE) / 2)
+        rp = max(r / (max(depth, 1e-12) * t) * 0.5 * height, 2.5 * line)
+        # a white halo under the red circle and dot: visible on dark and red surfaces
+        for color, grow in (("white", 1), (INSET_MARKER, 0)):
+            draw.ellipse([c[0] - rp - grow, c[1] - rp - grow, c[0] + rp + grow,
+                          c[1] + rp + grow], outline=color, width=line + 2 * grow)
+            dot = 1.2 * line + grow
+            draw.ellipse([c[0] - dot, c[1] - dot, c[0] + dot, c[1] + dot], fill=color)
+        draw.rectangle([0, 0, width - 1, height - 1], outline=INSET_FRAME,
+                       width=max(1, line // 2 + 1))
+        out.append(np.asarray(picture))
+    return out
+
+
 def render_mesh(V, F, path, *, size=(1200, 900), up="z", title: str = "",
                 color: str = DEFAULT_COLOR, scalars=None, cmap: str = "viridis",
                 highlight: dict | None = None, show_edges: bool = False,
                 uv=None, uv_faces=None, texture=None, closeup=None,
-                closeup_radius: float | None = None) -> Path:
+                closeup_radius: float | None = None, inset: bool = True) -> Path:
     """Render one mesh off-screen into a PNG picture.
 
     The default camera shows the front three-quarter view from above (see
     :func:`view_direction`) and fits the mesh to the picture; ``closeup``
-    looks at one point from outside instead.
+    looks at one point from outside instead, with an inset of the whole
+    object marking where (``inset``).
 
     Parameters
     ----------
@@ -499,7 +662,7 @@ def render_mesh(V, F, path, *, size=(1200, 900), up="z", title: str = "",
         World direction that points up in the picture.
     title, color, scalars, cmap, highlight, show_edges
         See :class:`Panel`.
-    uv, uv_faces, texture, closeup, closeup_radius
+    uv, uv_faces, texture, closeup, closeup_radius, inset
         See :class:`Panel`.
 
     Returns
@@ -522,5 +685,6 @@ def render_mesh(V, F, path, *, size=(1200, 900), up="z", title: str = "",
     """
     panel = Panel(V, F, title=title, color=color, scalars=scalars, cmap=cmap,
                   highlight=highlight, show_edges=show_edges, uv=uv, uv_faces=uv_faces,
-                  texture=texture, closeup=closeup, closeup_radius=closeup_radius)
+                  texture=texture, closeup=closeup, closeup_radius=closeup_radius,
+                  inset=inset)
     return render_panels([panel], path, size=size, up=up)

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import io
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -63,13 +64,17 @@ def site(tmp_path_factory) -> Path:
     missing = [m for m in DOCS_PACKAGES if not _installed(m)]
     _need(f"the docs extra ({', '.join(missing)})", not missing)
     _need("the viewer bundle (npm --prefix viewer run build)", viewer_bundle_path().exists())
+    mathjax = ROOT / "docs" / "node_modules"
+    _need("MathJax (npm --prefix docs ci) or npm", mathjax.is_dir() or shutil.which("npm"))
     top = tmp_path_factory.mktemp("site")
     # conf.py finds the package, the examples and the benchmark results next to
     # docs/: a copy of docs/ beside links to the rest, so that what the build
     # generates (docs/generated, docs/auto_examples, docs/_build) stays here
     shutil.copytree(ROOT / "docs", top / "docs",
                     ignore=shutil.ignore_patterns("_build", "generated", "auto_examples",
-                                                  "sg_execution_times.rst"))
+                                                  "sg_execution_times.rst", "node_modules"))
+    if mathjax.is_dir():           # else conf.py installs MathJax in the copy
+        (top / "docs" / "node_modules").symlink_to(mathjax)
     for name in ("geotex", "examples", "benchmarks", "README.md"):
         (top / name).symlink_to(ROOT / name)
     env = dict(os.environ, GEOTEX_EXAMPLES_ONLY=EXAMPLE, GEOTEX_DOCS_API=API_MODULE,
@@ -85,7 +90,7 @@ def site(tmp_path_factory) -> Path:
     return html
 
 
-def _open(page_path: Path, *, wait_for_viewer: bool):
+def _open(page_path: Path, *, wait_for_viewer: bool, wait_for_math: bool = False):
     """Open a built page; return (canvas screenshot or None, console errors, page facts)."""
     _need("chromium", CHROMIUM is not None)
     with chromium_page((1100, 900)) as (page, errors, failed):
@@ -99,12 +104,16 @@ def _open(page_path: Path, *, wait_for_viewer: bool):
             state = viewer.get_attribute("data-state")
             if state == "loaded":
                 shot = viewer.locator("canvas").screenshot()
+        if wait_for_math:
+            page.wait_for_selector("mjx-container svg", state="attached", timeout=60_000)
         facts = page.evaluate("""() => ({
             images: [...document.images].map(i => [i.src, i.complete && i.naturalWidth > 0]),
             scripts: [...document.scripts].filter(s => s.src).map(s => s.src),
             styles: [...document.querySelectorAll('link[rel=stylesheet]')].map(l => l.href),
             links: [...document.querySelectorAll('a[href]')].map(a => a.href),
             viewers: document.querySelectorAll('.geotex-viewer').length,
+            math: document.querySelectorAll('mjx-container').length,
+            mathSvg: document.querySelectorAll('mjx-container svg').length,
         })""")
         facts["state"] = state
         facts["failed"] = failed
@@ -152,3 +161,38 @@ def test_home_page_loads_without_errors_or_missing_files(site):
     # the scripts are the site's own (no CDN: the site works offline)
     assert all(_local_file(u) is not None for u in facts["scripts"])
     assert any(_local_file(u).name == "geotex-viewer.js" for u in facts["scripts"])
+
+
+_TAG = re.compile(r"<(script|link)\b[^>]*>", re.I)
+_REMOTE = re.compile(r"\b(src|href)\s*=\s*[\"']?\s*(https?:)?//", re.I)
+
+
+def _remote_assets(html: str) -> list[str]:
+    """Script tags with a network ``src`` and stylesheet links with a network ``href``."""
+    tags = (m.group(0) for m in _TAG.finditer(html))
+    return [t for t in tags if _REMOTE.search(t)
+            and (t[1:7].lower() == "script" or "stylesheet" in t.lower())]
+
+
+def test_no_page_loads_a_script_from_the_network(site):
+    assert _remote_assets('<script defer src="https://cdn.x/mathjax.js"></script>')
+    assert _remote_assets("<link rel='stylesheet' href='//cdn.x/a.css'>")
+    assert not _remote_assets('<script src="_static/a.js"></script><a href="https://x">')
+    pages = sorted(site.rglob("*.html"))
+    assert len(pages) > 10
+    remote = {str(p.relative_to(site)): _remote_assets(p.read_text()) for p in pages}
+    remote = {k: v for k, v in remote.items() if v}
+    assert remote == {}, "scripts and styles must come from the site itself (no CDN)"
+    # MathJax is one of the site's own files, and the pages with math load it
+    assert (site / "_static" / "mathjax" / "tex-svg-full.js").stat().st_size > 500_000
+    with_math = [p for p in pages if "_static/mathjax/tex-svg-full.js" in p.read_text()]
+    assert any(p.name == "getting-started-researchers.html" for p in with_math)
+
+
+def test_math_renders_offline(site):
+    page = site / "getting-started-researchers.html"
+    _, errors, facts = _open(page, wait_for_viewer=False, wait_for_math=True)
+    assert errors == [] and facts["failed"] == []
+    # $N = 1, 2, 4$ and $z^N$ on that page: typeset by MathJax as SVG
+    assert facts["math"] >= 2 and facts["mathSvg"] >= 2
+    assert all(_local_file(u) is not None for u in facts["scripts"])

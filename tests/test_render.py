@@ -190,6 +190,87 @@ def test_closeup_keeps_its_caption_free(tmp_path):
     beige = (img[..., 0] - img[..., 2]) > 40            # the surface (text is grey)
     band = 2 * 26 + 8                                    # the caption's two lines, px
     assert beige[:band].mean() < 0.002                   # nothing of the surface under it
-    assert beige[band + 10:].mean() > 0.95               # the surface fills the rest
+    # the surface fills the rest, but for the inset in the lower right corner
+    x0, y0 = _inset_box(500, 400)
+    rest = beige[band + 10:].copy()
+    rest[y0 - band - 10:, x0:] = True
+    assert rest.mean() > 0.95
+    assert beige[y0 + 5:-5, x0 + 5:-5].mean() < 0.9      # the inset is not surface
     text = img[:band].sum(axis=2) < 300
     assert text.mean() > 0.01                            # the caption is drawn
+
+
+# ---- close-ups with an inset marking where (issue 19, item 5) -------------------------
+
+def _inset_box(w, h):
+    """Upper left pixel (column, row) of a close-up's inset in a w x h panel."""
+    from geotex.render import _INSET_MARGIN, INSET_FRACTION
+    iw = round(INSET_FRACTION * w)
+    margin = round(_INSET_MARGIN * w)
+    return w - margin - iw, h - margin - round(iw * h / w)
+
+
+def _red(img):
+    return (img[..., 0] > 180) & (img[..., 1] < 90) & (img[..., 2] < 90)
+
+
+def test_closeup_inset_marks_where(tmp_path):
+    V, F = _figure()
+    w, h = 480, 360
+    ball_top, box_foot = (1.1, 0.3, 2.65), (0.5, 0.0, 0.25)
+    imgs = []
+    for name, point in (("a", ball_top), ("b", box_foot)):
+        out = render_mesh(V, F, tmp_path / f"{name}.png", size=(w, h), title="close-up",
+                          closeup=point, closeup_radius=0.3)
+        imgs.append(np.asarray(Image.open(out).convert("RGB")).astype(int))
+    x0, y0 = _inset_box(w, h)
+    rows = []
+    for img in imgs:
+        inset, red = img[y0:, x0:], _red(img)
+        # the inset shows the whole object (not background only) and the red marker,
+        # and the marker is nowhere else (the object is beige)
+        white = (inset > 235).all(axis=2)
+        beige = (inset[..., 0] - inset[..., 2]) > 30
+        assert 0.03 < beige.mean() < 0.6 and white.mean() > 0.2
+        assert red[y0:, x0:].sum() > 20
+        assert not red[:y0].any() and not red[:, :x0].any()
+        rows.append(np.nonzero(red[y0:, x0:])[0].mean())
+    # the ball on top is marked high in the inset, the box's foot low
+    assert rows[0] + 0.25 * (h - y0) < rows[1]
+
+
+def test_closeup_region_stays_clear_of_inset_and_caption(tmp_path):
+    from geotex.mesh.primitives import icosphere
+    V, F = icosphere(4, radius=30.0)
+    p = V[np.argmax(V[:, 0] + V[:, 2] - V[:, 1])]
+    # faces within 3 mm of the close-up point magenta, the rest cyan
+    near = (np.linalg.norm(V[F].mean(axis=1) - p, axis=1) < 3.0).astype(float)
+    w, h = 500, 400
+    out = render_panels([Panel(V, F, scalars=near, cmap="cool", closeup=p, closeup_radius=8.0,
+                               title="the spot")], tmp_path / "s.png", size=(w, h))
+    img = np.asarray(Image.open(out).convert("RGB")).astype(int)
+    magenta = (img[..., 0] > 150) & (img[..., 2] > 150) & (img[..., 1] < 110)
+    x0, y0 = _inset_box(w, h)
+    band = 26 + 16
+    spot = magenta.copy()
+    spot[y0:, x0:] = False                               # the inset shows the spot small
+    ys, xs = np.nonzero(spot)
+    assert spot.sum() > 0.02 * w * h                     # the spot is seen from close by
+    assert ys.min() > band and xs.max() < x0 - 5         # clear of the caption and the inset
+    # centred in the free part left of the inset, between band and bottom
+    assert abs(xs.mean() - 0.5 * x0) < 0.06 * w
+    assert abs(ys.mean() - 0.5 * (band + h)) < 0.06 * h
+
+
+def test_no_inset(tmp_path, capsys):
+    from geotex.io import write_mesh
+    from geotex.mesh import Mesh
+    V, F = _figure()
+    write_mesh(tmp_path / "m.stl", Mesh(V, F))
+    with_inset = np.asarray(Image.open(_render_cli(
+        capsys, tmp_path / "m.stl", tmp_path / "a.png", "--closeup", "1.1,0.3,2.65,0.3")))
+    plain = np.asarray(Image.open(_render_cli(
+        capsys, tmp_path / "m.stl", tmp_path / "b.png", "--closeup", "1.1,0.3,2.65,0.3",
+        "--no-inset")))
+    assert _red(with_inset.astype(int)).any()
+    assert not _red(plain.astype(int)).any()

@@ -82,6 +82,9 @@ def register(sub):
     p.add_argument("--closeup", default=None, metavar="X,Y,Z[,R]",
                    help="detail view of the point X,Y,Z (mm) showing a region of radius "
                         "R around it (default R: 12%% of the model's diagonal)")
+    p.add_argument("--no-inset", action="store_true",
+                   help="with --closeup: leave out the inset (a small picture of the whole "
+                        "model in the lower right corner, the close-up circled in red)")
     p.add_argument("--color", default="#d9c7a3",
                    help="surface colour (name or #rrggbb) of meshes without a texture")
     p.add_argument("--no-texture", action="store_true",
@@ -120,6 +123,6 @@ def run(args) -> int:
                 uv=mesh.uv if textured else None,
                 uv_faces=mesh.uv_faces if textured else None,
                 texture=mesh.texture if textured else None,
-                closeup=closeup, closeup_radius=radius)
+                closeup=closeup, closeup_radius=radius, inset=not args.no_inset)
     print(f"wrote {out}" + (" (textured)" if textured else ""))
     return EXIT_OK
