@@ -52,14 +52,11 @@ def tiles(V0, F, k=2):
     return np.column_stack([V[:, 2], -V[:, 1], V[:, 0]]), np.concatenate(Fs)
 
 
-def close_up(V, F, radius):
-    """Faces within ``radius`` of the middle of the +x flank (facing the camera)."""
+def flank_point(V):
+    """The middle of the +x flank (facing the camera): where the close-up looks."""
     c = 0.5 * (V.min(axis=0) + V.max(axis=0))
     mid = (np.abs(V[:, 1] - c[1]) < 0.15) & (np.abs(V[:, 2] - c[2]) < 0.15)
-    p = V[mid][np.argmax(V[mid, 0])]
-    keep = np.linalg.norm(V[F].mean(axis=1) - p, axis=1) < radius
-    used, Fk = np.unique(F[keep], return_inverse=True)
-    return V[used], Fk.reshape(-1, 3)
+    return V[mid][np.argmax(V[mid, 0])]
 
 
 def main(out: Path) -> None:
@@ -74,8 +71,8 @@ def main(out: Path) -> None:
     res, Vt = textured("Spot", Vspot, spot.faces, plane, scale=0.3)
     panels.append(Panel(Vt, res.faces, color=COLOR,
                         title=f"Spot: {len(Vt) // 1000}k vertices, {res.n_patches} patches"))
-    panels.append(Panel(*close_up(Vt, res.faces, 0.3), color=COLOR,
-                        title="Spot, close up: bumps lean up"))
+    panels.append(Panel(Vt, res.faces, color=COLOR, closeup=flank_point(Vt),
+                        closeup_radius=0.3, title="Spot, close up: bumps lean up"))
     if BOB.exists():
         bob = read_mesh(BOB)
         Vbob = bob.vertices[:, [0, 2, 1]] * [-1, 1, 1]
