@@ -49,26 +49,6 @@ def scaled_to_area(V, F, area):
     return (V - V.mean(axis=0)) * np.sqrt(area / face_areas(V, F).sum())
 
 
-def close_up(V, F, Vbase, center, radius):
-    """Faces within ``radius`` of ``center``, turned so their base faces up (+z).
-
-    The render camera looks from a fixed direction a little above the
-    horizon, so a patch facing up is seen at a low, oblique angle that shows
-    both the spikes' height and their lean.
-    """
-    keep = np.linalg.norm(Vbase[F].mean(axis=1) - center, axis=1) < radius
-    used, Fk = np.unique(F[keep], return_inverse=True)
-    from geotex.mesh.geometry import face_normals
-    n = face_normals(Vbase, F[keep]).mean(axis=0)
-    n /= np.linalg.norm(n)
-    z = np.array([0.0, 0.0, 1.0])
-    k = np.cross(n, z)
-    s, c = np.linalg.norm(k), float(n @ z)
-    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
-    R = np.eye(3) + K + K @ K * ((1 - c) / s ** 2 if s > 1e-12 else 0.0)
-    return (V[used] - center) @ R.T, Fk.reshape(-1, 3)
-
-
 def busy_point(V, F, height, direction, radius):
     """A vertex facing ``direction`` with the most spike tips within ``radius``."""
     from scipy.spatial import cKDTree
@@ -106,8 +86,9 @@ def main(out: Path) -> None:
 
     row1 = [Panel(V0, F, color=COLOR, title=f"lychee, {len(V0) // 1000}k vertices"),
             Panel(apply_texture(Vs, F, whirled), F, color=COLOR, title="whirled (wrap k = 4)")]
-    row2 = [Panel(*close_up(apply_texture(Vs, F, whirled), F, Vs,
-                            busy_point(Vs, F, tex.height, VIEW, 0.35), 0.5), color=COLOR,
+    # close-ups: the close-up camera on the whole lit mesh, an inset marking where
+    row2 = [Panel(apply_texture(Vs, F, whirled), F, color=COLOR, closeup_radius=0.5,
+                  closeup=busy_point(Vs, F, tex.height, VIEW, 0.35),
                   title="whirled lychee, close up")]
     for name, (Vd, Fd) in (("avocado", avocado), ("bean", bean)):
         t = time.perf_counter()
@@ -120,7 +101,7 @@ def main(out: Path) -> None:
         row1.append(Panel(Vt, Fd, color=TARGET_COLOR,
                           title=f"{name}: heights {100 * (ratio - 1):+.0f}%"))
         c = busy_point(Vd, Fd, moved.height, VIEW, 0.35)
-        row2.append(Panel(*close_up(Vt, Fd, Vd, c, 0.5), color=TARGET_COLOR,
+        row2.append(Panel(Vt, Fd, color=TARGET_COLOR, closeup=c, closeup_radius=0.5,
                           title=f"{name}, close up"))
     path = out / "heighttilt_shapes.png"
     with tempfile.TemporaryDirectory() as tmp:
