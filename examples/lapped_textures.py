@@ -9,8 +9,10 @@ Pictures (written to OUT_DIR):
   pasted along it, and the same texture pasted isotropically (each paste
   with a random orientation propagated over its patch).
 * ``lapped_textures_gallery.png`` - every image in ``../shared/data/images``
-  (see its MANIFEST) on Spot or Bob; structured textures (bricks, weave,
-  tiles, net) follow the field, stochastic ones are pasted isotropically.
+  (see its MANIFEST) on Spot or Bob, and two of geotex's procedural height
+  maps (grey images) to fill the grid; structured textures (bricks, weave,
+  tiles, net, hexagons) follow the field, stochastic ones are pasted
+  isotropically. Each panel shows its input image in the lower right corner.
 * ``lapped_textures_relief.png`` - the composited texture used as a height
   field: a refined copy of Spot displaced into a solid that passes the
   printability check.
@@ -39,6 +41,7 @@ from PIL import Image
 
 from geotex.check import check_mesh
 from geotex.data import sample_path
+from geotex.displace.library import library_height_map
 from geotex.fields.directions import principal_direction_field, projected_direction_field
 from geotex.fields.singularities import singularities
 from geotex.image import (alignment_errors, displace, lapped_texture, texture_patches,
@@ -51,8 +54,11 @@ IMAGES = SHARED / "images"
 SPOT = SHARED / "base" / "spot_uv" / "spot.obj"
 BOB = SHARED / "base" / "bob_uv" / "bob_tri.obj"
 #: Textures with a direction (pasted along the field in the gallery).
-STRUCTURED = ("bricks", "weave", "slate", "rope")
+STRUCTURED = ("bricks", "weave", "slate", "rope", "hexagons")
 SIZE = (480, 520)
+#: Columns of the gallery grid; procedural maps fill its last row.
+GALLERY_COLUMNS = 5
+FILLERS = ("hexagons", "voronoi")
 
 
 def z_up(mesh):
@@ -118,13 +124,19 @@ def field_panel(V, F, vectors, symmetry, title, count=900):
                  markers={"index > 0": (plus, "#d62728"), "index < 0": (minus, "#1f77b4")})
 
 
-def stitch(rows: list[list[Panel]], path: Path) -> None:
+def stitch(rows: list[list[Panel]], path: Path, *, swatches=None) -> None:
+    """Render rows of panels into one picture; ``swatches[r][k]`` (an image or
+    None) is pasted into the lower right corner of panel ``k`` of row ``r``."""
     with tempfile.TemporaryDirectory() as tmp:
         pics = []
         for i, row in enumerate(rows):
             p = render_panels(row, Path(tmp) / f"row{i}.png", size=SIZE, up="z")
             with Image.open(p) as im:
-                pics.append(im.convert("RGB").copy())
+                pic = im.convert("RGB").copy()
+            for k, sw in enumerate(swatches[i] if swatches else []):
+                if sw is not None:
+                    _paste_swatch(pic, sw, k)
+            pics.append(pic)
     w = max(p.width for p in pics)
     canvas = Image.new("RGB", (w, sum(p.height for p in pics)), "white")
     y = 0
@@ -133,6 +145,22 @@ def stitch(rows: list[list[Panel]], path: Path) -> None:
         y += p.height
     canvas.save(path)
     print(f"wrote {path}")
+
+
+def _paste_swatch(pic, image, k, side=110, margin=10):
+    """The input image, ``side`` pixels square with a thin frame, in a panel's corner."""
+    if isinstance(image, (str, Path)):
+        with Image.open(image) as im:
+            sw = im.convert("RGB")
+    else:
+        a = np.asarray(image)
+        a = (np.clip(a, 0.0, 1.0) * 255).astype(np.uint8) if a.dtype != np.uint8 else a
+        sw = Image.fromarray(a).convert("RGB")
+    sw = sw.resize((side, side), Image.LANCZOS)
+    x = (k + 1) * SIZE[0] - side - margin
+    y = SIZE[1] - side - margin
+    pic.paste(Image.new("RGB", (side + 4, side + 4), "#404040"), (x - 2, y - 2))
+    pic.paste(sw, (x, y))
 
 
 def diag(V):
@@ -176,7 +204,7 @@ def main(out: Path) -> None:
     stitch(rows, out / "lapped_textures.png")
 
     # ---------------------------------------------------------------- gallery
-    panels = []
+    panels, inputs = [], []
     small_bob = None
     if bob is not None:                    # half the faces: 13 textures stay quick
         import fast_simplification
@@ -192,7 +220,23 @@ def main(out: Path) -> None:
         m, lt, _ = paste(V, F, img, field=fld, scale=0.25 * diag(V), seed=i, resolution=512)
         label = name.replace("bricks_with_alpha_hole", "bricks+hole")
         panels.append(textured_panel(m, f"{label} ({'field' if structured else 'isotropic'})"))
-    stitch([panels[k:k + 4] for k in range(0, len(panels), 4)], out / "lapped_textures_gallery.png")
+        inputs.append(img)
+    # the grid has no empty cells: procedural grey maps fill the last row
+    fill = -len(panels) % GALLERY_COLUMNS if len(panels) > GALLERY_COLUMNS else 0
+    for j, name in enumerate(FILLERS[:fill]):
+        V, F = spot
+        img = library_height_map(name, size=256)
+        structured = any(s in name for s in STRUCTURED)
+        print(f"library map {name} on Spot ({'field' if structured else 'isotropic'}):")
+        fld = projected_direction_field(V, F, [0.0, 0.0, 1.0])[0] if structured else None
+        m, lt, _ = paste(V, F, img, field=fld, scale=0.25 * diag(V), seed=100 + j,
+                         resolution=512)
+        panels.append(textured_panel(m, f"map '{name}' ({'field' if structured else 'isotropic'})"))
+        inputs.append(img)
+    cols = GALLERY_COLUMNS if len(panels) > GALLERY_COLUMNS else len(panels)
+    stitch([panels[k:k + cols] for k in range(0, len(panels), cols)],
+           out / "lapped_textures_gallery.png",
+           swatches=[inputs[k:k + cols] for k in range(0, len(inputs), cols)])
 
     # ---------------------------------------------------------------- relief
     V, F = spot
@@ -201,20 +245,20 @@ def main(out: Path) -> None:
     _, lt, _ = paste(V, F, relief_img, scale=0.2 * diag(V))
     t = time.perf_counter()
     depth = 0.008 * diag(V)
-    Vd, Fd = displace(V, F, lt, depth=depth, edge_length=0.2 * diag(V) / 40)
+    Vd, Fd = displace(V, F, lt, depth=depth, edge_length=0.2 * diag(V) / 50)
     rep = check_mesh(Vd, Fd)
     print(f"  relief: {len(Fd)} faces, printable {rep.printable}, {time.perf_counter() - t:.1f} s")
-    # close up: a cap around the point of the flank that faces the camera
+    # close up: the point at mid height that faces the camera (head and neck), in the whole
+    # lit mesh (not a cut-out piece)
     view = np.array([0.75, -1.0, 0.55]) / np.linalg.norm([0.75, -1.0, 0.55])
     c = 0.5 * (Vd.min(axis=0) + Vd.max(axis=0))
     flank = np.abs(Vd[:, 2] - c[2]) < 0.15
     p = Vd[flank][np.argmax((Vd[flank] - c) @ view)]
-    near = np.linalg.norm(Vd[Fd].mean(axis=1) - p, axis=1) < 0.45
-    used, Fk = np.unique(Fd[near], return_inverse=True)
     stitch([[Panel(Vd, Fd, color="#c9b28f",
                    title=f"relief {depth:.3f}, {len(Fd) // 1000}k faces, "
                          f"{'printable' if rep.printable else 'NOT printable'}"),
-             Panel(Vd[used], Fk.reshape(-1, 3), color="#c9b28f", title="close up")]],
+             Panel(Vd, Fd, color="#c9b28f", title="close up: head and neck", closeup=p,
+                   closeup_radius=0.12 * diag(Vd))]],
            out / "lapped_textures_relief.png")
 
 
