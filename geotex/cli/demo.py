@@ -87,7 +87,7 @@ def _run(args, out, tiles, start, painter) -> int:
         result = textured_solid(shell, tiles, seed=args.seed, progress=bar)
     rep, s = result.report, result.stats
     name = f"{DEMO_BASE}_{tiles.name}"
-    # the picture is drawn in the worker process while the files are written here
+    # the picture is drawn in the worker process while the files are written here,
     picture = painter.submit(render_panels, [
         Panel(V, base.faces, color="#d9c7a3", title=f"{DEMO_BASE}: {base.n_faces} faces, "
               f"{args.size_mm:g} mm"),
@@ -97,18 +97,21 @@ def _run(args, out, tiles, start, painter) -> int:
         Panel(result.vertices, result.faces, color="#c9b38f",
               title=f"{tiles.name}: {s.elements} elements, printable"),
     ], out / f"{name}.png", size=(700, 700))
-    files = []
+    # and then the STL (written, read back, compared) while the 3MF, the longer
+    # of the two, is written here
+    stl = painter.submit(export_printable, out / f"{name}.stl", result.vertices,
+                         result.faces, name=name, report=rep)
     try:
-        for ext in (".stl", ".3mf"):
-            export_printable(out / f"{name}{ext}", result.vertices, result.faces, name=name,
-                             report=rep)
-            files.append(f"{name}{ext}")
+        export_printable(out / f"{name}.3mf", result.vertices, result.faces, name=name,
+                         report=rep)
+        stl.result()
     except NotPrintableError as exc:
         picture.cancel()
+        stl.cancel()
         print(f"geotex: error: {exc}", file=sys.stderr)
         return EXIT_NOT_PRINTABLE
     picture.result()
-    files.append(f"{name}.png")
+    files = [f"{name}.stl", f"{name}.3mf", f"{name}.png"]
     elapsed = time.perf_counter() - start
     summary = {"base": DEMO_BASE, "tiles": tiles.name, "size_mm": args.size_mm,
                "tile_mm": tile_mm, "seconds": round(elapsed, 2), "files": files,
