@@ -188,11 +188,16 @@ def geotex_cmd() -> list[str]:
     return [str(exe)] if exe.exists() else [sys.executable, "-m", "geotex"]
 
 
-def run_measured(cmd: list[str], *, timeout: float, log: Path, env: dict) -> dict:
-    """Run cmd; return exit code, wall seconds, peak RSS (MB) of the child, timed_out."""
-    with open(log, "wb") as fh:
+def run_measured(cmd: list[str], *, timeout: float, log: Path, env: dict,
+                 err_log: Path | None = None) -> dict:
+    """Run cmd; return exit code, wall seconds, peak RSS (MB) of the child, timed_out.
+
+    stdout goes to ``log``; stderr too, or to ``err_log`` when given.
+    """
+    with open(log, "wb") as fh, open(err_log or os.devnull, "wb") as eh:
         t0 = time.perf_counter()
-        proc = subprocess.Popen(cmd, stdout=fh, stderr=subprocess.STDOUT,
+        proc = subprocess.Popen(cmd, stdout=fh,
+                                stderr=eh if err_log is not None else subprocess.STDOUT,
                                 stdin=subprocess.DEVNULL, env=env)
         timer = threading.Timer(timeout, proc.kill)
         timer.start()

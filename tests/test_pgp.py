@@ -265,6 +265,56 @@ def test_pgp_file_round_trip_and_tile_image(capsys, tmp_path):
     assert code == 2 and "--make-tileable" in err and not (tmp_path / "no.glb").exists()
 
 
+def test_cli_pgp_errors_name_the_mesh_file_or_the_flag(capsys, tmp_path):
+    # corpus sweep: a zero --up and a non-manifold or unoriented mesh were refused with the
+    # library's words ("direction is zero", "F has ..."), naming neither the flag nor the file
+    V, F = icosphere(1)
+    i, j = int(np.argmax(V[:, 0])), int(np.argmin(V[:, 0]))
+    F2 = F + len(V)
+    F2[F2 == j + len(V)] = i                     # a second sphere touching the first at i
+    bowtie = write_mesh(tmp_path / "bowtie.obj",
+                        Mesh(np.vstack([V, V + (V[i] - V[j])]), np.vstack([F, F2])))
+    flipped = F.copy()
+    flipped[0] = flipped[0, ::-1]
+    unoriented = write_mesh(tmp_path / "flip.obj", Mesh(V, flipped))
+    good = write_mesh(tmp_path / "s.obj", Mesh(V, F))
+    cases = [(good, ["--up", "0,0,0"], "--up '0,0,0': give a non-zero direction"),
+             (bowtie, ["--up", "0,0,1"], f"{bowtie}: the mesh has 1 non-manifold vertex"),
+             (unoriented, ["--up", "0,0,1"], f"{unoriented}: the mesh is not consistently"),
+             (unoriented, ["--curvature"], f"{unoriented}: the mesh is not consistently")]
+    for mesh, field, start in cases:
+        out = tmp_path / "p.npz"
+        code, _, err = _run(capsys, "pgp", mesh, *field, "--scale", "0.4", "-o", out)
+        lines = err.strip().splitlines()
+        assert code == 2 and not out.exists(), err
+        assert len(lines) == 1 and lines[0].startswith("geotex: error: " + start), err
+
+
+def test_make_tileable_refuses_a_tile_larger_than_a_texture(capsys, tmp_path, monkeypatch):
+    # --make-tileable 100000 asked for a 10^10-texel tile and was killed for lack of memory
+    # (corpus sweep); the limit is the texture limit, lowered here to keep the test small
+    from PIL import Image
+
+    import geotex.image.material.tileable as tileable
+
+    monkeypatch.setattr(tileable, "MAX_TEXTURE_PIXELS", 32 * 32)
+    mesh = write_mesh(tmp_path / "s.obj", Mesh(*icosphere(1)))
+    pgp = tmp_path / "p.npz"
+    assert _run(capsys, "pgp", mesh, "--up", "0,0,1", "--scale", "0.4", "-o", pgp)[0] == 0
+    rng = np.random.default_rng(0)
+    Image.fromarray(rng.integers(0, 255, (40, 40, 3), dtype=np.uint8)).save(tmp_path / "i.png")
+    out = tmp_path / "big.glb"
+    code, _, err = _run(capsys, "tile-image", mesh, "--image", tmp_path / "i.png", "--param",
+                        pgp, "--make-tileable", "33", "-o", out)
+    assert code == 2 and not out.exists()
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("geotex: error: --make-tileable 33:")
+    assert "too large" in lines[0]
+    code, _, err = _run(capsys, "tile-image", mesh, "--image", tmp_path / "i.png", "--param",
+                        pgp, "--make-tileable", "32", "-o", out)
+    assert code == 0, err
+
+
 @pytest.mark.parametrize("argv, message", [
     (["--param", "{other}"], "made for a mesh of"),
     (["--param", "{junk}"], "not a geotex PGP file"),

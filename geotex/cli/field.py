@@ -63,7 +63,10 @@ def field_from_args(args, V, F, N: int):
         return field, constraint_scale_field(V, F, constraints), "smooth"
     if args.up is not None:
         method = "up"
-        vectors, _ = projected_direction_field(V, F, _vector(args.up))
+        up = _vector(args.up)
+        if not any(up):
+            raise UsageError(f"--up {args.up!r}: give a non-zero direction, e.g. 0,0,1")
+        vectors, _ = projected_direction_field(V, F, up)
     else:
         method = "curvature"
         vectors = principal_direction_field(V, F).directions

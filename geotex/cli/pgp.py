@@ -91,6 +91,14 @@ def _updated(args, V, F, old, field, scale, scale_field):
     return updated_parameterization(V, F, old, vectors, scale=sizes, faces=inside), area.size
 
 
+def _cli_error(exc: InputError, mesh: str) -> InputError:
+    """A library error in the command's terms: the scale by its flag, a mesh by its file."""
+    new = flag_error(exc, {"scale": "--scale"})
+    if new is exc and str(exc).startswith("F "):       # the mesh arrays' own checks
+        new = UsageError(f"{mesh}: the mesh {str(exc)[2:]}")
+    return new
+
+
 def run(args) -> int:
     from geotex.io import read_mesh
     from geotex.param.pgp import periodic_parameterization
@@ -106,17 +114,17 @@ def run(args) -> int:
         raise UsageError(f"{args.mesh}: the mesh has no faces")
     old = _previous(args, F.shape[0], V.shape[0])
     t0 = time.perf_counter()
-    field, scale_field, method = field_from_args(args, V, F, 4)
-    t1 = time.perf_counter()
     area = None
     try:
+        field, scale_field, method = field_from_args(args, V, F, 4)
+        t1 = time.perf_counter()
         if old is None:
             p = periodic_parameterization(V, F, field, seed=args.seed, solver=args.solver,
                                           scale=scale if scale_field is None else scale_field)
         else:
             p, area = _updated(args, V, F, old, field, scale, scale_field)
-    except InputError as exc:            # rephrased when it is about the scale
-        raise flag_error(exc, {"scale": "--scale"}) from None
+    except InputError as exc:
+        raise _cli_error(exc, args.mesh) from None
     t2 = time.perf_counter()
     cones = [{"vertex": v, "index": k} for v, k in p.cones]
     save_parameterization(out, p, metadata={

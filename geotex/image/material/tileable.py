@@ -40,6 +40,7 @@ from scipy.ndimage import median_filter
 from scipy.sparse.csgraph import breadth_first_order, maximum_flow
 
 from geotex.errors import InputError
+from geotex.io.limits import MAX_TEXTURE_PIXELS
 
 __all__ = ["TileableImage", "tileable_image", "feature_mask", "otsu_threshold",
            "luminance_of"]
@@ -226,7 +227,8 @@ def tileable_image(image, *, size: int = 128, overlap: int | None = None, mask=N
     image : array_like, (h, w, 3 or 4) uint8 or float in [0, 1]
         Any image (alpha is ignored); its central square is used.
     size : int, optional
-        Side of the tile in texels (at least 8).
+        Side of the tile in texels: at least 8, and ``size**2`` at most
+        :data:`geotex.io.limits.MAX_TEXTURE_PIXELS`.
     overlap : int, optional
         Width of the strips the cuts run through; default ``size // 4``.
     mask : array_like, (h, w) or (h, w, c), optional
@@ -244,7 +246,7 @@ def tileable_image(image, *, size: int = 128, overlap: int | None = None, mask=N
     ------
     InputError
         On images that are not (h, w, 3 or 4), smaller than 8 texels, a mask
-        of another size, or bad options.
+        of another size, a ``size`` out of range, or bad options.
     """
     img = np.asarray(image)
     if img.ndim != 3 or img.shape[2] not in (3, 4) or min(img.shape[:2]) < 8:
@@ -253,6 +255,9 @@ def tileable_image(image, *, size: int = 128, overlap: int | None = None, mask=N
     if isinstance(size, bool) or int(size) != size or int(size) < 8:
         raise InputError(f"size must be an integer >= 8, got {size!r}")
     size = int(size)
+    if size * size > MAX_TEXTURE_PIXELS:        # no tile geotex would not read back
+        raise InputError(f"size {size} is too large: the tile would have more than the "
+                         f"{MAX_TEXTURE_PIXELS} texels a texture may have; give a smaller size")
     o = max(size // 4, 2) if overlap is None else int(overlap)
     if not 2 <= o <= size:
         raise InputError(f"overlap must lie in [2, size], got {overlap!r}")
