@@ -60,9 +60,16 @@ def run(args) -> int:
         image = load_image(args.image)
     except InputError as exc:
         raise UsageError(f"--image {exc}") from None
-    if args.make_tileable is not None:
-        import numpy as np
+    import numpy as np
 
+    if image.shape[2] == 4 and (image[:, :, 3] < 128).any():
+        from geotex.image.holes import transparent_filled
+
+        # a texture with holes would show them on every tile: filled from the image
+        filled = transparent_filled(image[:, :, :3], image[:, :, 3] / 255.0)
+        image = np.clip(np.rint(filled), 0, 255).astype(np.uint8)
+        print(f"--image {args.image}: transparent texels filled from the opaque parts")
+    if args.make_tileable is not None:
         from geotex.image.material.tileable import tileable_image
 
         try:

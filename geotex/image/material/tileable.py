@@ -4,6 +4,8 @@ Material-space textures §1 starts from two *tiles* ``T_0`` and ``T_M``
 (periodic in ``s`` and ``t``), made from the input images with the graph-cut
 method of Kwatra et al. 2003.  Here:
 
+0. transparent texels (an alpha channel below half) are filled from opaque
+   parts of the image (:mod:`geotex.image.holes`);
 1. the image is cropped to its central square and resized (Lanczos) to
    ``size + overlap`` texels on a side;
 2. **horizontal wrap**: the first ``overlap`` columns ``A`` and the last
@@ -40,6 +42,7 @@ from scipy.ndimage import median_filter
 from scipy.sparse.csgraph import breadth_first_order, maximum_flow
 
 from geotex.errors import InputError
+from geotex.image.holes import transparent_filled
 from geotex.io.limits import MAX_TEXTURE_PIXELS
 
 __all__ = ["TileableImage", "tileable_image", "feature_mask", "otsu_threshold",
@@ -225,7 +228,9 @@ def tileable_image(image, *, size: int = 128, overlap: int | None = None, mask=N
     Parameters
     ----------
     image : array_like, (h, w, 3 or 4) uint8 or float in [0, 1]
-        Any image (alpha is ignored); its central square is used.
+        Any image; its central square is used. Transparent texels (alpha
+        below half) and their rim are filled first from opaque parts of the
+        image (:func:`geotex.image.holes.transparent_filled`).
     size : int, optional
         Side of the tile in texels: at least 8, and ``size**2`` at most
         :data:`geotex.io.limits.MAX_TEXTURE_PIXELS`.
@@ -266,6 +271,9 @@ def tileable_image(image, *, size: int = 128, overlap: int | None = None, mask=N
         rgb = rgb / 255.0
     if not np.isfinite(rgb).all():
         raise InputError("image has non-finite values")
+    if img.shape[2] == 4:
+        alpha = img[:, :, 3].astype(np.float64) / (255.0 if img.dtype == np.uint8 else 1.0)
+        rgb = transparent_filled(rgb, alpha).astype(np.float32)
     big = _square_resized(np.clip(rgb, 0.0, 1.0), size + o)
     extra = []
     if mask is not None:
