@@ -315,6 +315,28 @@ def test_make_tileable_refuses_a_tile_larger_than_a_texture(capsys, tmp_path, mo
     assert code == 0, err
 
 
+def test_make_tileable_is_capped_and_tiny_tiles_warn(capsys, tmp_path):
+    from PIL import Image
+
+    from geotex.cli.tile_image import MAX_TILEABLE_PX
+
+    mesh = write_mesh(tmp_path / "s.obj", Mesh(*icosphere(2)))
+    pgp = tmp_path / "p.npz"
+    # tiles far smaller than the triangles: written, with a one-line warning
+    code, _, err = _run(capsys, "pgp", mesh, "--up", "0,0,1", "--scale", "0.01", "-o", pgp)
+    assert code == 0 and pgp.exists()
+    assert err.startswith("geotex: warning: tiles of 0.01 are smaller than the mesh's")
+    code, _, err = _run(capsys, "pgp", mesh, "--up", "0,0,1", "--scale", "0.5", "-o", pgp)
+    assert code == 0 and "warning" not in err
+    Image.fromarray(np.full((40, 40, 3), 128, np.uint8)).save(tmp_path / "i.png")
+    out = tmp_path / "t.glb"
+    code, _, err = _run(capsys, "tile-image", mesh, "--image", tmp_path / "i.png", "--param",
+                        pgp, "--make-tileable", str(MAX_TILEABLE_PX + 1), "-o", out)
+    assert code == 2 and not out.exists()
+    assert err.strip() == (f"geotex: error: --make-tileable {MAX_TILEABLE_PX + 1}: at most "
+                           f"{MAX_TILEABLE_PX} texels a side (the graph cut would take minutes)")
+
+
 @pytest.mark.parametrize("argv, message", [
     (["--param", "{other}"], "made for a mesh of"),
     (["--param", "{junk}"], "not a geotex PGP file"),

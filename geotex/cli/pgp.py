@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import sys
 import time
 
 from geotex.cli._common import EXIT_OK, UsageError, flag_error, guard_output
@@ -101,6 +102,7 @@ def _cli_error(exc: InputError, mesh: str) -> InputError:
 
 def run(args) -> int:
     from geotex.io import read_mesh
+    from geotex.mesh.geometry import mean_edge_length
     from geotex.param.pgp import periodic_parameterization
     from geotex.param.pgp_store import save_parameterization
 
@@ -126,6 +128,11 @@ def run(args) -> int:
     except InputError as exc:
         raise _cli_error(exc, args.mesh) from None
     t2 = time.perf_counter()
+    edge = mean_edge_length(V, F)
+    if float(p.scale.min()) < edge:
+        print(f"geotex: warning: tiles of {p.scale.min():g} are smaller than the mesh's "
+              f"triangles (mean edge {edge:.3g}): a texture will alias; give a larger "
+              "--scale or refine the mesh", file=sys.stderr)
     cones = [{"vertex": v, "index": k} for v, k in p.cones]
     save_parameterization(out, p, metadata={
         "mesh": str(args.mesh), "method": method,

@@ -35,6 +35,10 @@ def register(sub):
     p.set_defaults(run=run)
 
 
+#: Largest tile --make-tileable makes (the graph-cut wrap grows faster than the area).
+MAX_TILEABLE_PX = 1024
+
+
 def run(args) -> int:
     from geotex.errors import InputError
     from geotex.image.patches import load_image
@@ -71,6 +75,10 @@ def run(args) -> int:
         print(f"--image {args.image}: transparent texels filled from the opaque parts")
     if args.make_tileable is not None:
         from geotex.image.material.tileable import tileable_image
+
+        if args.make_tileable > MAX_TILEABLE_PX:
+            raise UsageError(f"--make-tileable {args.make_tileable}: at most {MAX_TILEABLE_PX} "
+                             "texels a side (the graph cut would take minutes)")
 
         try:
             tile = tileable_image(image, size=args.make_tileable)
