@@ -27,7 +27,7 @@ from geotex.mesh.topology import compacted
 from geotex.progress import report
 from geotex.quilting import coverage_fraction, quilt_texture, split_elements
 from geotex.tiles.colors import COMPLETE_GROUPS, PLANAR_GROUPS, parse_colors, tile_keys
-from geotex.tiles.fill import ExemplarPixels, fill_gaps
+from geotex.tiles.fill import ExemplarPixels, fill_corners, fill_gaps
 from geotex.tiles.frame import concatenated, frame_of
 from geotex.tiles.strips import (GAP, element_boxes, largest_footprint, lattice_corner,
                                  lattice_phase, pick_strips)
@@ -408,6 +408,9 @@ def built_tile(plan: TilePlan, t: int) -> tuple[tuple[np.ndarray, np.ndarray], d
     if tile is None:
         stats["pasted"] = int(plan.interior == "quilt")
         tile, _ = interior_paste(src, frame, rng, pixels=plan.pixels, lattice=grid)
+    if grid is None:
+        added, stats["corner_filled"] = fill_corners(tile[0], tile[1], plan.pixels, rng)
+        tile = concatenated([tile, added])
     stats["coverage"] = coverage_fraction(tile[0], tile[1], (0.0, 0.0, 1.0, 1.0),
                                           resolution=100)
     return tile, stats

@@ -36,7 +36,7 @@ import numpy as np
 from geotex.errors import InputError
 from geotex.mesh.topology import face_components
 from geotex.tiles.clip import split_by_plane
-from geotex.tiles.fill import GAP, PIXEL, footprint_pixels
+from geotex.tiles.fill import GAP, PIXEL, footprint_pixels, grown_heights, pixel_heights
 
 __all__ = ["Strip", "element_boxes", "pick_strips", "largest_footprint", "lattice_phase",
            "lattice_corner", "corner_footprints", "corner_conflicts"]
@@ -171,7 +171,7 @@ def corner_footprints(Vs: np.ndarray, Fs: np.ndarray, labels: np.ndarray, k: int
         ``(low, high)`` of float arrays ``(k, n, n)`` over
         ``[0, CORNER_WINDOW]^2`` with axes (distance from the strip end along
         ``t``, distance from the cut line): the lowest and highest height of
-        the faces of each element over each pixel (``+inf`` / ``-inf`` where
+        the faces of each element at the centre of each pixel (``+inf`` / ``-inf`` where
         the element is absent). The vertical cut makes a half's footprint the
         element's footprint on its side of the line.
     """
@@ -179,32 +179,18 @@ def corner_footprints(Vs: np.ndarray, Fs: np.ndarray, labels: np.ndarray, k: int
     t, s = Vs[:, 0], Vs[:, 1]
     maps = {"above_start": (t, s), "below_start": (t, -s),
             "above_far": (1.0 - t, s), "below_far": (1.0 - t, -s)}
-    zf = Vs[Fs][:, :, 2] if len(Fs) else np.zeros((0, 3))
     out = {}
     for key, (a, b) in maps.items():
         low = np.full((k, n, n), np.inf)
         high = np.full((k, n, n), -np.inf)
         if len(Fs):
-            ii, jj, f = footprint_pixels(np.c_[a, b, Vs[:, 2]], Fs, pixel=PIXEL, shape=(n, n))
-            np.minimum.at(low, (labels[f], ii, jj), zf[f].min(axis=1))
-            np.maximum.at(high, (labels[f], ii, jj), zf[f].max(axis=1))
+            P = np.c_[a, b, Vs[:, 2]]
+            ii, jj, f = footprint_pixels(P, Fs, pixel=PIXEL, shape=(n, n))
+            z = pixel_heights(P, Fs, ii, jj, f, pixel=PIXEL)
+            np.minimum.at(low, (labels[f], ii, jj), z)
+            np.maximum.at(high, (labels[f], ii, jj), z)
         out[key] = (low, high)
     return out
-
-
-def _grown(low: np.ndarray, high: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Height images grown by one pixel (8-neighbourhood): min of lows, max of highs."""
-    lo, hi = low.copy(), high.copy()
-    for axis in (1, 2):
-        a, b = lo.copy(), hi.copy()
-        sl = [slice(None)] * 3
-        sr = [slice(None)] * 3
-        sl[axis], sr[axis] = slice(1, None), slice(None, -1)
-        lo[tuple(sl)] = np.minimum(lo[tuple(sl)], a[tuple(sr)])
-        lo[tuple(sr)] = np.minimum(lo[tuple(sr)], a[tuple(sl)])
-        hi[tuple(sl)] = np.maximum(hi[tuple(sl)], b[tuple(sr)])
-        hi[tuple(sr)] = np.maximum(hi[tuple(sr)], b[tuple(sl)])
-    return lo, hi
 
 
 def corner_conflicts(x: dict, y: dict) -> np.ndarray:
@@ -232,7 +218,7 @@ def corner_conflicts(x: dict, y: dict) -> np.ndarray:
     if kx == 0 or ky == 0:
         return out
     for kx_key, ky_key in QUADRANTS:
-        xl, xh = _grown(*x[kx_key])
+        xl, xh = grown_heights(*x[kx_key])
         yl = y[ky_key][0].transpose(0, 2, 1)
         yh = y[ky_key][1].transpose(0, 2, 1)
         both = np.isfinite(xl).any(axis=0) & np.isfinite(yl).any(axis=0)
