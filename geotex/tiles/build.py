@@ -518,7 +518,8 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
             before = [st for c in strips for st in strips[c]]
             strips[cls], taken = pick_strips(src.V, src.F, src.size, count=n_colors[cls],
                                              along=STRIP_AXIS[cls], rng=rng, taken=taken,
-                                             lattice=grid, chosen_before=before)
+                                             lattice=grid, chosen_before=before,
+                                             meets_itself=isotropic)
     if isotropic:
         strips[1] = strips[2] = strips[0]
     groups, cols = tile_keys(n_colors, PLANAR_GROUPS if planar or isotropic

@@ -11,8 +11,11 @@ cut vertices bit for bit.
 
 Corners. Elements may cross a side right up to the tile corner. Around a
 corner point the four quadrants each hold the ends of two strips (one per
-side through the corner); every strip can meet every other strip (and
-itself) there, in any tiling. The strips are chosen so that those overlaps
+side through the corner), both in the tile of that quadrant: one along its
+horizontal side, one along its vertical side. Any strip of the horizontal
+side's class can meet any strip of the vertical side's class there, in some
+tiling; the classes differ, except in an isotropic set, where every strip
+meets every strip and itself. The strips are chosen so that those overlaps
 hold no colliding elements: every strip end's half-footprints are rasterized
 in the corner's quadrant coordinates (:func:`corner_footprints`) and the
 element sets are pruned, strip by strip, until the footprints of every
@@ -256,12 +259,13 @@ def lattice_corner(lo: np.ndarray, hi: np.ndarray, pitch: float, phase) -> tuple
 
 def pick_strips(V: np.ndarray, F: np.ndarray, size, *, count: int, along: int,
                 rng: np.random.Generator, taken=(), lattice=None,
-                chosen_before=()) -> tuple[list[Strip], set]:
+                chosen_before=(), meets_itself: bool = True) -> tuple[list[Strip], set]:
     """Choose ``count`` distinct edge strips from an exemplar.
 
     Every candidate segment keeps its crossing elements that stay
     :data:`CLEAR` inside the segment's end lines, minus those that would
-    collide at a tile corner with themselves or with any strip chosen before
+    collide at a tile corner with themselves (``meets_itself``) or with any
+    strip that can meet them there chosen before
     (:func:`corner_conflicts`, both ways round; the element with most
     collisions goes first). Of the :data:`SHORTLIST` candidates covering
     most of the segment, the one whose kept elements cover most (the
@@ -288,6 +292,12 @@ def pick_strips(V: np.ndarray, F: np.ndarray, size, *, count: int, along: int,
     chosen_before : sequence of Strip
         Strips of other classes; the new strips must not collide with them at
         any corner.
+    meets_itself : bool
+        Whether strips of this class meet each other (and themselves) at a
+        tile corner, one along the horizontal side and one along the vertical
+        side: only in an isotropic set, where one class serves every side.
+        Otherwise a corner pairs strips of two different classes, and the new
+        strips are checked against ``chosen_before`` only.
 
     Returns
     -------
@@ -343,7 +353,9 @@ def pick_strips(V: np.ndarray, F: np.ndarray, size, *, count: int, along: int,
         best = None
         for c in order[:SHORTLIST]:
             members = _without_corner_conflicts(V, F, labels, np.flatnonzero(crossing[c]),
-                                                tuple(origin[c]), along, before + strips)
+                                                tuple(origin[c]), along,
+                                                before + strips if meets_itself else before,
+                                                own=meets_itself)
             key = frozenset(members.tolist())
             if not key or key in used:
                 continue
@@ -369,8 +381,11 @@ def pick_strips(V: np.ndarray, F: np.ndarray, size, *, count: int, along: int,
     return strips, used
 
 
-def _without_corner_conflicts(V, F, labels, members, origin, along, others):
-    """Drop elements from ``members`` until the strip collides at no corner."""
+def _without_corner_conflicts(V, F, labels, members, origin, along, others, own=True):
+    """Drop elements from ``members`` until the strip collides at no corner.
+
+    ``own``: also with itself (the strip along both sides through a corner).
+    """
     keep = np.isin(labels, members)
     face_el = np.searchsorted(members, labels[keep])
     Vs = _to_strip(V, origin, along)
@@ -379,8 +394,9 @@ def _without_corner_conflicts(V, F, labels, members, origin, along, others):
     while alive.any():
         mine = {k: (v[0][alive], v[1][alive]) for k, v in imgs.items()}
         hits = np.zeros(int(alive.sum()))
-        own = corner_conflicts(mine, mine)
-        hits += own.sum(axis=1) + own.sum(axis=0)
+        if own:
+            self_hits = corner_conflicts(mine, mine)
+            hits += self_hits.sum(axis=1) + self_hits.sum(axis=0)
         for other in others:
             hits += corner_conflicts(mine, other.corners).sum(axis=1)
             hits += corner_conflicts(other.corners, mine).sum(axis=0)
