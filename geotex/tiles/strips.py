@@ -48,6 +48,7 @@ CLEAR = 0.5 * GAP   # clearance of strip elements from the perpendicular tile si
 CANDIDATES = 96     # random segment positions tried per colour
 SHORTLIST = 24      # best candidates (by covered length) pruned and compared
 END = 0.3           # length near a segment end whose coverage counts twice
+EXACT = 12          # strips with at most this many elements in play are pruned exactly
 
 
 @dataclass(frozen=True)
@@ -266,8 +267,9 @@ def pick_strips(V: np.ndarray, F: np.ndarray, size, *, count: int, along: int,
     :data:`CLEAR` inside the segment's end lines, minus those that would
     collide at a tile corner with themselves (``meets_itself``) or with any
     strip that can meet them there chosen before
-    (:func:`corner_conflicts`, both ways round; the element with most
-    collisions goes first). Of the :data:`SHORTLIST` candidates covering
+    (:func:`corner_conflicts`, both ways round): of the sets of elements
+    that collide nowhere, the one covering most (as below) is kept
+    (:data:`EXACT`). Of the :data:`SHORTLIST` candidates covering
     most of the segment, the one whose kept elements cover most (the
     :data:`END` parts near the tile corners counted twice) is taken, then the
     next colour is picked the same way against all strips so far.
@@ -352,18 +354,19 @@ def pick_strips(V: np.ndarray, F: np.ndarray, size, *, count: int, along: int,
         # the parts near the segment ends counted twice
         best = None
         for c in order[:SHORTLIST]:
-            members = _without_corner_conflicts(V, F, labels, np.flatnonzero(crossing[c]),
-                                                tuple(origin[c]), along,
+            cand = np.flatnonzero(crossing[c])
+            a, b = t0[c, cand], t1[c, cand]
+            value = (b - a + np.clip(np.minimum(b, END), 0, None)
+                     - np.clip(np.minimum(a, END), 0, None)
+                     + np.clip(np.maximum(b, 1 - END), None, 1)
+                     - np.clip(np.maximum(a, 1 - END), None, 1))
+            members = _without_corner_conflicts(V, F, labels, cand, tuple(origin[c]), along,
                                                 before + strips if meets_itself else before,
-                                                own=meets_itself)
+                                                own=meets_itself, value=value)
             key = frozenset(members.tolist())
             if not key or key in used:
                 continue
-            a, b = t0[c, members], t1[c, members]
-            ends = (np.clip(np.minimum(b, END), 0, None) - np.clip(np.minimum(a, END), 0, None)
-                    + np.clip(np.maximum(b, 1 - END), None, 1) - np.clip(np.maximum(a, 1 - END),
-                                                                       None, 1))
-            score = float((b - a).sum() + ends.sum())
+            score = float(value[np.isin(cand, members)].sum())
             if best is None or score > best[0]:
                 best = (score, c, key)
         if best is None:
@@ -381,25 +384,43 @@ def pick_strips(V: np.ndarray, F: np.ndarray, size, *, count: int, along: int,
     return strips, used
 
 
-def _without_corner_conflicts(V, F, labels, members, origin, along, others, own=True):
-    """Drop elements from ``members`` until the strip collides at no corner.
+def _without_corner_conflicts(V, F, labels, members, origin, along, others, own=True,
+                              value=None):
+    """The elements of ``members`` to keep so that the strip collides at no corner.
 
-    ``own``: also with itself (the strip along both sides through a corner).
+    An element colliding with a strip of ``others`` (either way round) goes;
+    with ``own`` (the strip along both sides through a corner), so does an
+    element colliding with itself, and of two colliding elements at most one
+    stays. Among the sets left, the one of largest total ``value`` (one per
+    member; default 1) is kept: found exactly when at most :data:`EXACT`
+    elements are in play, otherwise by dropping the element with most
+    collisions until none is left.
     """
     keep = np.isin(labels, members)
     face_el = np.searchsorted(members, labels[keep])
     Vs = _to_strip(V, origin, along)
     imgs = corner_footprints(Vs, F[keep], face_el, len(members))
-    alive = np.ones(len(members), dtype=bool)
+    n = len(members)
+    value = np.ones(n) if value is None else np.asarray(value, dtype=np.float64)
+    clash = np.zeros((n, n), dtype=bool)
+    if own and n:
+        clash = corner_conflicts(imgs, imgs)
+        clash = clash | clash.T
+    banned = np.diag(clash).copy()
+    for other in others:
+        banned |= corner_conflicts(imgs, other.corners).any(axis=1)
+        banned |= corner_conflicts(other.corners, imgs).any(axis=0)
+    free = np.flatnonzero(~banned)
+    m = len(free)
+    if m <= EXACT:
+        pick = (np.arange(2 ** m)[:, None] >> np.arange(m)[None, :]) & 1 == 1
+        sub = clash[np.ix_(free, free)]
+        bad = (pick[:, :, None] & pick[:, None, :] & sub[None]).any(axis=(1, 2))
+        score = np.where(bad, -np.inf, pick @ value[free])
+        return members[free[pick[int(np.argmax(score))]]]
+    alive = ~banned
     while alive.any():
-        mine = {k: (v[0][alive], v[1][alive]) for k, v in imgs.items()}
-        hits = np.zeros(int(alive.sum()))
-        if own:
-            self_hits = corner_conflicts(mine, mine)
-            hits += self_hits.sum(axis=1) + self_hits.sum(axis=0)
-        for other in others:
-            hits += corner_conflicts(mine, other.corners).sum(axis=1)
-            hits += corner_conflicts(other.corners, mine).sum(axis=0)
+        hits = (clash[np.ix_(alive, alive)]).sum(axis=1)
         if not hits.any():
             break
         alive[np.flatnonzero(alive)[int(np.argmax(hits))]] = False
