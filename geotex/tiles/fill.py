@@ -320,9 +320,10 @@ def fill_corners(V: np.ndarray, F: np.ndarray, ex: ExemplarPixels, rng: np.rando
     the square it would cover, up to :data:`CORNER_PLACES` places. It joins
     at the first place where at least :data:`FREE_SHARE` of its pixels are on
     free ground and, at every pixel, its height range keeps :data:`CLEAR`
-    from that of every element already there grown by a pixel
+    from that of every element already there grown by :data:`GAP`
     (:func:`heights_touch`; heights at the pixel centres, so elements may
-    overlap in projection one above the other, like scales). Elements are
+    overlap in projection one above the other, like scales, but never come
+    closer than the gap side by side, as in :func:`fill_gaps`). Elements are
     copied unchanged, so they stay closed; nothing crosses a side, so the
     tile stays seamless and never collides with its neighbours.
 
@@ -355,8 +356,7 @@ def fill_corners(V: np.ndarray, F: np.ndarray, ex: ExemplarPixels, rng: np.rando
         up = V[F][:, :, 2].mean(axis=1) > 0.0
         ii, jj, _ = footprint_pixels(V, F[up], shape=(n, n))
         cover[ii, jj] = True
-        placed = [(o, *grown_heights(lo, hi)) for o, lo, hi in element_heights(V, F, labels, k)
-                  if lo.size]
+        placed = [_grown_by_gap(h) for h in element_heights(V, F, labels, k) if h[1].size]
     corner = np.zeros((n, n), dtype=bool)
     corner[np.ix_(np.r_[0:q, n - q:n], np.r_[0:q, n - q:n])] = True
     target = float(cover[~corner].mean())
@@ -402,13 +402,24 @@ def fill_corners(V: np.ndarray, F: np.ndarray, ex: ExemplarPixels, rng: np.rando
                 up = Vk[Fk][:, :, 2].mean(axis=1) > 0.0
                 ii, jj, _ = footprint_pixels(Vk, Fk[up], shape=(n, n))
                 cover[ii, jj] = True
-                placed.append((real[0], *grown_heights(real[1], real[2])))
-                ro, rs = real[0], real[1].shape
+                placed.append(_grown_by_gap(real))
+                ro, rs = placed[-1][0], placed[-1][1].shape
                 boxes = np.vstack([boxes, [ro[0], ro[1], ro[0] + rs[0], ro[1] + rs[1]]])
                 parts.append((Vk, Fk))
                 count += 1
                 break
     return concatenated(parts), count
+
+
+def _grown_by_gap(h):
+    """A placed height image grown by :data:`GAP` (a square of whole pixels) on every side."""
+    o, low, high = h
+    r = int(np.ceil(GAP / PIXEL))
+    low = np.pad(low, r, constant_values=np.inf)
+    high = np.pad(high, r, constant_values=-np.inf)
+    for _ in range(r):
+        low, high = grown_heights(low, high)
+    return (o - r, low, high)
 
 
 def _touches(cand, placed, boxes) -> bool:
