@@ -173,7 +173,7 @@ def test_strips_that_meet_only_other_classes_keep_their_end_elements():
 def test_catalog_corner_squares_are_not_left_empty(name):
     # issue 14 asks for 0.85 (benchmarks/results/tiles_corners.md); the catalog
     # before the corner fill and the exact pruning had chainmail 0.55 and
-    # scales-planar 0.63, now 0.70 and 0.84
+    # scales-planar 0.63, now 0.70 and 0.84 (both still short of 0.85)
     from geotex.tiles import load_named
 
     tiles = load_named(name)

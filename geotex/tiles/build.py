@@ -513,13 +513,23 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
     largest_footprint(src.lo, src.hi)
     grid = _lattice(src) if lattice else None
     strips, taken = {}, set()
-    for cls in ((0,) if isotropic else range(3)):
-        if n_colors[cls]:
-            before = [st for c in strips for st in strips[c]]
-            strips[cls], taken = pick_strips(src.V, src.F, src.size, count=n_colors[cls],
+    if isotropic:
+        strips[0], taken = pick_strips(src.V, src.F, src.size, count=n_colors[0],
+                                       along=STRIP_AXIS[0], rng=rng, lattice=grid)
+    else:
+        # colour by colour, the classes in turn: a strip meets only the other
+        # classes' strips at a corner, and the first strips chosen keep their
+        # corner elements, so no class takes every corner
+        strips = {cls: [] for cls in range(3) if n_colors[cls]}
+        for k in range(max(n_colors)):
+            for cls in strips:
+                if k < n_colors[cls]:
+                    before = [st for c in strips if c != cls for st in strips[c]]
+                    new, taken = pick_strips(src.V, src.F, src.size, count=1,
                                              along=STRIP_AXIS[cls], rng=rng, taken=taken,
                                              lattice=grid, chosen_before=before,
-                                             meets_itself=isotropic)
+                                             meets_itself=False)
+                    strips[cls] += new
     if isotropic:
         strips[1] = strips[2] = strips[0]
     groups, cols = tile_keys(n_colors, PLANAR_GROUPS if planar or isotropic
