@@ -5,7 +5,9 @@ class (:mod:`geotex.tiles.strips`); for each tile the four strip halves of its
 side colours form its frame (:mod:`geotex.tiles.frame`); the interior is then
 synthesized around the frame by constrained mesh quilting
 (:func:`interior_quilt`, the default) or filled with whole exemplar elements
-(:func:`interior_paste`, fast).
+(:func:`interior_paste`, fast); last, corner squares left emptier than the
+rest of the tile get more exemplar elements
+(:func:`geotex.tiles.fill.fill_corners`, sets without a lattice).
 
 An *isotropic* set uses one colour class for all three axes: the strips are
 cut once per colour and serve the sides of every class, so a side of colour
@@ -384,7 +386,9 @@ def built_tile(plan: TilePlan, t: int) -> tuple[tuple[np.ndarray, np.ndarray], d
     tile : tuple of (V (n, 3) float64, F (m, 3) int64)
     stats : dict
         ``coverage`` (covered fraction of the tile), ``pasted`` (1 when
-        quilting was not accepted and the tile was pasted), and for quilted
+        quilting was not accepted and the tile was pasted),
+        ``corner_filled`` (elements :func:`geotex.tiles.fill.fill_corners`
+        added to the corner squares; sets without a lattice), and for quilted
         tiles ``merges``, ``filled`` (gap-fill elements), ``stitched`` and the
         seam figures of :func:`interior_quilt`.
     """

@@ -8,6 +8,12 @@ the tile, and it stays :data:`CLEAR` inside the tile sides. Disjoint
 footprints mean disjoint solids, so the added elements never touch what is
 there (up to the pixel size, well under the gap), and they are copied
 unchanged, so they stay closed.
+
+Corner squares (:func:`fill_corners`) use height images instead of bare
+footprints: at every pixel an element's lowest and highest face height, so
+that elements may also overlap in projection when one lies above the other
+(scales), the collision rule of the strips at the tile corners
+(:func:`geotex.tiles.strips.corner_conflicts`).
 """
 
 from __future__ import annotations
