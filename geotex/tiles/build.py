@@ -5,7 +5,9 @@ class (:mod:`geotex.tiles.strips`); for each tile the four strip halves of its
 side colours form its frame (:mod:`geotex.tiles.frame`); the interior is then
 synthesized around the frame by constrained mesh quilting
 (:func:`interior_quilt`, the default) or filled with whole exemplar elements
-(:func:`interior_paste`, fast).
+(:func:`interior_paste`, fast); last, corner squares left emptier than the
+rest of the tile get more exemplar elements
+(:func:`geotex.tiles.fill.fill_corners`, sets without a lattice).
 
 An *isotropic* set uses one colour class for all three axes: the strips are
 cut once per colour and serve the sides of every class, so a side of colour
@@ -27,7 +29,7 @@ from geotex.mesh.topology import compacted
 from geotex.progress import report
 from geotex.quilting import coverage_fraction, quilt_texture, split_elements
 from geotex.tiles.colors import COMPLETE_GROUPS, PLANAR_GROUPS, parse_colors, tile_keys
-from geotex.tiles.fill import ExemplarPixels, fill_gaps
+from geotex.tiles.fill import ExemplarPixels, fill_corners, fill_gaps
 from geotex.tiles.frame import concatenated, frame_of
 from geotex.tiles.strips import (GAP, element_boxes, largest_footprint, lattice_corner,
                                  lattice_phase, pick_strips)
@@ -384,7 +386,9 @@ def built_tile(plan: TilePlan, t: int) -> tuple[tuple[np.ndarray, np.ndarray], d
     tile : tuple of (V (n, 3) float64, F (m, 3) int64)
     stats : dict
         ``coverage`` (covered fraction of the tile), ``pasted`` (1 when
-        quilting was not accepted and the tile was pasted), and for quilted
+        quilting was not accepted and the tile was pasted),
+        ``corner_filled`` (elements :func:`geotex.tiles.fill.fill_corners`
+        added to the corner squares; sets without a lattice), and for quilted
         tiles ``merges``, ``filled`` (gap-fill elements), ``stitched`` and the
         seam figures of :func:`interior_quilt`.
     """
@@ -408,6 +412,9 @@ def built_tile(plan: TilePlan, t: int) -> tuple[tuple[np.ndarray, np.ndarray], d
     if tile is None:
         stats["pasted"] = int(plan.interior == "quilt")
         tile, _ = interior_paste(src, frame, rng, pixels=plan.pixels, lattice=grid)
+    if grid is None:
+        added, stats["corner_filled"] = fill_corners(tile[0], tile[1], plan.pixels, rng)
+        tile = concatenated([tile, added])
     stats["coverage"] = coverage_fraction(tile[0], tile[1], (0.0, 0.0, 1.0, 1.0),
                                           resolution=100)
     return tile, stats
@@ -510,12 +517,23 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
     largest_footprint(src.lo, src.hi)
     grid = _lattice(src) if lattice else None
     strips, taken = {}, set()
-    for cls in ((0,) if isotropic else range(3)):
-        if n_colors[cls]:
-            before = [st for c in strips for st in strips[c]]
-            strips[cls], taken = pick_strips(src.V, src.F, src.size, count=n_colors[cls],
+    if isotropic:
+        strips[0], taken = pick_strips(src.V, src.F, src.size, count=n_colors[0],
+                                       along=STRIP_AXIS[0], rng=rng, lattice=grid)
+    else:
+        # colour by colour, the classes in turn: a strip meets only the other
+        # classes' strips at a corner, and the first strips chosen keep their
+        # corner elements, so no class takes every corner
+        strips = {cls: [] for cls in range(3) if n_colors[cls]}
+        for k in range(max(n_colors)):
+            for cls in strips:
+                if k < n_colors[cls]:
+                    before = [st for c in strips if c != cls for st in strips[c]]
+                    new, taken = pick_strips(src.V, src.F, src.size, count=1,
                                              along=STRIP_AXIS[cls], rng=rng, taken=taken,
-                                             lattice=grid, chosen_before=before)
+                                             lattice=grid, chosen_before=before,
+                                             meets_itself=False)
+                    strips[cls] += new
     if isotropic:
         strips[1] = strips[2] = strips[0]
     groups, cols = tile_keys(n_colors, PLANAR_GROUPS if planar or isotropic

@@ -11,8 +11,11 @@ cut vertices bit for bit.
 
 Corners. Elements may cross a side right up to the tile corner. Around a
 corner point the four quadrants each hold the ends of two strips (one per
-side through the corner); every strip can meet every other strip (and
-itself) there, in any tiling. The strips are chosen so that those overlaps
+side through the corner), both in the tile of that quadrant: one along its
+horizontal side, one along its vertical side. Any strip of the horizontal
+side's class can meet any strip of the vertical side's class there, in some
+tiling; the classes differ, except in an isotropic set, where every strip
+meets every strip and itself. The strips are chosen so that those overlaps
 hold no colliding elements: every strip end's half-footprints are rasterized
 in the corner's quadrant coordinates (:func:`corner_footprints`) and the
 element sets are pruned, strip by strip, until the footprints of every
@@ -36,7 +39,7 @@ import numpy as np
 from geotex.errors import InputError
 from geotex.mesh.topology import face_components
 from geotex.tiles.clip import split_by_plane
-from geotex.tiles.fill import GAP, PIXEL, footprint_pixels
+from geotex.tiles.fill import GAP, PIXEL, footprint_pixels, grown_heights, pixel_heights
 
 __all__ = ["Strip", "element_boxes", "pick_strips", "largest_footprint", "lattice_phase",
            "lattice_corner", "corner_footprints", "corner_conflicts"]
@@ -45,6 +48,7 @@ CLEAR = 0.5 * GAP   # clearance of strip elements from the perpendicular tile si
 CANDIDATES = 96     # random segment positions tried per colour
 SHORTLIST = 24      # best candidates (by covered length) pruned and compared
 END = 0.3           # length near a segment end whose coverage counts twice
+EXACT = 12          # strips with at most this many elements in play are pruned exactly
 
 
 @dataclass(frozen=True)
@@ -171,7 +175,7 @@ def corner_footprints(Vs: np.ndarray, Fs: np.ndarray, labels: np.ndarray, k: int
         ``(low, high)`` of float arrays ``(k, n, n)`` over
         ``[0, CORNER_WINDOW]^2`` with axes (distance from the strip end along
         ``t``, distance from the cut line): the lowest and highest height of
-        the faces of each element over each pixel (``+inf`` / ``-inf`` where
+        the faces of each element at the centre of each pixel (``+inf`` / ``-inf`` where
         the element is absent). The vertical cut makes a half's footprint the
         element's footprint on its side of the line.
     """
@@ -179,32 +183,18 @@ def corner_footprints(Vs: np.ndarray, Fs: np.ndarray, labels: np.ndarray, k: int
     t, s = Vs[:, 0], Vs[:, 1]
     maps = {"above_start": (t, s), "below_start": (t, -s),
             "above_far": (1.0 - t, s), "below_far": (1.0 - t, -s)}
-    zf = Vs[Fs][:, :, 2] if len(Fs) else np.zeros((0, 3))
     out = {}
     for key, (a, b) in maps.items():
         low = np.full((k, n, n), np.inf)
         high = np.full((k, n, n), -np.inf)
         if len(Fs):
-            ii, jj, f = footprint_pixels(np.c_[a, b, Vs[:, 2]], Fs, pixel=PIXEL, shape=(n, n))
-            np.minimum.at(low, (labels[f], ii, jj), zf[f].min(axis=1))
-            np.maximum.at(high, (labels[f], ii, jj), zf[f].max(axis=1))
+            P = np.c_[a, b, Vs[:, 2]]
+            ii, jj, f = footprint_pixels(P, Fs, pixel=PIXEL, shape=(n, n))
+            z = pixel_heights(P, Fs, ii, jj, f, pixel=PIXEL)
+            np.minimum.at(low, (labels[f], ii, jj), z)
+            np.maximum.at(high, (labels[f], ii, jj), z)
         out[key] = (low, high)
     return out
-
-
-def _grown(low: np.ndarray, high: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Height images grown by one pixel (8-neighbourhood): min of lows, max of highs."""
-    lo, hi = low.copy(), high.copy()
-    for axis in (1, 2):
-        a, b = lo.copy(), hi.copy()
-        sl = [slice(None)] * 3
-        sr = [slice(None)] * 3
-        sl[axis], sr[axis] = slice(1, None), slice(None, -1)
-        lo[tuple(sl)] = np.minimum(lo[tuple(sl)], a[tuple(sr)])
-        lo[tuple(sr)] = np.minimum(lo[tuple(sr)], a[tuple(sl)])
-        hi[tuple(sl)] = np.maximum(hi[tuple(sl)], b[tuple(sr)])
-        hi[tuple(sr)] = np.maximum(hi[tuple(sr)], b[tuple(sl)])
-    return lo, hi
 
 
 def corner_conflicts(x: dict, y: dict) -> np.ndarray:
@@ -232,7 +222,7 @@ def corner_conflicts(x: dict, y: dict) -> np.ndarray:
     if kx == 0 or ky == 0:
         return out
     for kx_key, ky_key in QUADRANTS:
-        xl, xh = _grown(*x[kx_key])
+        xl, xh = grown_heights(*x[kx_key])
         yl = y[ky_key][0].transpose(0, 2, 1)
         yh = y[ky_key][1].transpose(0, 2, 1)
         both = np.isfinite(xl).any(axis=0) & np.isfinite(yl).any(axis=0)
@@ -270,14 +260,16 @@ def lattice_corner(lo: np.ndarray, hi: np.ndarray, pitch: float, phase) -> tuple
 
 def pick_strips(V: np.ndarray, F: np.ndarray, size, *, count: int, along: int,
                 rng: np.random.Generator, taken=(), lattice=None,
-                chosen_before=()) -> tuple[list[Strip], set]:
+                chosen_before=(), meets_itself: bool = True) -> tuple[list[Strip], set]:
     """Choose ``count`` distinct edge strips from an exemplar.
 
     Every candidate segment keeps its crossing elements that stay
     :data:`CLEAR` inside the segment's end lines, minus those that would
-    collide at a tile corner with themselves or with any strip chosen before
-    (:func:`corner_conflicts`, both ways round; the element with most
-    collisions goes first). Of the :data:`SHORTLIST` candidates covering
+    collide at a tile corner with themselves (``meets_itself``) or with any
+    strip that can meet them there chosen before
+    (:func:`corner_conflicts`, both ways round): of the sets of elements
+    that collide nowhere, the one covering most (as below) is kept
+    (:data:`EXACT`). Of the :data:`SHORTLIST` candidates covering
     most of the segment, the one whose kept elements cover most (the
     :data:`END` parts near the tile corners counted twice) is taken, then the
     next colour is picked the same way against all strips so far.
@@ -302,6 +294,12 @@ def pick_strips(V: np.ndarray, F: np.ndarray, size, *, count: int, along: int,
     chosen_before : sequence of Strip
         Strips of other classes; the new strips must not collide with them at
         any corner.
+    meets_itself : bool
+        Whether strips of this class meet each other (and themselves) at a
+        tile corner, one along the horizontal side and one along the vertical
+        side: only in an isotropic set, where one class serves every side.
+        Otherwise a corner pairs strips of two different classes, and the new
+        strips are checked against ``chosen_before`` only.
 
     Returns
     -------
@@ -356,16 +354,19 @@ def pick_strips(V: np.ndarray, F: np.ndarray, size, *, count: int, along: int,
         # the parts near the segment ends counted twice
         best = None
         for c in order[:SHORTLIST]:
-            members = _without_corner_conflicts(V, F, labels, np.flatnonzero(crossing[c]),
-                                                tuple(origin[c]), along, before + strips)
+            cand = np.flatnonzero(crossing[c])
+            a, b = t0[c, cand], t1[c, cand]
+            value = (b - a + np.clip(np.minimum(b, END), 0, None)
+                     - np.clip(np.minimum(a, END), 0, None)
+                     + np.clip(np.maximum(b, 1 - END), None, 1)
+                     - np.clip(np.maximum(a, 1 - END), None, 1))
+            members = _without_corner_conflicts(V, F, labels, cand, tuple(origin[c]), along,
+                                                before + strips if meets_itself else before,
+                                                own=meets_itself, value=value)
             key = frozenset(members.tolist())
             if not key or key in used:
                 continue
-            a, b = t0[c, members], t1[c, members]
-            ends = (np.clip(np.minimum(b, END), 0, None) - np.clip(np.minimum(a, END), 0, None)
-                    + np.clip(np.maximum(b, 1 - END), None, 1) - np.clip(np.maximum(a, 1 - END),
-                                                                       None, 1))
-            score = float((b - a).sum() + ends.sum())
+            score = float(value[np.isin(cand, members)].sum())
             if best is None or score > best[0]:
                 best = (score, c, key)
         if best is None:
@@ -383,21 +384,43 @@ def pick_strips(V: np.ndarray, F: np.ndarray, size, *, count: int, along: int,
     return strips, used
 
 
-def _without_corner_conflicts(V, F, labels, members, origin, along, others):
-    """Drop elements from ``members`` until the strip collides at no corner."""
+def _without_corner_conflicts(V, F, labels, members, origin, along, others, own=True,
+                              value=None):
+    """The elements of ``members`` to keep so that the strip collides at no corner.
+
+    An element colliding with a strip of ``others`` (either way round) goes;
+    with ``own`` (the strip along both sides through a corner), so does an
+    element colliding with itself, and of two colliding elements at most one
+    stays. Among the sets left, the one of largest total ``value`` (one per
+    member; default 1) is kept: found exactly when at most :data:`EXACT`
+    elements are in play, otherwise by dropping the element with most
+    collisions until none is left.
+    """
     keep = np.isin(labels, members)
     face_el = np.searchsorted(members, labels[keep])
     Vs = _to_strip(V, origin, along)
     imgs = corner_footprints(Vs, F[keep], face_el, len(members))
-    alive = np.ones(len(members), dtype=bool)
+    n = len(members)
+    value = np.ones(n) if value is None else np.asarray(value, dtype=np.float64)
+    clash = np.zeros((n, n), dtype=bool)
+    if own and n:
+        clash = corner_conflicts(imgs, imgs)
+        clash = clash | clash.T
+    banned = np.diag(clash).copy()
+    for other in others:
+        banned |= corner_conflicts(imgs, other.corners).any(axis=1)
+        banned |= corner_conflicts(other.corners, imgs).any(axis=0)
+    free = np.flatnonzero(~banned)
+    m = len(free)
+    if m <= EXACT:
+        pick = (np.arange(2 ** m)[:, None] >> np.arange(m)[None, :]) & 1 == 1
+        sub = clash[np.ix_(free, free)]
+        bad = (pick[:, :, None] & pick[:, None, :] & sub[None]).any(axis=(1, 2))
+        score = np.where(bad, -np.inf, pick @ value[free])
+        return members[free[pick[int(np.argmax(score))]]]
+    alive = ~banned
     while alive.any():
-        mine = {k: (v[0][alive], v[1][alive]) for k, v in imgs.items()}
-        hits = np.zeros(int(alive.sum()))
-        own = corner_conflicts(mine, mine)
-        hits += own.sum(axis=1) + own.sum(axis=0)
-        for other in others:
-            hits += corner_conflicts(mine, other.corners).sum(axis=1)
-            hits += corner_conflicts(other.corners, mine).sum(axis=0)
+        hits = (clash[np.ix_(alive, alive)]).sum(axis=1)
         if not hits.any():
             break
         alive[np.flatnonzero(alive)[int(np.argmax(hits))]] = False
