@@ -41,7 +41,8 @@ QUICK = bool(os.environ.get("GEOTEX_EXAMPLES_QUICK"))
 def spot_89mm():
     """Spot, z up, largest extent 89 mm, with per-corner UVs when the file has them."""
     mesh = read_mesh(SPOT_UV if SPOT_UV.exists() and not QUICK else sample_path("spot"))
-    V = mesh.vertices[:, [0, 2, 1]] * np.array([1.0, -1.0, 1.0])      # y up -> z up
+    # y up -> z up, face towards the picture's camera (as geotex demo turns it)
+    V = mesh.vertices[:, [0, 2, 1]] * np.array([-1.0, 1.0, 1.0])
     V = V - V.min(axis=0)
     V *= 89.0 / float(np.ptp(V, axis=0).max())
     uv = None if mesh.uv is None else np.asarray(mesh.uv)[np.asarray(mesh.uv_faces)]
