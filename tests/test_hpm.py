@@ -136,6 +136,21 @@ def test_hierarchy_deterministic_pure_and_seeded():
     assert any(not np.array_equal(x.labels, y.labels) for x, y in zip(a.levels, c.levels))
 
 
+def test_hierarchy_finest_cluster_level_is_a_few_faces():
+    # 4992 faces: 6^4 clusters would be under 4 faces each, so the branching stops at
+    # 6^3 = 216 clusters of ~23 faces; one more split to ~4 faces follows (a cluster
+    # refused there leaves only a few faces to the face level)
+    V, F = torus(1.0, 0.4, n_major=96, n_minor=26)
+    H = cluster_hierarchy(V, F)
+    assert len(F) / H[-2].n_clusters <= 2 * 4
+    assert H[-3].n_clusters < H[-2].n_clusters < len(F)
+    assert is_disc_partition(F, H[-2].labels)
+    # a level already small enough is not split again
+    V, F = icosphere(3)
+    sizes = [len(F) / lv.n_clusters for lv in cluster_hierarchy(V, F).levels[:-1]]
+    assert sizes[-1] <= 8 and sizes[-2] > 8
+
+
 def test_hierarchy_errors():
     V, F = icosphere(2)
     with pytest.raises(InputError, match="branching"):
@@ -270,6 +285,20 @@ def test_hpm_uv_continuous_within_clusters(mapped):
         assert np.unique(pairs[:, 0]).size == pairs.shape[0]
     # vertices are split only where the mapping jumps: fewer uv than corners
     assert len(V) <= r.uv.shape[0] < 3 * len(F)
+
+
+def test_hpm_fills_few_faces_at_face_level():
+    # a small scale on a 5k-face torus: many clusters of the finest level fail
+    # (matching error, folded flattening); they must be placed as patches, not left
+    # to the per-face gap filling (6.6 % of the faces were, before)
+    V, F = torus(1.0, 0.4, n_major=96, n_minor=26)
+    r = hpm_texture(V, F, noise_image(64, 64), scale=0.7, seed=1)
+    filled = np.count_nonzero(r.patch < 0)
+    assert filled <= 0.01 * len(F)
+    rep = r.report()["levels"]
+    assert rep[-1]["filled_faces"] == filled
+    fine = rep[-2]                      # finest cluster level: placed as well as possible
+    assert fine["placed"] > 0 and fine["refused"].get("error", 0) == 0
 
 
 def test_hpm_deterministic_and_pure(mapped):

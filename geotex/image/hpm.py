@@ -34,6 +34,15 @@ into the original image.
    continues the neighbours' own texture coordinates (least-squares fit on
    the band vertices, any angle) is tried and kept when its error is lower
    and it stays inside the image.
+   On the finest cluster level (a few faces per cluster, see
+   :func:`geotex.patches.clusters.cluster_hierarchy`) a cluster is placed
+   as well as possible instead of being dropped to single faces: the best
+   match is kept whatever its error; a cluster whose barycentric flattening
+   folds is flattened by projection onto its mean plane (if that is within
+   ``max_flat_error``); if imposing the neighbours' border folds it, its
+   free flattening is kept.  The report counts, per level, why clusters were
+   refused (``refused``) and these two fallbacks (``projected``,
+   ``free_border``).
 4. Cracks: a vertex reached through several faces gets the mean of its
    values (in-cluster cracks); the vertices the cluster shares with textured
    faces take the positions the neighbours' band has in the cluster's frame,
@@ -46,8 +55,9 @@ into the original image.
    along the shared edges (weighted by the hat function of the vertex); the
    moves are spread inside the cluster by running the barycentric recursion
    again with the moved vertices imposed (the paper's pink region).
-5. At the face level, faces still without texture are filled from a
-   textured neighbour across an edge: the neighbour's linear map is
+5. At the face level, the few faces still without texture (clusters of the
+   finest level that could not be flattened or placed at all) are filled
+   from a textured neighbour across an edge: the neighbour's linear map is
    extended over the face unfolded about the shared edge (the paper matches
    single faces too; unfolding keeps the texture continuous across that
    edge at a fraction of the cost).
@@ -103,6 +113,9 @@ class HPMLevel:
     errors: list = field(default_factory=list)
     filled_faces: int = 0
     continued: int = 0
+    refused: dict = field(default_factory=dict)
+    projected: int = 0
+    free_border: int = 0
 
     @property
     def mean_error(self) -> float:
@@ -114,7 +127,9 @@ class HPMLevel:
         return {"level": self.level, "clusters": self.clusters, "placed": self.placed,
                 "subdivided": self.subdivided,
                 "mean_error": None if not self.errors else self.mean_error,
-                "filled_faces": self.filled_faces, "continued": self.continued}
+                "filled_faces": self.filled_faces, "continued": self.continued,
+                "refused": dict(sorted(self.refused.items())), "projected": self.projected,
+                "free_border": self.free_border}
 
 
 @dataclass(frozen=True, eq=False)
@@ -219,17 +234,25 @@ class _State:
         self.vacc = np.zeros((n, 2))        # sum of textured corner positions per vertex
         self.vcnt = np.zeros(n)             # number of textured corners per vertex
         self.vsq = np.zeros(n)              # sum of squared norms (to detect disagreement)
+        self._agreed = None                 # cache of agreed(), reset by mark()
 
     def agreed(self) -> np.ndarray:
-        """Per-vertex mean textured position, nan where none or where corners disagree."""
-        c = np.maximum(self.vcnt, 1.0)
-        mean = self.vacc / c[:, None]
-        spread = self.vsq / c - np.sum(mean * mean, axis=1)
-        ok = (self.vcnt > 0) & (spread < 1e-6 * (1.0 + self.vsq / c))
-        return np.where(ok[:, None], mean, np.nan)
+        """Per-vertex mean textured position, nan where none or where corners disagree.
+
+        The returned array is shared until the next :meth:`mark`: do not modify it.
+        """
+        if self._agreed is None:
+            c = np.maximum(self.vcnt, 1.0)
+            mean = self.vacc / c[:, None]
+            spread = self.vsq / c - np.sum(mean * mean, axis=1)
+            ok = (self.vcnt > 0) & (spread < 1e-6 * (1.0 + self.vsq / c))
+            self._agreed = np.where(ok[:, None], mean, np.nan)
+            self._agreed.setflags(write=False)
+        return self._agreed
 
     def mark(self, F, faces, corner, patch, level):
         """Record the corner positions of newly textured faces."""
+        self._agreed = None
         self.corner[faces] = corner
         self.done[faces] = True
         self.patch[faces] = patch
@@ -274,7 +297,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         Orientations searched by the FFT matching (>= 1; paper: 19).
     max_error : float, optional
         Largest accepted relative matching error; above it a cluster is
-        subdivided.
+        subdivided (on the finest cluster level the best match is kept).
     max_flat_error : float, optional
         Largest flattening error ``|surface area / texture area - 1|``.
     band : float, optional
@@ -366,7 +389,8 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         d = np.min(np.abs(((ang[:, None] - 2 * np.pi * np.arange(sym)[None, :] / sym) + np.pi)
                           % (2 * np.pi) - np.pi), axis=1)
         allowed = np.flatnonzero(d <= np.radians(20.0) + 1e-9)
-    # vertex graph for band distances
+    # vertex graph for band distances (both directions stored: searched as directed, which
+    # spares scipy a transpose per search)
     E = edge_topology(F, V.shape[0]).edges
     ew = np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1)
     G = sp.csr_matrix((np.concatenate([ew, ew]), (np.concatenate([E[:, 0], E[:, 1]]),
@@ -501,15 +525,33 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                 out.append(edge_band(bh, ly, cy, edges, width=band))
         return np.unique(np.concatenate(out)) if out else np.zeros(0, np.int64)
 
+    def refuse(li, reason):
+        levels[li].refused[reason] = levels[li].refused.get(reason, 0) + 1
+
     def place(li, c):
         """Try to texture cluster c of level li; returns the relative error or None."""
         lv = Hc.levels[li]
         if not lv.disc[c] or lv.control_ptr[c + 1] - lv.control_ptr[c] < 3:
+            refuse(li, 'not_disc')
             return None
+        last = li == L - 2               # finest cluster level: place as well as possible
         poly, verts, loc, faces = flatten(li, c)
-        if flat_error(verts, loc, faces) > max_flat_error:
-            return None
         N, e1, e2 = frame(li)
+        proj = False
+        if flat_error(verts, loc, faces) > max_flat_error:
+            if not last:
+                refuse(li, 'flattening')
+                return None
+            # the barycentric recursion folds this small cluster (its vertices take
+            # their coordinates from different base triangles of a polygon laid out
+            # with 3D lengths): flatten it by projection onto its mean plane instead
+            verts = np.unique(F[faces])
+            loc = np.stack([V[verts] @ e1[c], V[verts] @ e2[c]], 1)
+            if flat_error(verts, loc, faces) > max_flat_error:
+                refuse(li, 'flattening')
+                return None
+            levels[li].projected += 1
+            proj = True
         # band of textured faces within band_w of the cluster
         in_c = np.zeros(V.shape[0], bool)
         in_c[verts] = True
@@ -518,23 +560,34 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         band_faces = np.zeros(0, np.int64)
         fixed = fixed_mask = None
         if src.size and band_mode == "distance":
-            dist = dijkstra(G, directed=False, indices=src, min_only=True, limit=band_w)
+            dist = dijkstra(G, directed=True, indices=src, min_only=True, limit=band_w)
             near = np.isfinite(dist)
             band_faces = np.flatnonzero(st.done & near[F].all(axis=1))
         elif src.size:
             band_faces = topological_band(in_c, faces)
         if band_faces.size:
             bverts = np.unique(F[band_faces])
-            idx, w = polygon_coordinates(V, lv.controls(c), N[c], e1[c], e2[c], V[bverts])
-            bloc = np.einsum("pk,pkd->pd", w, poly[idx])
-            fixed = np.zeros((V.shape[0], 2))
-            fixed_mask = np.zeros(V.shape[0], bool)
-            fixed[bverts] = bloc
-            shared = np.intersect1d(bverts, verts)
-            fixed_mask[shared] = True
-            poly, verts, loc, faces = flatten(li, c, fixed, fixed_mask)
-            if folded(verts, loc, faces) and li < L - 1:
-                return None              # imposing the border folded the map: subdivide
+            if proj:
+                bloc = np.stack([V[bverts] @ e1[c], V[bverts] @ e2[c]], 1)
+            else:
+                idx, w = polygon_coordinates(V, lv.controls(c), N[c], e1[c], e2[c], V[bverts])
+                bloc = np.einsum("pk,pkd->pd", w, poly[idx])
+                fixed = np.zeros((V.shape[0], 2))
+                fixed_mask = np.zeros(V.shape[0], bool)
+                fixed[bverts] = bloc
+                shared = np.intersect1d(bverts, verts)
+                fixed_mask[shared] = True
+                poly, verts2, loc2, faces = flatten(li, c, fixed, fixed_mask)
+                if folded(verts2, loc2, faces):
+                    if not last:
+                        refuse(li, 'border_folds')
+                        return None          # imposing the border folded the map: subdivide
+                    # finest cluster level: keep the free flattening (border cracks
+                    # are then left to the snapping and the relaxation)
+                    levels[li].free_border += 1
+                    fixed = fixed_mask = None
+                else:
+                    verts, loc = verts2, loc2
             bl = np.zeros((V.shape[0], 2))
             bl[bverts] = bloc
         Lall = np.zeros((V.shape[0], 2))
@@ -545,6 +598,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         origin = np.floor(pp.min(axis=0)) - 1.0
         ext = np.ceil(pp.max(axis=0)) - origin + 1.0
         if ext[0] >= wm or ext[1] >= hm:
+            refuse(li, 'too_large')
             return None
         tri_c = pix(Lall[F[faces]].reshape(-1, 2)).reshape(-1, 3, 2) - origin
         K = np.zeros(hm * wm)
@@ -570,6 +624,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                               which=which)
             okp = np.flatnonzero(np.isfinite(Eg.ravel()))
             if okp.size == 0:
+                refuse(li, 'no_position')
                 return None
             pick = okp[int(rng.integers(okp.size))]
             err = 0.0
@@ -578,6 +633,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                               which=allowed)
             flat = Eg.ravel()
             if not np.isfinite(flat).any():
+                refuse(li, 'no_position')
                 return None
             best = float(flat.min())
             near = np.flatnonzero(flat <= best + 1e-9 * (1.0 + best))
@@ -590,7 +646,8 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                     best, pick = cont[2], None
                     levels[li].continued += 1
             err = best / J.sum() / var2
-            if err > max_error and li < L - 1:
+            if err > max_error and not last:
+                refuse(li, 'error')
                 return -err
         if pick is None:
             R_, t_ = cont[0], cont[1]
@@ -610,7 +667,10 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                 # spread the moves inside the cluster through the recursive mapping
                 # (the moved vertices imposed at every level), as in the paper
                 mm = np.flatnonzero(np.any(moved != P, axis=1))
-                if mm.size:
+                if mm.size and proj:
+                    if not folded(verts, np.column_stack([moved[:, 0], -moved[:, 1]]), faces):
+                        P = moved
+                elif mm.size:
                     if fixed is None:
                         fixed = np.zeros((V.shape[0], 2))
                         fixed_mask = np.zeros(V.shape[0], bool)
