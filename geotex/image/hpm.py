@@ -35,13 +35,17 @@ into the original image.
    the band vertices, any angle) is tried and kept when its error is lower
    and it stays inside the image.
    On the finest cluster level (a few faces per cluster, see
-   :func:`geotex.patches.clusters.cluster_hierarchy`) a cluster is placed
-   as well as possible instead of being dropped to single faces: the best
-   match is kept whatever its error; a cluster whose barycentric flattening
-   folds is flattened by projection onto its mean plane (if that is within
-   ``max_flat_error``); if imposing the neighbours' border folds it, its
-   free flattening is kept.  The report counts, per level, why clusters were
-   refused (``refused``) and these two fallbacks (``projected``,
+   :func:`geotex.patches.clusters.cluster_hierarchy`) a cluster that cannot
+   be flattened is not dropped to single faces: if its barycentric
+   flattening folds (its vertices take coordinates from different base
+   triangles of a polygon laid out with 3D lengths) it is flattened by
+   projection onto its mean plane (if that is within ``max_flat_error``),
+   and if imposing the neighbours' border folds it, its free flattening is
+   kept.  A match above ``max_error`` is still refused there: the face-level
+   filling (5) continues the neighbours' maps, which on Spot showed weaker
+   borders (mean colour jump 0.06-0.10) than patches forced above the
+   threshold (0.17).  The report counts, per level, why clusters were
+   refused (``refused``) and the two fallbacks (``projected``,
    ``free_border``).
 4. Cracks: a vertex reached through several faces gets the mean of its
    values (in-cluster cracks); the vertices the cluster shares with textured
@@ -55,9 +59,9 @@ into the original image.
    along the shared edges (weighted by the hat function of the vertex); the
    moves are spread inside the cluster by running the barycentric recursion
    again with the moved vertices imposed (the paper's pink region).
-5. At the face level, the few faces still without texture (clusters of the
-   finest level that could not be flattened or placed at all) are filled
-   from a textured neighbour across an edge: the neighbour's linear map is
+5. At the face level, the faces still without texture (clusters of the
+   finest level that matched badly or could not be flattened at all) are
+   filled from a textured neighbour across an edge: the neighbour's linear map is
    extended over the face unfolded about the shared edge (the paper matches
    single faces too; unfolding keeps the texture continuous across that
    edge at a fraction of the cost).
@@ -297,7 +301,8 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         Orientations searched by the FFT matching (>= 1; paper: 19).
     max_error : float, optional
         Largest accepted relative matching error; above it a cluster is
-        subdivided (on the finest cluster level the best match is kept).
+        subdivided (on the finest cluster level: left to the face-level
+        filling).
     max_flat_error : float, optional
         Largest flattening error ``|surface area / texture area - 1|``.
     band : float, optional
@@ -534,7 +539,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         if not lv.disc[c] or lv.control_ptr[c + 1] - lv.control_ptr[c] < 3:
             refuse(li, 'not_disc')
             return None
-        last = li == L - 2               # finest cluster level: place as well as possible
+        last = li == L - 2               # finest cluster level: flatten as well as possible
         poly, verts, loc, faces = flatten(li, c)
         N, e1, e2 = frame(li)
         proj = False
@@ -646,7 +651,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                     best, pick = cont[2], None
                     levels[li].continued += 1
             err = best / J.sum() / var2
-            if err > max_error and not last:
+            if err > max_error:
                 refuse(li, 'error')
                 return -err
         if pick is None:
@@ -661,7 +666,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         has = np.isfinite(nb_uv[:, 0])
         if has.any():
             close = has & (np.linalg.norm(P - np.nan_to_num(nb_uv), axis=1) <= snap)
-            P[close] = nb_uv[close]
+            close = _snap(P, nb_uv, close, np.searchsorted(verts, F[faces]))
             if relax and (has & ~close).any():
                 moved = _relax(P, verts, faces, has & ~close, F, st, full, rng, f)
                 # spread the moves inside the cluster through the recursive mapping
@@ -777,6 +782,35 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
     fl = np.where(st.face_level < 0, L - 1, st.face_level)
     return HPMResult(uv=np.ascontiguousarray(uv_out), uv_faces=uv_faces, patch=st.patch,
                      face_level=fl, levels=levels)
+
+
+def _signed_areas(P: np.ndarray, tri: np.ndarray) -> np.ndarray:
+    """Twice the signed areas of triangles ``tri`` (t, 3) over positions ``P`` (p, 2)."""
+    t = P[tri]
+    return (t[:, 1, 0] - t[:, 0, 0]) * (t[:, 2, 1] - t[:, 0, 1]) \
+        - (t[:, 1, 1] - t[:, 0, 1]) * (t[:, 2, 0] - t[:, 0, 0])
+
+
+def _snap(P, target, close, tri):
+    """Move the ``close`` rows of ``P`` (in place) onto ``target`` unless that folds a face.
+
+    ``tri`` (t, 3) are the cluster's faces as row indices of ``P``.  On fine
+    meshes the snapping distance is a sizeable part of an edge in pixels, and
+    snapping both ends of a short edge can reverse or crush a face: the
+    vertices of such faces keep their own position (a small crack instead of
+    a flipped face).  Returns the rows actually snapped.
+    """
+    close = close.copy()
+    a0 = _signed_areas(P, tri)
+    while close.any():                  # every round unsnaps at least one vertex
+        trial = P.copy()
+        trial[close] = target[close]
+        bad = _signed_areas(trial, tri) * np.sign(a0) < 0.3 * np.abs(a0)
+        if not bad.any():
+            break
+        close[np.unique(tri[bad])] = False
+    P[close] = target[close]
+    return close
 
 
 def _relax(P, verts, faces, movable, F, st, full, rng, f):
