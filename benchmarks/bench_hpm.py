@@ -37,6 +37,7 @@ from geotex.image import lapped_texture, texture_patches, textured_mesh
 from geotex.image.hpm import hpm_texture, read_hpm_image
 from geotex.image.seams import seam_contrast
 from geotex.io import read_mesh
+from geotex.mesh.topology import edge_topology
 from geotex.param.distortion import distortion_summary
 
 HERE = Path(__file__).resolve().parent
@@ -45,6 +46,29 @@ SHARED = next((p / "shared" / "data" for p in HERE.parents[1:3]
                if (p / "shared" / "data").is_dir()), HERE.parents[1] / "shared" / "data")
 SPOT = SHARED / "base" / "spot_odedstein.obj"
 IMAGES = SHARED / "images"
+
+
+def border_rotation(V, F, uv, uv_faces, regions):
+    """Rotation (degrees) between the two sides' texture maps at every region border edge.
+
+    The shared edge's vector in texture space seen from either face; the angle
+    between the two is how much the pattern turns across the border (0 where
+    the orientation propagates).
+    """
+    topo = edge_topology(F, V.shape[0])
+    two = topo.face_count == 2
+    ef, ed = topo.edge_faces()[two], topo.edges[two]
+
+    def edge_uv(f):
+        ia = np.argmax(F[f] == ed[:, :1], axis=1)
+        ib = np.argmax(F[f] == ed[:, 1:], axis=1)
+        return uv[uv_faces[f, ib]] - uv[uv_faces[f, ia]]
+
+    u0, u1 = edge_uv(ef[:, 0]), edge_uv(ef[:, 1])
+    ang = np.degrees(np.abs(np.arctan2(u0[:, 0] * u1[:, 1] - u0[:, 1] * u1[:, 0],
+                                       np.sum(u0 * u1, axis=1))))
+    r0, r1 = regions[ef[:, 0]], regions[ef[:, 1]]
+    return ang[(r0 != r1) & (r0 >= 0) & (r1 >= 0)]
 
 
 def timed(fn, repeat):
@@ -99,8 +123,9 @@ def main():
              f"Base: Spot (Keenan Crane, public domain) simplified with fast-simplification "
              "(30k: after one midpoint subdivision); "
              f"scale {scale:.3f} mesh units per image width (0.3 x the bounding-box diagonal); "
-             "seed 0; default options (20 orientations, max relative error 0.35, max flattening "
-             "error 0.2, band 0.06 of the image width).", "",
+             "seed 0; default options (20 orientations, searched within 30 degrees of the main "
+             "neighbour's orientation, max relative error 0.35, max flattening error 0.2, band "
+             "0.06 of the image width).", "",
              "## 1. Time", "",
              "| faces | image | wall (s) | CPU (s) | load avg | patches placed | subdivided | "
              "faces filled at face level | uv / vertices |",
@@ -122,15 +147,30 @@ def main():
                      f"{sub} | {rep['levels'][-1]['filled_faces']} | "
                      f"{r.uv.shape[0]} / {V.shape[0]} |")
         print(lines[-1], flush=True)
+    def per_level(rep):
+        out = []
+        for lv in rep["levels"]:
+            why = ", ".join(f"{k} {v}" for k, v in lv.get("refused", {}).items())
+            extra = [f"projected {lv['projected']}"] if lv.get("projected") else []
+            extra += [f"free border {lv['free_border']}"] if lv.get("free_border") else []
+            out.append(f"level {lv['level']} ({lv['clusters']} clusters): {lv['placed']} placed, "
+                       f"{lv['subdivided']} subdivided"
+                       + (f" ({why})" if why else "")
+                       + (f", {', '.join(extra)}" if extra else "")
+                       + ", mean error "
+                       + ("-" if lv["mean_error"] is None else format(lv["mean_error"], ".3f"))
+                       + (f", {lv['filled_faces']} faces filled" if lv["filled_faces"] else ""))
+        return "; ".join(out)
+
     lines += ["", "Per level (10k faces, water 256): "
-              + "; ".join(f"level {lv['level']}: {lv['placed']} placed, {lv['subdivided']} "
-                          f"subdivided, mean error "
-                          f"{'-' if lv['mean_error'] is None else format(lv['mean_error'], '.3f')}"
-                          for lv in runs[(10000, "water 256")].report()["levels"]), ""]
+              + per_level(runs[(10000, "water 256")].report()), "",
+              "Per level (30k faces, water 256): "
+              + per_level(runs[(30000, "water 256")].report()), ""]
     lines += ["## 2. Seams and distortion beside lapped textures (10k faces, same scale)", "",
               "| image | method | wall (s) | border / within colour difference | border | "
-              "within | stretch mean | stretch p95 | flipped faces |",
-              "|---|---|---|---|---|---|---|---|---|"]
+              "within | stretch mean | stretch p95 | flipped faces | rotation across borders "
+              "(median / p75, degrees) |",
+              "|---|---|---|---|---|---|---|---|---|---|"]
     V, F = meshes[10000]
     for label in ("gravel 128", "bricks 192", "water 256"):
         img = imgs[label]
@@ -140,7 +180,8 @@ def main():
         d = distortion_summary(V, F, r.uv * [img.shape[1], img.shape[0]], uv_faces=r.uv_faces)
         w = next(t["wall"] for t in rec["timing"] if t["image"] == label and t["faces"] ==
                  F.shape[0])
-        rows = [("hpm", w, s, d)]
+        rot = border_rotation(V, F, r.uv, r.uv_faces, r.patch)
+        rows = [("hpm", w, s, d, rot)]
         patches = texture_patches(img)
         wl, _, lt = timed(lambda: lapped_texture(V, F, patches, scale=scale, seed=0),
                           args.repeat)
@@ -155,15 +196,19 @@ def main():
         sl = seam_contrast(V, F, tm.uv, tm.uv_faces, tm.texture, top)
         dl = distortion_summary(V, F, topuv.reshape(-1, 2),
                                 uv_faces=np.arange(3 * F.shape[0]).reshape(-1, 3))
-        rows.append(("lapped (+ atlas)", wl + wa, sl, dl))
-        for name, wall, s_, d_ in rows:
+        rl = border_rotation(V, F, topuv.reshape(-1, 2), np.arange(3 * F.shape[0]).reshape(-1, 3),
+                             top)
+        rows.append(("lapped (+ atlas)", wl + wa, sl, dl, rl))
+        for name, wall, s_, d_, ro in rows:
+            q50, q75 = np.quantile(ro, [0.5, 0.75])
             lines.append(f"| {label} | {name} | {wall:.2f} | {s_.ratio:.2f} | {s_.border:.4f} | "
                          f"{s_.within:.4f} | {d_.stretch.mean:.3f} | {d_.stretch.p95:.3f} | "
-                         f"{d_.n_flipped} |")
+                         f"{d_.n_flipped} | {q50:.1f} / {q75:.1f} |")
             rec["quality"].append({"image": label, "method": name, "wall": wall,
                                    "seam_ratio": s_.ratio, "border": s_.border,
                                    "within": s_.within, "stretch_mean": d_.stretch.mean,
-                                   "stretch_p95": d_.stretch.p95, "flipped": d_.n_flipped})
+                                   "stretch_p95": d_.stretch.p95, "flipped": d_.n_flipped,
+                                   "rotation_median": float(q50), "rotation_p75": float(q75)})
             print(lines[-1], flush=True)
     lines += ["", "Border / within: mean RGB distance (0..sqrt 3) between the colours the two "
               "faces of an edge show just either side of it (10 % of the way to their opposite "
@@ -172,7 +217,9 @@ def main():
               "edges count as borders); lapped regions are the top paste of every face, whose "
               "borders lapped textures hide with the splotch's alpha fall-off.  Stretch is "
               "s1/s2 of the map from the surface into the image (1 = no anisotropic "
-              "distortion).", ""]
+              "distortion).  Rotation across borders: the angle between the texture-space "
+              "vectors of a border edge seen from its two faces (how much the pattern turns "
+              "there; hpm: placed patches, filled faces left out; lapped: top pastes).", ""]
     out = HERE / "results" / "hpm.md"
     out.write_text("\n".join(lines))
     (HERE / "results" / "hpm.json").write_text(json.dumps(rec, indent=1))

@@ -136,6 +136,21 @@ def test_hierarchy_deterministic_pure_and_seeded():
     assert any(not np.array_equal(x.labels, y.labels) for x, y in zip(a.levels, c.levels))
 
 
+def test_hierarchy_finest_cluster_level_is_a_few_faces():
+    # 4992 faces: 6^4 clusters would be under 4 faces each, so the branching stops at
+    # 6^3 = 216 clusters of ~23 faces; one more split to ~4 faces follows (a cluster
+    # refused there leaves only a few faces to the face level)
+    V, F = torus(1.0, 0.4, n_major=96, n_minor=26)
+    H = cluster_hierarchy(V, F)
+    assert len(F) / H[-2].n_clusters <= 2 * 4
+    assert H[-3].n_clusters < H[-2].n_clusters < len(F)
+    assert is_disc_partition(F, H[-2].labels)
+    # a level already small enough is not split again
+    V, F = icosphere(3)
+    sizes = [len(F) / lv.n_clusters for lv in cluster_hierarchy(V, F).levels[:-1]]
+    assert sizes[-1] <= 8 and sizes[-2] > 8
+
+
 def test_hierarchy_errors():
     V, F = icosphere(2)
     with pytest.raises(InputError, match="branching"):
@@ -270,6 +285,77 @@ def test_hpm_uv_continuous_within_clusters(mapped):
         assert np.unique(pairs[:, 0]).size == pairs.shape[0]
     # vertices are split only where the mapping jumps: fewer uv than corners
     assert len(V) <= r.uv.shape[0] < 3 * len(F)
+
+
+def test_hpm_fills_few_faces_at_face_level():
+    # a small scale on a 5k-face torus: clusters of ~23 faces are too large for the
+    # image or match badly; they must be retried as smaller patches, not left to the
+    # per-face gap filling (47 % of the faces were, when the level of ~23 faces was
+    # followed by single faces)
+    V, F = torus(1.0, 0.4, n_major=96, n_minor=26)
+    r = hpm_texture(V, F, noise_image(64, 64), scale=0.5, seed=1)
+    filled = np.count_nonzero(r.patch < 0)
+    assert filled <= 0.01 * len(F)
+    rep = r.report()["levels"]
+    assert rep[-1]["filled_faces"] == filled
+    coarse, fine = rep[-3], rep[-2]
+    assert coarse["refused"].get("too_large", 0) > 0 and fine["placed"] > 0
+    assert sum(sum(lv["refused"].values()) for lv in rep) >= coarse["subdivided"]
+
+
+@pytest.mark.parametrize("snap", [1.5, 3.0])
+def test_hpm_snapping_never_flips_a_face(snap):
+    # snapping a border vertex onto the neighbour's coordinates moves it by up to
+    # ``snap`` pixels, a good part of a short edge: it reversed 12 faces here (62 with
+    # snap=3) before the snapping kept the vertices of faces it would fold
+    V, F = torus(1.0, 0.4, n_major=96, n_minor=26)
+    r = hpm_texture(V, F, noise_image(64, 64), scale=3.0, seed=1, snap=snap)
+    t = r.uv[r.uv_faces]
+    a = (t[:, 1, 0] - t[:, 0, 0]) * (t[:, 2, 1] - t[:, 0, 1]) \
+        - (t[:, 1, 1] - t[:, 0, 1]) * (t[:, 2, 0] - t[:, 0, 0])
+    assert np.count_nonzero(a <= 0) == 0
+
+
+def stripe_image(h=64, w=64, seed=0):
+    """Coloured noise crossed by dark horizontal stripes (an anisotropic texture)."""
+    img = noise_image(h, w, seed).astype(np.float64)
+    img[np.sin(2 * np.pi * np.arange(h) / 8) > 0.6] *= 0.25
+    return img.astype(np.uint8)
+
+
+def border_rotation(V, F, r):
+    """Rotation (degrees) between the two sides' texture maps at every patch border edge."""
+    topo = edge_topology(F, len(V))
+    two = topo.face_count == 2
+    ef, ed = topo.edge_faces()[two], topo.edges[two]
+
+    def edge_uv(f):
+        ia = np.argmax(F[f] == ed[:, :1], axis=1)
+        ib = np.argmax(F[f] == ed[:, 1:], axis=1)
+        return r.uv[r.uv_faces[f, ib]] - r.uv[r.uv_faces[f, ia]]
+
+    u0, u1 = edge_uv(ef[:, 0]), edge_uv(ef[:, 1])
+    ang = np.degrees(np.abs(np.arctan2(u0[:, 0] * u1[:, 1] - u0[:, 1] * u1[:, 0],
+                                       np.sum(u0 * u1, axis=1))))
+    p0, p1 = r.patch[ef[:, 0]], r.patch[ef[:, 1]]
+    return ang[(p0 != p1) & (p0 >= 0) & (p1 >= 0)]
+
+
+def test_hpm_orientation_propagates_from_the_neighbours():
+    # stripes: with every orientation free, a patch turned by 90 or 180 degrees
+    # matches the thin band about as well, and the stripes change direction at
+    # borders (median 46 degrees here); searching near the main neighbour's
+    # orientation keeps them coherent
+    V, F = torus(1.0, 0.4, n_major=96, n_minor=26)
+    img = stripe_image()
+    free = border_rotation(V, F, hpm_texture(V, F, img, scale=2.0, seed=1,
+                                             orientation_spread=None))
+    kept = border_rotation(V, F, hpm_texture(V, F, img, scale=2.0, seed=1))
+    assert free.size and kept.size
+    assert np.median(kept) < 0.5 * np.median(free)
+    assert np.quantile(kept, 0.75) < 60.0
+    with pytest.raises(InputError, match="orientation_spread"):
+        hpm_texture(V, F, img, scale=2.0, orientation_spread=-5.0)
 
 
 def test_hpm_deterministic_and_pure(mapped):

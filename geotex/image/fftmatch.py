@@ -192,28 +192,43 @@ def match_energy(spectra: TextureSpectra, mask, support, footprint, *, which=Non
     for ch in range(fI.shape[0]):
         fI[ch] *= 2.0
         spec -= fI[ch] * St[:, ch]
-    E = sfft.irfft2(spec, s=(h, w), axes=(-2, -1)).astype(np.float64)
+    E = sfft.irfft2(spec, s=(h, w), axes=(-2, -1))
+    sum_i2 = float(np.sum(I * I))
     ys, xs = np.nonzero(K > 0)
     if ys.size == 0:
-        return np.maximum(E + float(np.sum(I * I)), 0.0)
+        return np.maximum(E.astype(np.float64) + sum_i2, 0.0)
     # admissible block: the footprint must not wrap around
     hy, wx = h - int(ys.max()), w - int(xs.max())
     out = np.full(E.shape, np.inf)
-    blk = np.maximum(E[:, :hy, :wx] + float(np.sum(I * I)), 0.0)
+    blk = np.maximum(E[:, :hy, :wx].astype(np.float64) + sum_i2, 0.0)
     # inside of the rotated image: |r1 . (p - c)| <= w/2 - 1, |r2 . (p - c)| <= h/2 - 1
+    # for every footprint pixel p; for each orientation and row dy the admissible
+    # shifts dx form one interval (intersection of two slabs)
     c = spectra.center
     q = np.stack([xs + 0.5 - c[0], ys + 0.5 - c[1]], axis=1)
     a = spectra.angles[idx]
     co, si = np.cos(a), np.sin(a)
-    dy = np.arange(hy, dtype=np.float64)[None, :, None]
-    dx = np.arange(wx, dtype=np.float64)[None, None, :]
+    dy = np.arange(hy, dtype=np.float64)[None, :]
+    lo = np.full((idx.size, hy), -np.inf)
+    hi = np.full((idx.size, hy), np.inf)
     for r0, r1, half in ((co, si, w / 2.0 - 1.0), (-si, co, h / 2.0 - 1.0)):
         proj = q @ np.stack([r0, r1])                              # (p, k')
-        t = r0[:, None, None] * dx + r1[:, None, None] * dy
-        bad = (t > (half - proj.max(axis=0))[:, None, None]) | \
-            (t < (-half - proj.min(axis=0))[:, None, None])
-        np.putmask(blk, bad, np.inf)
-    out[:, :hy, :wx] = blk
+        # admissible: tmin <= r0 dx + r1 dy <= tmax
+        tmin = (-half - proj.min(axis=0))[:, None] - r1[:, None] * dy
+        tmax = (half - proj.max(axis=0))[:, None] - r1[:, None] * dy
+        r0c = r0[:, None]
+        tiny = np.abs(r0c) < 1e-12
+        safe = np.where(tiny, 1.0, r0c)
+        x1, x2 = tmin / safe, tmax / safe
+        lo_k = np.where(tiny, np.where((tmin <= 0) & (tmax >= 0), -np.inf, np.inf),
+                        np.minimum(x1, x2))
+        hi_k = np.where(tiny, np.where((tmin <= 0) & (tmax >= 0), np.inf, -np.inf),
+                        np.maximum(x1, x2))
+        lo = np.maximum(lo, lo_k)
+        hi = np.minimum(hi, hi_k)
+    dx = np.arange(wx, dtype=np.float64)[None, None, :]
+    ok = (dx >= lo[:, :, None]) & (dx <= hi[:, :, None])
+    out[:, :hy, :wx] = np.where(ok, blk, np.inf)
     return out
 
 

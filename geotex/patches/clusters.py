@@ -11,7 +11,11 @@ growth ("each untreated face sharing an edge with a growing sub-region joins
 the sub-region whose seed is nearest") computed for every cluster of a level
 at once by one multi-source Dijkstra (:func:`scipy.sparse.csgraph.dijkstra`).
 ``n`` adapts to the cluster's area so that clusters of one level have a
-nearly uniform size.
+nearly uniform size: ``branching ** level`` clusters on a level, until that
+would make clusters of at most ``leaf_faces`` faces; the finest cluster
+level then has at most about ``2 * leaf_faces`` faces per cluster (one more
+split to ``leaf_faces`` faces is made when needed), so that a cluster that
+cannot be textured at that level leaves only a few faces to the face level.
 
 After growth, borders are regularized by exchanging triangles: a face two of
 whose three neighbours (inside the same parent) belong to one other
@@ -537,7 +541,9 @@ def cluster_hierarchy(V, F, *, branching: float = 6.0, leaf_faces: int = 4,
         area.
     leaf_faces : int, optional
         Clusters stop being split when the level's target size is at most
-        this many faces; the next level is then the single faces.
+        this many faces; the next level is then the single faces.  If the
+        last level built has more than twice this many faces per cluster, one
+        more level of clusters of this size is made first.
     seed : int, optional
         Seed of the random first seed face of every cluster.
 
@@ -597,10 +603,17 @@ def cluster_hierarchy(V, F, *, branching: float = 6.0, leaf_faces: int = 4,
     built = [(lab0, C0, np.full(C0, -1, np.int64))]
     lab, C = lab0, C0
     level = 1
+    size = float(m)                      # target faces per cluster of the last level built
     while True:
         target_clusters = float(branching) ** level
         if m / target_clusters <= leaf_faces:
-            break
+            # the branching would reach the leaf size on this level: split once more to
+            # clusters of ``leaf_faces`` faces if the last level is more than twice that
+            # (else its clusters go straight to single faces: up to ``branching *
+            # leaf_faces`` faces at once, 23 on a 30k-face mesh with the defaults)
+            if size <= 2 * leaf_faces or m <= leaf_faces * C:
+                break
+            target_clusters = m / float(leaf_faces)
         target_area = total / target_clusters
         area = np.bincount(lab, weights=adj.areas, minlength=C)
         nf = np.bincount(lab, minlength=C)
@@ -611,6 +624,7 @@ def cluster_hierarchy(V, F, *, branching: float = 6.0, leaf_faces: int = 4,
         lab_new, par, C_new = _split_level(lab, C, want, ctx, rng)
         built.append((lab_new, C_new, par))
         lab, C = lab_new, C_new
+        size = m / target_clusters
         level += 1
     # face level, numbered by parent
     forder = np.lexsort((np.arange(m), lab))
