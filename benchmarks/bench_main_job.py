@@ -103,6 +103,7 @@ def _union_peer(report_json: Path, base: Path) -> float | None:
 
 
 def main(argv=None) -> int:
+    start_load = os.getloadavg()[0]
     ap = argparse.ArgumentParser()
     ap.add_argument("--data", default=str(HERE.parent.parent / "shared" / "data"))
     ap.add_argument("--quick", action="store_true", help="one base, one size")
@@ -160,7 +161,8 @@ def main(argv=None) -> int:
         "# The main job end to end",
         "",
         f"Run {time.strftime('%Y-%m-%d %H:%M')} on {platform.machine()}, {os.cpu_count()} cores "
-        f"(1-min load {load[0]:.1f} at the end: other jobs share the machine), Python "
+        f"(1-min load {start_load:.1f} before the first run and {load[0]:.1f} at the end"
+        f"{'' if start_load < 0.5 else ': other jobs share the machine'}), Python "
         f"{platform.python_version()}; `python benchmarks/bench_main_job.py`. Each command "
         "runs in its own process; peak memory from `/usr/bin/time -v`. Tile set `studs` "
         "(16 tiles, isotropic), parts scaled to 80 mm. Targets (issue #13): one-shot "
