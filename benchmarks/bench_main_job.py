@@ -203,7 +203,7 @@ def main(argv=None) -> int:
                                                         "write"))
         lines.append(f"| {r['shell']} | {r['faces']:,} | **{r['wall']:.1f}** | "
                      f"{r['peak']:.0f} | {st} | {r['retries']} |")
-    lines += ["", f"## geotex demo", "",
+    lines += ["", "## geotex demo", "",
               f"`geotex demo` (Spot at 80 mm, studs, STL + 3MF + picture + report): "
               f"**{demo[0]:.1f} s** wall, peak {demo[1]:.0f} MB, exit {demo[2]}.", ""]
     Path(args.out).write_text("\n".join(lines) + "\n")
