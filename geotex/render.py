@@ -14,7 +14,7 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
-from PIL import Image
+from PIL import Image, ImageDraw
 
 from geotex.errors import InputError
 from geotex.io.atomic import atomic_output
@@ -595,9 +595,6 @@ def _render_insets(pv, panels: list[Panel], up: np.ndarray, width: int,
     the default view (or from the close-up's side, see :func:`_inset_direction`),
     a red circle of the close-up radius around the close-up point and a frame.
     """
-    # lazy: PIL's drawing module is only needed for insets
-    from PIL import ImageDraw
-
     plotter = pv.Plotter(off_screen=True, shape=(1, len(panels)),
                          window_size=(width * len(panels), height), border=False)
     cameras = []

@@ -47,6 +47,7 @@ ALLOWED_RAISES: dict[str, str] = {
 #: Functions that build the exception to raise (``raise factory(...)``), with the reason.
 ALLOWED_FACTORIES: dict[str, str] = {
     "flag_error": "geotex.cli: returns a UsageError naming the flag, or the caught GeotexError",
+    "_cli_error": "geotex/cli/pgp.py: flag_error, or a UsageError naming the mesh file",
 }
 
 #: (file, exception) pairs allowed in one file only, with the reason.
