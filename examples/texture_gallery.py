@@ -75,7 +75,9 @@ def main(out: Path) -> None:
         with Image.open(path) as im:
             firsts.append(im.convert("RGB").crop((0, 0, im.width // len(panels), im.height)))
         print(f"wrote {path}")
-    cols = min(3, len(firsts))
+    # a grid with no empty cell: one row up to five sets, else rows of 3, 4 or 2
+    n = len(firsts)
+    cols = n if n <= 5 else next((c for c in (3, 4, 2) if n % c == 0), n)
     rows = (len(firsts) + cols - 1) // cols
     w, h = firsts[0].size
     sheet = Image.new("RGB", (cols * w, rows * h), "white")
