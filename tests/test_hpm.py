@@ -461,7 +461,19 @@ def test_cli_hpm_errors(files, capsys):
     assert ".glb or .obj" in err([str(base), "--image", str(img), "-o", str(tmp / "a.stl")])
     assert "no such image" in err([str(base), "--image", str(tmp / "x.png"),
                                    "-o", str(tmp / "a.glb")])
+    for bad in ("-5", "nan", "inf", "wide"):
+        assert err([str(base), "--image", str(img), "--orientation-spread", bad,
+                    "-o", str(tmp / "a.glb")]) == (
+            f"geotex: error: --orientation-spread {bad}: give degrees >= 0 or 'any'")
     assert not (tmp / "a.glb").exists()
+
+
+def test_cli_hpm_orientation_spread_any_searches_every_orientation(files, capsys):
+    tmp, base, img = files
+    out = tmp / "any.glb"
+    assert main(["hpm", str(base), "--image", str(img), "--scale", "3",
+                 "--orientation-spread", "any", "-o", str(out)]) == 0
+    assert out.exists()
 
 
 def test_hpm_follows_a_direction_field_and_cli_field(files, tmp_path):

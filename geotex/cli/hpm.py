@@ -28,6 +28,11 @@ def register(sub):
                    help="direction field from 'geotex field': patches follow it")
     p.add_argument("--angle", type=float, default=None, metavar="DEG",
                    help="orientation of the first patch in degrees (default random)")
+    p.add_argument("--orientation-spread", default="30", metavar="DEG|any",
+                   help="without --field: a patch next to textured faces is matched only at "
+                        "orientations within DEG degrees of its main neighbour's, so the "
+                        "orientation carries over as in the paper (default 30); 'any' "
+                        "searches every orientation")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.add_argument("--max-error", type=float, default=0.35, metavar="E",
                    help="largest relative matching error accepted before a cluster is "
@@ -62,6 +67,19 @@ def _outputs(args) -> list[Path]:
     return written
 
 
+def _spread(text: str) -> float | None:
+    """``--orientation-spread``: degrees (finite, >= 0) or 'any' (None)."""
+    if text.strip().lower() == "any":
+        return None
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not (value >= 0.0 and value != float("inf")):
+        raise UsageError(f"--orientation-spread {text}: give degrees >= 0 or 'any'")
+    return value
+
+
 def run(args) -> int:
     import numpy as np
 
@@ -92,13 +110,15 @@ def run(args) -> int:
         if field.vectors.shape != (F.shape[0], 3):
             raise UsageError(f"{args.field}: the field has {field.vectors.shape[0]} faces, the "
                              f"mesh {F.shape[0]}; compute it on this mesh with 'geotex field'")
+    spread = _spread(args.orientation_spread)
     scale = args.scale
     if scale is None:
         scale = 0.25 * float(np.linalg.norm(np.ptp(V, axis=0)))
     try:
         with stage_bar(8, "hpm") as bar:
             result = hpm_texture(V, F, image, scale=scale, field=field, angle=args.angle,
-                                 seed=args.seed, max_error=args.max_error, progress=bar)
+                                 seed=args.seed, max_error=args.max_error,
+                                 orientation_spread=spread, progress=bar)
     except Exception as exc:
         from geotex.errors import InputError
         if isinstance(exc, InputError):
