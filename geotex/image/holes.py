@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.ndimage import binary_dilation, distance_transform_edt
-from scipy.signal import fftconvolve
 
 from geotex.errors import InputError
 
@@ -25,6 +24,9 @@ RIM = 3
 
 def _correlation(image: np.ndarray, kernel: np.ndarray) -> np.ndarray:
     """``sum_k kernel[k] * image[p + k]`` for every placement ``p`` inside the image."""
+    # lazy: scipy.signal takes ~0.7 s to import, and only images with holes need it
+    from scipy.signal import fftconvolve
+
     return fftconvolve(image, kernel[::-1, ::-1], mode="valid")
 
 

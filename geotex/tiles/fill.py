@@ -19,7 +19,7 @@ that elements may also overlap in projection when one lies above the other
 from __future__ import annotations
 
 import numpy as np
-from scipy import ndimage, signal
+from scipy import ndimage
 
 from geotex.mesh.topology import compacted, concatenated, face_components
 
@@ -251,7 +251,7 @@ def element_heights(V: np.ndarray, F: np.ndarray, labels: np.ndarray, k: int
         if sel.size == 0:
             out.append((np.zeros(2, dtype=np.int64), np.zeros((0, 0)), np.zeros((0, 0))))
             continue
-        i, j, fs = ii[sel], jj[sel], f[sel]
+        i, j = ii[sel], jj[sel]
         o = np.array([i.min(), j.min()], dtype=np.int64)
         shape = (int(i.max() - o[0] + 1), int(j.max() - o[1] + 1))
         low = np.full(shape, np.inf)
@@ -352,6 +352,9 @@ def fill_corners(V: np.ndarray, F: np.ndarray, ex: ExemplarPixels, rng: np.rando
     count : int
         How many.
     """
+    # lazy: scipy.signal takes ~0.7 s to import, and only tile building needs it
+    from scipy.signal import correlate
+
     n = int(round(1.0 / PIXEL))
     q = int(round(quarter / PIXEL))
     c = int(np.ceil(CLEAR / PIXEL)) + 1          # pixels kept free along the sides
@@ -387,10 +390,10 @@ def fill_corners(V: np.ndarray, F: np.ndarray, ex: ExemplarPixels, rng: np.rando
             lo_j, hi_j = (max(c, n - q - b + 1), n - c - b) if cv else (c, min(q - 1, n - c - b))
             if hi_i < lo_i or hi_j < lo_j:
                 continue
-            gain = signal.correlate((quad & ~cover).astype(np.float64),
-                                    (high > 0).astype(np.float64), mode="valid")
-            free = signal.correlate((~cover).astype(np.float64), mine.astype(np.float64),
-                                    mode="valid")
+            gain = correlate((quad & ~cover).astype(np.float64),
+                             (high > 0).astype(np.float64), mode="valid")
+            free = correlate((~cover).astype(np.float64), mine.astype(np.float64),
+                             mode="valid")
             gain = gain[lo_i:hi_i + 1, lo_j:hi_j + 1]
             ok = (free[lo_i:hi_i + 1, lo_j:hi_j + 1] >= FREE_SHARE * mine.sum() - 0.5) \
                 & (gain > 0.5)
