@@ -81,8 +81,11 @@ def pgp_corner_coordinates(V, F, *, tile: float, field="smooth", seed: int = 0) 
     -------
     numpy.ndarray, (m, 3, 2) float64
     """
+    # a direction or the curvature lines keep the image's "up" everywhere (half-turn
+    # jumps only: a brick map is symmetric under those, not under quarter turns);
+    # the smoothest cross field can only be combed by quarter turns
     p = periodic_parameterization(V, F, direction_vectors(V, F, field), scale=float(tile),
-                                  seed=seed)
+                                  seed=seed, symmetry=4 if field == "smooth" else 2)
     return np.asarray(p.coords, dtype=np.float64)
 
 

@@ -636,7 +636,7 @@ def _vanishing(X: np.ndarray, vmass: np.ndarray) -> np.ndarray:
 
 
 def periodic_parameterization(V, F, field, *, scale, solver: str = "auto",
-                              seed=None) -> PeriodicParameterization:
+                              seed=None, symmetry: int = 4) -> PeriodicParameterization:
     """Return per-corner tile coordinates that agree across edges up to grid symmetries.
 
     See the module docstring for the method (Ray et al. 2006; material-space
@@ -664,6 +664,14 @@ def periodic_parameterization(V, F, field, *, scale, solver: str = "auto",
         ``"auto"``: multilevel from ``MULTILEVEL_VERTICES`` vertices on.
     seed : int, optional
         Start vector of the eigen solver; ``None`` means 0 (reproducible).
+    symmetry : {4, 2}, optional
+        The grid symmetries the coordinates may jump by across edges: 4,
+        quarter turns (any field); 2, half turns only, for tiles that are not
+        symmetric under a quarter turn (bricks, planks): the ``s`` axis then
+        follows ``field``'s own vector (or its opposite) everywhere, where a
+        quarter-turn combing may swap ``s`` and ``t`` over whole regions.
+        Needs a field without quarter-turn structure: vectors, or a field of
+        symmetry 1 or 2.
 
     Returns
     -------
@@ -684,7 +692,7 @@ def periodic_parameterization(V, F, field, *, scale, solver: str = "auto",
     >>> bool(p.seam_residual < 1e-9), bool(p.singular.any())
     (True, False)
     """
-    st = _setup(V, F, field, scale)
+    st = _setup(V, F, field, scale, symmetry)
     if solver not in ("auto", "direct", "multilevel"):
         raise InputError(f"solver must be 'auto', 'direct' or 'multilevel', got {solver!r}")
     n = st.V.shape[0]
@@ -718,7 +726,7 @@ class _Setup:
     slots: np.ndarray         # (e, 4) corner slots of the interior edges (_edge_slots)
 
 
-def _setup(V, F, field, scale) -> _Setup:
+def _setup(V, F, field, scale, symmetry: int = 4) -> _Setup:
     """Validate the mesh, comb the field, and find the corner rotations."""
     conn = face_connection(V, F)                      # validates the mesh and orientation
     V = np.asarray(V, dtype=np.float64)
@@ -732,16 +740,23 @@ def _setup(V, F, field, scale) -> _Setup:
     if bow.size:
         raise InputError(f"F has {bow.size} non-manifold vertex(es), first {int(bow[0])}; "
                          "repair the mesh first, e.g. with geotex repair")
-    return _prepared(V, F, conn, _field_vectors(field, m), _scale_per_vertex(scale, n))
+    if symmetry not in (2, 4) or isinstance(symmetry, bool):
+        raise InputError(f"symmetry must be 4 (quarter turns) or 2 (half turns), got {symmetry!r}")
+    if symmetry == 2 and isinstance(field, DirectionField) and field.symmetry == 4:
+        raise InputError("symmetry 2 needs a field of symmetry 1 or 2 (or vectors); a cross "
+                         "field turns by quarter turns")
+    return _prepared(V, F, conn, _field_vectors(field, m), _scale_per_vertex(scale, n),
+                     symmetry)
 
 
-def _prepared(V, F, conn, vectors, S) -> _Setup:
+def _prepared(V, F, conn, vectors, S, symmetry: int = 4) -> _Setup:
     """Comb the field and find the corner rotations on a checked mesh (``conn`` its
-    connection, ``vectors`` (m, 3) and ``S`` (n,) checked)."""
+    connection, ``vectors`` (m, 3) and ``S`` (n,) checked); ``symmetry`` 2 combs
+    by half turns only."""
     n = V.shape[0]
-    combed = comb_direction_field(V, F, vectors, symmetry=4, connection=conn)
+    combed = comb_direction_field(V, F, vectors, symmetry=symmetry, connection=conn)
     jump = np.zeros(conn.edges.size, dtype=np.int64)
-    jump[np.searchsorted(conn.edges, combed.cut_edges)] = combed.jumps
+    jump[np.searchsorted(conn.edges, combed.cut_edges)] = combed.jumps * (4 // symmetry)
     theta = tangent_angles(conn.T1, conn.T2, combed.vectors)
     a = np.cos(theta)[:, None] * conn.T1 + np.sin(theta)[:, None] * conn.T2
     b = np.cross(conn.N, a)
