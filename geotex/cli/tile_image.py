@@ -46,6 +46,9 @@ def run(args) -> int:
     from geotex.io import read_mesh, write_mesh
     from geotex.param.pgp_store import load_parameterization
 
+    if args.make_tileable is not None and args.make_tileable > MAX_TILEABLE_PX:
+        raise UsageError(f"--make-tileable {args.make_tileable}: at most {MAX_TILEABLE_PX} "
+                         "texels a side (the graph cut would take minutes)")
     out = guard_output(args.output, args.base, args.image, args.param)
     suffix = out.suffix.lower()
     if args.displace is None and suffix not in TEXTURED:
@@ -75,10 +78,6 @@ def run(args) -> int:
         print(f"--image {args.image}: transparent texels filled from the opaque parts")
     if args.make_tileable is not None:
         from geotex.image.material.tileable import tileable_image
-
-        if args.make_tileable > MAX_TILEABLE_PX:
-            raise UsageError(f"--make-tileable {args.make_tileable}: at most {MAX_TILEABLE_PX} "
-                             "texels a side (the graph cut would take minutes)")
 
         try:
             tile = tileable_image(image, size=args.make_tileable)
