@@ -101,11 +101,13 @@ HEAVY_MODULES: dict[str, str] = {
                     "image hole filling correlate",
     "fast_simplification": "~50 ms, only when a relief is decimated",
     "gmsh": "optional (the 'step' extra): STEP input only",
+    "numba": "~0.2 s, plus ~0.05 s per cached compiled function; geotex.jit loads it on "
+             "the first call of a compiled loop (large inputs only)",
 }
 
 #: Modules that neither ``import geotex`` nor building the ``geotex`` parser may load.
 NOT_AT_STARTUP = ("pyvista", "vtkmodules", "dask", "distributed", "playwright", "pymeshlab",
-                  "networkx")
+                  "networkx", "numba")
 
 
 def _modules():

@@ -16,6 +16,10 @@ faults, which on a busy machine weigh as much as the arithmetic).
   (:meth:`BaseGeometry.gradients`, shared with the decoder transpose).
 * :func:`edge_encode` is the direct per-edge encoding
   ``c_ij = <(t_i + t_j) / 2, p_j - p_i>`` clipped to ``|c_ij| <= |p_j - p_i|``.
+* On large meshes (from :data:`geotex.jit.JIT_MIN_SIZE` half-edges or
+  edges) the decoder, its transpose and the conjugate gradients of
+  :func:`lsq_encode` run as compiled loops (:mod:`geotex.jit`): the same sums
+  without the sparse matrices and temporaries (equal to round-off; tested).
 * :meth:`BaseGeometry.decoder_transpose` writes the projected decoder ``P D``
   edge by edge: the decoded vector at a vertex only involves the coefficients of the
   edges *incident* to it (corner ``k`` of a face uses the two face edges at
@@ -32,6 +36,7 @@ import numpy as np
 import scipy.linalg.blas as blas
 import scipy.sparse as sp
 
+from geotex.jit import JIT_MIN_SIZE, compiled
 from geotex.linalg import single_threaded_blas
 from geotex.mesh.topology import EdgeTopology, edge_topology
 
@@ -223,6 +228,12 @@ class BaseGeometry:
         """
         n = self.V.shape[0]
         m = self.F.shape[0]
+        if 3 * m >= JIT_MIN_SIZE:
+            out = np.zeros((n, 3))
+            G = self.gradients()
+            _decode_loops(self.FT, self.topo.half_to_edge, c, *G[0], *G[1], *G[2],
+                          self.valence, out)
+            return out
         h2e = self.topo.half_to_edge.reshape(m, 3)
         FT = self.FT
         fwd = self.forward()
@@ -276,6 +287,11 @@ class BaseGeometry:
             iv = 1.0 / self.valence
             Y = [np.ascontiguousarray(X[:, d]) * iv for X in (X1, X2) for d in range(3)]
             G = self.gradients()
+            if 3 * m >= JIT_MIN_SIZE:
+                data = np.zeros((e, 4))
+                _decoder_rows(self.FT, topo.half_to_edge, *G[0], *G[1], *G[2], *Y, data)
+                self._transpose = (_four_per_row(data, E, n), X1, X2)
+                return self._transpose
             FT = self.FT
             fwd = self.forward()
             rev = ~fwd
@@ -326,23 +342,117 @@ class BaseGeometry:
                 np.add(b0, b1, out=data[:, i])
             del b0, b1
             del W
-            index = np.int32 if 2 * n < 2 ** 31 else np.int64
-            cols = np.empty((e, 4), dtype=index)
-            cols[:, 0] = E[:, 0]
-            cols[:, 0] *= 2
-            cols[:, 1] = cols[:, 0] + 1
-            cols[:, 2] = E[:, 1]
-            cols[:, 2] *= 2
-            cols[:, 3] = cols[:, 2] + 1
-            AT = sp.csr_matrix((data.reshape(-1), cols.reshape(-1),
-                                np.arange(0, 4 * e + 1, 4, dtype=index)), shape=(e, 2 * n))
-            self._transpose = (AT, X1, X2)
+            self._transpose = (_four_per_row(data, E, n), X1, X2)
         return self._transpose
 
     def tangent(self, X: np.ndarray) -> np.ndarray:
         """``X`` minus its component along the base normals."""
         nrm = self.normals
         return X - dot(X, nrm)[:, None] * nrm
+
+
+def _four_per_row(data: np.ndarray, E: np.ndarray, n: int) -> sp.csr_matrix:
+    """The ``(e, 2n)`` CSR matrix with row ``i`` holding ``data[i]`` at the frame
+    columns ``2a, 2a+1, 2b, 2b+1`` of edge ``(a, b) = E[i]``."""
+    e = E.shape[0]
+    index = np.int32 if 2 * n < 2 ** 31 else np.int64
+    cols = np.empty((e, 4), dtype=index)
+    cols[:, 0] = E[:, 0]
+    cols[:, 0] *= 2
+    cols[:, 1] = cols[:, 0] + 1
+    cols[:, 2] = E[:, 1]
+    cols[:, 2] *= 2
+    cols[:, 3] = cols[:, 2] + 1
+    return sp.csr_matrix((data.reshape(-1), cols.reshape(-1),
+                          np.arange(0, 4 * e + 1, 4, dtype=index)), shape=(e, 2 * n))
+
+
+@compiled
+def _decode_loops(FT, half_to_edge, c, g00, g01, g02, g10, g11, g12, g20, g21, g22,
+                  valence, out):
+    """:meth:`BaseGeometry.decode` face by face (``out`` (n, 3) zeroed): corner
+    ``k`` adds ``s_k G_{k+1} - s_{k+2} G_{k+2}`` to its vertex, ``s_k`` the
+    coefficient of half-edge ``k`` signed by its direction; then the mean."""
+    m = FT.shape[1]
+    for f in range(m):
+        s0 = c[half_to_edge[3 * f]]
+        s1 = c[half_to_edge[3 * f + 1]]
+        s2 = c[half_to_edge[3 * f + 2]]
+        v0, v1, v2 = FT[0, f], FT[1, f], FT[2, f]
+        if not v0 < v1:               # half-edges against their edge's direction
+            s0 = -s0
+        if not v1 < v2:
+            s1 = -s1
+        if not v2 < v0:
+            s2 = -s2
+        # corner 0: s0 G1 - s2 G2; corner 1: s1 G2 - s0 G0; corner 2: s2 G0 - s1 G1
+        out[v0, 0] += s0 * g10[f] - s2 * g20[f]
+        out[v0, 1] += s0 * g11[f] - s2 * g21[f]
+        out[v0, 2] += s0 * g12[f] - s2 * g22[f]
+        out[v1, 0] += s1 * g20[f] - s0 * g00[f]
+        out[v1, 1] += s1 * g21[f] - s0 * g01[f]
+        out[v1, 2] += s1 * g22[f] - s0 * g02[f]
+        out[v2, 0] += s2 * g00[f] - s1 * g10[f]
+        out[v2, 1] += s2 * g01[f] - s1 * g11[f]
+        out[v2, 2] += s2 * g02[f] - s1 * g12[f]
+    for v in range(out.shape[0]):
+        for d in range(3):
+            out[v, d] /= valence[v]
+
+
+@compiled
+def _decoder_rows(FT, half_to_edge, g00, g01, g02, g10, g11, g12, g20, g21, g22,
+                  y0, y1, y2, y3, y4, y5, data):
+    """:meth:`BaseGeometry.decoder_transpose`'s four numbers per edge, face by face.
+
+    The same products and sums as the numpy path (bit for bit): half-edge
+    ``k`` of face ``f`` adds ``G_{k+1} . Y(F_k)`` at its tail and
+    ``-G_k . Y(F_{k+1})`` at its head, to the parts of the edge's first or
+    second vertex by its direction; ``data`` (e, 4) starts at zero and the
+    half-edges of an edge arrive in ascending order, as the numpy path sums them.
+    """
+    m = FT.shape[1]
+    for f in range(m):
+        for k in range(3):
+            k1 = (k + 1) % 3
+            tail = FT[k, f]
+            head = FT[k1, f]
+            row = half_to_edge[3 * f + k]
+            if k1 == 0:
+                a0, a1, a2 = g00[f], g01[f], g02[f]
+            elif k1 == 1:
+                a0, a1, a2 = g10[f], g11[f], g12[f]
+            else:
+                a0, a1, a2 = g20[f], g21[f], g22[f]
+            if k == 0:
+                b0, b1, b2 = g00[f], g01[f], g02[f]
+            elif k == 1:
+                b0, b1, b2 = g10[f], g11[f], g12[f]
+            else:
+                b0, b1, b2 = g20[f], g21[f], g22[f]
+            # + G_{k+1} . Y(tail) and -(G_k . Y(head)), both frames j = 0, 1
+            t0 = a0 * y0[tail]
+            t0 += a1 * y1[tail]
+            t0 += a2 * y2[tail]
+            t1 = a0 * y3[tail]
+            t1 += a1 * y4[tail]
+            t1 += a2 * y5[tail]
+            h0 = b0 * y0[head]
+            h0 += b1 * y1[head]
+            h0 += b2 * y2[head]
+            h1 = b0 * y3[head]
+            h1 += b1 * y4[head]
+            h1 += b2 * y5[head]
+            if tail < head:              # tail is the edge's first vertex
+                data[row, 0] += t0
+                data[row, 1] += t1
+                data[row, 2] += -h0
+                data[row, 3] += -h1
+            else:
+                data[row, 0] += h0
+                data[row, 1] += h1
+                data[row, 2] += -t0
+                data[row, 3] += -t1
 
 
 def _dot_into(g, y, out: np.ndarray, tmp: np.ndarray) -> None:
@@ -391,7 +501,8 @@ def lsq_encode(g: BaseGeometry, t: np.ndarray) -> np.ndarray:
     fixed at it and the free ones re-fitted (``LSQ_ROUND_ITERATIONS`` each);
     the result is clipped so the bound holds exactly.  A truncated solve: the
     iteration counts are fixed, so the cost is a few dozen passes over the
-    edges whatever the mesh size.
+    edges whatever the mesh size.  From :data:`geotex.jit.JIT_MIN_SIZE` edges
+    up the iterations run as compiled loops (:func:`_lsq_fit_compiled`).
 
     Parameters
     ----------
@@ -419,6 +530,14 @@ def lsq_encode(g: BaseGeometry, t: np.ndarray) -> np.ndarray:
     # (no division by Kd) and the damping a scalar where every diag > 0
     sq = np.sqrt(Kd)
     scale = 1.0 / sq
+    t2 = np.empty((t.shape[0], 2))
+    t2[:, 0] = dot(t, X1)
+    t2[:, 1] = dot(t, X2)
+    if E.shape[0] >= JIT_MIN_SIZE:
+        x = _lsq_fit_compiled(data, E, t.shape[0], c0, lim, t2.ravel(), sq, scale, reg, Kd,
+                              bool((diag > 0).all()))
+        c = c0 + scale * x
+        return np.clip(c, -lim, lim, out=c)
     ATs = sp.csr_matrix((np.multiply(data, scale[:, None]).reshape(-1), AT.indices, AT.indptr),
                         shape=AT.shape)
     As = ATs.T
@@ -437,9 +556,6 @@ def lsq_encode(g: BaseGeometry, t: np.ndarray) -> np.ndarray:
             y += mu_v * x
             return y
 
-    t2 = np.empty((t.shape[0], 2))
-    t2[:, 0] = dot(t, X1)
-    t2[:, 1] = dot(t, X2)
     rhs = ATs @ (t2.ravel() - As @ (sq * c0))
     lo, hi = (-lim - c0) * sq, (lim - c0) * sq
     with single_threaded_blas():
@@ -489,3 +605,136 @@ def _cg(K, rhs, x, free, iterations, rtol, weight):
         blas.daxpy(r, p)
         rr = rr_new
     return x
+
+
+def _lsq_fit_compiled(data, E, n, c0, lim, t2, sq, scale, reg, Kd, all_positive):
+    """The fit of :func:`lsq_encode` with compiled loops (large meshes): the same
+    damped, Jacobi-scaled normal equations, unconstrained CG and active-set
+    rounds, with the operator applied from the four numbers per edge (no
+    sparse matrix; the step's vector updates and dot products folded into the
+    passes over the edges).  Equal to the numpy path to round-off (sums in a
+    different order, and the operator read in single precision in the
+    iterations: relative differences ~1e-8); returns the scaled unknowns
+    ``x`` (e,)."""
+    e = E.shape[0]
+    index = np.int32 if 2 * n < 2 ** 31 else np.int64
+    E2 = np.ascontiguousarray(E, dtype=index)
+    D = data * scale[:, None]
+    mu = LSQ_DAMPING / (1.0 + LSQ_DAMPING)
+    mu_v = np.empty(0) if all_positive else reg / Kd
+    z = np.empty(2 * n)
+    rhs = np.empty(e)
+    _scaled_rhs(D, E2, sq * c0, t2, z, rhs)
+    # the iterations read the operator in single precision (relative error
+    # 6e-8 per entry, far below the truncated solve's 1e-3): the passes over
+    # the edges are memory-bound and this halves their largest array
+    D = D.astype(np.float32)
+    lo, hi = (-lim - c0) * sq, (lim - c0) * sq
+    x = np.zeros(e)
+    r, p, Kp = np.empty(e), np.empty(e), np.empty(e)
+    none = np.empty(0)
+    _cg_loops(D, E2, mu, mu_v, rhs, x, none, False, LSQ_ITERATIONS, LSQ_RTOL, Kd, r, p, Kp, z)
+    free = np.ones(e, dtype=bool)
+    for _ in range(LSQ_ROUNDS):
+        out = free & ((x > hi) | (x < lo))
+        if not out.any():
+            break
+        np.clip(x, lo, hi, out=x)
+        free &= ~out
+        _cg_loops(D, E2, mu, mu_v, rhs, x, free.astype(np.float64), True,
+                  LSQ_ROUND_ITERATIONS, 0.0, Kd, r, p, Kp, z)
+    return x
+
+
+@compiled
+def _scaled_rhs(D, E, w, t2, z, rhs):
+    """``rhs = A^T (t2 - A w)`` for the four-per-row ``A^T`` of ``D`` on ``E``."""
+    z[:] = t2
+    for i in range(D.shape[0]):
+        a = 2 * E[i, 0]
+        b = 2 * E[i, 1]
+        wi = w[i]
+        z[a] -= D[i, 0] * wi
+        z[a + 1] -= D[i, 1] * wi
+        z[b] -= D[i, 2] * wi
+        z[b + 1] -= D[i, 3] * wi
+    for i in range(D.shape[0]):
+        a = 2 * E[i, 0]
+        b = 2 * E[i, 1]
+        rhs[i] = D[i, 0] * z[a] + D[i, 1] * z[a + 1] + D[i, 2] * z[b] + D[i, 3] * z[b + 1]
+
+
+@compiled
+def _cg_loops(D, E, mu, mu_v, rhs, x, mask, start, iterations, rtol, weight, r, p, Kp, z):
+    """CG on ``(A^T A + mu) x = rhs`` over the unknowns where ``mask`` is 1 (all
+    when ``mask`` is empty), from ``x`` (used when ``start``, else taken as
+    zero; updated in place).  ``mu_v`` (e,) replaces the scalar ``mu`` when not
+    empty.  Stops early when ``sum(weight r^2) <= rtol^2 sum(weight rhs^2)``
+    (``rtol > 0``).  ``r``, ``p``, ``Kp`` (e,) and ``z`` (2n,): scratch."""
+    e = D.shape[0]
+    masked = mask.shape[0] > 0
+    per_edge = mu_v.shape[0] > 0
+
+    def product(v, out, z, beta):
+        # v = r + beta v first where beta >= 0; then out = (A^T A + mu) v,
+        # masked; returns v . out
+        z[:] = 0.0
+        for i in range(e):
+            a = 2 * E[i, 0]
+            b = 2 * E[i, 1]
+            if beta >= 0.0:
+                v[i] = r[i] + beta * v[i]
+            vi = v[i]
+            z[a] += D[i, 0] * vi
+            z[a + 1] += D[i, 1] * vi
+            z[b] += D[i, 2] * vi
+            z[b + 1] += D[i, 3] * vi
+        vkv = 0.0
+        for i in range(e):
+            a = 2 * E[i, 0]
+            b = 2 * E[i, 1]
+            y = D[i, 0] * z[a] + D[i, 1] * z[a + 1] + D[i, 2] * z[b] + D[i, 3] * z[b + 1]
+            y += (mu_v[i] if per_edge else mu) * v[i]
+            if masked:
+                y *= mask[i]
+            out[i] = y
+            vkv += v[i] * y
+        return vkv
+
+    if start:
+        product(x, Kp, z, -1.0)
+        for i in range(e):
+            r[i] = rhs[i] - Kp[i]
+    else:
+        x[:] = 0.0
+        r[:] = rhs
+    if masked:
+        for i in range(e):
+            r[i] *= mask[i]
+    rr = 0.0
+    wrr = 0.0
+    stop = 0.0
+    for i in range(e):
+        p[i] = r[i]
+        rr += r[i] * r[i]
+    if rtol > 0.0:
+        for i in range(e):
+            wrr += weight[i] * r[i] * r[i]
+            stop += weight[i] * rhs[i] * rhs[i]
+        stop *= rtol * rtol
+    beta = -1.0                  # p = r + beta p is folded into the next product
+    for _ in range(iterations):
+        if rr <= 0.0 or (rtol > 0.0 and wrr <= stop):
+            break
+        alpha = rr / product(p, Kp, z, beta)
+        rr_new = 0.0
+        wrr = 0.0
+        for i in range(e):
+            x[i] += alpha * p[i]
+            ri = r[i] - alpha * Kp[i]
+            r[i] = ri
+            rr_new += ri * ri
+            if rtol > 0.0:
+                wrr += weight[i] * ri * ri
+        beta = rr_new / rr
+        rr = rr_new

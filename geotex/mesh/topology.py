@@ -15,6 +15,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
+from geotex.jit import JIT_MIN_SIZE, compiled
+
 __all__ = [
     "greedy_colouring",
     "EdgeTopology",
@@ -133,6 +135,19 @@ def edge_topology(F: np.ndarray, n_vertices: int | None = None) -> EdgeTopology:
     """
     F = np.asarray(F, dtype=np.int64)
     n = int(n_vertices if n_vertices is not None else (F.max() + 1 if F.size else 0))
+    if F.size >= JIT_MIN_SIZE and F.min() >= 0:
+        n_loop = max(n, int(F.max()) + 1)        # the loops index by vertex: stay in bounds
+        h = F.size
+        start = np.zeros(n_loop + 1, np.int64)
+        order, high, inv = (np.empty(h, np.int64) for _ in range(3))
+        edges = np.empty((h, 2), np.int64)
+        counts, forward = np.zeros(h, np.int64), np.zeros(h, np.int64)
+        e = _edge_topology_loops(np.ascontiguousarray(F), n_loop, start, order, high, inv,
+                                 edges, counts, forward)
+        del start, high
+        edges, counts, forward = edges[:e].copy(), counts[:e].copy(), forward[:e].copy()
+        return EdgeTopology(edges=edges, half_to_edge=inv, face_count=counts,
+                            forward_count=forward, half_order=order)
     N = max(n, 1)
     a = F.ravel()                       # half-edge 3f + k runs a -> b
     b = F[:, [1, 2, 0]].ravel()         # a copy: overwritten below
@@ -184,6 +199,68 @@ def edge_topology(F: np.ndarray, n_vertices: int | None = None) -> EdgeTopology:
     forward = np.bincount(inv[fwd], minlength=first.shape[0]).astype(np.int64, copy=False)
     return EdgeTopology(edges=edges, half_to_edge=inv, face_count=counts,
                         forward_count=forward, half_order=order)
+
+
+@compiled
+def _edge_topology_loops(F, n, start, order, high, half_to_edge, edges, counts, forward):
+    """:func:`edge_topology` as loops (the same arrays): a counting sort of the
+    half-edges by their lower vertex, then each vertex's few half-edges sorted
+    by the higher one (insertion sort; a stable merge sort for long lists), so
+    the work is linear in the faces instead of one sort of all half-edges.
+    Arrays are allocated by the caller (numpy's large allocations use huge
+    pages: page faults on fresh memory cost more than the loops here) and
+    given zeroed where they accumulate (``start``, ``counts``, ``forward``);
+    returns the number of edges."""
+    m = F.shape[0]
+    for f in range(m):
+        for k in range(3):
+            a = F[f, k]
+            b = F[f, (k + 1) % 3]
+            start[min(a, b) + 1] += 1
+    for v in range(n):
+        start[v + 1] += start[v]
+    fill = start[:n].copy()
+    for f in range(m):
+        for k in range(3):
+            a = F[f, k]
+            b = F[f, (k + 1) % 3]
+            lo = min(a, b)
+            p = fill[lo]
+            fill[lo] = p + 1
+            order[p] = 3 * f + k
+            high[p] = max(a, b)
+    for v in range(n):
+        s, e = start[v], start[v + 1]
+        if e - s <= 64:
+            for i in range(s + 1, e):
+                key, h = high[i], order[i]
+                j = i - 1
+                while j >= s and high[j] > key:
+                    high[j + 1] = high[j]
+                    order[j + 1] = order[j]
+                    j -= 1
+                high[j + 1] = key
+                order[j + 1] = h
+        else:
+            idx = np.argsort(high[s:e], kind="mergesort")
+            high[s:e] = high[s:e][idx]
+            order[s:e] = order[s:e][idx]
+    ne = -1
+    for v in range(n):
+        previous = -1
+        for p in range(start[v], start[v + 1]):
+            if high[p] != previous:
+                ne += 1
+                previous = high[p]
+                edges[ne, 0] = v
+                edges[ne, 1] = previous
+            h = order[p]
+            half_to_edge[h] = ne
+            counts[ne] += 1
+            f, k = h // 3, h % 3
+            if F[f, k] < F[f, (k + 1) % 3]:
+                forward[ne] += 1
+    return ne + 1
 
 
 def _runs(ks: np.ndarray):

@@ -1,0 +1,152 @@
+"""The compiled loops (geotex.jit) give what the numpy paths give.
+
+Large inputs take compiled loops; here the size threshold is lowered so small
+meshes take them too, and every result is compared with the numpy path.
+"""
+
+import numpy as np
+import pytest
+
+import geotex.heighttilt._kernels as kernels
+import geotex.mesh.topology as topology
+from geotex.heighttilt import apply_texture, extract_texture, spiky_sphere
+from geotex.heighttilt.validation import base_geometry
+from geotex.mesh.primitives import grid_plane, torus
+
+TOPOLOGY_FIELDS = ("edges", "half_to_edge", "face_count", "forward_count", "half_order")
+
+
+def _both_topologies(monkeypatch, F, n=None):
+    monkeypatch.setattr(topology, "JIT_MIN_SIZE", 0)
+    fast = topology.edge_topology(F, n)
+    monkeypatch.setattr(topology, "JIT_MIN_SIZE", 10 ** 12)
+    slow = topology.edge_topology(F, n)
+    return fast, slow
+
+
+def _assert_same_topology(fast, slow):
+    for name in TOPOLOGY_FIELDS:
+        a, b = getattr(fast, name), getattr(slow, name)
+        assert a.dtype == b.dtype == np.int64, name
+        assert np.array_equal(a, b), name
+
+
+def test_topology_of_a_shuffled_torus(monkeypatch):
+    V, F = torus(1.0, 0.3, n_major=40, n_minor=17)
+    rng = np.random.default_rng(3)
+    perm = rng.permutation(len(V))
+    F = np.argsort(perm)[F][rng.permutation(len(F))]
+    fast, slow = _both_topologies(monkeypatch, F, len(V))
+    _assert_same_topology(fast, slow)
+    assert (fast.face_count == 2).all() and (fast.forward_count == 1).all()
+
+
+def test_topology_of_open_non_manifold_and_inconsistent_faces(monkeypatch):
+    V, F = grid_plane(9, 7)
+    # a fin: three faces on one edge; a flipped face; a degenerate face; an unused vertex
+    a, b = F[0, 0], F[0, 1]
+    F = np.vstack([F, [[a, b, len(V)]], [[a, a, b]]])
+    F[40] = F[40, ::-1]
+    fast, slow = _both_topologies(monkeypatch, F, len(V) + 2)
+    _assert_same_topology(fast, slow)
+    assert (fast.face_count > 2).any() and (fast.face_count == 1).any()
+    assert len(fast.inconsistent) > 0
+
+
+def test_topology_of_many_faces_on_few_vertices(monkeypatch):
+    # long per-vertex lists (> 64 half-edges) take the merge-sort branch
+    rng = np.random.default_rng(0)
+    F = rng.integers(0, 8, size=(3000, 3))
+    fast, slow = _both_topologies(monkeypatch, F, 8)
+    _assert_same_topology(fast, slow)
+
+
+def test_topology_with_too_small_vertex_count_stays_in_bounds(monkeypatch):
+    # a wrong (too small) vertex count: the loops index by vertex and must not
+    # run past their arrays; they give the topology of the faces as they are
+    V, F = torus(1.0, 0.3, n_major=12, n_minor=8)
+    monkeypatch.setattr(topology, "JIT_MIN_SIZE", 0)
+    fast = topology.edge_topology(F, 5)
+    _, slow = _both_topologies(monkeypatch, F, len(V))
+    _assert_same_topology(fast, slow)
+
+
+@pytest.fixture
+def lychee():
+    V, F, Vs = spiky_sphere(subdivisions=3, spikes=12, seed=4)
+    return V, F, Vs
+
+
+def _paths(monkeypatch, fn):
+    monkeypatch.setattr(kernels, "JIT_MIN_SIZE", 0)
+    monkeypatch.setattr(topology, "JIT_MIN_SIZE", 0)
+    fast = fn()
+    monkeypatch.setattr(kernels, "JIT_MIN_SIZE", 10 ** 12)
+    monkeypatch.setattr(topology, "JIT_MIN_SIZE", 10 ** 12)
+    slow = fn()
+    return fast, slow
+
+
+def test_decoder_rows_equal_bit_for_bit(monkeypatch, lychee):
+    _, F, Vs = lychee
+
+    def rows():
+        g = base_geometry(Vs, F, name="Vs")
+        AT, X1, X2 = g.decoder_transpose()
+        return AT.toarray(), X1
+
+    (a, x1), (b, y1) = _paths(monkeypatch, rows)
+    assert np.array_equal(x1, y1)
+    assert np.array_equal(a, b)
+
+
+def test_decode_equals_numpy_path(monkeypatch, lychee):
+    _, F, Vs = lychee
+    c = np.random.default_rng(1).normal(size=3 * len(F) // 2)
+
+    def decoded():
+        return base_geometry(Vs, F, name="Vs").decode(c)
+
+    a, b = _paths(monkeypatch, decoded)
+    assert np.allclose(a, b, rtol=0, atol=1e-12 * np.abs(b).max())
+
+
+def test_least_squares_tilt_equals_numpy_path(monkeypatch, lychee):
+    V, F, Vs = lychee
+
+    def extracted():
+        tex, _ = extract_texture(V, F, base=Vs, encode="lsq")
+        return tex, apply_texture(Vs, F, tex)
+
+    (ta, Va), (tb, Vb) = _paths(monkeypatch, extracted)
+    assert np.array_equal(ta.height, tb.height)
+    # single-precision operator in the compiled iterations: equal to ~1e-7
+    assert np.linalg.norm(ta.tilt - tb.tilt) <= 1e-6 * np.linalg.norm(tb.tilt)
+    # the bound |c_e| <= |e| was active somewhere, so the masked rounds ran
+    g = base_geometry(Vs, F, name="Vs")
+    lengths = np.linalg.norm(Vs[g.topo.edges[:, 1]] - Vs[g.topo.edges[:, 0]], axis=1)
+    assert np.isclose(np.abs(ta.tilt), lengths, rtol=1e-12).any()
+    # both reconstruct the textured surface exactly
+    scale = np.ptp(V, axis=0).max()
+    assert np.abs(Va - V).max() <= 1e-12 * scale
+    assert np.abs(Vb - V).max() <= 1e-12 * scale
+
+
+def test_per_edge_damping_branch_matches_scalar_damping(monkeypatch, lychee):
+    V, F, Vs = lychee
+    monkeypatch.setattr(topology, "JIT_MIN_SIZE", 0)
+    g = base_geometry(Vs, F, name="Vs")
+    AT, X1, X2 = g.decoder_transpose()
+    data = AT.data.reshape(-1, 4)
+    diag = np.einsum("ij,ij->i", data, data)
+    reg = kernels.LSQ_DAMPING * diag
+    Kd = diag + reg
+    sq = np.sqrt(Kd)
+    rng = np.random.default_rng(2)
+    e = len(diag)
+    c0, lim = rng.normal(size=e) * 0.01, np.full(e, 0.05)
+    t2 = rng.normal(size=2 * len(Vs)) * 0.1
+    args = (data, g.topo.edges, len(Vs), c0, lim, t2, sq, 1.0 / sq, reg, Kd)
+    scalar = kernels._lsq_fit_compiled(*args, True)
+    per_edge = kernels._lsq_fit_compiled(*args, False)
+    assert np.allclose(scalar, per_edge, rtol=0, atol=1e-9 * np.abs(scalar).max())
