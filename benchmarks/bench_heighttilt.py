@@ -43,6 +43,9 @@ import numpy as np
 from geotex.heighttilt import apply_texture, decode_tilt, extract_texture, spiky_sphere
 from geotex.heighttilt.base import base_normals
 from geotex.heighttilt.extract import displacement_to_height_tilt
+from geotex.jit import JIT_MIN_SIZE
+from geotex.mesh import topology
+from geotex.heighttilt import _kernels as kernels
 from geotex.mesh.primitives import torus
 
 RESULTS = Path(__file__).parent / "results" / "heighttilt_speed.md"
@@ -186,18 +189,23 @@ def main():
     rows, record = [], {"vertices": int(V0.shape[0]), "faces": int(F.shape[0]),
                         "repeat": args.repeat, "machine": platform.machine(),
                         "cores": os.cpu_count(), "numpy": np.__version__, "runs": {}}
-    runs = [("lsq", "geotex height + tilt, least-squares encoding (default)"),
-            ("edge", "geotex height + tilt, per-edge encoding")]
-    for encode, label in runs:
+    runs = [("lsq", "lsq", "geotex height + tilt, least-squares encoding (default)"),
+            ("lsq-numpy", "lsq", "the same, numpy only (the path below `JIT_MIN_SIZE`: "
+             "no compiled loops)"),
+            ("edge", "edge", "geotex height + tilt, per-edge encoding")]
+    for key, encode, label in runs:
+        limit = 10 ** 12 if key == "lsq-numpy" else JIT_MIN_SIZE
+        kernels.JIT_MIN_SIZE = topology.JIT_MIN_SIZE = limit
         t_ext, c_ext, (tex, _) = best(lambda: extract_texture(V0, F, base=Vs, encode=encode),
                                       args.repeat)
         t_app, c_app, V = best(lambda: apply_texture(Vs, F, tex), args.repeat)
+        kernels.JIT_MIN_SIZE = topology.JIT_MIN_SIZE = JIT_MIN_SIZE
         err = float(np.abs(V - V0).max()) / diag
         rel, mx = form_error(Vs, F, tex, t_true)
         rows.append(f"| {label} | {t_ext:.2f} / {c_ext:.2f} | {t_app:.2f} / {c_app:.2f} | "
                     f"{t_ext + t_app:.2f} / {c_ext + c_app:.2f} | "
                     f"{err:.1e} | {rel:.3f} / {mx:.3f} |")
-        record["runs"][encode] = {"extract_s": t_ext, "reconstruct_s": t_app,
+        record["runs"][key] = {"extract_s": t_ext, "reconstruct_s": t_app,
                                   "total_s": t_ext + t_app, "extract_cpu_s": c_ext,
                                   "reconstruct_cpu_s": c_app, "total_cpu_s": c_ext + c_app,
                                   "max_error_over_diag": err,
@@ -215,6 +223,12 @@ def main():
     record["height_field_peer_s"] = t_hf
     record["height_field_max_error_over_diag"] = err_hf
     spiky = spiky_form_errors()
+    # a fresh process: its first round trip loads numba and the cached compiled
+    # loops (compiling them instead on the first run on a machine)
+    fresh_runs = json.loads(subprocess.run(
+        [sys.executable, __file__, "--child", "--vertices", str(args.vertices), "--repeat", "2"],
+        check=True, capture_output=True, text=True).stdout)
+    record["fresh_process_round_trips"] = fresh_runs
     compared = None
     if args.reference:
         compared = compare(args.reference, args.vertices, args.repeat, args.rounds)
@@ -232,7 +246,7 @@ def main():
         f"Mesh: bumpy torus, {V0.shape[0]:,} vertices, {F.shape[0]:,} faces, bumps leaning along "
         f"the ring (tilt up to {np.linalg.norm(t_true, axis=1).max():.2f}). Given base (no "
         f"smoothing). Best of {args.repeat} (wall and CPU seconds each the best of its own). "
-        f"Machine: {platform.machine()}, {os.cpu_count()} cores (shared with other jobs), "
+        f"Machine: {platform.machine()}, {os.cpu_count()} cores, "
         f"Python {platform.python_version()}, numpy {np.__version__}. "
         "Script: `benchmarks/bench_heighttilt.py`.",
         "",
@@ -245,7 +259,7 @@ def main():
         "",
         f"Load average (1, 5, 15 min) at the start {load_start[0]:.2f}, {load_start[1]:.2f}, "
         f"{load_start[2]:.2f} and at the end {load_end[0]:.2f}, {load_end[1]:.2f}, "
-        f"{load_end[2]:.2f} (2 cores shared with other jobs).",
+        f"{load_end[2]:.2f} (2 cores; other jobs: {os.environ.get('OTHER_JOBS', 'not stated')}).",
         "",
         f"Target: at most 2 s for extract + reconstruct; the default takes {total:.2f} s wall "
         f"and {total_cpu:.2f} s CPU: the target is {'met' if total_cpu <= 2.0 else 'not met'} "
@@ -255,10 +269,16 @@ def main():
         "misses); the last column is the tilt decoded from the 1-form alone, relative to "
         "the true tilt. Fresh memory is expensive on this machine: filling a newly "
         f"allocated 24 MB array took {1000 * fresh:.0f} ms, filling it again "
-        f"{1000 * again:.0f} ms (page faults), which weighs on both encodings. Before the "
-        "rewrite of the edge topology sort, the decoder transpose and the CG loop (same "
-        "results to round-off), the default was recorded at 4.69 s wall (extract 4.18 + "
-        "reconstruct 0.52) and the per-edge encoding at 2.68 s, best of 3 on a quiet machine.",
+        f"{1000 * again:.0f} ms (page faults), which weighs on all rows. From "
+        f"{JIT_MIN_SIZE:,} half-edges or edges up, the edge topology, the decoder, its "
+        "transpose and the least-squares CG run as compiled loops (numba, `geotex/jit.py`); "
+        "the numpy-only row is the same "
+        "code with that threshold lifted. In a fresh process the first round trip took "
+        f"{fresh_runs[0]['wall']:.2f} s wall and the second {fresh_runs[1]['wall']:.2f} s: "
+        "the first loads numba and the cached compiled code (on the first run on a machine "
+        "it compiles them instead, about 5 s, once). Earlier records, best of 3 on a quiet "
+        "machine: 4.69 s before the numpy rewrite of the topology sort, decoder transpose "
+        "and CG loop; 3.74 s after it (2026-12-06, numpy only).",
         "",
         "1-form alone on `spiky_sphere(subdivisions=3, spikes=12)`, seeds 0, 1, 2 "
         "(relative L2 tilt error; issue 22 asks for at most 0.05 by default): "

@@ -16,20 +16,26 @@ use by :func:`compiled`:
   results are deterministic and equal the numpy paths' bit for bit where both
   exist (tested).
 
-A compiled function may not call another one (each is compiled on its own).
+A compiled function may call functions of its module marked with
+:func:`helper`: on the first compiled call in a module, every marked function
+of that module is compiled too and replaces its plain version in the module's
+namespace (numba resolves the names of called functions there).
 """
 
 from __future__ import annotations
 
 import functools
+import os
 import threading
 
-__all__ = ["compiled", "JIT_MIN_SIZE"]
+__all__ = ["compiled", "helper", "JIT_MIN_SIZE"]
 
-#: Inputs from this many items (half-edges, faces) up take a compiled path
-#: where a numpy path exists too: below it, loading numba and the cached code
-#: (~0.25 s in a fresh process) costs more than the loop saves.
-JIT_MIN_SIZE = 300_000
+#: Inputs from this many items (half-edges, edges, candidate pairs) up take a
+#: compiled path where a numpy path exists too: below it, loading numba and the
+#: cached code (~0.4 s in a fresh process) costs more than the loop saves.
+#: The environment variable ``GEOTEX_JIT_MIN_SIZE`` sets it (0: always compiled;
+#: the tests run both paths this way).
+JIT_MIN_SIZE = int(os.environ.get("GEOTEX_JIT_MIN_SIZE", "300000"))
 
 _LOCK = threading.Lock()
 
@@ -56,8 +62,29 @@ def compiled(fn):
                 if not holder:
                     import numba
 
+                    namespace = fn.__globals__
+                    for name, obj in list(namespace.items()):
+                        if getattr(obj, "_geotex_helper", False):
+                            namespace[name] = numba.njit(cache=True, nogil=True)(obj)
                     holder.append(numba.njit(cache=True, nogil=True, boundscheck=False)(fn))
         return holder[0](*args)
 
     call.py_func = fn
     return call
+
+
+def helper(fn):
+    """Mark ``fn`` as called from compiled functions of its module (see the module notes).
+
+    Parameters
+    ----------
+    fn : callable
+        A function numba can compile in nopython mode.
+
+    Returns
+    -------
+    callable
+        ``fn`` itself, marked.
+    """
+    fn._geotex_helper = True
+    return fn

@@ -562,13 +562,13 @@ def test_max_pairs(monkeypatch):
 def test_max_pairs_stops_early(monkeypatch):
     monkeypatch.setattr(gi, "_PAIR_CHUNK", 1000)
     calls = []
-    narrow = gi._intersecting
+    task = gi._pair_task
 
-    def counting(faces, i, j):
-        calls.append(i.size)
-        return narrow(faces, i, j)
+    def counting(faces, level, s, e):
+        calls.append(e - s)
+        return task(faces, level, s, e)
 
-    monkeypatch.setattr(gi, "_intersecting", counting)
+    monkeypatch.setattr(gi, "_pair_task", counting)
     V, F, _ = two_spheres(level=4, offset=(0.5, 0.4, 0.3))
     self_intersecting_pairs(V, F)
     everything = len(calls)

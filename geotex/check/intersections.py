@@ -60,6 +60,7 @@ from functools import partial
 import numpy as np
 
 from geotex.errors import InputError
+from geotex.jit import JIT_MIN_SIZE, compiled, helper
 from geotex.mesh.arrays import as_mesh_arrays
 
 __all__ = ["self_intersecting_pairs", "REL_TOL", "ABS_TOL"]
@@ -815,6 +816,12 @@ def _level_tasks(faces, box, cell, cur, low):
 def _pair_task(faces, level, s, e):
     """Generate candidate pairs ``s .. e - 1`` of a level, filter, test them."""
     cum, counts, first, face, ebox = level
+    if cum[-1] >= JIT_MIN_SIZE:
+        masked = ebox[6:] if len(ebox) > 6 else [np.empty(0, dtype=face.dtype)] * 3
+        out = np.empty(e - s, dtype=np.int64)
+        found = _pair_loops(cum, counts, first, face, *ebox[:6], *masked, s, e, faces.F,
+                            faces.V, faces.plane, faces.tol, faces.E, out)
+        return out[:found]
     p0 = int(np.searchsorted(cum, s, side="right"))
     p1 = int(np.searchsorted(cum, e - 1, side="right")) + 1
     index = np.int32 if first.size < 2 ** 31 else np.int64   # entry numbers
@@ -1047,3 +1054,172 @@ def _endpoints_inside(PX, dX, shX, EY, tol):
     out = np.zeros(PX.shape[0], dtype=bool)
     out[rows[keep]] = True
     return out
+
+
+# ---------------------------------------------------------------------------
+# compiled: the pair task and the narrow phase as loops (large inputs)
+
+
+@compiled
+def _pair_loops(cum, counts, first, face, b0, b1, b2, b3, b4, b5, m0, m1, m2, s, e,
+                F, V, plane, tol, E, out):
+    """:func:`_pair_task` as loops: the same pairs, filters and narrow phase
+    (:func:`_intersecting`, case by case), the hits written to ``out`` as keys
+    in the same order; returns their number."""
+    m = F.shape[0]
+    masked = m0.shape[0] > 0
+    found = 0
+    p = np.searchsorted(cum, s, side="right")
+    while p < cum.shape[0]:
+        base = cum[p] - counts[p]                # pair number of (p, p + 1)
+        if base >= e:
+            break
+        g0 = max(base, s)
+        g1 = min(cum[p], e)
+        fp = first[p]
+        for g in range(g0, g1):
+            q = p + 1 + (g - base)
+            if (fp | first[q]) != 7:
+                continue
+            if (b0[p] > b3[q] or b0[q] > b3[p] or b1[p] > b4[q] or b1[q] > b4[p]
+                    or b2[p] > b5[q] or b2[q] > b5[p]):
+                continue
+            if masked:                           # (entry order, as the boxes)
+                x0, x1, x2 = m0[p], m1[p], m2[p]
+                y0, y1, y2 = m0[q], m1[q], m2[q]
+                if (x0 == y0 or x0 == y1 or x0 == y2 or x1 == y0 or x1 == y1 or x1 == y2
+                        or x2 == y0 or x2 == y1 or x2 == y2):
+                    continue
+            fa = face[p]
+            fb = face[q]
+            i = min(fa, fb)
+            j = max(fa, fb)
+            if _pair_hits(i, j, F, V, plane, tol, E):
+                out[found] = i * m + j
+                found += 1
+        p += 1
+    return found
+
+
+@helper
+def _pair_hits(i, j, F, V, plane, tol, E):
+    """:func:`_intersecting` for one pair (compiled inside :func:`_pair_loops`)."""
+    shA = np.zeros(3, np.bool_)
+    shB = np.zeros(3, np.bool_)
+    for a in range(3):
+        for b in range(3):
+            if F[i, a] == F[j, b]:
+                shA[a] = True
+                shB[b] = True
+    ns = int(shA[0]) + int(shA[1]) + int(shA[2])
+    if ns >= 3:
+        return False
+    t = max(tol[i], tol[j])
+    PA = np.empty((3, 3))
+    PB = np.empty((3, 3))
+    for k in range(3):
+        for c in range(3):
+            PA[k, c] = V[F[i, k], c]
+            PB[k, c] = V[F[j, k], c]
+    dA = np.empty(3)
+    dB = np.empty(3)
+    for k in range(3):
+        dA[k] = PA[k, 0] * plane[j, 0] + PA[k, 1] * plane[j, 1] + PA[k, 2] * plane[j, 2] - plane[j, 3]
+        dB[k] = PB[k, 0] * plane[i, 0] + PB[k, 1] * plane[i, 1] + PB[k, 2] * plane[i, 2] - plane[i, 3]
+    rejA = _one_side(dA, shA, t)
+    rejB = _one_side(dB, shB, t)
+    if ns == 2:
+        if rejA and rejB:
+            return False
+    elif rejA or rejB:
+        return False
+    if ns == 2:
+        ka = 0 if not shA[0] else (1 if not shA[1] else 2)    # corner off the shared edge
+        kb = 0 if not shB[0] else (1 if not shB[1] else 2)
+        side_b = _edge_distance_at(E, i, (ka + 1) % 3, PB[kb, 0], PB[kb, 1], PB[kb, 2])
+        side_a = _edge_distance_at(E, j, (kb + 1) % 3, PA[ka, 0], PA[ka, 1], PA[ka, 2])
+        return ((abs(dB[kb]) <= t and side_b > t) or (abs(dA[ka]) <= t and side_a > t))
+    coplanar = ((abs(dA[0]) <= t and abs(dA[1]) <= t and abs(dA[2]) <= t)
+                or (abs(dB[0]) <= t and abs(dB[1]) <= t and abs(dB[2]) <= t))
+    if coplanar:
+        if ns == 1:
+            ka = 0 if shA[0] else (1 if shA[1] else 2)            # the shared corner
+            kb = 0 if shB[0] else (1 if shB[1] else 2)
+            return _rays_in_wedge(E, i, ka, PB, kb, t) or _rays_in_wedge(E, j, kb, PA, ka, t)
+        return not (_separated_by_edge(E, i, PB, t) or _separated_by_edge(E, j, PA, t))
+    return (_endpoint_inside(PA, dA, shA, E, j, t) or _endpoint_inside(PB, dB, shB, E, i, t))
+
+
+@helper
+def _one_side(d, sh, t):
+    above = True
+    below = True
+    for k in range(3):
+        above = above and (d[k] > t or sh[k])
+        below = below and (d[k] < -t or sh[k])
+    return above or below
+
+
+@helper
+def _edge_distance_at(E, f, k, x, y, z):
+    """Signed distance of ``(x, y, z)``'s projection to edge ``k``'s line of face ``f``."""
+    return E[f, 4 * k] * x + E[f, 4 * k + 1] * y + E[f, 4 * k + 2] * z - E[f, 4 * k + 3]
+
+
+@helper
+def _rays_in_wedge(E, f, k, PG, kg, t):
+    """Does a ray to corner ``kg + 1`` or ``kg + 2`` of ``PG`` lie in face ``f``'s
+    wedge at its corner ``k`` (edges ``k`` and ``k + 2``)?"""
+    k2 = (k + 2) % 3
+    for step in (1, 2):
+        c = (kg + step) % 3
+        x, y, z = PG[c, 0], PG[c, 1], PG[c, 2]
+        if _edge_distance_at(E, f, k, x, y, z) >= -t and _edge_distance_at(E, f, k2, x, y, z) >= -t:
+            return True
+    return False
+
+
+@helper
+def _separated_by_edge(E, f, PY, t):
+    """Is ``PY`` strictly outside the line of one edge of face ``f``?"""
+    for k in range(3):
+        outside = True
+        for c in range(3):
+            if not (E[f, 4 * k] * PY[c, 0] + E[f, 4 * k + 1] * PY[c, 1]
+                    + E[f, 4 * k + 2] * PY[c, 2] - E[f, 4 * k + 3] < -t):
+                outside = False
+        if outside:
+            return True
+    return False
+
+
+@helper
+def _endpoint_inside(PX, dX, shX, E, fy, t):
+    """:func:`_endpoints_inside` for one pair: a corner of ``X`` in ``Y``'s plane
+    or a crossing of an edge of ``X`` with it, inside face ``fy`` and away from
+    a corner ``X`` shares with it."""
+    shared = shX[0] or shX[1] or shX[2]
+    ks = 0 if shX[0] else (1 if shX[1] else 2)
+    for k in range(3):
+        k1 = (k + 1) % 3
+        d = dX[k]
+        d1 = dX[k1]
+        if abs(d) <= t and not shX[k]:
+            x, y, z = PX[k, 0], PX[k, 1], PX[k, 2]
+        elif (d > t and d1 < -t) or (d < -t and d1 > t):
+            s = d / (d - d1)
+            x = PX[k, 0] + (PX[k1, 0] - PX[k, 0]) * s
+            y = PX[k, 1] + (PX[k1, 1] - PX[k, 1]) * s
+            z = PX[k, 2] + (PX[k1, 2] - PX[k, 2]) * s
+        else:
+            continue
+        if shared:
+            dx = x - PX[ks, 0]
+            dy = y - PX[ks, 1]
+            dz = z - PX[ks, 2]
+            if not dx * dx + dy * dy + dz * dz > t * t:
+                continue
+        if (_edge_distance_at(E, fy, 0, x, y, z) >= -t and _edge_distance_at(E, fy, 1, x, y, z) >= -t
+                and _edge_distance_at(E, fy, 2, x, y, z) >= -t):
+            return True
+    return False

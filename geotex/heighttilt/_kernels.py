@@ -104,6 +104,11 @@ def edge_encode(V: np.ndarray, E: np.ndarray, t: np.ndarray) -> np.ndarray:
 def edge_encode_and_lengths(V: np.ndarray, E: np.ndarray, t: np.ndarray
                             ) -> tuple[np.ndarray, np.ndarray]:
     """:func:`edge_encode` and the edge lengths ``|p_j - p_i|`` (its bounds), ``(e,)`` each."""
+    if E.shape[0] >= JIT_MIN_SIZE:
+        c, lim = np.empty(E.shape[0]), np.empty(E.shape[0])
+        _edge_integrals(np.ascontiguousarray(E), np.ascontiguousarray(V, dtype=np.float64),
+                        np.ascontiguousarray(t, dtype=np.float64), c, lim)
+        return c, lim
     a = np.ascontiguousarray(E[:, 0])
     b = np.ascontiguousarray(E[:, 1])
     c = np.zeros(E.shape[0])
@@ -117,6 +122,24 @@ def edge_encode_and_lengths(V: np.ndarray, E: np.ndarray, t: np.ndarray
     c *= 0.5
     lim = np.sqrt(len2)
     return np.clip(c, -lim, lim, out=c), lim
+
+
+@compiled
+def _edge_integrals(E, V, t, c, lim):
+    """:func:`edge_encode_and_lengths` edge by edge (the same sums, bit for bit)."""
+    for i in range(E.shape[0]):
+        a = E[i, 0]
+        b = E[i, 1]
+        ci = 0.0
+        len2 = 0.0
+        for d in range(3):
+            ed = V[b, d] - V[a, d]
+            ci += (t[a, d] + t[b, d]) * ed
+            len2 += ed * ed
+        ci *= 0.5
+        li = np.sqrt(len2)
+        lim[i] = li
+        c[i] = min(max(ci, -li), li)
 
 
 class BaseGeometry:
@@ -183,6 +206,10 @@ class BaseGeometry:
     def unit_sum_normals(self) -> np.ndarray:
         """Sum of the incident unit face normals per vertex, (n, 3)."""
         n = self.V.shape[0]
+        if 3 * self.F.shape[0] >= JIT_MIN_SIZE:
+            acc = np.zeros((n, 3))
+            _unit_normal_sums(self.FT, *self.N, self.N2, acc)
+            return acc
         with np.errstate(divide="ignore", invalid="ignore"):
             inv = 1.0 / np.sqrt(self.N2)
         acc = np.empty((n, 3))
@@ -202,6 +229,10 @@ class BaseGeometry:
     def gradients(self) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
         """``G_k = N x e_k / |N|^2`` of every face (the gradient of the hat function
         of corner ``k``), three coordinate columns ``(m,)`` per corner; cached."""
+        if self._gradients is None and 3 * self.F.shape[0] >= JIT_MIN_SIZE:
+            G = np.empty((3, 3, self.F.shape[0]))
+            _face_gradients(*self.N, self.N2, *self.e[0], *self.e[1], *self.e[2], G)
+            self._gradients = [tuple(G[k]) for k in range(3)]
         if self._gradients is None:
             inv = 1.0 / self.N2
             G = []
@@ -365,6 +396,39 @@ def _four_per_row(data: np.ndarray, E: np.ndarray, n: int) -> sp.csr_matrix:
     cols[:, 3] = cols[:, 2] + 1
     return sp.csr_matrix((data.reshape(-1), cols.reshape(-1),
                           np.arange(0, 4 * e + 1, 4, dtype=index)), shape=(e, 2 * n))
+
+
+@compiled
+def _unit_normal_sums(FT, n0, n1, n2, N2, acc):
+    """:meth:`BaseGeometry.unit_sum_normals` face by face (``acc`` (n, 3) zeroed;
+    a zero-area face adds NaN, as the numpy path's ``0 / 0``)."""
+    for f in range(FT.shape[1]):
+        inv = 1.0 / np.sqrt(N2[f])
+        u0, u1, u2 = n0[f] * inv, n1[f] * inv, n2[f] * inv
+        for k in range(3):
+            v = FT[k, f]
+            acc[v, 0] += u0
+            acc[v, 1] += u1
+            acc[v, 2] += u2
+
+
+@compiled
+def _face_gradients(n0, n1, n2, N2, a0, a1, a2, b0, b1, b2, c0, c1, c2, G):
+    """:meth:`BaseGeometry.gradients` in one pass (the same products, bit for bit):
+    ``G[k, :, f] = N x e_k / |N|^2`` with ``e_0 = a``, ``e_1 = b``, ``e_2 = c``."""
+    for f in range(N2.shape[0]):
+        inv = 1.0 / N2[f]
+        m0, m1, m2 = n0[f], n1[f], n2[f]
+        for k in range(3):
+            if k == 0:
+                x0, x1, x2 = a0[f], a1[f], a2[f]
+            elif k == 1:
+                x0, x1, x2 = b0[f], b1[f], b2[f]
+            else:
+                x0, x1, x2 = c0[f], c1[f], c2[f]
+            G[k, 0, f] = (m1 * x2 - m2 * x1) * inv
+            G[k, 1, f] = (m2 * x0 - m0 * x2) * inv
+            G[k, 2, f] = (m0 * x1 - m1 * x0) * inv
 
 
 @compiled
@@ -613,9 +677,10 @@ def _lsq_fit_compiled(data, E, n, c0, lim, t2, sq, scale, reg, Kd, all_positive)
     rounds, with the operator applied from the four numbers per edge (no
     sparse matrix; the step's vector updates and dot products folded into the
     passes over the edges).  Equal to the numpy path to round-off (sums in a
-    different order, and the operator read in single precision in the
-    iterations: relative differences ~1e-8); returns the scaled unknowns
-    ``x`` (e,)."""
+    different order); returns the scaled unknowns ``x`` (e,).  (Reading the
+    operator in single precision would save a sixth of the time but makes the
+    truncated iterates depend on the rounding of a rotated copy of the mesh at
+    1e-6: the stored 1-form would no longer be rigid-motion invariant to 1e-9.)"""
     e = E.shape[0]
     index = np.int32 if 2 * n < 2 ** 31 else np.int64
     E2 = np.ascontiguousarray(E, dtype=index)
@@ -625,10 +690,6 @@ def _lsq_fit_compiled(data, E, n, c0, lim, t2, sq, scale, reg, Kd, all_positive)
     z = np.empty(2 * n)
     rhs = np.empty(e)
     _scaled_rhs(D, E2, sq * c0, t2, z, rhs)
-    # the iterations read the operator in single precision (relative error
-    # 6e-8 per entry, far below the truncated solve's 1e-3): the passes over
-    # the edges are memory-bound and this halves their largest array
-    D = D.astype(np.float32)
     lo, hi = (-lim - c0) * sq, (lim - c0) * sq
     x = np.zeros(e)
     r, p, Kp = np.empty(e), np.empty(e), np.empty(e)
