@@ -173,7 +173,7 @@ def test_per_edge_damping_branch_matches_scalar_damping(monkeypatch, lychee):
 
 
 def test_suites_pass_on_the_compiled_loops(tmp_path):
-    # the self-intersection, invariant and height-and-tilt suites with every
+    # the self-intersection, invariant, height-and-tilt, topology and file format suites with every
     # compiled path taken whatever the size (GEOTEX_JIT_MIN_SIZE=0)
     import os
     import subprocess
@@ -184,6 +184,26 @@ def test_suites_pass_on_the_compiled_loops(tmp_path):
     env = dict(os.environ, GEOTEX_JIT_MIN_SIZE="0")
     proc = subprocess.run(
         [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "--no-header",
-         "tests/test_intersections.py", "tests/test_invariants.py", "tests/test_heighttilt.py"],
+         "tests/test_intersections.py", "tests/test_invariants.py", "tests/test_heighttilt.py",
+         "tests/test_topology.py", "tests/test_io_formats.py"],
         cwd=root, env=env, capture_output=True, text=True)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-2000:]
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_weld_by_hash_table_equals_sorted_weld(monkeypatch, dtype):
+    import geotex.io._common as common
+
+    rng = np.random.default_rng(7)
+    rows = rng.normal(size=(500, 3)).astype(dtype)
+    rows[0] = 0.0
+    P = rows[rng.integers(0, len(rows), 4000)]
+    P[1::9, 2] = -0.0                     # -0.0 and 0.0 weld
+    P[2::9, 2] = 0.0
+    monkeypatch.setattr(common, "JIT_MIN_SIZE", 0)
+    fast = common.weld_exact(P)
+    monkeypatch.setattr(common, "JIT_MIN_SIZE", 10 ** 12)
+    slow = common.weld_exact(P)
+    assert fast[0].dtype == slow[0].dtype == dtype
+    assert np.array_equal(fast[0], slow[0]) and np.array_equal(fast[1], slow[1])
+    assert np.array_equal(fast[0][fast[1]], P + dtype(0.0))

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from geotex.errors import InputError, MeshFileError
+from geotex.jit import JIT_MIN_SIZE, compiled
 from geotex.mesh.polygons import polygon_triangle_corners
 from geotex.mesh.record import Mesh
 
@@ -69,6 +70,14 @@ def weld_exact(P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     P = P + P.dtype.type(0.0)          # -0.0 + 0.0 == +0.0: one bit pattern for zero
     columns = _exact_columns(P)
     key = _hash_columns(columns)
+    if k >= JIT_MIN_SIZE:
+        bits = max(4, int(2 * k - 1).bit_length())
+        table = np.full(1 << bits, -1, dtype=np.int64)
+        inverse = np.empty(k, dtype=np.int64)
+        first = np.empty(k, dtype=np.int64)
+        extra = columns[2] if len(columns) == 3 else columns[1][:0]
+        n = _weld_table(key, columns[0], columns[1], extra, table, 64 - bits, inverse, first)
+        return P[first[:n]], inverse
     perm = np.argsort(key, kind="quicksort")
     ks = key[perm]
     boundary = np.empty(k, dtype=bool)
@@ -99,6 +108,33 @@ def weld_exact(P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     inverse[perm] = new_id[gid]
     unique = P[first[order]]
     return unique, inverse
+
+
+@compiled
+def _weld_table(key, c0, c1, c2, table, shift, inverse, first):
+    """:func:`weld_exact` by open addressing: rows in order, each looked up by
+    its hash's top bits (``table`` of size ``2**(64 - shift)``, -1 = empty,
+    holds the row that opened a slot) and compared exactly on the bit-pattern columns ``c0``,
+    ``c1`` and ``c2`` (empty when two columns identify a row); a new row gets
+    the next id, so ids follow first appearance.  Returns the number of rows kept."""
+    mask = table.shape[0] - 1
+    three = c2.shape[0] > 0
+    n = 0
+    for r in range(key.shape[0]):
+        h = int(key[r] >> np.uint64(shift)) & mask
+        while True:
+            s = table[h]
+            if s < 0:
+                table[h] = r
+                inverse[r] = n
+                first[n] = r
+                n += 1
+                break
+            if c0[s] == c0[r] and c1[s] == c1[r] and (not three or c2[s] == c2[r]):
+                inverse[r] = inverse[s]
+                break
+            h = (h + 1) & mask
+    return n
 
 
 def fan_triangulate(counts: np.ndarray, flat: np.ndarray) -> tuple[np.ndarray, int]:

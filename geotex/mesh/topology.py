@@ -136,7 +136,7 @@ def edge_topology(F: np.ndarray, n_vertices: int | None = None) -> EdgeTopology:
     F = np.asarray(F, dtype=np.int64)
     n = int(n_vertices if n_vertices is not None else (F.max() + 1 if F.size else 0))
     if F.size >= JIT_MIN_SIZE and F.min() >= 0:
-        n_loop = max(n, int(F.max()) + 1)        # the loops index by vertex: stay in bounds
+        n_loop = int(F.max()) + 1                # the loops index the referenced vertices
         h = F.size
         start = np.zeros(n_loop + 1, np.int64)
         order, high, inv = (np.empty(h, np.int64) for _ in range(3))
