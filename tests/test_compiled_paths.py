@@ -185,7 +185,7 @@ def test_suites_pass_on_the_compiled_loops(tmp_path):
     proc = subprocess.run(
         [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "--no-header",
          "tests/test_intersections.py", "tests/test_invariants.py", "tests/test_heighttilt.py",
-         "tests/test_topology.py", "tests/test_io_formats.py"],
+         "tests/test_topology.py", "tests/test_io_formats.py", "tests/test_needles.py"],
         cwd=root, env=env, capture_output=True, text=True)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-2000:]
 
@@ -207,3 +207,16 @@ def test_weld_by_hash_table_equals_sorted_weld(monkeypatch, dtype):
     assert fast[0].dtype == slow[0].dtype == dtype
     assert np.array_equal(fast[0], slow[0]) and np.array_equal(fast[1], slow[1])
     assert np.array_equal(fast[0][fast[1]], P + dtype(0.0))
+
+
+def test_needle_heights_equal_numpy_path(monkeypatch):
+    import geotex.mesh.needles as needles
+
+    V, F = torus(1.0, 0.3, n_major=30, n_minor=11)
+    V = V + np.random.default_rng(1).normal(size=V.shape) * 1e-3
+    F = np.vstack([F, [[0, 0, 1]], [[0, 1, 2]]])         # a degenerate and a stray face
+    monkeypatch.setattr(needles, "JIT_MIN_SIZE", 0)
+    fast = needles._heights(V, F)
+    monkeypatch.setattr(needles, "JIT_MIN_SIZE", 10 ** 12)
+    slow = needles._heights(V, F)
+    assert np.array_equal(fast, slow) and fast[-2] == 0.0
