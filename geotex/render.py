@@ -480,9 +480,12 @@ def _wrapped_title(title: str, width: int) -> str:
     """``title`` with line breaks between words so that every line fits ``width`` pixels.
 
     Lines are measured with VTK's own text renderer (the font the caption is
-    drawn in); a single word wider than the panel stays on its own line.
+    drawn in); a single word wider than the panel stays on its own line.  A
+    broken line is balanced: as few lines as fit, each as short as that number
+    of lines allows (no single word left alone on the last line).
     """
     # lazy: VTK's text classes load with pyvista (see offscreen_pyvista)
+    import vtkmodules.vtkRenderingFreeType  # noqa: F401 - the text renderer's implementation
     from vtkmodules.vtkRenderingCore import vtkTextProperty, vtkTextRenderer
 
     renderer = vtkTextRenderer()
@@ -490,23 +493,37 @@ def _wrapped_title(title: str, width: int) -> str:
     prop.SetFontFamilyToArial()
     prop.SetFontSize(_TITLE_POINTS)
     box = [0, 0, 0, 0]
-    room = width - 2 * _TITLE_MARGIN
 
-    def fits(text: str) -> bool:
+    def text_width(text: str) -> int:
         renderer.GetBoundingBox(prop, text, box, 72)
-        return box[1] - box[0] + 1 <= room
+        return box[1] - box[0] + 1
 
+    def greedy(words: list[str], room: int) -> list[str]:
+        lines, current = [], words[0]
+        for word in words[1:]:
+            if text_width(f"{current} {word}") <= room:
+                current = f"{current} {word}"
+            else:
+                lines.append(current)
+                current = word
+        return lines + [current]
+
+    room = width - 2 * _TITLE_MARGIN
     out = []
     for line in title.split("\n"):
         words = line.split(" ")
-        current = words[0]
-        for word in words[1:]:
-            if fits(f"{current} {word}"):
-                current = f"{current} {word}"
-            else:
-                out.append(current)
-                current = word
-        out.append(current)
+        lines = greedy(words, room)
+        if len(lines) > 1:
+            # the narrowest room that still needs no more lines (bisection)
+            low, high = 0, room
+            while high - low > 2:
+                middle = (low + high) // 2
+                if len(greedy(words, middle)) <= len(lines):
+                    high = middle
+                else:
+                    low = middle
+            lines = greedy(words, high)
+        out.extend(lines)
     return "\n".join(out)
 
 
