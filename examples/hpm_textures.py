@@ -16,9 +16,11 @@ Pictures (written to OUT_DIR), after the paper's figures:
 
 The textured surfaces are the base meshes with the output texture
 coordinates and the input image itself (what ``geotex hpm`` writes as GLB /
-OBJ).  Without the shared data the bundled low-resolution Spot and Bob and a
-synthetic image are used; ``GEOTEX_EXAMPLES_QUICK=1`` (the test suite sets
-it) uses them too.
+OBJ).  Without the shared data the bundled low-resolution Spot and Bob and
+two procedural colour images (bricks and a basket weave, made here from the
+seamless height maps of :mod:`geotex.displace.library`, so no licence is
+involved) are used; ``GEOTEX_EXAMPLES_QUICK=1`` (the test suite sets it)
+uses them too.
 
 Run:  python examples/hpm_textures.py [OUT_DIR]     (default docs/gallery)
 """
@@ -36,6 +38,7 @@ import numpy as np
 from PIL import Image
 
 from geotex.data import sample_path
+from geotex.displace.library import library_height_map
 from geotex.image.hpm import hpm_texture, read_hpm_image
 from geotex.io import read_mesh
 from geotex.patches import cluster_hierarchy
@@ -60,14 +63,27 @@ def mesh(name: str):
     return m.vertices, m.faces
 
 
+#: colours of the procedural stand-ins: (groove, top) in [0, 1] RGB
+PROCEDURAL = {"bricks": ((0.80, 0.77, 0.70), (0.66, 0.27, 0.17)),
+              "weave": ((0.22, 0.14, 0.07), (0.88, 0.70, 0.42))}
+
+
+def procedural(kind: str, n: int = 192) -> np.ndarray:
+    """A colour image of bricks or a weave: a library height map coloured from
+    groove to top, with smooth blotches and a fine grain (fallback input)."""
+    h = library_height_map(kind, size=n).astype(np.float64)[..., None]
+    blotches = library_height_map("noise", size=n).astype(np.float64)
+    grain = np.random.default_rng(zlib.crc32(kind.encode())).normal(0.0, 0.05, blotches.shape)
+    low, high = (np.array(c) for c in PROCEDURAL[kind])
+    img = (low + (high - low) * h) * (0.7 + 0.4 * blotches + grain)[..., None]
+    return np.clip(np.rint(img * 255), 0, 255).astype(np.uint8)
+
+
 def image(name: str) -> tuple[str, np.ndarray]:
     p = SHARED / "images" / name
     if QUICK or not p.exists():
-        rng = np.random.default_rng(zlib.crc32(name.encode()))
-        small = rng.random((14, 14, 3))
-        img = np.asarray(Image.fromarray((small * 255).astype(np.uint8)).resize(
-            (112, 112), Image.BICUBIC))
-        return "synthetic", img
+        kind = "weave" if "weave" in name else "bricks"
+        return f"{kind} (procedural)", procedural(kind)
     label = "water" if name == "embark/1.jpg" else Path(name).stem.split("_", 1)[-1]
     return label, read_hpm_image(p)
 
@@ -132,8 +148,8 @@ def results_figure(out: Path) -> None:
             ("bob", "quilting_classic/t2_basket_weave.png", 0.35, "y"),
             ("double torus", "embark/1.jpg", 0.35, "y"),
             ("fertility", "quilting_classic/t8_rope_net.png", 0.3, "y")]
-    if QUICK:
-        jobs = jobs[:2]
+    if QUICK:       # the bundled Spot and Bob with the two procedural images
+        jobs = [jobs[1], jobs[3]]
     with tempfile.TemporaryDirectory() as tmp:
         rows = []
         for i in range(0, len(jobs), 3):

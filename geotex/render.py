@@ -89,7 +89,8 @@ class Panel:
     V : array_like, (n, 3) float64
     F : array_like, (m, 3) int64
     title : str, optional
-        Caption drawn at the top of the panel.
+        Caption drawn at the top of the panel; a line wider than the panel is
+        broken between words.
     color : str, optional
         Surface colour (ignored when ``scalars`` is given).
     scalars : array_like, (n,) or (m,), optional
@@ -467,7 +468,66 @@ def _add_surface(pv, plotter, panel: Panel) -> None:
         plotter.add_points(V, color=panel.color, point_size=4)
 
 
-def _draw(pv, plotter, panel: Panel, up: np.ndarray, aspect: float):
+#: size (VTK points at 72 dpi) of the panel captions as drawn: pyvista's caption
+#: (a corner annotation at font_size 12) settles at this size whatever the panel size
+#: (measured on panels 300 to 1200 pixels wide)
+_TITLE_POINTS = 30
+#: pixels kept free on each side of a caption line
+_TITLE_MARGIN = 8
+
+
+def _wrapped_title(title: str, width: int) -> str:
+    """``title`` with line breaks between words so that every line fits ``width`` pixels.
+
+    Lines are measured with VTK's own text renderer (the font the caption is
+    drawn in); a single word wider than the panel stays on its own line.  A
+    broken line is balanced: as few lines as fit, each as short as that number
+    of lines allows (no single word left alone on the last line).
+    """
+    # lazy: VTK's text classes load with pyvista (see offscreen_pyvista)
+    import vtkmodules.vtkRenderingFreeType  # noqa: F401 - the text renderer's implementation
+    from vtkmodules.vtkRenderingCore import vtkTextProperty, vtkTextRenderer
+
+    renderer = vtkTextRenderer()
+    prop = vtkTextProperty()
+    prop.SetFontFamilyToArial()
+    prop.SetFontSize(_TITLE_POINTS)
+    box = [0, 0, 0, 0]
+
+    def text_width(text: str) -> int:
+        renderer.GetBoundingBox(prop, text, box, 72)
+        return box[1] - box[0] + 1
+
+    def greedy(words: list[str], room: int) -> list[str]:
+        lines, current = [], words[0]
+        for word in words[1:]:
+            if text_width(f"{current} {word}") <= room:
+                current = f"{current} {word}"
+            else:
+                lines.append(current)
+                current = word
+        return lines + [current]
+
+    room = width - 2 * _TITLE_MARGIN
+    out = []
+    for line in title.split("\n"):
+        words = line.split(" ")
+        lines = greedy(words, room)
+        if len(lines) > 1:
+            # the narrowest room that still needs no more lines (bisection)
+            low, high = 0, room
+            while high - low > 2:
+                middle = (low + high) // 2
+                if len(greedy(words, middle)) <= len(lines):
+                    high = middle
+                else:
+                    low = middle
+            lines = greedy(words, high)
+        out.extend(lines)
+    return "\n".join(out)
+
+
+def _draw(pv, plotter, panel: Panel, up: np.ndarray, aspect: float, width: int):
     V, F = panel.V, panel.F
     _add_surface(pv, plotter, panel)
     legend = []
@@ -499,14 +559,15 @@ def _draw(pv, plotter, panel: Panel, up: np.ndarray, aspect: float):
     if legend:
         plotter.add_legend(legend, bcolor="white", face="line", loc="lower left",
                            size=(0.45, 0.07 * len(legend)))
-    lines = panel.title.count("\n") + 1 if panel.title else 0
+    title = _wrapped_title(panel.title, width) if panel.title else ""
+    lines = title.count("\n") + 1 if title else 0
     top = (lines * 26.0 + 8.0) / plotter.window_size[1] if lines else 0.0
     closeup = panel.closeup is not None and V.shape[0] > 0
     if closeup and top:
         top += 8.0 / plotter.window_size[1]      # a little air under the last line
         _caption_band(pv, plotter, top)          # under the caption, drawn before it
-    if panel.title:
-        plotter.add_text(panel.title, position="upper_edge", font_size=12, color="#222222")
+    if title:
+        plotter.add_text(title, position="upper_edge", font_size=12, color="#222222")
     if V.shape[0]:
         if closeup:
             plotter.camera_position = _closeup_camera(
@@ -559,7 +620,7 @@ def render_panels(panels: list[Panel], path, *, size=(1200, 900), up="z") -> Pat
             plotter.subplot(0, i)
             plotter.set_background("white", top="#dfe6ee")
             plotter.enable_lightkit()
-            _draw(pv, plotter, panel, upv, w / h)
+            _draw(pv, plotter, panel, upv, w / h, w)
         plotter.enable_anti_aliasing("ssaa", all_renderers=True)
         image = plotter.screenshot(return_img=True)
     finally:

@@ -274,3 +274,22 @@ def test_no_inset(tmp_path, capsys):
         "--no-inset")))
     assert _red(with_inset.astype(int)).any()
     assert not _red(plain.astype(int)).any()
+
+
+def test_long_caption_is_broken_between_words_and_stays_in_its_panel(tmp_path, sphere):
+    """A caption wider than its panel wraps onto more lines instead of being cut at
+    both edges (the benchmark close-ups' titles were)."""
+    from geotex.render import _wrapped_title
+
+    title = "cylinder: BumpMesh default resolution (triplanar)"
+    out = render_panels([Panel(*sphere, title=title), Panel(*sphere, title="short")],
+                        tmp_path / "c.png", size=(320, 320))
+    img = np.asarray(Image.open(out).convert("L")).astype(int)
+    ink = img[:34] < 120                         # the first caption line's dark pixels
+    for panel in (ink[:, :320], ink[:, 320:]):
+        cols = np.nonzero(panel.any(axis=0))[0]
+        assert cols.size and cols.min() > 2 and cols.max() < 317
+    assert _wrapped_title("short", 320) == "short"
+    lines = _wrapped_title(title, 320).split("\n")
+    assert len(lines) >= 3 and " ".join(lines) == title
+    assert _wrapped_title(title, 2000) == title
