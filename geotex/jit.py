@@ -27,6 +27,7 @@ from __future__ import annotations
 import functools
 import os
 import threading
+import types
 
 __all__ = ["compiled", "helper", "JIT_MIN_SIZE"]
 
@@ -64,7 +65,8 @@ def compiled(fn):
 
                     namespace = fn.__globals__
                     for name, obj in list(namespace.items()):
-                        if getattr(obj, "_geotex_helper", False):
+                        if isinstance(obj, types.FunctionType) and getattr(
+                                obj, "_geotex_helper", False):        # not compiled yet
                             namespace[name] = numba.njit(cache=True, nogil=True)(obj)
                     holder.append(numba.njit(cache=True, nogil=True, boundscheck=False)(fn))
         return holder[0](*args)

@@ -62,6 +62,7 @@ import numpy as np
 from geotex.errors import InputError
 from geotex.jit import JIT_MIN_SIZE, compiled, helper
 from geotex.mesh.arrays import as_mesh_arrays
+from geotex.mesh.topology import edge_topology
 
 __all__ = ["self_intersecting_pairs", "REL_TOL", "ABS_TOL"]
 
@@ -492,19 +493,26 @@ def _separated_fans(faces: _FaceData, *, mapper=map) -> np.ndarray:
     inactive[faces.active] = False
     good[F[inactive].ravel()] = False
     # every edge used exactly once in each direction
-    u = F.ravel()
-    v = F[:, [1, 2, 0]].ravel()
-    key = (np.minimum(u, v) << (bits + 1)) | (np.maximum(u, v) << 1) | (u > v)
-    key.sort()
-    edge = key >> 1
-    starts = np.flatnonzero(np.r_[True, edge[1:] != edge[:-1]])
-    length = np.diff(np.r_[starts, key.size])
-    ok_edge = length == 2
-    ok_edge[ok_edge] = ((key[starts[ok_edge]] & 1) == 0) & ((key[starts[ok_edge] + 1] & 1) == 1)
-    bad = edge[starts[~ok_edge]]
-    good[bad >> bits] = False
-    good[bad & ((1 << bits) - 1)] = False
-    del key, edge, starts, length, ok_edge, bad
+    if F.size >= JIT_MIN_SIZE:
+        topo = edge_topology(F, n)
+        bad = topo.edges[(topo.face_count != 2) | (topo.forward_count != 1)]
+        good[bad.ravel()] = False
+        del topo, bad
+    else:
+        u = F.ravel()
+        v = F[:, [1, 2, 0]].ravel()
+        key = (np.minimum(u, v) << (bits + 1)) | (np.maximum(u, v) << 1) | (u > v)
+        key.sort()
+        edge = key >> 1
+        starts = np.flatnonzero(np.r_[True, edge[1:] != edge[:-1]])
+        length = np.diff(np.r_[starts, key.size])
+        ok_edge = length == 2
+        ok_edge[ok_edge] = (((key[starts[ok_edge]] & 1) == 0)
+                            & ((key[starts[ok_edge] + 1] & 1) == 1))
+        bad = edge[starts[~ok_edge]]
+        good[bad >> bits] = False
+        good[bad & ((1 << bits) - 1)] = False
+        del key, edge, starts, length, ok_edge, bad
     # per corner, in face order (corner k of a face is at vertex F[:, k]);
     # per-vertex minima, maxima and sums by scattering
     cols = faces.corner_columns
@@ -531,6 +539,11 @@ def _separated_fans(faces: _FaceData, *, mapper=map) -> np.ndarray:
             tol = faces.tol[s:s + _FACE_BLOCK]
             for col, (cos_n, sector, length, rim, half_sin, q, r, big) in zip(cols, part):
                 c = col[s:s + _FACE_BLOCK]
+                if F.size >= JIT_MIN_SIZE:
+                    _scatter_fan_terms(c, cos_n, sector, rim, length, half_sin, q, r, big, tol,
+                                       cos_min, total, spread, shortest, sin_min, q_min, rho,
+                                       longest, t)
+                    continue
                 np.minimum.at(cos_min, c, cos_n)
                 np.add.at(total, c, sector)
                 np.minimum.at(spread, c, rim)
@@ -1099,6 +1112,33 @@ def _pair_loops(cum, counts, first, face, b0, b1, b2, b3, b4, b5, m0, m1, m2, s,
                 found += 1
         p += 1
     return found
+
+
+@compiled
+def _scatter_fan_terms(c, cos_n, sector, rim, length, half_sin, q, r, big, tol,
+                       cos_min, total, spread, shortest, sin_min, q_min, rho, longest, t):
+    """The scatter of :func:`_separated_fans` for one corner column of a block:
+    ``np.minimum.at`` / ``np.maximum.at`` / ``np.add.at`` as one loop (the same
+    order of additions; NaN propagates as in ``np.minimum``)."""
+    for k in range(c.shape[0]):
+        v = c[k]
+        cos_min[v] = _nan_min(cos_min[v], cos_n[k])
+        total[v] += sector[k]
+        spread[v] = _nan_min(spread[v], rim[k])
+        shortest[v] = _nan_min(shortest[v], length[k])
+        sin_min[v] = _nan_min(sin_min[v], half_sin[k])
+        q_min[v] = _nan_min(q_min[v], q[k])
+        rho[v] = -_nan_min(-rho[v], -r[k])
+        longest[v] = -_nan_min(-longest[v], -big[k])
+        t[v] = -_nan_min(-t[v], -tol[k])
+
+
+@helper
+def _nan_min(a, b):
+    """``np.minimum(a, b)``: NaN when either is NaN."""
+    if a != a or b != b:
+        return a + b
+    return a if a <= b else b
 
 
 @helper
