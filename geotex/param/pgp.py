@@ -336,7 +336,6 @@ def _energy(I, J, T, weight, n):
     L = np.add.reduceat(Ts, start, axis=0) if start.size else Ts      # (E, 4, 4) at (hi, lo)
     elo, ehi = lo[order][start], hi[order][start]
     diag = np.bincount(I, weights=w, minlength=n) + np.bincount(J, weights=w, minlength=n)
-    E = start.size
     verts = np.arange(n)
     br = np.concatenate([ehi, elo, verts])
     bc = np.concatenate([elo, ehi, verts])
