@@ -60,6 +60,9 @@ def mesh(name: str):
     if QUICK or p is None or not p.exists():
         p = sample_path("bob" if name == "bob" else "spot")
     m = read_mesh(p)
+    if name == "spot":
+        # y up -> z up, the face towards the picture's camera (as geotex demo turns it)
+        return m.vertices[:, [0, 2, 1]] * np.array([-1.0, 1.0, 1.0]), m.faces
     return m.vertices, m.faces
 
 
@@ -122,7 +125,7 @@ def clusters_figure(out: Path) -> None:
         panels.append(Panel(V, F, scalars=colors[lv.labels], cmap="tab20",
                             markers=markers if li < 3 else None,
                             title=f"level {li}: {lv.n_clusters} clusters"))
-    render_panels(panels, out, size=SIZE, up="y")
+    render_panels(panels, out, size=SIZE, up="z")
     print(f"wrote {out}")
 
 
@@ -137,13 +140,13 @@ def scale_figure(out: Path) -> None:
         last = r
     panels.append(Panel(V, F, scalars=last.face_level, cmap="viridis",
                         title="levels used (dark = coarse)"))
-    render_panels(panels, out, size=SIZE, up="y")
+    render_panels(panels, out, size=SIZE, up="z")
     print(f"wrote {out}")
 
 
 def results_figure(out: Path) -> None:
-    jobs = [("spot", "quilting_classic/t4_gravel.png", 0.3, "y"),
-            ("spot", "quilting_classic/t1_bricks.png", 0.35, "y"),
+    jobs = [("spot", "quilting_classic/t4_gravel.png", 0.3, "z"),
+            ("spot", "quilting_classic/t1_bricks.png", 0.35, "z"),
             ("bob", "quilting_classic/t6_peppers.png", 0.35, "y"),
             ("bob", "quilting_classic/t2_basket_weave.png", 0.35, "y"),
             ("double torus", "embark/1.jpg", 0.35, "y"),
