@@ -67,7 +67,7 @@ def main(out: Path) -> None:
         texture_to_png_bytes(np.kron(strip, np.ones((zoom, zoom, 1), np.uint8))))
     spot = read_mesh(sample_path("spot"))
     V, F = spot.vertices[:, [0, 2, 1]] * [-1, 1, 1], spot.faces
-    V, F = igl.upsample(V, F, 1)
+    V, F = igl.loop(V, F, 1)                                  # smooth: no facets in the close-up
     V, F = np.asarray(V, np.float64), np.asarray(F, np.int64)
     field, _ = projected_direction_field(V, F, [0.0, 0.0, 1.0])
     scale = 0.3
@@ -84,7 +84,7 @@ def main(out: Path) -> None:
     flank = V[int(np.argmin(np.linalg.norm(V - target, axis=1)))]
     Vc = V[F].reshape(-1, 3)
     Fc = np.arange(Vc.shape[0], dtype=np.int64).reshape(-1, 3)
-    radius = 0.22 * float(np.linalg.norm(hi - lo))
+    radius = 0.12 * float(np.linalg.norm(hi - lo))
 
     def textured(mesh, title):
         return Panel(Vc, Fc, uv=mesh.uv[mesh.uv_faces].reshape(-1, 2), texture=mesh.texture,
