@@ -39,7 +39,7 @@ import numpy as np
 from geotex.errors import GeotexError, InputError
 from geotex.exemplars.chainmail import (DIAGONAL_STEP, diagonal_layout, ring_meshes,
                                         wire_slack)
-from geotex.mesh.topology import concatenated
+from geotex.mesh.topology import concatenated, face_components
 from geotex.progress import report
 from geotex.quilting import coverage_fraction
 from geotex.tiles.clip import split_by_plane
@@ -51,7 +51,7 @@ __all__ = ["periodic_tileset", "PeriodicLayout", "layout_of", "SUPPORTED"]
 SUPPORTED = ("chainmail",)
 SHIFT = 0.4          # largest random ring shift, as a fraction of the free clearance x jitter
 MARGIN = 1e-3        # added to a ring's reach when classing it by the lines it crosses
-OFFSETS = 8          # layout shifts along the diagonal tried for the corner rings
+OFFSETS = 32         # layout shifts along the diagonal tried (one row step in all)
 
 
 class PeriodicLayout:
@@ -71,8 +71,17 @@ class PeriodicLayout:
         Largest distance, along x or y, from a ring's centre to its surface,
         plus ``shift`` and :data:`MARGIN`.
     offset : float
-        Shift of the layout along the diagonal (the one of :data:`OFFSETS`
-        candidates that keeps wires farthest from the tile corners).
+        Shift of the layout along the diagonal: of :data:`OFFSETS` candidates
+        whose corner rings no face crosses both tile lines through, the one
+        that leaves the fewest ring pieces not reaching below ``z = 0`` when
+        the rings are cut at the tile sides (such a piece is held only by its
+        continuation on the neighbour tile; where a polycube seam pairs two
+        sides that do not continue each other, it would float), then the one
+        whose wires keep farthest from the tile corner.
+    loose_pieces : int
+        Those pieces left with the chosen offset (per strip and corner, once).
+    corner_clearance : float
+        Distance from the tile corner line to the nearest ring vertex.
     params : dict
         Wire, depth, resolution (for :func:`~geotex.exemplars.chainmail.ring_meshes`).
     """
@@ -97,12 +106,16 @@ class PeriodicLayout:
             Vc, Fc = self.mesh(*self.centres("corner", off))
             if _straddles_corner(Vc, Fc):
                 continue
+            pieces = _cut_pieces(self.mesh(*self.centres("side", off)), (Vc, Fc))
+            loose = sum(_loose(p) for p in pieces)
             clear = float(np.hypot(Vc[:, 0], Vc[:, 1]).min())
-            if best is None or clear > best[0]:
-                best = (clear, off)
+            if best is None or (loose, -clear) < (best[2], -best[0]):
+                best = (clear, off, loose)
         if best is None:
             raise InputError("periodic chain mail: every layout puts a wire across a tile "
                              "corner; change the radius or the resolution")
+        self.loose_pieces = best[2]
+        best = best[:2]
         self.corner_clearance, self.offset = best
 
     def centres(self, kind: str, offset=None):
@@ -153,6 +166,26 @@ def layout_of(exemplar) -> PeriodicLayout:
         raise InputError(f"interior 'periodic' needs an exemplar with a periodic tile layout "
                          f"({', '.join(SUPPORTED)}), got {name!r}")
     return PeriodicLayout(dict(exemplar.params))
+
+
+def _cut_pieces(side, corner):
+    """The two halves of the side rings and the four quadrants of the corner rings."""
+    below, above = split_by_plane(*side, axis=1, value=0.0)
+    left, right = split_by_plane(*corner, axis=0, value=0.0, ordered=True)
+    ll, lu = split_by_plane(*left, axis=1, value=0.0, ordered=True)
+    rl, ru = split_by_plane(*right, axis=1, value=0.0, ordered=True)
+    return below, above, ll, lu, rl, ru
+
+
+def _loose(mesh) -> int:
+    """Connected pieces of a cut mesh that do not reach below ``z = 0`` (not anchored)."""
+    V, F = mesh
+    if len(F) == 0:
+        return 0
+    n, label = face_components(F, len(V))
+    low = np.full(n, np.inf)
+    np.minimum.at(low, label, V[F][:, :, 2].min(axis=1))
+    return int((low >= 0.0).sum())
 
 
 def _straddles_corner(V, F) -> bool:
@@ -217,16 +250,14 @@ def periodic_tileset(exemplar, *, n_colors, seed: int = 0, name: str | None = No
     report(progress, "strips")
     rng = np.random.default_rng(seed)
     strips = []
-    for _ in range(N):
-        C, sign = lay.centres("side")
-        V, F = lay.mesh(lay.jittered(C, rng), sign)
-        strips.append(split_by_plane(V, F, axis=1, value=0.0))
-    Vc, Fc = lay.mesh(*lay.centres("corner"))
-    if _straddles_corner(Vc, Fc):
+    C, sign = lay.centres("side")
+    corner = lay.mesh(*lay.centres("corner"))
+    if _straddles_corner(*corner):
         raise GeotexError("periodic chain mail: a corner ring face crosses both tile lines")
-    left, right = split_by_plane(Vc, Fc, axis=0, value=0.0, ordered=True)
-    ll, lu = split_by_plane(*left, axis=1, value=0.0, ordered=True)
-    rl, ru = split_by_plane(*right, axis=1, value=0.0, ordered=True)
+    for _ in range(N):
+        strips.append(split_by_plane(*lay.mesh(lay.jittered(C, rng), sign), axis=1,
+                                     value=0.0))
+    ll, lu, rl, ru = _cut_pieces(corner, corner)[2:]
     corners = [ru, _moved(lu, (1.0, 0.0)), _moved(rl, (0.0, 1.0)), _moved(ll, (1.0, 1.0))]
     C_in, sign_in = lay.centres("interior")
 
@@ -255,7 +286,8 @@ def periodic_tileset(exemplar, *, n_colors, seed: int = 0, name: str | None = No
         "periodic": {"layout": "diagonal 4-in-1", "rings_per_row": lay.n,
                      "radius": round(float(lay.radius), 9), "shift_max": round(lay.shift, 9),
                      "offset": round(lay.offset, 9), "rings_per_tile": 2 * lay.n ** 2,
-                     "corner_wire_clearance": round(lay.corner_clearance, 6)},
+                     "corner_wire_clearance": round(lay.corner_clearance, 6),
+                     "unanchored_pieces": lay.loose_pieces},
         "coverage_mean": round(float(np.mean(coverage)), 6),
     }
     height = max(float(V[:, 2].max()) for V, _ in tiles)
