@@ -174,7 +174,7 @@ def test_catalog_corner_squares_are_not_left_empty(name):
     # issue 14 asks for 0.85 (benchmarks/results/tiles_corners.md); the catalog
     # before the corner fill and the exact pruning had chainmail 0.55 and
     # scales-planar 0.63, then 0.70 and 0.84; chainmail, cut from its periodic
-    # layout since, reaches 1.10
+    # layout since, reaches 1.03
     from geotex.tiles import load_named
 
     tiles = load_named(name)
