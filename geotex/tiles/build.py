@@ -34,7 +34,7 @@ from geotex.tiles.frame import concatenated, frame_of
 from geotex.tiles.periodic import periodic_tileset
 from geotex.tiles.strips import (GAP, element_boxes, largest_footprint, lattice_corner,
                                  lattice_phase, pick_strips)
-from geotex.tiles.tileset import TileSet
+from geotex.tiles.tileset import TileSet, tile_rng
 from geotex.tiles.verify import side_boundaries
 
 __all__ = ["build_tileset", "built_tile", "tile_rng", "TilePlan", "interior_quilt",
@@ -359,15 +359,6 @@ class TilePlan:
     lattice: tuple | None
     seed: int
     pixels: object
-
-
-def tile_rng(seed: int, t: int) -> np.random.Generator:
-    """The random generator of tile ``t`` of a set built with ``seed``.
-
-    The ``t``-th child of ``SeedSequence(seed).spawn``: independent of the
-    strips' generator (``default_rng(seed)``) and of every other tile's.
-    """
-    return np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(int(t),)))
 
 
 def built_tile(plan: TilePlan, t: int) -> tuple[tuple[np.ndarray, np.ndarray], dict]:

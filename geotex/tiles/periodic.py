@@ -44,7 +44,7 @@ from geotex.progress import report
 from geotex.quilting import coverage_fraction
 from geotex.tiles.clip import split_by_plane
 from geotex.tiles.colors import PLANAR_GROUPS, tile_keys
-from geotex.tiles.tileset import TileSet
+from geotex.tiles.tileset import TileSet, tile_rng
 
 __all__ = ["periodic_tileset", "PeriodicLayout", "layout_of", "SUPPORTED"]
 
@@ -98,8 +98,8 @@ class PeriodicLayout:
         V, _ = ring_meshes(np.zeros((2, 2)), np.array([1.0, -1.0]), **self.params)
         self.reach = float(np.abs(V[:, :2]).max()) + self.shift + MARGIN
         if self.reach >= 0.5:
-            raise InputError(f"periodic chain mail: rings of radius {R0:g} are too large "
-                             "for a tile; use a radius below 0.2")
+            raise InputError(f"periodic chain mail: rings reach {self.reach:.3g} from their "
+                             "centres, more than half a tile; use a thinner wire")
         best = None
         for j in range(OFFSETS):
             off = j / (2 * self.n * OFFSETS)
@@ -109,14 +109,12 @@ class PeriodicLayout:
             pieces = _cut_pieces(self.mesh(*self.centres("side", off)), (Vc, Fc))
             loose = sum(_loose(p) for p in pieces)
             clear = float(np.hypot(Vc[:, 0], Vc[:, 1]).min())
-            if best is None or (loose, -clear) < (best[2], -best[0]):
-                best = (clear, off, loose)
+            if best is None or (loose, -clear) < (best[0], -best[1]):
+                best = (loose, clear, off)
         if best is None:
             raise InputError("periodic chain mail: every layout puts a wire across a tile "
                              "corner; change the radius or the resolution")
-        self.loose_pieces = best[2]
-        best = best[:2]
-        self.corner_clearance, self.offset = best
+        self.loose_pieces, self.corner_clearance, self.offset = best
 
     def centres(self, kind: str, offset=None):
         """Centres ``(E, 2)`` and tilts ``(E,)`` of one class of rings.
@@ -168,13 +166,18 @@ def layout_of(exemplar) -> PeriodicLayout:
     return PeriodicLayout(dict(exemplar.params))
 
 
-def _cut_pieces(side, corner):
-    """The two halves of the side rings and the four quadrants of the corner rings."""
-    below, above = split_by_plane(*side, axis=1, value=0.0)
+def _quadrants(corner):
+    """The corner rings cut by both lines through the origin (ordered cuts, so the
+    quadrants are mirror images across ``x = y`` bit for bit): ``(x-y-, x-y+, x+y-, x+y+)``."""
     left, right = split_by_plane(*corner, axis=0, value=0.0, ordered=True)
     ll, lu = split_by_plane(*left, axis=1, value=0.0, ordered=True)
     rl, ru = split_by_plane(*right, axis=1, value=0.0, ordered=True)
-    return below, above, ll, lu, rl, ru
+    return ll, lu, rl, ru
+
+
+def _cut_pieces(side, corner):
+    """The two halves of the side rings and the four quadrants of the corner rings."""
+    return split_by_plane(*side, axis=1, value=0.0) + _quadrants(corner)
 
 
 def _loose(mesh) -> int:
@@ -207,10 +210,6 @@ def _swapped(mesh, dx=0.0):
 def _moved(mesh, d):
     V, F = mesh
     return V + np.array([d[0], d[1], 0.0]), F
-
-
-def _tile_rng(seed: int, t: int) -> np.random.Generator:
-    return np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(int(t),)))
 
 
 def periodic_tileset(exemplar, *, n_colors, seed: int = 0, name: str | None = None,
@@ -257,14 +256,14 @@ def periodic_tileset(exemplar, *, n_colors, seed: int = 0, name: str | None = No
     for _ in range(N):
         strips.append(split_by_plane(*lay.mesh(lay.jittered(C, rng), sign), axis=1,
                                      value=0.0))
-    ll, lu, rl, ru = _cut_pieces(corner, corner)[2:]
+    ll, lu, rl, ru = _quadrants(corner)
     corners = [ru, _moved(lu, (1.0, 0.0)), _moved(rl, (0.0, 1.0)), _moved(ll, (1.0, 1.0))]
     C_in, sign_in = lay.centres("interior")
 
     groups, cols = tile_keys((N, N, N), PLANAR_GROUPS)
     tiles, coverage = [], []
     for t, (cs, ce, cn, cw) in enumerate(cols.tolist()):
-        inner = lay.mesh(lay.jittered(C_in, _tile_rng(seed, t)), sign_in)
+        inner = lay.mesh(lay.jittered(C_in, tile_rng(seed, t)), sign_in)
         south = strips[cs][1]
         north = _moved(strips[cn][0], (0.0, 1.0))
         west = _swapped(strips[cw][1])
