@@ -505,8 +505,8 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
                          "already the n^4 tiles of the plane, usable on a closed polycube")
     if interior == "periodic":
         if not isotropic:
-            raise InputError("interior 'periodic' builds isotropic sets only (use "
-                             "isotropic=True, --isotropic)")
+            raise InputError("interior 'periodic' (--interior periodic) builds isotropic "
+                             "sets only; use isotropic=True (--isotropic)")
         if isinstance(exemplar, str):
             exemplar = make(exemplar)
         return periodic_tileset(exemplar, n_colors=parse_colors(colors, planar=False),

@@ -161,8 +161,8 @@ def layout_of(exemplar) -> PeriodicLayout:
     """
     name = getattr(exemplar, "name", None)
     if name not in SUPPORTED:
-        raise InputError(f"interior 'periodic' needs an exemplar with a periodic tile layout "
-                         f"({', '.join(SUPPORTED)}), got {name!r}")
+        raise InputError(f"interior 'periodic' (--interior periodic) needs an exemplar with a "
+                         f"periodic tile layout ({', '.join(SUPPORTED)}), got {name!r}")
     return PeriodicLayout(dict(exemplar.params))
 
 
