@@ -6,8 +6,10 @@ For every tile set of the catalog that can cover a closed shape (complete or
 isotropic sets; planar sets only tile the plane) and each of the shells
 Spot, Bob and the torus: lay the tiles over the shell, unite them with the
 base, check the solid, and draw it. One picture per tile set
-(``texture_gallery_<set>.png``, a row of three shells) and one overview
-(``texture_gallery.png``, the first shell of every set). The printable solids
+(``texture_gallery_<set>.png``, a row of three shells and a close-up of the
+first one, about three tiles across, where the elements and the tile seams
+can be judged) and one overview (``texture_gallery.png``, the first shell of
+every set). The printable solids
 are written as STL beside the pictures.
 
 Set ``GEOTEX_EXAMPLES_QUICK=1`` (the test suite does) to draw one set on one
@@ -23,6 +25,7 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 from PIL import Image
 
 from geotex.io import write_mesh
@@ -30,12 +33,13 @@ from geotex.io.atomic import atomic_output
 from geotex.mapping import textured_solid
 from geotex.mesh import Mesh
 from geotex.printing import export_printable
-from geotex.render import Panel, render_panels
+from geotex.render import Panel, render_panels, view_direction
 from geotex.shells import load_named as load_shell
 from geotex.tiles.catalog import list_tilesets, load_named as load_tiles
 from geotex.viewpage import mesh_turned_y_up
 
 SHELLS = {"spot": "y", "bob": "z", "torus": "z"}   # name -> up axis (y-up is turned z-up)
+CLOSEUP_TILES = 1.5        # radius of the close-up, in tile sizes of the shell
 COLOURS = ("#c9b38f", "#a9bfd1", "#b9c99a", "#d1a9a9", "#c4b0d6", "#d6c7a0")
 
 
@@ -70,6 +74,14 @@ def main(out: Path) -> None:
             panels.append(Panel(shown, res.faces, color=COLOURS[k % len(COLOURS)],
                                 title=f"{name} on {shell_name}, {s.elements} elements"
                                 + ("" if res.report.printable else " (NOT printable)")))
+            if len(panels) == 1:
+                # the point of the first shell that stands out most towards the camera
+                towards = (shown - shown.mean(axis=0)) @ view_direction("z")
+                closeup = Panel(shown, res.faces, color=COLOURS[k % len(COLOURS)],
+                                title=f"{name} on {shell_name}, close-up",
+                                closeup=shown[np.argmax(towards)],
+                                closeup_radius=CLOSEUP_TILES * shell.tile_size)
+        panels.append(closeup)
         path = out / f"texture_gallery_{name}.png"
         render_panels(panels, path, size=(640, 600), up="z")
         with Image.open(path) as im:

@@ -31,9 +31,13 @@ def test_catalog_set_matches_its_recipe_and_is_seamless(name):
                        "planar" if r["planar"] else "complete")
     assert ts.isotropic == r["isotropic"]
     assert ts.metadata["recipe"]["seed"] == r["seed"]
-    assert ts.metadata["recipe"]["interior"] == r["interior"] == "quilt"
+    assert ts.metadata["recipe"]["interior"] == r["interior"]
+    # linked chain mail is cut from its periodic layout (rings picked one by one
+    # would not be linked); every other set is quilted
+    assert r["interior"] == ("periodic" if name == "chainmail" else "quilt")
     assert ts.metadata["exemplar"]["params"] == r["exemplar"]["params"]
-    assert ts.metadata["paste_fallbacks"] <= len(ts) // 8
+    if r["interior"] == "quilt":
+        assert ts.metadata["paste_fallbacks"] <= len(ts) // 8
     rep = check_seams(ts)
     assert rep.ok, rep.problems[:3]
     for pic in r["pictures"]:
@@ -51,6 +55,16 @@ def test_rebuild_from_recipe_is_byte_identical(tmp_path):
     assert out.read_bytes() == shipped, (
         f"{name} no longer rebuilds byte for byte; if the change is wanted, run "
         f"python -m geotex.tiles.catalog {name}")
+
+
+def test_chainmail_rebuilds_byte_identical_and_holds_linked_rings(tmp_path):
+    # the periodic set builds in a second, so it is rebuilt here too
+    out = tmp_path / "chainmail.npz"
+    ts = rebuild("chainmail")
+    save_tileset(out, ts)
+    assert out.read_bytes() == (CATALOG_DIR / "chainmail.npz").read_bytes()
+    assert ts.metadata["periodic"]["layout"] == "diagonal 4-in-1"
+    assert "linked" in recipes()["chainmail"]["description"]
 
 
 def test_catalog_names_and_cli_list(capsys):

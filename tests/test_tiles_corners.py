@@ -173,9 +173,10 @@ def test_strips_that_meet_only_other_classes_keep_their_end_elements():
 def test_catalog_corner_squares_are_not_left_empty(name):
     # issue 14 asks for 0.85 (benchmarks/results/tiles_corners.md); the catalog
     # before the corner fill and the exact pruning had chainmail 0.55 and
-    # scales-planar 0.63, now 0.70 and 0.84 (both still short of 0.85)
+    # scales-planar 0.63, then 0.70 and 0.84; chainmail, cut from its periodic
+    # layout since, reaches 1.03
     from geotex.tiles import load_named
 
     tiles = load_named(name)
     V, F = planar_tiling(tiles, random_arrangement(tiles, 6, 6, seed=0), border="open")
-    assert corner_density(V, F, (6, 6)).ratio >= 0.65
+    assert corner_density(V, F, (6, 6)).ratio >= (0.85 if name == "chainmail" else 0.65)

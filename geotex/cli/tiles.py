@@ -25,9 +25,11 @@ def register(sub):
     b.add_argument("--isotropic", action="store_true",
                    help="one colour class for all axes: N^4 tiles that cover a closed "
                    "polycube when their group is ignored (use one N in --colors)")
-    b.add_argument("--interior", choices=("quilt", "paste"), default="quilt",
-                   help="tile interiors: constrained mesh quilting (default) or whole "
-                   "exemplar elements pasted between the frame's (fast)")
+    b.add_argument("--interior", choices=("quilt", "paste", "periodic"), default="quilt",
+                   help="tile interiors: constrained mesh quilting (default), whole "
+                   "exemplar elements pasted between the frame's (fast), or periodic: "
+                   "tiles cut from the exemplar's own periodic layout (linked chainmail; "
+                   "with --isotropic)")
     b.add_argument("--lattice", action="store_true",
                    help="keep the exemplar's lattice (period = its pitch, which must divide "
                    "the tile) in every tile: for regular textures such as knurl")

@@ -85,29 +85,6 @@ def side_keys(uvw: np.ndarray, quad_of_vertex: np.ndarray, quad_edge: np.ndarray
     return on, np.stack([edge, bits], axis=1)
 
 
-def _tile_components(tiles: TileSet) -> tuple[np.ndarray, np.ndarray]:
-    """Element (connected component) of every tile-set vertex, numbered per tile.
-
-    Returns
-    -------
-    element : numpy.ndarray, (N,) int64
-        Element index within its tile.
-    count : numpy.ndarray, (T,) int64
-        Elements per tile.
-    """
-    tile_of_face = np.repeat(np.arange(len(tiles)), np.diff(tiles.face_offsets))
-    F = tiles.faces + tiles.vertex_offsets[tile_of_face][:, None]
-    _, label = vertex_components(F, tiles.vertices.shape[0])
-    tile_of_vertex = np.repeat(np.arange(len(tiles)), np.diff(tiles.vertex_offsets))
-    label = np.where(label < 0, 0, label)
-    first = np.full(len(tiles), np.iinfo(np.int64).max)
-    np.minimum.at(first, tile_of_vertex, label)
-    last = np.full(len(tiles), -1)
-    np.maximum.at(last, tile_of_vertex, label)
-    first = np.where(last < 0, 0, first)
-    return label - first[tile_of_vertex], np.maximum(last - first + 1, 0)
-
-
 @dataclass(frozen=True)
 class MappedTiles:
     """Tile geometry mapped into a shell.
@@ -159,15 +136,7 @@ def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: floa
     MappedTiles
     """
     pc = shell.polycube
-    uvw, quad_of_vertex, faces, source = gathered_tiles(tiles, tile_of_quad)
-    # elements numbered per copy, so one copy's elements stay apart from another's
-    element, count = _tile_components(tiles)
-    tile_of_vertex = np.searchsorted(tiles.vertex_offsets, source, side="right") - 1
-    copy = np.concatenate([[0], np.cumsum(quad_of_vertex[1:] != quad_of_vertex[:-1])])
-    per_copy = count[tile_of_vertex[np.r_[0, np.flatnonzero(np.diff(copy)) + 1]]] \
-        if len(uvw) else np.zeros(0, np.int64)
-    element = element[source] + (np.cumsum(per_copy) - per_copy)[copy]
-    n_elements = int(per_copy.sum())
+    uvw, quad_of_vertex, faces, _ = gathered_tiles(tiles, tile_of_quad)
     # weld side vertices with their twins across quad edges
     on, keys = side_keys(uvw, quad_of_vertex, pc.layout.quad_edge)
     side_idx = np.flatnonzero(on)
@@ -179,13 +148,19 @@ def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: floa
     first = order[start]                                  # representative of every key
     target = np.arange(len(uvw))
     target[side_idx[order]] = side_idx[first[group]]
-    # an element with a side vertex that found no twin is open: drop it
+    # an element with a side vertex that found no twin is open: drop it, with
+    # every piece welded to it (a chain-mail ring cut at a tile corner spans up
+    # to four tiles, so one open piece would leave the others open)
     sizes = np.bincount(group)
     lonely = side_idx[order[sizes[group] == 1]]
-    open_element = np.zeros(n_elements, dtype=bool)
-    open_element[element[lonely]] = True
-    keep_face = ~open_element[element[faces[:, 0]]]
-    faces = target[faces[keep_face]]
+    faces = target[faces]
+    keep_face = np.ones(len(faces), dtype=bool)
+    if lonely.size:
+        _, piece = vertex_components(faces, len(uvw))
+        open_piece = np.zeros(int(piece.max()) + 1, dtype=bool)
+        open_piece[piece[lonely]] = True
+        keep_face = ~open_piece[piece[faces[:, 0]]]
+        faces = faces[keep_face]
     used = np.zeros(len(uvw), dtype=bool)
     used[faces.ravel()] = True
     new_index = np.cumsum(used) - 1

@@ -31,15 +31,16 @@ from geotex.quilting import coverage_fraction, quilt_texture, split_elements
 from geotex.tiles.colors import COMPLETE_GROUPS, PLANAR_GROUPS, parse_colors, tile_keys
 from geotex.tiles.fill import ExemplarPixels, fill_corners, fill_gaps
 from geotex.tiles.frame import concatenated, frame_of
+from geotex.tiles.periodic import periodic_tileset
 from geotex.tiles.strips import (GAP, element_boxes, largest_footprint, lattice_corner,
                                  lattice_phase, pick_strips)
-from geotex.tiles.tileset import TileSet
+from geotex.tiles.tileset import TileSet, tile_rng
 from geotex.tiles.verify import side_boundaries
 
 __all__ = ["build_tileset", "built_tile", "tile_rng", "TilePlan", "interior_quilt",
            "interior_paste", "INTERIOR_METHODS", "BUILD_STAGES", "Source"]
 
-INTERIOR_METHODS = ("quilt", "paste")
+INTERIOR_METHODS = ("quilt", "paste", "periodic")
 BUILD_STAGES = ("strips", "tiles")
 QUILT_WINDOW = 2.0           # side of the exemplar window a tile is quilted from
 QUILT_ATTEMPTS = 3           # quilting tries per tile before the paste fallback
@@ -360,15 +361,6 @@ class TilePlan:
     pixels: object
 
 
-def tile_rng(seed: int, t: int) -> np.random.Generator:
-    """The random generator of tile ``t`` of a set built with ``seed``.
-
-    The ``t``-th child of ``SeedSequence(seed).spawn``: independent of the
-    strips' generator (``default_rng(seed)``) and of every other tile's.
-    """
-    return np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(int(t),)))
-
-
 def built_tile(plan: TilePlan, t: int) -> tuple[tuple[np.ndarray, np.ndarray], dict]:
     """Tile ``t`` of a plan: its frame with the interior filled.
 
@@ -456,12 +448,16 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
         collide across the tiles and no lattice site is left empty.
     seed : int
         Random seed; same inputs and seed give the same set, byte for byte.
-    interior : {"quilt", "paste"}
+    interior : {"quilt", "paste", "periodic"}
         How tile interiors are filled: constrained mesh quilting around the
         frame (:func:`interior_quilt`; a tile whose quilting is not accepted
         after :data:`QUILT_ATTEMPTS` tries is pasted instead, counted in
         ``metadata["paste_fallbacks"]``), or whole exemplar elements placed
-        between the frame's (:func:`interior_paste`, fast).
+        between the frame's (:func:`interior_paste`, fast). ``"periodic"``
+        uses neither strips nor quilting: the tiles are cut from the
+        exemplar's own periodic layout kept on its lattice
+        (:func:`geotex.tiles.periodic.periodic_tileset`; linked chain mail,
+        isotropic sets only, ``lattice`` is not used).
     name : str, optional
         Set name (default: the exemplar's).
     progress : callable, optional
@@ -507,6 +503,14 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
     if isotropic and planar:
         raise InputError("isotropic and planar exclude each other: an isotropic set is "
                          "already the n^4 tiles of the plane, usable on a closed polycube")
+    if interior == "periodic":
+        if not isotropic:
+            raise InputError("interior 'periodic' (--interior periodic) builds isotropic "
+                             "sets only; use isotropic=True (--isotropic)")
+        if isinstance(exemplar, str):
+            exemplar = make(exemplar)
+        return periodic_tileset(exemplar, n_colors=parse_colors(colors, planar=False),
+                                seed=seed, name=name, progress=progress)
     src, height, depth, recipe = _exemplar_arrays(exemplar)
     n_colors = parse_colors(colors, planar=planar)
     if isotropic and len(set(n_colors)) != 1:

@@ -11,16 +11,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from geotex.mesh.topology import compacted
-
-from geotex.mesh.topology import edge_topology
+from geotex.mesh.topology import compacted, edge_topology
 
 __all__ = ["split_by_plane"]
 
 
-
 def split_by_plane(V: np.ndarray, F: np.ndarray, *, axis: int, value: float,
-                   snap: float = 1e-7) -> tuple[tuple[np.ndarray, np.ndarray],
+                   snap: float = 1e-7, ordered: bool = False
+                   ) -> tuple[tuple[np.ndarray, np.ndarray],
                                                   tuple[np.ndarray, np.ndarray]]:
     """Cut a mesh with the plane ``x[axis] = value`` into its two sides.
 
@@ -35,6 +33,11 @@ def split_by_plane(V: np.ndarray, F: np.ndarray, *, axis: int, value: float,
     snap : float
         Vertices closer than this to the plane are first pushed to
         ``value + snap`` so that no cut triangle degenerates.
+    ordered : bool
+        Compute every cut vertex from the crossing edge's endpoint below the
+        plane, whatever the vertex numbering: a mesh and its mirror image
+        (two axes swapped) cut by the mirrored planes give mirror-image cut
+        vertices bit for bit. Default False: from the edge's first vertex.
 
     Returns
     -------
@@ -55,8 +58,11 @@ def split_by_plane(V: np.ndarray, F: np.ndarray, *, axis: int, value: float,
     e0, e1 = topo.edges[:, 0], topo.edges[:, 1]
     crossing = positive[e0] != positive[e1]
     cut_edges = np.flatnonzero(crossing)
-    t = d[e0[cut_edges]] / (d[e0[cut_edges]] - d[e1[cut_edges]])
-    P = V[e0[cut_edges]] + t[:, None] * (V[e1[cut_edges]] - V[e0[cut_edges]])
+    a, b = e0[cut_edges], e1[cut_edges]
+    if ordered:
+        a, b = np.where(positive[a], b, a), np.where(positive[a], a, b)
+    t = d[a] / (d[a] - d[b])
+    P = V[a] + t[:, None] * (V[b] - V[a])
     P[:, axis] = value
     cut_vertex = np.full(len(topo.edges), -1, dtype=np.int64)
     cut_vertex[cut_edges] = len(V) + np.arange(len(cut_edges))

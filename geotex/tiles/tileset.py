@@ -17,7 +17,7 @@ import numpy as np
 from geotex.errors import MeshFileError
 from geotex.io.records import read_record, write_record
 
-__all__ = ["TileSet", "save_tileset", "load_tileset", "FORMAT_VERSION"]
+__all__ = ["TileSet", "save_tileset", "load_tileset", "tile_rng", "FORMAT_VERSION"]
 
 FORMAT_VERSION = 1
 _DATE = (1980, 1, 1, 0, 0, 0)       # fixed member time stamps: same set, same bytes
@@ -111,6 +111,15 @@ class TileSet:
                    np.concatenate([[0], np.cumsum(nf)]),
                    np.asarray(groups, dtype=np.int64).reshape(-1, 2),
                    np.asarray(colors, dtype=np.int64).reshape(-1, 4), **kwargs)
+
+
+def tile_rng(seed: int, t: int) -> np.random.Generator:
+    """The random generator of tile ``t`` of a set built with ``seed``.
+
+    The ``t``-th child of ``SeedSequence(seed).spawn``: independent of the
+    strips' generator (``default_rng(seed)``) and of every other tile's.
+    """
+    return np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(int(t),)))
 
 
 def save_tileset(path, tiles: TileSet) -> None:
