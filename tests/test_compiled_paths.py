@@ -103,6 +103,17 @@ def test_decoder_rows_equal_bit_for_bit(monkeypatch, lychee):
     assert np.array_equal(a, b)
 
 
+def test_base_face_geometry_equals_numpy_path_bit_for_bit(monkeypatch, lychee):
+    _, F, Vs = lychee
+
+    def arrays():
+        g = kernels.BaseGeometry(Vs, F)
+        return [*(x for e in g.e for x in e), *g.N, g.N2, g.flat, g.valence]
+
+    a, b = _paths(monkeypatch, arrays)
+    assert all(np.array_equal(x, y) for x, y in zip(a, b))
+
+
 def test_face_and_edge_loops_equal_numpy_path(monkeypatch, lychee):
     _, F, Vs = lychee
     t = np.random.default_rng(5).normal(size=Vs.shape) * 3.0     # large: some clip
@@ -166,9 +177,9 @@ def test_per_edge_damping_branch_matches_scalar_damping(monkeypatch, lychee):
     e = len(diag)
     c0, lim = rng.normal(size=e) * 0.01, np.full(e, 0.05)
     t2 = rng.normal(size=2 * len(Vs)) * 0.1
-    args = (data, g.topo.edges, len(Vs), c0, lim, t2, sq, 1.0 / sq, reg, Kd)
-    scalar = kernels._lsq_fit_compiled(*args, True)
-    per_edge = kernels._lsq_fit_compiled(*args, False)
+    args = (g.topo.edges, len(Vs), c0, lim, t2, sq, 1.0 / sq, reg, Kd)
+    scalar = kernels._lsq_fit_compiled(data.copy(), *args, True)      # rescales its rows
+    per_edge = kernels._lsq_fit_compiled(data.copy(), *args, False)
     assert np.allclose(scalar, per_edge, rtol=0, atol=1e-9 * np.abs(scalar).max())
 
 

@@ -163,8 +163,15 @@ class BaseGeometry:
 
     def __init__(self, V: np.ndarray, F: np.ndarray, topo: EdgeTopology | None = None):
         self.V, self.F = V, F
-        n = V.shape[0]
         self.FT = np.ascontiguousarray(F.T)
+        if F.size >= JIT_MIN_SIZE:
+            rows = np.empty((13, F.shape[0]))
+            self.flat = np.empty(F.shape[0], dtype=bool)
+            _face_geometry(self.FT, np.ascontiguousarray(V, dtype=np.float64), rows, self.flat)
+            self.e = [tuple(rows[3 * k:3 * k + 3]) for k in range(3)]
+            self.N, self.N2 = tuple(rows[9:12]), rows[12]
+            self._finish(topo)
+            return
         cols = [np.ascontiguousarray(V[:, d]) for d in range(3)]
         P0, P1, P2 = ([np.take(c, f) for c in cols] for f in self.FT)
         # e_k = p_{k+2} - p_{k+1}, written over the gathered corners once they are used
@@ -190,7 +197,10 @@ class BaseGeometry:
             lmax2 *= 1e-12
             self.flat = ~(tmp > lmax2)
         del tmp, lmax2
-        self.valence = np.bincount(F.ravel(), minlength=n).astype(np.float64)
+        self._finish(topo)
+
+    def _finish(self, topo: EdgeTopology | None) -> None:
+        self.valence = np.bincount(self.F.ravel(), minlength=self.V.shape[0]).astype(np.float64)
         self._topo = topo
         self._normals = None
         self._transpose = None
@@ -293,9 +303,16 @@ class BaseGeometry:
         return out
 
     def decoder_transpose(self) -> tuple[sp.csr_matrix, np.ndarray, np.ndarray]:
-        """``(P D)^T`` in per-vertex tangent frames, with the frames; cached.
+        """``(P D)^T`` as a CSR matrix (see :meth:`decoder_rows`), with the frames; cached."""
+        if self._transpose is None:
+            data, X1, X2 = self.decoder_rows()
+            self._transpose = (_four_per_row(data, self.topo.edges, self.V.shape[0]), X1, X2)
+        return self._transpose
 
-        Returns ``AT`` (e, 2n) CSR with four entries per row, the components
+    def decoder_rows(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(P D)^T`` in per-vertex tangent frames, four numbers per edge, with the frames.
+
+        Returns ``data`` (e, 4), row ``i`` of ``AT`` (e, 2n), the components
         of ``a_e`` and ``b_e`` (module docstring) along the frames of the
         edge's two endpoints, and the frames ``X1, X2`` (n, 3) of
         :func:`axis_frames`.  Half-edge ``k`` of a face (``F_k -> F_{k+1}``)
@@ -307,74 +324,71 @@ class BaseGeometry:
         the topology's grouped half-edges in half-edge order.  The rows are
         built directly (no sort).  ``AT.T`` (CSC, no copy) applies ``P D`` to
         coefficients and gives the two frame components of every vertex vector.
+        Not cached (:meth:`decoder_transpose` is).
         """
-        if self._transpose is None:
-            m = self.F.shape[0]
-            n = self.V.shape[0]
-            topo = self.topo
-            E = topo.edges
-            e = E.shape[0]
-            X1, X2 = axis_frames(self.normals)
-            iv = 1.0 / self.valence
-            Y = [np.ascontiguousarray(X[:, d]) * iv for X in (X1, X2) for d in range(3)]
-            G = self.gradients()
-            if 3 * m >= JIT_MIN_SIZE:
-                data = np.zeros((e, 4))
-                _decoder_rows(self.FT, topo.half_to_edge, *G[0], *G[1], *G[2], *Y, data)
-                self._transpose = (_four_per_row(data, E, n), X1, X2)
-                return self._transpose
-            FT = self.FT
-            fwd = self.forward()
-            rev = ~fwd
-            # W[i, k, f]: part i of half-edge k of face f -- parts 0, 1 at the
-            # edge's first vertex a, 2, 3 at its second vertex b.  Corner k (vertex
-            # F_k) is the tail of half-edge k, which puts +G_{k+1} there, and the
-            # head of half-edge k+2, which puts -G_{k+2} there; a forward half-edge
-            # (F_k < F_{k+1}) has a at its tail, a reversed one at its head and
-            # enters with the opposite sign.  Entry 3m stays zero.
-            W = np.zeros((4, 3 * m + 1))
-            Wk = W[:, :3 * m].reshape(4, 3, m)
-            y = [np.empty(m) for _ in range(6)]
-            acc = np.empty(m)
-            tmp = np.empty(m)
-            for k in range(3):
-                k1, k2 = (k + 1) % 3, (k + 2) % 3
-                for i in range(6):
-                    np.take(Y[i], FT[k], out=y[i])
-                for j in range(2):
-                    _dot_into(G[k1], y[3 * j:3 * j + 3], acc, tmp)     # tail of k
-                    np.copyto(Wk[j, k], acc, where=fwd[k])
-                    np.negative(acc, out=Wk[2 + j, k], where=rev[k])
-                    _dot_into(G[k2], y[3 * j:3 * j + 3], acc, tmp)     # -head of k+2
-                    np.negative(acc, out=Wk[2 + j, k2], where=fwd[k2])
-                    np.copyto(Wk[j, k2], acc, where=rev[k2])
-            del y, acc, tmp
-            # an edge's four numbers: the sum over its one or two half-edges (the
-            # base is manifold), in half-edge order; half-edge 3 f + k is W[:, k, f]
-            order = topo.grouped_half_edges()
-            start = topo.edge_starts()
-            h0 = order[start]
-            h1 = h0.copy()
-            two = topo.face_count == 2
-            h1[two] = order[start[two] + 1]
-            rem = np.empty(e, dtype=np.int64)
-            for h in (h0, h1):                  # 3 f + k -> k m + f, in place
-                np.remainder(h, 3, out=rem)
-                h //= 3
-                rem *= m
-                h += rem
-            h1[~two] = 3 * m
-            del rem
-            data = np.empty((e, 4))
-            b0, b1 = np.empty(e), np.empty(e)
-            for i in range(4):
-                np.take(W[i], h0, out=b0)
-                np.take(W[i], h1, out=b1)
-                np.add(b0, b1, out=data[:, i])
-            del b0, b1
-            del W
-            self._transpose = (_four_per_row(data, E, n), X1, X2)
-        return self._transpose
+        m = self.F.shape[0]
+        topo = self.topo
+        E = topo.edges
+        e = E.shape[0]
+        X1, X2 = axis_frames(self.normals)
+        iv = 1.0 / self.valence
+        Y = [np.ascontiguousarray(X[:, d]) * iv for X in (X1, X2) for d in range(3)]
+        G = self.gradients()
+        if 3 * m >= JIT_MIN_SIZE:
+            data = np.zeros((e, 4))
+            _decoder_rows(self.FT, topo.half_to_edge, *G[0], *G[1], *G[2], *Y, data)
+            return data, X1, X2
+        FT = self.FT
+        fwd = self.forward()
+        rev = ~fwd
+        # W[i, k, f]: part i of half-edge k of face f -- parts 0, 1 at the
+        # edge's first vertex a, 2, 3 at its second vertex b.  Corner k (vertex
+        # F_k) is the tail of half-edge k, which puts +G_{k+1} there, and the
+        # head of half-edge k+2, which puts -G_{k+2} there; a forward half-edge
+        # (F_k < F_{k+1}) has a at its tail, a reversed one at its head and
+        # enters with the opposite sign.  Entry 3m stays zero.
+        W = np.zeros((4, 3 * m + 1))
+        Wk = W[:, :3 * m].reshape(4, 3, m)
+        y = [np.empty(m) for _ in range(6)]
+        acc = np.empty(m)
+        tmp = np.empty(m)
+        for k in range(3):
+            k1, k2 = (k + 1) % 3, (k + 2) % 3
+            for i in range(6):
+                np.take(Y[i], FT[k], out=y[i])
+            for j in range(2):
+                _dot_into(G[k1], y[3 * j:3 * j + 3], acc, tmp)     # tail of k
+                np.copyto(Wk[j, k], acc, where=fwd[k])
+                np.negative(acc, out=Wk[2 + j, k], where=rev[k])
+                _dot_into(G[k2], y[3 * j:3 * j + 3], acc, tmp)     # -head of k+2
+                np.negative(acc, out=Wk[2 + j, k2], where=fwd[k2])
+                np.copyto(Wk[j, k2], acc, where=rev[k2])
+        del y, acc, tmp
+        # an edge's four numbers: the sum over its one or two half-edges (the
+        # base is manifold), in half-edge order; half-edge 3 f + k is W[:, k, f]
+        order = topo.grouped_half_edges()
+        start = topo.edge_starts()
+        h0 = order[start]
+        h1 = h0.copy()
+        two = topo.face_count == 2
+        h1[two] = order[start[two] + 1]
+        rem = np.empty(e, dtype=np.int64)
+        for h in (h0, h1):                  # 3 f + k -> k m + f, in place
+            np.remainder(h, 3, out=rem)
+            h //= 3
+            rem *= m
+            h += rem
+        h1[~two] = 3 * m
+        del rem
+        data = np.empty((e, 4))
+        b0, b1 = np.empty(e), np.empty(e)
+        for i in range(4):
+            np.take(W[i], h0, out=b0)
+            np.take(W[i], h1, out=b1)
+            np.add(b0, b1, out=data[:, i])
+        del b0, b1
+        del W
+        return data, X1, X2
 
     def tangent(self, X: np.ndarray) -> np.ndarray:
         """``X`` minus its component along the base normals."""
@@ -396,6 +410,35 @@ def _four_per_row(data: np.ndarray, E: np.ndarray, n: int) -> sp.csr_matrix:
     cols[:, 3] = cols[:, 2] + 1
     return sp.csr_matrix((data.reshape(-1), cols.reshape(-1),
                           np.arange(0, 4 * e + 1, 4, dtype=index)), shape=(e, 2 * n))
+
+
+@compiled
+def _face_geometry(FT, V, rows, flat):
+    """:class:`BaseGeometry`'s face arrays in one pass (the same products, bit for
+    bit): ``rows`` (13, m) gets ``e_0``, ``e_1``, ``e_2`` (``e_k = p_{k+2} -
+    p_{k+1}``, three rows each), ``N = e_1 x e_2`` (three rows) and ``|N|^2``;
+    ``flat`` whether ``|N| <= 1e-12`` times the longest edge squared (or NaN)."""
+    for f in range(FT.shape[1]):
+        i, j, k = FT[0, f], FT[1, f], FT[2, f]
+        lmax2 = 0.0
+        for d in range(3):
+            rows[d, f] = V[k, d] - V[j, d]
+            rows[3 + d, f] = V[i, d] - V[k, d]
+            rows[6 + d, f] = V[j, d] - V[i, d]
+        a0, a1, a2 = rows[3, f], rows[4, f], rows[5, f]
+        b0, b1, b2 = rows[6, f], rows[7, f], rows[8, f]
+        n0 = a1 * b2 - a2 * b1
+        n1 = a2 * b0 - a0 * b2
+        n2 = a0 * b1 - a1 * b0
+        rows[9, f], rows[10, f], rows[11, f] = n0, n1, n2
+        nn = n0 * n0 + n1 * n1 + n2 * n2
+        rows[12, f] = nn
+        for q in range(3):
+            x, y, z = rows[3 * q, f], rows[3 * q + 1, f], rows[3 * q + 2, f]
+            l2 = x * x + y * y + z * z
+            if q == 0 or not (lmax2 >= l2):              # np.maximum: NaN wins
+                lmax2 = l2
+        flat[f] = not (np.sqrt(nn) > lmax2 * 1e-12)
 
 
 @compiled
@@ -582,8 +625,12 @@ def lsq_encode(g: BaseGeometry, t: np.ndarray) -> np.ndarray:
     c0, lim = edge_encode_and_lengths(g.V, E, t)
     if E.shape[0] == 0:
         return c0
-    AT, X1, X2 = g.decoder_transpose()
-    data = AT.data.reshape(-1, 4)
+    compiled_fit = E.shape[0] >= JIT_MIN_SIZE
+    if compiled_fit:
+        data, X1, X2 = g.decoder_rows()          # a fresh array: rescaled in place below
+    else:
+        AT, X1, X2 = g.decoder_transpose()
+        data = AT.data.reshape(-1, 4)
     diag = np.einsum("ij,ij->i", data, data)
     reg = LSQ_DAMPING * diag
     Kd = diag + reg
@@ -597,7 +644,7 @@ def lsq_encode(g: BaseGeometry, t: np.ndarray) -> np.ndarray:
     t2 = np.empty((t.shape[0], 2))
     t2[:, 0] = dot(t, X1)
     t2[:, 1] = dot(t, X2)
-    if E.shape[0] >= JIT_MIN_SIZE:
+    if compiled_fit:
         x = _lsq_fit_compiled(data, E, t.shape[0], c0, lim, t2.ravel(), sq, scale, reg, Kd,
                               bool((diag > 0).all()))
         c = c0 + scale * x
@@ -672,7 +719,8 @@ def _cg(K, rhs, x, free, iterations, rtol, weight):
 
 
 def _lsq_fit_compiled(data, E, n, c0, lim, t2, sq, scale, reg, Kd, all_positive):
-    """The fit of :func:`lsq_encode` with compiled loops (large meshes): the same
+    """The fit of :func:`lsq_encode` with compiled loops (large meshes; ``data``,
+    the decoder rows, is rescaled in place): the same
     damped, Jacobi-scaled normal equations, unconstrained CG and active-set
     rounds, with the operator applied from the four numbers per edge (no
     sparse matrix; the step's vector updates and dot products folded into the
@@ -684,7 +732,8 @@ def _lsq_fit_compiled(data, E, n, c0, lim, t2, sq, scale, reg, Kd, all_positive)
     e = E.shape[0]
     index = np.int32 if 2 * n < 2 ** 31 else np.int64
     E2 = np.ascontiguousarray(E, dtype=index)
-    D = data * scale[:, None]
+    D = data
+    D *= scale[:, None]                          # the caller's fresh rows, rescaled in place
     mu = LSQ_DAMPING / (1.0 + LSQ_DAMPING)
     mu_v = np.empty(0) if all_positive else reg / Kd
     z = np.empty(2 * n)
