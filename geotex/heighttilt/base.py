@@ -29,7 +29,8 @@ import scipy.sparse.linalg as spla
 from geotex.errors import InputError
 from geotex.linalg import single_threaded_blas
 from geotex.fields.oneforms import projected_decoder
-from geotex.heighttilt._kernels import BaseGeometry, axis_frames, dot, edge_encode, lsq_encode
+from geotex.heighttilt._kernels import (BaseGeometry, axis_frames, cross, dot, edge_encode,
+                                        lsq_encode)
 from geotex.heighttilt.smoothing import smoothed_base
 from geotex.heighttilt.validation import base_geometry, check_base_mesh
 from geotex.mesh.topology import EdgeTopology
@@ -129,7 +130,7 @@ def frames_of(g: BaseGeometry, u: np.ndarray) -> tuple[np.ndarray, np.ndarray, n
             T1[still] = axis_frames(nrm[still])[0]
             ln[still] = 1.0
     T1 /= ln[:, None]
-    return nrm, T1, np.cross(nrm, T1)
+    return nrm, T1, cross(nrm, T1)
 
 
 def _coefficients(g: BaseGeometry, c) -> np.ndarray:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from geotex.errors import InputError
+from geotex.heighttilt._kernels import cross
 from geotex.heighttilt.base import (base_geometry, check_base_mesh, check_encoding, encode_on,
                                     smoothed_base)
 from geotex.heighttilt.texture import HeightTiltTexture
@@ -31,7 +32,7 @@ def displacement_to_height_tilt(d: np.ndarray, n: np.ndarray) -> tuple[np.ndarra
     length = np.linalg.norm(d, axis=1)
     sign = np.where(np.einsum("kd,kd->k", d, n) < 0, -1.0, 1.0)
     unit = np.divide(d, length[:, None], out=np.zeros_like(d), where=length[:, None] > 0)
-    return sign * length, np.cross(unit, n)
+    return sign * length, cross(unit, n)
 
 
 def extract_texture(V0, F, *, base=None, steps: int = 3, time_step: float | None = None,
