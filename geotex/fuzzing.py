@@ -397,17 +397,42 @@ def _limit_address_space():  # pragma: no cover - runs in the child
     os.nice(5)
 
 
+def peak_rss(pid="self") -> int | None:
+    """Peak resident bytes of a process's own program (``VmHWM``), None where unknown.
+
+    ``ru_maxrss`` is not that: Linux starts a forked child's maximum at the
+    parent's size (the copied address space), and ``exec`` keeps it, so a
+    small program started from a large test process reports the parent's
+    size.  ``VmHWM`` belongs to the address space the program made at exec.
+    """
+    try:
+        with open(f"/proc/{pid}/status", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        return None
+    return None
+
+
 def run_limited(cmd, timeout, env):
-    """Run ``cmd``; return (code or None, stdout, stderr, seconds, maxrss bytes)."""
+    """Run ``cmd``; return (code or None, stdout, stderr, seconds, maxrss bytes).
+
+    The peak is the child's own (:func:`peak_rss`, read while it runs) unless
+    ``ru_maxrss`` exceeds this process's size at the start, in which case that
+    is the child's.
+    """
     import subprocess
     import tempfile
 
+    own = peak_rss() or 0
     with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err:
         start = time.perf_counter()
         proc = subprocess.Popen(cmd, stdout=out, stderr=err, stdin=subprocess.DEVNULL,
                                 preexec_fn=_limit_address_space, env=env)
-        code, usage = None, None
+        code, usage, polled = None, None, 0
         while True:
+            polled = max(polled, peak_rss(proc.pid) or 0)
             pid, status, usage = os.wait4(proc.pid, os.WNOHANG)
             if pid:
                 code = os.waitstatus_to_exitcode(status)
@@ -422,8 +447,11 @@ def run_limited(cmd, timeout, env):
         seconds = time.perf_counter() - start
         out.seek(0)
         err.seek(0)
+        peak = usage.ru_maxrss * 1024
+        if peak <= own:            # the inherited size of this process: use the polled peak
+            peak = polled
         return (code, out.read().decode("utf-8", "replace"),
-                err.read().decode("utf-8", "replace"), seconds, usage.ru_maxrss * 1024)
+                err.read().decode("utf-8", "replace"), seconds, peak)
 
 
 def limited_env():
@@ -543,7 +571,8 @@ def _drive(files) -> int:  # pragma: no cover - runs in the batch subprocess
             err.write(f"escaped: {type(exc).__name__}: {exc}\n")
         row = {"file": name, "code": code, "stdout": out.getvalue()[-4000:],
                "stderr": err.getvalue()[:4000], "seconds": time.perf_counter() - start,
-               "maxrss": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024}
+               "maxrss": peak_rss()
+               or resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024}
         print(json.dumps(row), file=real_stdout, flush=True)
     return 0
 

@@ -60,3 +60,18 @@ def test_verdict_rejects_bad_outcomes(tmp_path):
     assert verdict(outcome(None, seconds=10.0))
     assert verdict(outcome(0, "printable: yes\n", seconds=11.0))
     assert verdict(outcome(0, "printable: yes\n", rss=2 << 30))
+
+
+def test_a_small_child_of_a_large_process_reports_its_own_peak():
+    # Linux starts a forked child's ru_maxrss at the parent's size: a test
+    # process grown by earlier tests made every fuzz case look like 1 GiB
+    import sys
+
+    import numpy as np
+
+    from geotex.fuzzing import limited_env, run_limited
+
+    ballast = np.ones(40_000_000)            # 320 MB in this process
+    code, _, _, _, peak = run_limited([sys.executable, "-c", "print(1)"], 60, limited_env())
+    assert code == 0 and ballast[0] == 1.0
+    assert peak < 150 * 2 ** 20
