@@ -557,8 +557,13 @@ def _draw(pv, plotter, panel: Panel, up: np.ndarray, aspect: float, width: int):
                          render_lines_as_tubes=True)
         legend.append([f"{label} ({E.shape[0]})", color])
     if legend:
+        # VTK fits the text to the box: a box as wide as the longest label
+        # needs at a legible size (about 0.026 of a square panel per
+        # character, 0.09 per line) keeps it so
+        longest = max(len(text) for text, _ in legend)
         plotter.add_legend(legend, bcolor="white", face="line", loc="lower left",
-                           size=(0.45, 0.07 * len(legend)))
+                           size=(min(0.9, max(0.45, 0.026 * longest / aspect)),
+                                 0.09 * len(legend)))
     title = _wrapped_title(panel.title, width) if panel.title else ""
     lines = title.count("\n") + 1 if title else 0
     top = (lines * 26.0 + 8.0) / plotter.window_size[1] if lines else 0.0
