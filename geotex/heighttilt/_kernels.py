@@ -170,7 +170,7 @@ class BaseGeometry:
             _face_geometry(self.FT, np.ascontiguousarray(V, dtype=np.float64), rows, self.flat)
             self.e = [tuple(rows[3 * k:3 * k + 3]) for k in range(3)]
             self.N, self.N2 = tuple(rows[9:12]), rows[12]
-            self._finish(topo)
+            self._finish(topo, rows)
             return
         cols = [np.ascontiguousarray(V[:, d]) for d in range(3)]
         P0, P1, P2 = ([np.take(c, f) for c in cols] for f in self.FT)
@@ -199,7 +199,9 @@ class BaseGeometry:
         del tmp, lmax2
         self._finish(topo)
 
-    def _finish(self, topo: EdgeTopology | None) -> None:
+    def _finish(self, topo: EdgeTopology | None, rows: np.ndarray | None = None) -> None:
+        self._rows = rows                       # (13, m) face arrays of the compiled pass
+        self._gradient_stack = None
         self.valence = np.bincount(self.F.ravel(), minlength=self.V.shape[0]).astype(np.float64)
         self._topo = topo
         self._normals = None
@@ -240,9 +242,7 @@ class BaseGeometry:
         """``G_k = N x e_k / |N|^2`` of every face (the gradient of the hat function
         of corner ``k``), three coordinate columns ``(m,)`` per corner; cached."""
         if self._gradients is None and 3 * self.F.shape[0] >= JIT_MIN_SIZE:
-            G = np.empty((3, 3, self.F.shape[0]))
-            _face_gradients(*self.N, self.N2, *self.e[0], *self.e[1], *self.e[2], G)
-            self._gradients = [tuple(G[k]) for k in range(3)]
+            self.gradient_stack()
         if self._gradients is None:
             inv = 1.0 / self.N2
             G = []
@@ -252,6 +252,25 @@ class BaseGeometry:
                           (n0 * x1 - n1 * x0) * inv))
             self._gradients = G
         return self._gradients
+
+    def gradient_stack(self) -> np.ndarray:
+        """:meth:`gradients` as one ``(3, 3, m)`` array ``[corner, axis, face]``; cached.
+
+        Computed in one compiled pass from the face arrays (the same products,
+        bit for bit); a copy of the numpy path's columns where those came first.
+        """
+        if self._gradient_stack is None:
+            if self._gradients is not None:
+                self._gradient_stack = np.array(self._gradients)
+            else:
+                E = self._rows[:9].reshape(3, 3, -1) if self._rows is not None \
+                    else np.array(self.e)
+                G = np.empty((3, 3, self.F.shape[0]))
+                _face_gradients(np.array(self.N) if self._rows is None else self._rows[9:12],
+                                self.N2, E, G)
+                self._gradient_stack = G
+                self._gradients = [tuple(G[k]) for k in range(3)]
+        return self._gradient_stack
 
     def forward(self) -> np.ndarray:
         """``(3, m)`` bool: half-edge ``k`` of face ``f`` runs from the lower to the
@@ -271,8 +290,7 @@ class BaseGeometry:
         m = self.F.shape[0]
         if 3 * m >= JIT_MIN_SIZE:
             out = np.zeros((n, 3))
-            G = self.gradients()
-            _decode_loops(self.FT, self.topo.half_to_edge, c, *G[0], *G[1], *G[2],
+            _decode_loops(self.FT, self.topo.half_to_edge, c, self.gradient_stack(),
                           self.valence, out)
             return out
         h2e = self.topo.half_to_edge.reshape(m, 3)
@@ -336,7 +354,7 @@ class BaseGeometry:
         G = self.gradients()
         if 3 * m >= JIT_MIN_SIZE:
             data = np.zeros((e, 4))
-            _decoder_rows(self.FT, topo.half_to_edge, *G[0], *G[1], *G[2], *Y, data)
+            _decoder_rows(self.FT, topo.half_to_edge, self.gradient_stack(), np.array(Y), data)
             return data, X1, X2
         FT = self.FT
         fwd = self.forward()
@@ -456,67 +474,53 @@ def _unit_normal_sums(FT, n0, n1, n2, N2, acc):
 
 
 @compiled
-def _face_gradients(n0, n1, n2, N2, a0, a1, a2, b0, b1, b2, c0, c1, c2, G):
+def _face_gradients(N, N2, E, G):
     """:meth:`BaseGeometry.gradients` in one pass (the same products, bit for bit):
-    ``G[k, :, f] = N x e_k / |N|^2`` with ``e_0 = a``, ``e_1 = b``, ``e_2 = c``."""
+    ``G[k, :, f] = N x e_k / |N|^2`` from ``N`` (3, m) and ``E`` (3, 3, m) =
+    ``[k, axis, face]``."""
     for f in range(N2.shape[0]):
         inv = 1.0 / N2[f]
-        m0, m1, m2 = n0[f], n1[f], n2[f]
+        m0, m1, m2 = N[0, f], N[1, f], N[2, f]
         for k in range(3):
-            if k == 0:
-                x0, x1, x2 = a0[f], a1[f], a2[f]
-            elif k == 1:
-                x0, x1, x2 = b0[f], b1[f], b2[f]
-            else:
-                x0, x1, x2 = c0[f], c1[f], c2[f]
+            x0, x1, x2 = E[k, 0, f], E[k, 1, f], E[k, 2, f]
             G[k, 0, f] = (m1 * x2 - m2 * x1) * inv
             G[k, 1, f] = (m2 * x0 - m0 * x2) * inv
             G[k, 2, f] = (m0 * x1 - m1 * x0) * inv
 
 
 @compiled
-def _decode_loops(FT, half_to_edge, c, g00, g01, g02, g10, g11, g12, g20, g21, g22,
-                  valence, out):
-    """:meth:`BaseGeometry.decode` face by face (``out`` (n, 3) zeroed): corner
-    ``k`` adds ``s_k G_{k+1} - s_{k+2} G_{k+2}`` to its vertex, ``s_k`` the
-    coefficient of half-edge ``k`` signed by its direction; then the mean."""
+def _decode_loops(FT, half_to_edge, c, G, valence, out):
+    """:meth:`BaseGeometry.decode` face by face (``out`` (n, 3) zeroed; ``G`` the
+    (3, 3, m) gradients): corner ``k`` adds ``s_k G_{k+1} - s_{k+2} G_{k+2}``
+    to its vertex, ``s_k`` the coefficient of half-edge ``k`` signed by its
+    direction; then the mean."""
     m = FT.shape[1]
+    s = np.empty(3)
     for f in range(m):
-        s0 = c[half_to_edge[3 * f]]
-        s1 = c[half_to_edge[3 * f + 1]]
-        s2 = c[half_to_edge[3 * f + 2]]
-        v0, v1, v2 = FT[0, f], FT[1, f], FT[2, f]
-        if not v0 < v1:               # half-edges against their edge's direction
-            s0 = -s0
-        if not v1 < v2:
-            s1 = -s1
-        if not v2 < v0:
-            s2 = -s2
-        # corner 0: s0 G1 - s2 G2; corner 1: s1 G2 - s0 G0; corner 2: s2 G0 - s1 G1
-        out[v0, 0] += s0 * g10[f] - s2 * g20[f]
-        out[v0, 1] += s0 * g11[f] - s2 * g21[f]
-        out[v0, 2] += s0 * g12[f] - s2 * g22[f]
-        out[v1, 0] += s1 * g20[f] - s0 * g00[f]
-        out[v1, 1] += s1 * g21[f] - s0 * g01[f]
-        out[v1, 2] += s1 * g22[f] - s0 * g02[f]
-        out[v2, 0] += s2 * g00[f] - s1 * g10[f]
-        out[v2, 1] += s2 * g01[f] - s1 * g11[f]
-        out[v2, 2] += s2 * g02[f] - s1 * g12[f]
+        for k in range(3):
+            sk = c[half_to_edge[3 * f + k]]
+            # a half-edge against its edge's direction
+            s[k] = sk if FT[k, f] < FT[(k + 1) % 3, f] else -sk
+        for k in range(3):
+            k1, k2 = (k + 1) % 3, (k + 2) % 3
+            v = FT[k, f]
+            for d in range(3):
+                out[v, d] += s[k] * G[k1, d, f] - s[k2] * G[k2, d, f]
     for v in range(out.shape[0]):
         for d in range(3):
             out[v, d] /= valence[v]
 
 
 @compiled
-def _decoder_rows(FT, half_to_edge, g00, g01, g02, g10, g11, g12, g20, g21, g22,
-                  y0, y1, y2, y3, y4, y5, data):
+def _decoder_rows(FT, half_to_edge, G, Y, data):
     """:meth:`BaseGeometry.decoder_transpose`'s four numbers per edge, face by face.
 
     The same products and sums as the numpy path (bit for bit): half-edge
     ``k`` of face ``f`` adds ``G_{k+1} . Y(F_k)`` at its tail and
-    ``-G_k . Y(F_{k+1})`` at its head, to the parts of the edge's first or
-    second vertex by its direction; ``data`` (e, 4) starts at zero and the
-    half-edges of an edge arrive in ascending order, as the numpy path sums them.
+    ``-G_k . Y(F_{k+1})`` at its head (``G`` (3, 3, m), ``Y`` (6, n): the two
+    frames over the valence), to the parts of the edge's first or second
+    vertex by its direction; ``data`` (e, 4) starts at zero and the half-edges
+    of an edge arrive in ascending order, as the numpy path sums them.
     """
     m = FT.shape[1]
     for f in range(m):
@@ -525,31 +529,19 @@ def _decoder_rows(FT, half_to_edge, g00, g01, g02, g10, g11, g12, g20, g21, g22,
             tail = FT[k, f]
             head = FT[k1, f]
             row = half_to_edge[3 * f + k]
-            if k1 == 0:
-                a0, a1, a2 = g00[f], g01[f], g02[f]
-            elif k1 == 1:
-                a0, a1, a2 = g10[f], g11[f], g12[f]
-            else:
-                a0, a1, a2 = g20[f], g21[f], g22[f]
-            if k == 0:
-                b0, b1, b2 = g00[f], g01[f], g02[f]
-            elif k == 1:
-                b0, b1, b2 = g10[f], g11[f], g12[f]
-            else:
-                b0, b1, b2 = g20[f], g21[f], g22[f]
             # + G_{k+1} . Y(tail) and -(G_k . Y(head)), both frames j = 0, 1
-            t0 = a0 * y0[tail]
-            t0 += a1 * y1[tail]
-            t0 += a2 * y2[tail]
-            t1 = a0 * y3[tail]
-            t1 += a1 * y4[tail]
-            t1 += a2 * y5[tail]
-            h0 = b0 * y0[head]
-            h0 += b1 * y1[head]
-            h0 += b2 * y2[head]
-            h1 = b0 * y3[head]
-            h1 += b1 * y4[head]
-            h1 += b2 * y5[head]
+            t0 = G[k1, 0, f] * Y[0, tail]
+            t0 += G[k1, 1, f] * Y[1, tail]
+            t0 += G[k1, 2, f] * Y[2, tail]
+            t1 = G[k1, 0, f] * Y[3, tail]
+            t1 += G[k1, 1, f] * Y[4, tail]
+            t1 += G[k1, 2, f] * Y[5, tail]
+            h0 = G[k, 0, f] * Y[0, head]
+            h0 += G[k, 1, f] * Y[1, head]
+            h0 += G[k, 2, f] * Y[2, head]
+            h1 = G[k, 0, f] * Y[3, head]
+            h1 += G[k, 1, f] * Y[4, head]
+            h1 += G[k, 2, f] * Y[5, head]
             if tail < head:              # tail is the edge's first vertex
                 data[row, 0] += t0
                 data[row, 1] += t1
