@@ -12,9 +12,11 @@ Run:  python examples/polycube.py [OUT_DIR]     (default docs/gallery)
 
 from __future__ import annotations
 
+import copy
 import sys
 from pathlib import Path
 
+import numpy as np
 from PIL import Image
 
 from geotex.io.atomic import atomic_output
@@ -23,6 +25,22 @@ from geotex.shells import load_named
 from geotex.shells.picture import shell_panels
 
 SHELLS = {"spot": "y", "bob": "z", "blub": "y", "torus": "z"}   # name -> up axis
+
+
+def turned_z_up(panels):
+    """y-up panels turned z-up with the model's face towards the camera (as geotex demo turns it)."""
+    def turn(P):
+        return np.asarray(P)[:, [0, 2, 1]] * np.array([-1.0, 1.0, 1.0])
+
+    out = []
+    for p in panels:
+        q = copy.copy(p)
+        q.V = turn(p.V)
+        q.markers = {k: (turn(P), c) for k, (P, c) in p.markers.items()}
+        if p.arrows is not None:
+            q.arrows = (turn(p.arrows[0]), turn(p.arrows[1]))
+        out.append(q)
+    return out
 
 
 def main(out: Path) -> None:
@@ -36,7 +54,10 @@ def main(out: Path) -> None:
               f"{shell.max_height:.3g}, distortion area {d['area_mean']:.3f} "
               f"angle {d['angle_mean']:.3f}, base within 1/4 tile {c['within_quarter_tile']:.3f}")
         p = out / f".polycube_{name}.png"
-        render_panels(shell_panels(shell), p, size=(560, 520), up=up)
+        panels = shell_panels(shell)
+        if up == "y":
+            panels, up = turned_z_up(panels), "z"
+        render_panels(panels, p, size=(560, 520), up=up)
         with Image.open(p) as im:
             rows.append(im.convert("RGB"))
         p.unlink()
