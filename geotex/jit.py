@@ -36,7 +36,26 @@ __all__ = ["compiled", "helper", "JIT_MIN_SIZE"]
 #: cached code (~0.4 s in a fresh process) costs more than the loop saves.
 #: The environment variable ``GEOTEX_JIT_MIN_SIZE`` sets it (0: always compiled;
 #: the tests run both paths this way).
-JIT_MIN_SIZE = int(os.environ.get("GEOTEX_JIT_MIN_SIZE", "300000"))
+def _min_size(default: int = 300_000) -> int:
+    """``GEOTEX_JIT_MIN_SIZE`` as a non-negative integer; the default (with a
+    one-line warning) for anything else, so a typo cannot stop every command."""
+    text = os.environ.get("GEOTEX_JIT_MIN_SIZE")
+    if text is None:
+        return default
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if value < 0:
+        import warnings
+
+        warnings.warn(f"GEOTEX_JIT_MIN_SIZE={text!r} is not a non-negative integer; "
+                      f"using {default}", stacklevel=2)
+        return default
+    return value
+
+
+JIT_MIN_SIZE = _min_size()
 
 _LOCK = threading.Lock()
 

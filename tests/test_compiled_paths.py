@@ -231,3 +231,15 @@ def test_needle_heights_equal_numpy_path(monkeypatch):
     monkeypatch.setattr(needles, "JIT_MIN_SIZE", 10 ** 12)
     slow = needles._heights(V, F)
     assert np.array_equal(fast, slow) and fast[-2] == 0.0
+
+
+def test_a_bad_threshold_in_the_environment_falls_back_with_a_warning():
+    import os
+    import subprocess
+    import sys
+
+    env = dict(os.environ, GEOTEX_JIT_MIN_SIZE="lots")
+    proc = subprocess.run([sys.executable, "-c", "import geotex.jit as j; print(j.JIT_MIN_SIZE)"],
+                          env=env, capture_output=True, text=True)
+    assert proc.returncode == 0 and proc.stdout.strip() == "300000"
+    assert "GEOTEX_JIT_MIN_SIZE='lots'" in proc.stderr and "Traceback" not in proc.stderr
