@@ -196,7 +196,8 @@ def test_suites_pass_on_the_compiled_loops(tmp_path):
     proc = subprocess.run(
         [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "--no-header",
          "tests/test_intersections.py", "tests/test_invariants.py", "tests/test_heighttilt.py",
-         "tests/test_topology.py", "tests/test_io_formats.py", "tests/test_needles.py"],
+         "tests/test_topology.py", "tests/test_io_formats.py", "tests/test_needles.py",
+         "tests/test_check.py"],
         cwd=root, env=env, capture_output=True, text=True)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-2000:]
 
@@ -243,3 +244,72 @@ def test_a_bad_threshold_in_the_environment_falls_back_with_a_warning():
                           env=env, capture_output=True, text=True)
     assert proc.returncode == 0 and proc.stdout.strip() == "300000"
     assert "GEOTEX_JIT_MIN_SIZE='lots'" in proc.stderr and "Traceback" not in proc.stderr
+
+
+def _both(monkeypatch, module, fn):
+    monkeypatch.setattr(module, "JIT_MIN_SIZE", 0)
+    fast = fn()
+    monkeypatch.setattr(module, "JIT_MIN_SIZE", 10 ** 12)
+    return fast, fn()
+
+
+def test_degenerate_faces_equal_numpy_path(monkeypatch):
+    import geotex.mesh.geometry as geometry
+
+    V, F = torus(1.0, 0.3, n_major=30, n_minor=11)
+    V = np.vstack([V, [[0.5, 0.5, 0.5]], [[1.5, 1.5, 1.5]], [[1.0, 1.0, 1.0 + 1e-14]]])
+    n = len(V)
+    F = np.vstack([F, [[0, 0, 1]], [[n - 3, n - 2, n - 1]], [[2, 3, 2]]])   # repeats, a sliver
+    fast, slow = _both(monkeypatch, geometry, lambda: geometry.degenerate_faces(V, F))
+    assert fast.dtype == slow.dtype == np.int64
+    assert np.array_equal(fast, slow) and set(fast.tolist()) >= {len(F) - 3, len(F) - 1}
+    assert len(F) - 2 in fast.tolist()                                   # collinear
+
+
+def test_components_and_volumes_equal_numpy_path(monkeypatch):
+    import geotex.mesh.geometry as geometry
+    from geotex.mesh.primitives import icosphere
+
+    V1, F1 = torus(1.0, 0.3, n_major=20, n_minor=9)
+    V2, F2 = icosphere(2)
+    V2 = V2 * 0.2
+    rng = np.random.default_rng(5)
+    # interleave the two bodies' faces and leave an unused vertex in between
+    V = np.vstack([V1, [[9.0, 9.0, 9.0]], V2])
+    F = np.vstack([F1, F2 + len(V1) + 1])[rng.permutation(len(F1) + len(F2))]
+    fast, slow = _both(monkeypatch, topology, lambda: topology.vertex_components(F, len(V)))
+    assert fast[0] == slow[0] == 2 and np.array_equal(fast[1], slow[1])
+    assert fast[1][len(V1)] == -1
+    labels = fast[1][F[:, 0]]
+    vf, vs = _both(monkeypatch, geometry, lambda: geometry.component_volumes(V, F, labels, 2))
+    assert np.allclose(vf, vs, rtol=1e-12, atol=0) and (vf > 0).all()
+
+
+def test_radix_grouping_by_cell_keeps_input_order_within_a_cell():
+    import geotex.check.intersections as si
+
+    rng = np.random.default_rng(2)
+    shift = 20
+    keys = (rng.integers(0, 5000, 20000) << shift) | rng.integers(0, 1 << shift, 20000)
+    out = si._sorted_by_high_bits(keys, shift, int(keys.max() >> shift).bit_length())
+    order = np.argsort(keys >> shift, kind="stable")
+    assert np.array_equal(out, keys[order])
+
+
+def test_duplicate_faces_found_by_topology_as_by_sorting(monkeypatch):
+    import geotex.check.intersections as si
+    from geotex.mesh.primitives import icosphere
+
+    V, F = icosphere(2)
+    # a detached "pillow" (a face and its reverse) and a crossing face
+    V = np.vstack([V, [[0, 0, 0], [0.5, 0, 0], [0, 0.5, 0]],
+                   [[0.1, 0.1, -0.5], [0.1, 0.1, 0.5], [0.3, 0.05, 0.0]]])
+    n = len(V)
+    F = np.vstack([F, [[n - 6, n - 5, n - 4]], [[n - 6, n - 4, n - 5]], [[n - 3, n - 2, n - 1]]])
+    fast, slow = _both(monkeypatch, si, lambda: si.self_intersecting_pairs(V, F))
+    m = len(F)
+    assert np.array_equal(fast, slow)
+    assert fast.tolist() == [[m - 3, m - 1], [m - 2, m - 1]]     # both copies cross it
+    plain = F[:-3]
+    fast, slow = _both(monkeypatch, si, lambda: si.self_intersecting_pairs(V, plain))
+    assert np.array_equal(fast, slow)

@@ -93,7 +93,7 @@ _FAN_SAFETY = 8.0
 _KEY_BITS = 62
 
 
-def self_intersecting_pairs(V, F, *, max_pairs=None) -> np.ndarray:
+def self_intersecting_pairs(V, F, *, max_pairs=None, topology=None) -> np.ndarray:
     """Return every pair of faces of a triangle mesh whose triangles intersect.
 
     Parameters
@@ -107,6 +107,9 @@ def self_intersecting_pairs(V, F, *, max_pairs=None) -> np.ndarray:
         result then holds at most ``max_pairs`` pairs, still sorted, and is a
         subset of the full answer (not necessarily its first rows); the same
         inputs always give the same subset.  ``None`` (default) finds all.
+    topology : geotex.mesh.topology.EdgeTopology, optional
+        ``edge_topology(F, len(V))`` when the caller has it already (large
+        meshes use it; it is computed otherwise).
 
     Returns
     -------
@@ -184,18 +187,22 @@ def self_intersecting_pairs(V, F, *, max_pairs=None) -> np.ndarray:
     empty = np.zeros((0, 2), dtype=np.int64)
     if m < 2 or max_pairs == 0:
         return empty
-    classes = _duplicate_classes(F)
+    topo = None
+    if F.size >= JIT_MIN_SIZE:
+        topo = edge_topology(F, V.shape[0]) if topology is None else topology
+    classes = _duplicate_classes(F, topo)
     if classes is not None:                  # duplicate faces: solve on one per class
         first, cls = classes
         pairs = _distinct_pairs(V, F[first], max_pairs)
         pairs = _expanded(first[pairs], cls, max_pairs)
     else:
-        pairs = _distinct_pairs(V, F, max_pairs)
+        pairs = _distinct_pairs(V, F, max_pairs, topo=topo)
     return pairs
 
 
-def _distinct_pairs(V, F, max_pairs):
-    """:func:`self_intersecting_pairs` for faces with distinct vertex sets."""
+def _distinct_pairs(V, F, max_pairs, *, topo=None):
+    """:func:`self_intersecting_pairs` for faces with distinct vertex sets
+    (``topo``: their edge topology, when known)."""
     m = F.shape[0]
     empty = np.zeros((0, 2), dtype=np.int64)
     workers = _workers()
@@ -204,7 +211,7 @@ def _distinct_pairs(V, F, max_pairs):
         faces = _FaceData(_normalized(V, F), F, mapper=pool.map)
         if faces.active.size < 2:
             return empty
-        faces.separated = _separated_fans(faces, mapper=pool.map)
+        faces.separated = _separated_fans(faces, mapper=pool.map, topo=topo)
         faces.mask_unseparated()
         found = []
         count = 0
@@ -251,8 +258,12 @@ def _in_order(pool, tasks, *, window: int):
 # duplicate faces
 
 
-def _duplicate_classes(F: np.ndarray):
+def _duplicate_classes(F: np.ndarray, topo=None):
     """Group the faces by vertex set; ``None`` when all sets differ.
+
+    With the edge topology ``topo`` and no edge of more than two faces nor a
+    repeated index, two faces with one vertex set are each other's
+    neighbours across all three edges: that is looked up instead of sorting.
 
     Returns
     -------
@@ -261,6 +272,14 @@ def _duplicate_classes(F: np.ndarray):
     cls : (m,) int64
         Class of every face (a row of ``first``).
     """
+    if (topo is not None and not (topo.face_count > 2).any()
+            and not ((F[:, 0] == F[:, 1]) | (F[:, 1] == F[:, 2]) | (F[:, 2] == F[:, 0])).any()):
+        ef = topo.edge_faces()[topo.half_to_edge]            # (3m, 2)
+        own = np.repeat(np.arange(F.shape[0]), 3)
+        other = np.where(ef[:, 0] == own, ef[:, 1], ef[:, 0]).reshape(-1, 3)
+        if not ((other[:, 0] >= 0) & (other[:, 0] == other[:, 1])
+                & (other[:, 1] == other[:, 2])).any():
+            return None
     lo = F.min(axis=1)
     hi = F.max(axis=1)
     mid = F.sum(axis=1) - lo - hi
@@ -368,6 +387,10 @@ class _FaceData:
         tolerance, and widened to cover the float32 rounding.
     active : (a,) int64
         Non-degenerate faces.
+    masked_columns : list of 3 (m,) int arrays, or None
+        Set by :meth:`mask_unseparated`.
+    masked_rows : (m, 3) int array
+        The same as one array (``(0, 3)`` until set).
     """
 
     def __init__(self, Vn: np.ndarray, F: np.ndarray, *, mapper=map):
@@ -387,6 +410,7 @@ class _FaceData:
         dtype = np.int32 if Vn.shape[0] < 2 ** 31 else np.int64
         self.corner_columns = [F[:, k].astype(dtype) for k in range(3)]
         self.masked_columns = None
+        self.masked_rows = np.empty((0, 3), dtype=np.int32)
 
     def mask_unseparated(self):
         """Set ``masked_columns``: vertex ids, those of unseparated fans negative.
@@ -402,6 +426,7 @@ class _FaceData:
             own = -(3 * np.arange(m, dtype=np.int64) + k) - 1
             self.masked_columns.append(
                 np.where(self.separated[col], col, own).astype(dtype))
+        self.masked_rows = np.stack(self.masked_columns, axis=1)
 
     def _fill(self, bad, s, e):
         F = self.F[s:e]
@@ -451,7 +476,7 @@ class _FaceData:
 # vertex fans that cannot intersect
 
 
-def _separated_fans(faces: _FaceData, *, mapper=map) -> np.ndarray:
+def _separated_fans(faces: _FaceData, *, mapper=map, topo=None) -> np.ndarray:
     """Vertices whose faces provably meet only along their shared edges.
 
     Returns a boolean array over the vertices.  A vertex ``p`` qualifies
@@ -494,7 +519,7 @@ def _separated_fans(faces: _FaceData, *, mapper=map) -> np.ndarray:
     good[F[inactive].ravel()] = False
     # every edge used exactly once in each direction
     if F.size >= JIT_MIN_SIZE:
-        topo = edge_topology(F, n)
+        topo = edge_topology(F, n) if topo is None else topo
         bad = topo.edges[(topo.face_count != 2) | (topo.forward_count != 1)]
         good[bad.ravel()] = False
         del topo, bad
@@ -781,7 +806,10 @@ def _level_tasks(faces, box, cell, cur, low):
             pos = np.minimum(np.searchsorted(cells, key), cells.size - 1)
             packed = np.concatenate([packed, lpacked[cells[pos] == key]])
             del lpacked, key, pos, cells
-        packed.sort()                               # cell, then current level first
+        if packed.size >= JIT_MIN_SIZE:             # by cell, then current level first
+            packed = _sorted_by_high_bits(packed, shift, int(packed.max() >> shift).bit_length())
+        else:
+            packed.sort()
         first = (packed & 7).astype(np.uint8)
         rows = ((packed >> 3) & ((1 << row_bits) - 1)).astype(index)
         is_low = ((packed >> shift) & 1).astype(bool)
@@ -813,14 +841,20 @@ def _level_tasks(faces, box, cell, cur, low):
     counts -= np.arange(1, rows.size + 1, dtype=index)
     counts[is_low] = 0                              # lower-level entries start no pair
     face = act.astype(index)[rows]
-    # the entries' boxes in entry order (one array per bound): the pairs of
-    # a cell read nearby memory
-    ebox = [np.take(col, rows) for col in box]
-    if faces.masked_columns is not None:
-        ebox += [np.take(col, face) for col in faces.masked_columns]
-    del rows, is_low
+    del is_low
     cum = np.cumsum(counts, dtype=np.int64)
     total = int(cum[-1])
+    if total >= JIT_MIN_SIZE:
+        # the compiled loops read each face's box and masked ids by face row
+        # (faces of one cell are mostly neighbours in memory): no gathers
+        ebox = None
+    else:
+        # the entries' boxes in entry order (one array per bound): the pairs
+        # of a cell read nearby memory
+        ebox = [np.take(col, rows) for col in box]
+        if faces.masked_columns is not None:
+            ebox += [np.take(col, face) for col in faces.masked_columns]
+    del rows
     for s in range(0, total, _PAIR_CHUNK):
         yield partial(_pair_task, faces, (cum, counts, first, face, ebox),
                       s, min(s + _PAIR_CHUNK, total))
@@ -829,11 +863,10 @@ def _level_tasks(faces, box, cell, cur, low):
 def _pair_task(faces, level, s, e):
     """Generate candidate pairs ``s .. e - 1`` of a level, filter, test them."""
     cum, counts, first, face, ebox = level
-    if cum[-1] >= JIT_MIN_SIZE:
-        masked = ebox[6:] if len(ebox) > 6 else [np.empty(0, dtype=face.dtype)] * 3
+    if ebox is None:
         out = np.empty(e - s, dtype=np.int64)
-        found = _pair_loops(cum, counts, first, face, *ebox[:6], *masked, s, e, faces.F,
-                            faces.V, faces.plane, faces.tol, faces.E, out)
+        found = _pair_loops(cum, counts, first, face, faces.box32, faces.masked_rows, s, e,
+                            faces.F, faces.V, faces.plane, faces.tol, faces.E, out)
         return out[:found]
     p0 = int(np.searchsorted(cum, s, side="right"))
     p1 = int(np.searchsorted(cum, e - 1, side="right")) + 1
@@ -1074,13 +1107,14 @@ def _endpoints_inside(PX, dX, shX, EY, tol):
 
 
 @compiled
-def _pair_loops(cum, counts, first, face, b0, b1, b2, b3, b4, b5, m0, m1, m2, s, e,
-                F, V, plane, tol, E, out):
+def _pair_loops(cum, counts, first, face, box, mrows, s, e, F, V, plane, tol, E, out):
     """:func:`_pair_task` as loops: the same pairs, filters and narrow phase
     (:func:`_intersecting`, case by case), the hits written to ``out`` as keys
-    in the same order; returns their number."""
+    in the same order; returns their number.  ``box`` is
+    :attr:`_FaceData.box32` and ``mrows`` :attr:`_FaceData.masked_rows` (no
+    rows: no mask), both read by face."""
     m = F.shape[0]
-    masked = m0.shape[0] > 0
+    masked = mrows.shape[0] > 0
     found = 0
     p = np.searchsorted(cum, s, side="right")
     while p < cum.shape[0]:
@@ -1090,21 +1124,23 @@ def _pair_loops(cum, counts, first, face, b0, b1, b2, b3, b4, b5, m0, m1, m2, s,
         g0 = max(base, s)
         g1 = min(cum[p], e)
         fp = first[p]
+        fa = face[p]
+        a0, a1, a2 = box[fa, 0], box[fa, 1], box[fa, 2]
+        a3, a4, a5 = box[fa, 3], box[fa, 4], box[fa, 5]
         for g in range(g0, g1):
             q = p + 1 + (g - base)
             if (fp | first[q]) != 7:
                 continue
-            if (b0[p] > b3[q] or b0[q] > b3[p] or b1[p] > b4[q] or b1[q] > b4[p]
-                    or b2[p] > b5[q] or b2[q] > b5[p]):
+            fb = face[q]
+            if (a0 > box[fb, 3] or box[fb, 0] > a3 or a1 > box[fb, 4] or box[fb, 1] > a4
+                    or a2 > box[fb, 5] or box[fb, 2] > a5):
                 continue
-            if masked:                           # (entry order, as the boxes)
-                x0, x1, x2 = m0[p], m1[p], m2[p]
-                y0, y1, y2 = m0[q], m1[q], m2[q]
+            if masked:
+                x0, x1, x2 = mrows[fa, 0], mrows[fa, 1], mrows[fa, 2]
+                y0, y1, y2 = mrows[fb, 0], mrows[fb, 1], mrows[fb, 2]
                 if (x0 == y0 or x0 == y1 or x0 == y2 or x1 == y0 or x1 == y1 or x1 == y2
                         or x2 == y0 or x2 == y1 or x2 == y2):
                     continue
-            fa = face[p]
-            fb = face[q]
             i = min(fa, fb)
             j = max(fa, fb)
             if _pair_hits(i, j, F, V, plane, tol, E):
@@ -1112,6 +1148,38 @@ def _pair_loops(cum, counts, first, face, b0, b1, b2, b3, b4, b5, m0, m1, m2, s,
                 found += 1
         p += 1
     return found
+
+
+@compiled
+def _sorted_by_high_bits(keys, shift, bits):
+    """Keys stably sorted by ``keys >> shift`` (``bits`` bits; keys >= 0).
+
+    An LSD radix sort (11-bit digits): the entries of a cell keep their
+    input order, where a full sort would order them by the low bits too; the
+    pairs found do not depend on the order inside a cell.
+    """
+    n = keys.shape[0]
+    src = keys.copy()
+    dst = np.empty_like(keys)
+    count = np.empty(2048, dtype=np.int64)
+    done = 0
+    while done < bits:
+        count[:] = 0
+        sh = shift + done
+        for k in range(n):
+            count[(src[k] >> sh) & 2047] += 1
+        total = 0
+        for d in range(2048):
+            c = count[d]
+            count[d] = total
+            total += c
+        for k in range(n):
+            d = (src[k] >> sh) & 2047
+            dst[count[d]] = src[k]
+            count[d] += 1
+        src, dst = dst, src
+        done += 11
+    return src
 
 
 @compiled

@@ -256,7 +256,8 @@ def check_mesh(V, F, *, self_intersections: bool = True, manifold3d: bool = True
     pairs = None
     report(progress, "self-intersections")
     if self_intersections and m:
-        pairs = self_intersecting_pairs(V, position_welded_faces(V, F) if dup_positions else F)
+        pairs = (self_intersecting_pairs(V, position_welded_faces(V, F)) if dup_positions
+                 else self_intersecting_pairs(V, F, topology=topo))
     elif self_intersections:
         pairs = np.zeros((0, 2), dtype=np.int64)
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from geotex.jit import JIT_MIN_SIZE, compiled
 from geotex.mesh.topology import edge_topology
 
 __all__ = [
@@ -72,8 +73,23 @@ def component_volumes(V: np.ndarray, F: np.ndarray, labels: np.ndarray,
     if F.shape[0] == 0:
         return np.zeros(count)
     C = _centered(V)
+    if F.size >= JIT_MIN_SIZE:
+        out = np.zeros(count)
+        _component_volume_loops(C, F, labels, out)
+        return out
     per_face = np.einsum("ij,ij->i", C[F[:, 0]], np.cross(C[F[:, 1]], C[F[:, 2]])) / 6.0
     return np.bincount(labels, weights=per_face, minlength=count)
+
+
+@compiled
+def _component_volume_loops(C, F, labels, out):
+    """:func:`component_volumes` as one loop over the faces (sums in face order)."""
+    for f in range(F.shape[0]):
+        a, b, c = F[f, 0], F[f, 1], F[f, 2]
+        bx, by, bz = C[b, 0], C[b, 1], C[b, 2]
+        cx, cy, cz = C[c, 0], C[c, 1], C[c, 2]
+        out[labels[f]] += (C[a, 0] * (by * cz - bz * cy) + C[a, 1] * (bz * cx - bx * cz)
+                           + C[a, 2] * (bx * cy - by * cx)) / 6.0
 
 
 def bounding_box(V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -96,6 +112,10 @@ def degenerate_faces(V: np.ndarray, F: np.ndarray, *, rel_tol: float = 1e-12) ->
     """
     if F.shape[0] == 0:
         return np.zeros(0, dtype=np.int64)
+    if F.size >= JIT_MIN_SIZE:
+        flag = np.empty(F.shape[0], dtype=np.bool_)
+        _degenerate_loops(np.ascontiguousarray(V, dtype=np.float64), F, float(rel_tol), flag)
+        return np.flatnonzero(flag)
     repeated = (F[:, 0] == F[:, 1]) | (F[:, 1] == F[:, 2]) | (F[:, 2] == F[:, 0])
     e0 = V[F[:, 1]] - V[F[:, 0]]
     e1 = V[F[:, 2]] - V[F[:, 1]]
@@ -105,6 +125,27 @@ def degenerate_faces(V: np.ndarray, F: np.ndarray, *, rel_tol: float = 1e-12) ->
         cross = np.linalg.norm(np.cross(e0, -e2), axis=1)
         flat = ~(cross > rel_tol * lmax2)
     return np.flatnonzero(repeated | flat)
+
+
+@compiled
+def _degenerate_loops(V, F, rel_tol, flag):
+    """:func:`degenerate_faces` face by face (the same operations in the same order)."""
+    for f in range(F.shape[0]):
+        a, b, c = F[f, 0], F[f, 1], F[f, 2]
+        if a == b or b == c or c == a:
+            flag[f] = True
+            continue
+        e0x, e0y, e0z = V[b, 0] - V[a, 0], V[b, 1] - V[a, 1], V[b, 2] - V[a, 2]
+        e1x, e1y, e1z = V[c, 0] - V[b, 0], V[c, 1] - V[b, 1], V[c, 2] - V[b, 2]
+        e2x, e2y, e2z = V[a, 0] - V[c, 0], V[a, 1] - V[c, 1], V[a, 2] - V[c, 2]
+        lmax2 = max(max(e0x * e0x + e0y * e0y + e0z * e0z, e1x * e1x + e1y * e1y + e1z * e1z),
+                    e2x * e2x + e2y * e2y + e2z * e2z)
+        nx, ny, nz = -e2x, -e2y, -e2z
+        cx = e0y * nz - e0z * ny
+        cy = e0z * nx - e0x * nz
+        cz = e0x * ny - e0y * nx
+        cross = np.sqrt(cx * cx + cy * cy + cz * cz)
+        flag[f] = not (cross > rel_tol * lmax2)
 
 
 def mean_edge_length(V: np.ndarray, F: np.ndarray, *, per_face: bool = False) -> float:

@@ -135,7 +135,7 @@ def edge_topology(F: np.ndarray, n_vertices: int | None = None) -> EdgeTopology:
     """
     F = np.asarray(F, dtype=np.int64)
     n = int(n_vertices if n_vertices is not None else (F.max() + 1 if F.size else 0))
-    if F.size >= JIT_MIN_SIZE and F.min() >= 0:
+    if F.size and F.size >= JIT_MIN_SIZE and F.min() >= 0:
         n_loop = int(F.max()) + 1                # the loops index the referenced vertices
         h = F.size
         start = np.zeros(n_loop + 1, np.int64)
@@ -408,6 +408,9 @@ def vertex_components(F: np.ndarray, n_vertices: int) -> tuple[int, np.ndarray]:
     labels = np.full(n_vertices, -1, dtype=np.int64)
     if F.shape[0] == 0:
         return 0, labels
+    if F.size >= JIT_MIN_SIZE:
+        count = _component_loops(np.ascontiguousarray(F), labels)
+        return int(count), labels
     rows = np.concatenate([F[:, 0], F[:, 1]])
     cols = np.concatenate([F[:, 1], F[:, 2]])
     adj = sp.coo_matrix((np.ones(rows.size, dtype=np.int8), (rows, cols)),
@@ -422,6 +425,45 @@ def vertex_components(F: np.ndarray, n_vertices: int) -> tuple[int, np.ndarray]:
     remap[ordered] = np.arange(ordered.size)
     labels[used] = remap[raw[used]]
     return int(ordered.size), labels
+
+
+@compiled
+def _component_loops(F, labels):
+    """:func:`vertex_components` by union-find: ``labels`` (all -1 on entry)
+    filled in order of first appearance in ``F``; returns the count."""
+    n = labels.shape[0]
+    parent = np.arange(n)
+
+    def find(v):
+        r = v
+        while parent[r] != r:
+            r = parent[r]
+        while parent[v] != r:                       # path compression
+            nxt = parent[v]
+            parent[v] = r
+            v = nxt
+        return r
+
+    for f in range(F.shape[0]):
+        for k in range(2):
+            a = find(F[f, k])
+            b = find(F[f, k + 1])
+            if a != b:
+                if a < b:
+                    parent[b] = a
+                else:
+                    parent[a] = b
+    root_label = np.full(n, -1, dtype=np.int64)
+    count = 0
+    for f in range(F.shape[0]):
+        for k in range(3):
+            v = F[f, k]
+            r = find(v)
+            if root_label[r] < 0:
+                root_label[r] = count
+                count += 1
+            labels[v] = root_label[r]
+    return count
 
 
 def face_components(F: np.ndarray, n_vertices: int) -> tuple[int, np.ndarray]:
