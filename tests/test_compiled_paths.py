@@ -313,3 +313,14 @@ def test_duplicate_faces_found_by_topology_as_by_sorting(monkeypatch):
     plain = F[:-3]
     fast, slow = _both(monkeypatch, si, lambda: si.self_intersecting_pairs(V, plain))
     assert np.array_equal(fast, slow)
+
+
+def test_first_use_order_equals_numpy_path(monkeypatch):
+    rng = np.random.default_rng(4)
+    F = rng.integers(0, 300, size=(400, 3))
+    F[F == 7] = 8                                    # vertex 7 unused
+    for start in (0, 5, 300):
+        fast, slow = _both(monkeypatch, topology,
+                           lambda: topology.first_use_order(F, 310, start=start))
+        assert np.array_equal(fast, slow) and np.array_equal(np.sort(fast), np.arange(310))
+        assert np.array_equal(fast[:start], np.arange(start))

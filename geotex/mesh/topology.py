@@ -276,6 +276,58 @@ def _runs(ks: np.ndarray):
     return new, first, run, counts
 
 
+def first_use_order(F: np.ndarray, n_vertices: int, *, start: int = 0) -> np.ndarray:
+    """Vertex numbering by first use in ``F``, from vertex ``start`` on.
+
+    Parameters
+    ----------
+    F : numpy.ndarray, (m, 3) int64
+    n_vertices : int
+    start : int, optional
+        Vertices below ``start`` keep their numbers.
+
+    Returns
+    -------
+    numpy.ndarray, (n_vertices,) int64
+        ``order``: new vertex ``i`` is old vertex ``order[i]`` (vertices from
+        ``start`` on in order of first appearance in ``F``, then the unused
+        ones in index order).
+    """
+    F = np.asarray(F, dtype=np.int64)
+    if F.size >= JIT_MIN_SIZE:
+        return _first_use_loops(np.ascontiguousarray(F).ravel(), int(n_vertices), int(start))
+    flat = F.ravel()
+    flat = flat[flat >= start]
+    _, idx = np.unique(flat, return_index=True)
+    used = flat[np.sort(idx)]
+    rest = np.ones(n_vertices, dtype=bool)
+    rest[:start] = False
+    rest[used] = False
+    return np.concatenate([np.arange(start, dtype=np.int64), used, np.flatnonzero(rest)])
+
+
+@compiled
+def _first_use_loops(flat, n, start):
+    """:func:`first_use_order` as one pass over the corners."""
+    order = np.empty(n, dtype=np.int64)
+    seen = np.zeros(n, dtype=np.bool_)
+    for v in range(start):
+        order[v] = v
+        seen[v] = True
+    k = start
+    for c in range(flat.shape[0]):
+        v = flat[c]
+        if not seen[v]:
+            seen[v] = True
+            order[k] = v
+            k += 1
+    for v in range(start, n):
+        if not seen[v]:
+            order[k] = v
+            k += 1
+    return order
+
+
 def compacted(V: np.ndarray, F: np.ndarray, *, return_index: bool = False):
     """Drop unreferenced vertices: the submesh of the faces ``F``.
 

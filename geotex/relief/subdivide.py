@@ -22,6 +22,7 @@ import numpy as np
 
 from geotex.errors import InputError
 from geotex.mesh.arrays import as_mesh_arrays
+from geotex.mesh.topology import first_use_order
 
 __all__ = ["RefinedMesh", "refined_by_edge_splits", "MAX_ROUNDS"]
 
@@ -36,8 +37,10 @@ class RefinedMesh:
     Attributes
     ----------
     vertices : numpy.ndarray, (p, 3) float64
-        The base's vertices first (same indices), then the midpoints.
+        The base's vertices first (same indices), then the midpoints in
+        order of first use in ``faces``.
     faces : numpy.ndarray, (k, 3) int64
+        Grouped by base face (ascending ``parent``).
     parent : numpy.ndarray, (k,) int64
         Base face each refined face lies in.
     corner_bary : numpy.ndarray or None, (k, 3, 3) float32
@@ -198,4 +201,14 @@ def refined_by_edge_splits(V, F, max_edge: float, *, max_faces: int = 8_000_000,
     Fout = np.ascontiguousarray(np.concatenate(done_F), dtype=np.int64)
     Pout = np.concatenate(done_P)
     Bout = np.concatenate(done_B) if B is not None else None
-    return RefinedMesh(np.ascontiguousarray(Vall), Fout, Pout, Bout, rounds)
+    # the rounds leave faces grouped by round and split kind, and midpoints by
+    # round: put each base face's children together and number the midpoints
+    # by first use, so later passes over the mesh read nearby memory
+    group = np.argsort(Pout, kind="stable")
+    Fout, Pout = Fout[group], Pout[group]
+    Bout = Bout[group] if Bout is not None else None
+    order = first_use_order(Fout, Vall.shape[0], start=V.shape[0])
+    new_index = np.empty_like(order)
+    new_index[order] = np.arange(order.size)
+    Fout = new_index[Fout]
+    return RefinedMesh(np.ascontiguousarray(Vall[order]), Fout, Pout, Bout, rounds)
