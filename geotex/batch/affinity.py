@@ -23,6 +23,7 @@ import os
 from typing import Sequence
 
 from geotex.errors import InputError
+from geotex.malloc import keep_freed_memory
 
 __all__ = ["PLAN_VARIABLE", "available_cpus", "split_cpus", "encode_plan", "decode_plan",
            "pin_process", "dask_setup"]
@@ -137,12 +138,15 @@ def pin_process(cpus: Sequence[int]) -> None:
 def dask_setup(worker) -> None:
     """Dask worker preload hook: pin this worker process to its share of the CPUs.
 
+    It also sets glibc's allocation thresholds (:func:`geotex.malloc.keep_freed_memory`).
+
     Reads :data:`PLAN_VARIABLE` (set by :func:`geotex.batch.run.local_cluster`)
     and the worker's name, which a ``LocalCluster`` sets to its index
     ``0 .. n-1``; does nothing without a plan, for a worker whose name is not
     an index of the plan, or where affinity is not supported; logs a warning
     (and leaves the worker unpinned) when the kernel refuses the mask.
     """
+    keep_freed_memory()                 # as the command line does (geotex.malloc)
     text = os.environ.get(PLAN_VARIABLE)
     if not text or available_cpus() is None:
         return

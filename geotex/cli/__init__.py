@@ -26,6 +26,7 @@ from geotex.cli import (batch, check, convert, demo, displace, exemplar, field, 
                         tile_image, tiles, view)
 from geotex.cli._common import EXIT_INTERNAL, EXIT_USAGE, Parser, fail
 from geotex.errors import GeotexError
+from geotex.malloc import keep_freed_memory
 
 COMMANDS = (demo, mapping, check, repair, render, convert, field, pgp, tile_image, heighttilt,
             exemplar, quilt, tiles, shell, lapped, displace, hpm, material, view, batch)
@@ -44,6 +45,7 @@ def build_parser() -> Parser:
 
 def main(argv=None) -> int:
     """Run the command line; returns the exit status (also used by the script)."""
+    keep_freed_memory()
     try:
         args = build_parser().parse_args(argv)
         if not getattr(args, "run", None):

@@ -135,7 +135,11 @@ def _vertex_normals(V, F, R, crease_angle: float) -> np.ndarray:
     CN = np.asarray(igl.per_corner_normals(V, F, float(crease_angle)), dtype=np.float64)
     CN = CN.reshape(-1, 3, 3)                            # (m, corner, xyz)
     B = R.corner_bary                                    # (k, corner, base corner)
-    Nc = np.einsum("kcj,kjx->kcx", B, CN[R.parent], optimize=True)
+    P = CN[R.parent]                                     # (k, base corner, xyz)
+    Nc = B[:, :, 0:1] * P[:, None, 0, :]                 # (k, corner, xyz)
+    Nc += B[:, :, 1:2] * P[:, None, 1, :]
+    Nc += B[:, :, 2:3] * P[:, None, 2, :]
+    del P
     n = R.vertices.shape[0]
     idx = R.faces.ravel()
     N = np.empty((n, 3))
