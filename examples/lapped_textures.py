@@ -9,8 +9,9 @@ Pictures (written to OUT_DIR):
   pasted along it, and the same texture pasted isotropically (each paste
   with a random orientation propagated over its patch).
 * ``lapped_textures_gallery.png`` - every image in ``../shared/data/images``
-  (see its MANIFEST) on Spot or Bob, and two of geotex's procedural height
-  maps (grey images) to fill the grid; structured textures (bricks, weave,
+  (see its MANIFEST), or in a clean clone the four bundled sample images, on
+  Spot or Bob, and when needed geotex's procedural height maps (grey images)
+  to fill the grid; structured textures (bricks, weave,
   tiles, net, hexagons) follow the field, stochastic ones are pasted
   isotropically. Each panel shows its input image in the lower right corner.
 * ``lapped_textures_relief.png`` - the composited texture used as a height
@@ -19,8 +20,10 @@ Pictures (written to OUT_DIR):
 
 Every textured surface is the mesh with a packed xatlas atlas and the pastes
 composited into it (what ``geotex lapped`` writes as GLB / OBJ).  Without
-the shared data, the bundled low-resolution Spot and a synthetic image are
-used.
+the shared data (a clean clone, an installed package), the bundled
+low-resolution Spot and Bob and the bundled images (a brick wall and a water
+photo, knitted wool and brick depth maps; ``geotex/data/NOTICE.md``) are used;
+the relief then reads the brick depth map inverted (bricks high).
 
 Set ``GEOTEX_EXAMPLES_QUICK=1`` (the test suite does) for the bundled
 low-resolution Spot and two images only.
@@ -40,19 +43,17 @@ import numpy as np
 from PIL import Image
 
 from geotex.check import check_mesh
-from geotex.data import sample_path
+from geotex.data import SAMPLE_IMAGES, sample_path, shared_data_dir
 from geotex.displace.library import library_height_map
 from geotex.fields.directions import principal_direction_field, projected_direction_field
 from geotex.fields.singularities import singularities
 from geotex.image import (alignment_errors, displace, lapped_texture, texture_patches,
                           textured_mesh)
 from geotex.io import read_mesh
+from geotex.io.images import load_texture_image
 from geotex.render import Panel, render_panels
 
-SHARED = Path(sys.argv[0]).resolve().parents[2] / "shared" / "data"
-IMAGES = SHARED / "images"
-SPOT = SHARED / "base" / "spot_uv" / "spot.obj"
-BOB = SHARED / "base" / "bob_uv" / "bob_tri.obj"
+SHARED = shared_data_dir(sys.argv[0])        # None in a clean clone: bundled samples
 #: Textures with a direction (pasted along the field in the gallery).
 STRUCTURED = ("bricks", "weave", "slate", "rope", "hexagons")
 SIZE = (480, 520)
@@ -66,19 +67,19 @@ def z_up(mesh):
 
 
 def load_bases():
-    spot = z_up(read_mesh(SPOT if SPOT.exists() else sample_path("spot")))
-    bob = z_up(read_mesh(BOB)) if BOB.exists() else None
-    return spot, bob
+    """Spot and Bob: with their own uv layouts from the shared data, else the bundled ones."""
+    if SHARED is None:
+        return z_up(read_mesh(sample_path("spot"))), z_up(read_mesh(sample_path("bob")))
+    return (z_up(read_mesh(SHARED / "base" / "spot_uv" / "spot.obj")),
+            z_up(read_mesh(SHARED / "base" / "bob_uv" / "bob_tri.obj")))
 
 
 def images() -> list[tuple[str, object]]:
-    found = sorted(IMAGES.rglob("*.png")) + sorted(IMAGES.rglob("*.jpg"))
-    if not found:
-        rng = np.random.default_rng(0)
-        y, x = np.mgrid[0:96, 0:96]
-        stripes = (np.sin(x / 4.0) > 0)[..., None] * [150, 60, 40] + [90, 80, 70]
-        img = np.clip(stripes + rng.normal(0, 12, (96, 96, 3)), 0, 255).astype(np.uint8)
-        return [("synthetic stripes", img)]
+    """(name, path) of every input image: the shared data's, else the bundled samples."""
+    if SHARED is None:
+        return [(name, sample_path(name)) for name in SAMPLE_IMAGES]
+    images = SHARED / "images"
+    found = sorted(images.rglob("*.png")) + sorted(images.rglob("*.jpg"))
     return [(f"{p.parent.name}_{p.stem}" if p.parent.name == "embark" else p.stem, p)
             for p in found]
 
@@ -240,8 +241,13 @@ def main(out: Path) -> None:
 
     # ---------------------------------------------------------------- relief
     V, F = spot
-    relief_img = next((v for k, v in imgs.items() if "cracker" in k), bricks)
-    print("Spot relief:")
+    if SHARED is None:     # a depth map (light is deep), inverted: the bricks stand
+        relief_name = "brick depth map, inverted"
+        relief_img = 255 - load_texture_image(sample_path("bricks-height"))
+    else:
+        relief_name, relief_img = next(((k, v) for k, v in imgs.items() if "cracker" in k),
+                                       ("bricks", bricks))
+    print(f"Spot relief ({relief_name}):")
     _, lt, _ = paste(V, F, relief_img, scale=0.2 * diag(V))
     t = time.perf_counter()
     depth = 0.008 * diag(V)
@@ -255,7 +261,7 @@ def main(out: Path) -> None:
     flank = np.abs(Vd[:, 2] - c[2]) < 0.15
     p = Vd[flank][np.argmax((Vd[flank] - c) @ view)]
     stitch([[Panel(Vd, Fd, color="#c9b28f",
-                   title=f"relief {depth:.3f}, {len(Fd) // 1000}k faces, "
+                   title=f"{relief_name}: relief {depth:.3f}\n{len(Fd) // 1000}k faces, "
                          f"{'printable' if rep.printable else 'NOT printable'}"),
              Panel(Vd, Fd, color="#c9b28f", title="close up: head and neck", closeup=p,
                    closeup_radius=0.12 * diag(Vd))]],
