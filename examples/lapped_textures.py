@@ -62,6 +62,16 @@ GALLERY_COLUMNS = 5
 FILLERS = ("hexagons", "voronoi")
 
 
+#: caption names of the bundled sample images
+LABELS = {"bricks": "brick photo", "water": "water photo", "wool-height": "wool depth map",
+          "bricks-height": "brick depth map"}
+
+
+def label(name: str) -> str:
+    """An input image's name in a caption."""
+    return LABELS.get(name, name.replace("bricks_with_alpha_hole", "bricks+hole"))
+
+
 def z_up(mesh):
     return np.ascontiguousarray(mesh.vertices[:, [0, 2, 1]] * [-1, 1, 1]), mesh.faces
 
@@ -175,9 +185,10 @@ def main(out: Path) -> None:
     if os.environ.get("GEOTEX_EXAMPLES_QUICK") == "1":   # the test suite: small and few
         spot, bob = z_up(read_mesh(sample_path("spot"))), None
         imgs = dict(list(imgs.items())[:2])
-    bricks = next((v for k, v in imgs.items() if "bricks" in k and "embark" not in k),
-                  next(iter(imgs.values())))
-    weave = next((v for k, v in imgs.items() if "weave" in k), bricks)
+    bricks_name = next((k for k in imgs if "bricks" in k and "embark" not in k
+                        and "height" not in k), next(iter(imgs)))
+    weave_name = next((k for k in imgs if "weave" in k), bricks_name)
+    bricks, weave = imgs[bricks_name], imgs[weave_name]
 
     # ---------------------------------------------------------------- fields
     rows = []
@@ -188,9 +199,10 @@ def main(out: Path) -> None:
     print("Spot, isotropic:")
     m_i, lt_i, _ = paste(V, F, bricks, scale=0.3 * diag(V))
     rows.append([field_panel(V, F, up, 1, "Spot: up field"),
-                 textured_panel(m_a, f"up field: {lt_a.n_pastes} pastes, "
-                                     f"error {np.median(err):.1f} deg"),
-                 textured_panel(m_i, f"isotropic: {lt_i.n_pastes} pastes")])
+                 textured_panel(m_a, f"{label(bricks_name)}, up field\n{lt_a.n_pastes} "
+                                     f"pastes, error {np.median(err):.1f} deg"),
+                 textured_panel(m_i, f"{label(bricks_name)}, isotropic\n"
+                                     f"{lt_i.n_pastes} pastes")])
     if bob is not None:
         V, F = bob
         lines = principal_direction_field(V, F).directions
@@ -199,9 +211,11 @@ def main(out: Path) -> None:
         print("Bob, isotropic:")
         m_i, lt_i, _ = paste(V, F, weave, scale=0.25 * diag(V))
         rows.append([field_panel(V, F, lines, 2, "Bob: curvature lines"),
-                     textured_panel(m_a, f"lines: {lt_a.n_pastes} pastes, "
-                                         f"error {np.median(err):.1f} deg"),
-                     textured_panel(m_i, f"isotropic: {lt_i.n_pastes} pastes")])
+                     textured_panel(m_a, f"{label(weave_name)}, along the lines\n"
+                                         f"{lt_a.n_pastes} pastes, error "
+                                         f"{np.median(err):.1f} deg"),
+                     textured_panel(m_i, f"{label(weave_name)}, isotropic\n"
+                                         f"{lt_i.n_pastes} pastes")])
     stitch(rows, out / "lapped_textures.png")
 
     # ---------------------------------------------------------------- gallery
@@ -219,8 +233,8 @@ def main(out: Path) -> None:
         print(f"{name} on {who} ({'field' if structured else 'isotropic'}):")
         fld = projected_direction_field(V, F, [0.0, 0.0, 1.0])[0] if structured else None
         m, lt, _ = paste(V, F, img, field=fld, scale=0.25 * diag(V), seed=i, resolution=512)
-        label = name.replace("bricks_with_alpha_hole", "bricks+hole")
-        panels.append(textured_panel(m, f"{label} ({'field' if structured else 'isotropic'})"))
+        panels.append(textured_panel(m, f"{label(name)} "
+                                        f"({'field' if structured else 'isotropic'})"))
         inputs.append(img)
     # the grid has no empty cells: procedural grey maps fill the last row
     fill = -len(panels) % GALLERY_COLUMNS if len(panels) > GALLERY_COLUMNS else 0
@@ -246,7 +260,7 @@ def main(out: Path) -> None:
         relief_img = 255 - load_texture_image(sample_path("bricks-height"))
     else:
         relief_name, relief_img = next(((k, v) for k, v in imgs.items() if "cracker" in k),
-                                       ("bricks", bricks))
+                                       (label(bricks_name), bricks))
     print(f"Spot relief ({relief_name}):")
     _, lt, _ = paste(V, F, relief_img, scale=0.2 * diag(V))
     t = time.perf_counter()

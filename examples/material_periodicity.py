@@ -14,7 +14,8 @@ C. the modulated ``m`` (colour).
 Also ``material_periodicity_tile.png``: the four layers (2 x 2 repeats each).
 
 Image: ``t1_bricks`` from ``../shared/data/images``; without the shared
-data (a clean clone), the bundled brick wall photo (``geotex/data/NOTICE.md``).
+data (a clean clone), a 128-pixel crop of the bundled brick wall photo
+(``geotex/data/NOTICE.md``).
 ``GEOTEX_EXAMPLES_QUICK=1`` draws a smaller tile.
 
 Run:  python examples/material_periodicity.py [OUT_DIR]
@@ -48,7 +49,10 @@ def main(out: Path) -> None:
         label = "bricks (quilting classic)"
         img = load_texture_image(SHARED / "images" / "quilting_classic" / "t1_bricks.png")
     else:
-        label, img = "brick photo", load_texture_image(sample_path("bricks"))
+        # a 128-texel crop (left, below the middle) of the 256-texel photo: the tile
+        # resamples its input, and the whole photo would leave bricks 3 texels high
+        label = "brick photo, crop"
+        img = load_texture_image(sample_path("bricks"))[100:228, :128]
     size = 32 if QUICK else 96
     tile = build_periodicity_tile(img, size=size, layers=4, seed=0)
     strip = tile_slices_image(tile, repeat=2, masks=False)

@@ -105,7 +105,7 @@ def main(out: Path) -> None:
                     title=f"Spot, m from tail (0) to head (1)\n"
                           f"{int(params.singular.sum())} singular faces blended"),
               Panel(Vc, Fc, uv=uv, texture=textured.texture, closeup=spot_mid,
-                    closeup_radius=0.25 * float(np.linalg.norm(np.ptp(V, axis=0))),
+                    closeup_radius=0.15 * float(np.linalg.norm(np.ptp(V, axis=0))),
                     title="close-up where m is about 1/2")]
     render_panels(panels, out / "material_tiles.png", size=(700, 650))
     print(f"tile {label}: {t_tile:.1f} s; histogram distance inner layers "
