@@ -10,8 +10,7 @@ face (a sample of faces); red balls are singular vertices of positive index,
 blue of negative index. The title of each panel gives the index sum, which
 equals the Euler characteristic.
 
-Meshes: the bundled Spot, and Bob from ../shared/data/base when it is there
-(otherwise a generated torus stands in).
+Meshes: the bundled Spot and Bob (``geotex/data``), and a generated torus.
 
 Run:  python examples/direction_fields.py [OUT_DIR]     (default docs/gallery)
 """
@@ -29,9 +28,6 @@ from geotex.fields.singularities import singularities
 from geotex.io import read_mesh
 from geotex.mesh.primitives import torus
 from geotex.render import Panel, render_panels
-
-BOB = Path(sys.argv[0]).resolve().parents[2] / "shared" / "data" / "base" / "bob_uv" / "bob_tri.obj"
-
 
 def field_panel(V, F, vectors, sing, *, title, every=1, length=0.6):
     C = V[F].mean(axis=1)
@@ -61,12 +57,11 @@ def main(out: Path) -> None:
     ring = smooth_direction_field(Vt, Ft, symmetry=1, seed=0)
     panels.append(field_panel(Vt, Ft, ring.vectors, ring.singularities,
                               title="torus, smoothest 1-field", every=3))
-    if BOB.is_file():
-        bob = read_mesh(BOB)
-        Vb, Fb = bob.vertices[:, [0, 2, 1]] * [-1, 1, 1], bob.faces
-        up, _ = projected_direction_field(Vb, Fb, [0, 0, 1])
-        panels.append(field_panel(Vb, Fb, up, singularities(Vb, Fb, up),
-                                  title="Bob, 'up' projected", every=6))
+    bob = read_mesh(sample_path("bob"))
+    Vb, Fb = bob.vertices[:, [0, 2, 1]] * [-1, 1, 1], bob.faces
+    up, _ = projected_direction_field(Vb, Fb, [0, 0, 1])
+    panels.append(field_panel(Vb, Fb, up, singularities(Vb, Fb, up),
+                              title="Bob, 'up' projected", every=6))
     render_panels(panels, out / "direction_fields.png", size=(700, 650))
     print(f"wrote {out / 'direction_fields.png'}")
 

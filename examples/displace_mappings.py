@@ -26,21 +26,20 @@ from pathlib import Path
 
 import numpy as np
 
-from geotex.data import sample_path
+from geotex.data import sample_path, shared_data_dir
 from geotex.displace import displaced_mesh
 from geotex.io import read_mesh
 from geotex.render import Panel, render_panels
 
 HERE = Path(sys.argv[0]).resolve().parent      # the script's folder (no __file__ in the gallery build)
-SHARED = next((p / "shared" / "data" for p in HERE.parents[1:3]
-               if (p / "shared" / "data").is_dir()), HERE.parents[1] / "shared" / "data")
-SPOT_UV = SHARED / "base" / "spot_uv" / "spot.obj"
+SHARED = shared_data_dir(sys.argv[0])        # None in a clean clone: the bundled Spot
 QUICK = bool(os.environ.get("GEOTEX_EXAMPLES_QUICK"))
 
 
 def spot_89mm():
     """Spot, z up, largest extent 89 mm, with per-corner UVs when the file has them."""
-    mesh = read_mesh(SPOT_UV if SPOT_UV.exists() and not QUICK else sample_path("spot"))
+    mesh = read_mesh(sample_path("spot") if SHARED is None or QUICK
+                     else SHARED / "base" / "spot_uv" / "spot.obj")
     # y up -> z up, face towards the picture's camera (as geotex demo turns it)
     V = mesh.vertices[:, [0, 2, 1]] * np.array([-1.0, 1.0, 1.0])
     V = V - V.min(axis=0)

@@ -4,9 +4,10 @@ Height-and-tilt textures: round trip, set tilt, wrap and wiggle on a spiky spher
 
 The spiky sphere has leaning spikes that overhang: no height field can hold
 them. Panels: the original; the reconstruction from base + height + tilt
-(with its measured error); the same heights without tilt (a height-field
-baseline, which straightens every spike); set tilt 30 degrees; wrap
-(lean grows with height); and three frames of a wiggle animation.
+(its largest error as a fraction of the bounding-box diagonal); the same
+heights without tilt (a height-field baseline, which straightens every
+spike); set tilt 30 degrees; wrap (lean grows with height); and three frames
+of a wiggle animation.
 
 Run:  python examples/heighttilt_edits.py [OUT_DIR]     (default docs/gallery)
 """
@@ -39,13 +40,13 @@ def main(out: Path) -> None:
               for p in (0.0, 2.1, 4.2)]
     color = "#c9a26b"
     panels = [Panel(V0, F, color=color, title="original (overhanging spikes)"),
-              Panel(back, F, color=color, title=f"height + tilt: error {err:.1e} of bbox"),
-              Panel(hf, F, color="#9aa7b8", title=f"height only: error {hf_err:.1%} of bbox"),
+              Panel(back, F, color=color, title=f"height + tilt: {err:.1e} of bbox"),
+              Panel(hf, F, color="#9aa7b8", title=f"height only: {hf_err:.1%} of bbox"),
               Panel(tilted, F, color=color, title="set tilt 30 deg towards +x"),
               Panel(wrapped, F, color=color, title="wrap k = 3: tips curl over")]
     panels += [Panel(f, F, color=color, title=f"wiggle frame {i + 1}") for i, f in enumerate(frames)]
-    render_panels(panels[:4], out / "heighttilt_edits.png", size=(600, 560))
-    render_panels(panels[4:], out / "heighttilt_edits_animation.png", size=(600, 560))
+    render_panels(panels[:4], out / "heighttilt_edits.png", size=(480, 520))
+    render_panels(panels[4:], out / "heighttilt_edits_animation.png", size=(480, 520))
     print(f"round trip error {err:.2e}, height-field baseline error {hf_err:.2%} (of bbox)")
     print(f"wrote {out / 'heighttilt_edits.png'}, {out / 'heighttilt_edits_animation.png'}")
 

@@ -3,8 +3,7 @@ A planar height-and-tilt texture tiled over Spot and Bob along the "up" field
 =============================================================================
 
 Left: the planar texture, leaning bumps on a periodic square (one tile).
-Middle and right: the same texture on Spot and on Bob (when the shared data
-is available). Each base is remeshed to the texture's resolution, covered
+Middle and right: the same texture on Spot and on Bob (the bundled meshes). Each base is remeshed to the texture's resolution, covered
 with disc patches that are flattened along the projected "up" direction
 (field-aligned parameterization), and the texture is read through the
 patches: heights resampled, the tilt 1-form integrated along every edge
@@ -27,7 +26,6 @@ from geotex.heighttilt import apply_texture, bumpy_plane, extract_texture, trans
 from geotex.io import read_mesh
 from geotex.render import Panel, render_panels
 
-BOB = Path("/work/shared/data/base/bob_uv/bob_tri.obj")
 COLOR = "#b97a56"
 
 
@@ -73,14 +71,11 @@ def main(out: Path) -> None:
                         title=f"Spot: {len(Vt) // 1000}k vertices, {res.n_patches} patches"))
     panels.append(Panel(Vt, res.faces, color=COLOR, closeup=flank_point(Vt),
                         closeup_radius=0.3, title="Spot, close up: bumps lean up"))
-    if BOB.exists():
-        bob = read_mesh(BOB)
-        Vbob = bob.vertices[:, [0, 2, 1]] * [-1, 1, 1]
-        res, Vt = textured("Bob", Vbob, bob.faces, plane, scale=0.3)
-        panels.append(Panel(Vt, res.faces, color=COLOR,
-                            title=f"Bob: {len(Vt) // 1000}k vertices, {res.n_patches} patches"))
-    else:
-        print(f"{BOB} not found: Bob skipped")
+    bob = read_mesh(sample_path("bob"))
+    Vbob = bob.vertices[:, [0, 2, 1]] * [-1, 1, 1]
+    res, Vt = textured("Bob", Vbob, bob.faces, plane, scale=0.3)
+    panels.append(Panel(Vt, res.faces, color=COLOR,
+                        title=f"Bob: {len(Vt) // 1000}k vertices, {res.n_patches} patches"))
     render_panels(panels, out / "heighttilt_transfer.png", size=(520, 620), up="z")
     print(f"wrote {out / 'heighttilt_transfer.png'}")
 

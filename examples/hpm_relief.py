@@ -6,8 +6,10 @@ The relief version of hierarchical pattern mapping
 lays over the surface (per-corner coordinates into the image itself) is read
 as a height map (light high) through the shared relief path of ``geotex
 displace`` and becomes a printable solid.  Spot (the bundled low-resolution
-cow, one Loop subdivision) at 80 mm, a gravel photo (or, without the shared
-data or in quick mode, a synthetic cell pattern), 1 mm deep; the file is
+cow, one Loop subdivision) at 80 mm, a gravel photo from the shared data (or,
+in a clean clone and in quick mode, the bundled brick wall depth map of the
+Godot demos, inverted so that the bricks stand and the mortar is low), 1 mm
+deep; the file is
 written only when printable as an STL stores it.  Panels: the textured map
 (what ``geotex hpm`` writes as GLB) and the relief, whole and a close-up
 of the head and neck.
@@ -26,9 +28,8 @@ from pathlib import Path
 
 import igl
 import numpy as np
-from scipy.spatial import cKDTree
 
-from geotex.data import sample_path
+from geotex.data import sample_path, shared_data_dir
 from geotex.displace import displaced_mesh
 from geotex.image.hpm import hpm_texture, read_hpm_image
 from geotex.io import read_mesh, write_mesh
@@ -37,20 +38,8 @@ from geotex.printing import export_printable
 from geotex.render import Panel, render_panels
 from geotex.viewpage import mesh_turned_y_up
 
-HERE = Path(sys.argv[0]).resolve().parent
-SHARED = next((p / "shared" / "data" for p in HERE.parents[1:3]
-               if (p / "shared" / "data").is_dir()), HERE.parents[1] / "shared" / "data")
+SHARED = shared_data_dir(sys.argv[0])        # None in a clean clone: a bundled image
 QUICK = os.environ.get("GEOTEX_EXAMPLES_QUICK") == "1"
-
-
-def cells(px: int = 192, n: int = 40, seed: int = 3) -> np.ndarray:
-    """Rounded cells (light) with dark gaps: a synthetic stand-in for gravel."""
-    rng = np.random.default_rng(seed)
-    sites = rng.random((n, 2)) * px
-    yy, xx = np.mgrid[0:px, 0:px]
-    d, _ = cKDTree(sites).query(np.stack([xx.ravel(), yy.ravel()], 1), k=2)
-    edge = np.clip((d[:, 1] - d[:, 0]) / 6.0, 0, 1).reshape(px, px)
-    return np.repeat((np.sqrt(edge) * 235 + 10).astype(np.uint8)[..., None], 3, axis=2)
 
 
 def main(out: Path) -> None:
@@ -60,11 +49,12 @@ def main(out: Path) -> None:
     V = (V - V.min(axis=0)) * (80.0 / float(np.ptp(V, axis=0).max()))
     V, F = igl.upsample(V, F, 1)
     V, F = np.asarray(V, np.float64), np.asarray(F, np.int64)
-    photo = SHARED / "images" / "quilting_classic" / "t4_gravel.png"
-    if QUICK or not photo.exists():
-        label, img = "synthetic cells", cells()
+    if QUICK or SHARED is None:
+        # a depth map (light is deep): inverted, the bricks stand and the mortar is low
+        label, img = "brick depth map, inverted", 255 - read_hpm_image(sample_path("bricks-height"))
     else:
-        label, img = "gravel photo", read_hpm_image(photo)
+        label, img = "gravel photo", read_hpm_image(SHARED / "images" / "quilting_classic"
+                                                    / "t4_gravel.png")
     r = hpm_texture(V, F, img, scale=30.0, seed=0)                 # 30 mm per image width
     uv = r.uv[r.uv_faces]                                          # (m, 3, 2)
     res = displaced_mesh(V, F, img, depth=1.0, mapping="uv", uv=uv,

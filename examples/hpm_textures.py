@@ -16,11 +16,12 @@ Pictures (written to OUT_DIR), after the paper's figures:
 
 The textured surfaces are the base meshes with the output texture
 coordinates and the input image itself (what ``geotex hpm`` writes as GLB /
-OBJ).  Without the shared data the bundled low-resolution Spot and Bob and
-two procedural colour images (bricks and a basket weave, made here from the
-seamless height maps of :mod:`geotex.displace.library`, so no licence is
-involved) are used; ``GEOTEX_EXAMPLES_QUICK=1`` (the test suite sets it)
-uses them too.
+OBJ).  Without the shared data (a clean clone, an installed package) the
+bundled samples are used instead (:func:`geotex.data.sample_path`): the
+low-resolution Spot, Bob and Blub with the brick wall and water photos and
+the knitted wool depth map (``geotex/data/NOTICE.md``), the slate tiles of
+the scale figure replaced by the bricks; ``GEOTEX_EXAMPLES_QUICK=1`` (the
+test suite sets it) uses them too.
 
 Run:  python examples/hpm_textures.py [OUT_DIR]     (default docs/gallery)
 """
@@ -31,64 +32,49 @@ import os
 import sys
 import tempfile
 import time
-import zlib
 from pathlib import Path
 
 import numpy as np
 from PIL import Image
 
-from geotex.data import sample_path
-from geotex.displace.library import library_height_map
+from geotex.data import sample_path, shared_data_dir
 from geotex.image.hpm import hpm_texture, read_hpm_image
 from geotex.io import read_mesh
 from geotex.patches import cluster_hierarchy
 from geotex.render import Panel, render_panels
 
 HERE = Path(sys.argv[0]).resolve().parent
-SHARED = next((p / "shared" / "data" for p in HERE.parents[1:3]
-               if (p / "shared" / "data").is_dir()), HERE.parents[1] / "shared" / "data")
-QUICK = os.environ.get("GEOTEX_EXAMPLES_QUICK") == "1" or not SHARED.is_dir()
+SHARED = shared_data_dir(sys.argv[0])        # None in a clean clone: bundled samples
+QUICK = os.environ.get("GEOTEX_EXAMPLES_QUICK") == "1" or SHARED is None
 SIZE = (520, 520)
 
 
 def mesh(name: str):
-    paths = {"spot": SHARED / "base" / "spot_odedstein.obj",
-             "bob": SHARED / "base" / "bob_uv" / "bob_tri.obj",
-             "double torus": SHARED / "base" / "double_torus_gpjs.obj",
-             "fertility": SHARED / "base" / "fertility_libigl.off"}
-    p = paths.get(name)
-    if QUICK or p is None or not p.exists():
-        p = sample_path("bob" if name == "bob" else "spot")
-    m = read_mesh(p)
+    """A base mesh by name: from the shared data, or the bundled sample (QUICK)."""
+    if QUICK:
+        m = read_mesh(sample_path(name))
+    else:
+        m = read_mesh(SHARED / "base" / {"spot": "spot_odedstein.obj",
+                                         "bob": "bob_uv/bob_tri.obj",
+                                         "double torus": "double_torus_gpjs.obj",
+                                         "fertility": "fertility_libigl.off"}[name])
     if name == "spot":
         # y up -> z up, the face towards the picture's camera (as geotex demo turns it)
         return m.vertices[:, [0, 2, 1]] * np.array([-1.0, 1.0, 1.0]), m.faces
     return m.vertices, m.faces
 
 
-#: colours of the procedural stand-ins: (groove, top) in [0, 1] RGB
-PROCEDURAL = {"bricks": ((0.80, 0.77, 0.70), (0.66, 0.27, 0.17)),
-              "weave": ((0.22, 0.14, 0.07), (0.88, 0.70, 0.42))}
-
-
-def procedural(kind: str, n: int = 192) -> np.ndarray:
-    """A colour image of bricks or a weave: a library height map coloured from
-    groove to top, with smooth blotches and a fine grain (fallback input)."""
-    h = library_height_map(kind, size=n).astype(np.float64)[..., None]
-    blotches = library_height_map("noise", size=n).astype(np.float64)
-    grain = np.random.default_rng(zlib.crc32(kind.encode())).normal(0.0, 0.05, blotches.shape)
-    low, high = (np.array(c) for c in PROCEDURAL[kind])
-    img = (low + (high - low) * h) * (0.7 + 0.4 * blotches + grain)[..., None]
-    return np.clip(np.rint(img * 255), 0, 255).astype(np.uint8)
+#: caption names of the images
+LABELS = {"embark/1.jpg": "water", "water": "water photo", "bricks": "brick photo",
+          "wool-height": "wool depth map"}
 
 
 def image(name: str) -> tuple[str, np.ndarray]:
-    p = SHARED / "images" / name
-    if QUICK or not p.exists():
-        kind = "weave" if "weave" in name else "bricks"
-        return f"{kind} (procedural)", procedural(kind)
-    label = "water" if name == "embark/1.jpg" else Path(name).stem.split("_", 1)[-1]
-    return label, read_hpm_image(p)
+    """An image by its path under the shared ``images`` folder, or a bundled sample's name."""
+    if name in LABELS and "/" not in name:
+        return LABELS[name], read_hpm_image(sample_path(name))
+    return (LABELS.get(name, Path(name).stem.split("_", 1)[-1]),
+            read_hpm_image(SHARED / "images" / name))
 
 
 def split(V, F, uv, uv_faces):
@@ -106,7 +92,7 @@ def textured(V, F, img, scale, *, seed=0, title=""):
     print(f"  {title}: {placed} patches, {rep['levels'][-1]['filled_faces']} faces filled, "
           f"{time.perf_counter() - t:.1f} s")
     Vs, Fs, uv = split(V, F, r.uv, r.uv_faces)
-    return Panel(Vs, Fs, uv=uv, texture=img, title=title), r
+    return Panel(Vs, Fs, uv=uv, texture=img, title=f"{title}\n{placed} patches"), r
 
 
 def diag(V) -> float:
@@ -131,7 +117,7 @@ def clusters_figure(out: Path) -> None:
 
 def scale_figure(out: Path) -> None:
     V, F = mesh("spot")
-    label, img = image("quilting_classic/t7_slate_tiles.png")
+    label, img = image("bricks" if QUICK else "quilting_classic/t7_slate_tiles.png")
     d = diag(V)
     panels, last = [], None
     for k in (0.15, 0.3, 0.6):
@@ -151,8 +137,9 @@ def results_figure(out: Path) -> None:
             ("bob", "quilting_classic/t2_basket_weave.png", 0.35, "y"),
             ("double torus", "embark/1.jpg", 0.35, "y"),
             ("fertility", "quilting_classic/t8_rope_net.png", 0.3, "y")]
-    if QUICK:       # the bundled Spot and Bob with the two procedural images
-        jobs = [jobs[1], jobs[3]]
+    if QUICK:       # the bundled meshes and images
+        jobs = [("spot", "bricks", 0.35, "z"), ("bob", "water", 0.35, "y"),
+                ("blub", "wool-height", 0.3, "y")]
     with tempfile.TemporaryDirectory() as tmp:
         rows = []
         for i in range(0, len(jobs), 3):

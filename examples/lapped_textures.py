@@ -9,8 +9,9 @@ Pictures (written to OUT_DIR):
   pasted along it, and the same texture pasted isotropically (each paste
   with a random orientation propagated over its patch).
 * ``lapped_textures_gallery.png`` - every image in ``../shared/data/images``
-  (see its MANIFEST) on Spot or Bob, and two of geotex's procedural height
-  maps (grey images) to fill the grid; structured textures (bricks, weave,
+  (see its MANIFEST), or in a clean clone the four bundled sample images, on
+  Spot or Bob, and when needed geotex's procedural height maps (grey images)
+  to fill the grid; structured textures (bricks, weave,
   tiles, net, hexagons) follow the field, stochastic ones are pasted
   isotropically. Each panel shows its input image in the lower right corner.
 * ``lapped_textures_relief.png`` - the composited texture used as a height
@@ -19,8 +20,10 @@ Pictures (written to OUT_DIR):
 
 Every textured surface is the mesh with a packed xatlas atlas and the pastes
 composited into it (what ``geotex lapped`` writes as GLB / OBJ).  Without
-the shared data, the bundled low-resolution Spot and a synthetic image are
-used.
+the shared data (a clean clone, an installed package), the bundled
+low-resolution Spot and Bob and the bundled images (a brick wall and a water
+photo, knitted wool and brick depth maps; ``geotex/data/NOTICE.md``) are used;
+the relief then reads the brick depth map inverted (bricks high).
 
 Set ``GEOTEX_EXAMPLES_QUICK=1`` (the test suite does) for the bundled
 low-resolution Spot and two images only.
@@ -40,19 +43,17 @@ import numpy as np
 from PIL import Image
 
 from geotex.check import check_mesh
-from geotex.data import sample_path
+from geotex.data import SAMPLE_IMAGES, sample_path, shared_data_dir
 from geotex.displace.library import library_height_map
 from geotex.fields.directions import principal_direction_field, projected_direction_field
 from geotex.fields.singularities import singularities
 from geotex.image import (alignment_errors, displace, lapped_texture, texture_patches,
                           textured_mesh)
 from geotex.io import read_mesh
+from geotex.io.images import load_texture_image
 from geotex.render import Panel, render_panels
 
-SHARED = Path(sys.argv[0]).resolve().parents[2] / "shared" / "data"
-IMAGES = SHARED / "images"
-SPOT = SHARED / "base" / "spot_uv" / "spot.obj"
-BOB = SHARED / "base" / "bob_uv" / "bob_tri.obj"
+SHARED = shared_data_dir(sys.argv[0])        # None in a clean clone: bundled samples
 #: Textures with a direction (pasted along the field in the gallery).
 STRUCTURED = ("bricks", "weave", "slate", "rope", "hexagons")
 SIZE = (480, 520)
@@ -61,24 +62,34 @@ GALLERY_COLUMNS = 5
 FILLERS = ("hexagons", "voronoi")
 
 
+#: caption names of the bundled sample images
+LABELS = {"bricks": "brick photo", "water": "water photo", "wool-height": "wool depth map",
+          "bricks-height": "brick depth map"}
+
+
+def label(name: str) -> str:
+    """An input image's name in a caption."""
+    return LABELS.get(name, name.replace("bricks_with_alpha_hole", "bricks+hole"))
+
+
 def z_up(mesh):
     return np.ascontiguousarray(mesh.vertices[:, [0, 2, 1]] * [-1, 1, 1]), mesh.faces
 
 
 def load_bases():
-    spot = z_up(read_mesh(SPOT if SPOT.exists() else sample_path("spot")))
-    bob = z_up(read_mesh(BOB)) if BOB.exists() else None
-    return spot, bob
+    """Spot and Bob: with their own uv layouts from the shared data, else the bundled ones."""
+    if SHARED is None:
+        return z_up(read_mesh(sample_path("spot"))), z_up(read_mesh(sample_path("bob")))
+    return (z_up(read_mesh(SHARED / "base" / "spot_uv" / "spot.obj")),
+            z_up(read_mesh(SHARED / "base" / "bob_uv" / "bob_tri.obj")))
 
 
 def images() -> list[tuple[str, object]]:
-    found = sorted(IMAGES.rglob("*.png")) + sorted(IMAGES.rglob("*.jpg"))
-    if not found:
-        rng = np.random.default_rng(0)
-        y, x = np.mgrid[0:96, 0:96]
-        stripes = (np.sin(x / 4.0) > 0)[..., None] * [150, 60, 40] + [90, 80, 70]
-        img = np.clip(stripes + rng.normal(0, 12, (96, 96, 3)), 0, 255).astype(np.uint8)
-        return [("synthetic stripes", img)]
+    """(name, path) of every input image: the shared data's, else the bundled samples."""
+    if SHARED is None:
+        return [(name, sample_path(name)) for name in SAMPLE_IMAGES]
+    images = SHARED / "images"
+    found = sorted(images.rglob("*.png")) + sorted(images.rglob("*.jpg"))
     return [(f"{p.parent.name}_{p.stem}" if p.parent.name == "embark" else p.stem, p)
             for p in found]
 
@@ -174,9 +185,10 @@ def main(out: Path) -> None:
     if os.environ.get("GEOTEX_EXAMPLES_QUICK") == "1":   # the test suite: small and few
         spot, bob = z_up(read_mesh(sample_path("spot"))), None
         imgs = dict(list(imgs.items())[:2])
-    bricks = next((v for k, v in imgs.items() if "bricks" in k and "embark" not in k),
-                  next(iter(imgs.values())))
-    weave = next((v for k, v in imgs.items() if "weave" in k), bricks)
+    bricks_name = next((k for k in imgs if "bricks" in k and "embark" not in k
+                        and "height" not in k), next(iter(imgs)))
+    weave_name = next((k for k in imgs if "weave" in k), bricks_name)
+    bricks, weave = imgs[bricks_name], imgs[weave_name]
 
     # ---------------------------------------------------------------- fields
     rows = []
@@ -187,9 +199,10 @@ def main(out: Path) -> None:
     print("Spot, isotropic:")
     m_i, lt_i, _ = paste(V, F, bricks, scale=0.3 * diag(V))
     rows.append([field_panel(V, F, up, 1, "Spot: up field"),
-                 textured_panel(m_a, f"up field: {lt_a.n_pastes} pastes, "
-                                     f"error {np.median(err):.1f} deg"),
-                 textured_panel(m_i, f"isotropic: {lt_i.n_pastes} pastes")])
+                 textured_panel(m_a, f"{label(bricks_name)}, up field\n{lt_a.n_pastes} "
+                                     f"pastes, error {np.median(err):.1f} deg"),
+                 textured_panel(m_i, f"{label(bricks_name)}, isotropic\n"
+                                     f"{lt_i.n_pastes} pastes")])
     if bob is not None:
         V, F = bob
         lines = principal_direction_field(V, F).directions
@@ -198,9 +211,11 @@ def main(out: Path) -> None:
         print("Bob, isotropic:")
         m_i, lt_i, _ = paste(V, F, weave, scale=0.25 * diag(V))
         rows.append([field_panel(V, F, lines, 2, "Bob: curvature lines"),
-                     textured_panel(m_a, f"lines: {lt_a.n_pastes} pastes, "
-                                         f"error {np.median(err):.1f} deg"),
-                     textured_panel(m_i, f"isotropic: {lt_i.n_pastes} pastes")])
+                     textured_panel(m_a, f"{label(weave_name)}, along the lines\n"
+                                         f"{lt_a.n_pastes} pastes, error "
+                                         f"{np.median(err):.1f} deg"),
+                     textured_panel(m_i, f"{label(weave_name)}, isotropic\n"
+                                         f"{lt_i.n_pastes} pastes")])
     stitch(rows, out / "lapped_textures.png")
 
     # ---------------------------------------------------------------- gallery
@@ -218,8 +233,8 @@ def main(out: Path) -> None:
         print(f"{name} on {who} ({'field' if structured else 'isotropic'}):")
         fld = projected_direction_field(V, F, [0.0, 0.0, 1.0])[0] if structured else None
         m, lt, _ = paste(V, F, img, field=fld, scale=0.25 * diag(V), seed=i, resolution=512)
-        label = name.replace("bricks_with_alpha_hole", "bricks+hole")
-        panels.append(textured_panel(m, f"{label} ({'field' if structured else 'isotropic'})"))
+        panels.append(textured_panel(m, f"{label(name)} "
+                                        f"({'field' if structured else 'isotropic'})"))
         inputs.append(img)
     # the grid has no empty cells: procedural grey maps fill the last row
     fill = -len(panels) % GALLERY_COLUMNS if len(panels) > GALLERY_COLUMNS else 0
@@ -240,8 +255,13 @@ def main(out: Path) -> None:
 
     # ---------------------------------------------------------------- relief
     V, F = spot
-    relief_img = next((v for k, v in imgs.items() if "cracker" in k), bricks)
-    print("Spot relief:")
+    if SHARED is None:     # a depth map (light is deep), inverted: the bricks stand
+        relief_name = "brick depth map, inverted"
+        relief_img = 255 - load_texture_image(sample_path("bricks-height"))
+    else:
+        relief_name, relief_img = next(((k, v) for k, v in imgs.items() if "cracker" in k),
+                                       (label(bricks_name), bricks))
+    print(f"Spot relief ({relief_name}):")
     _, lt, _ = paste(V, F, relief_img, scale=0.2 * diag(V))
     t = time.perf_counter()
     depth = 0.008 * diag(V)
@@ -255,7 +275,7 @@ def main(out: Path) -> None:
     flank = np.abs(Vd[:, 2] - c[2]) < 0.15
     p = Vd[flank][np.argmax((Vd[flank] - c) @ view)]
     stitch([[Panel(Vd, Fd, color="#c9b28f",
-                   title=f"relief {depth:.3f}, {len(Fd) // 1000}k faces, "
+                   title=f"{relief_name}: relief {depth:.3f}\n{len(Fd) // 1000}k faces, "
                          f"{'printable' if rep.printable else 'NOT printable'}"),
              Panel(Vd, Fd, color="#c9b28f", title="close up: head and neck", closeup=p,
                    closeup_radius=0.12 * diag(Vd))]],

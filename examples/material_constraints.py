@@ -14,7 +14,9 @@ Writes ``material_constraints.png`` into OUT_DIR (default docs/gallery), four pa
 4. the textured result after the update.
 
 The tile morphs gravel (m = 0) into peppers (m = 1) from
-``../shared/data/images``; without the shared data, two synthetic textures.
+``../shared/data/images``; without the shared data (a clean clone), the
+bundled water photo (m = 0) into the bundled brick wall photo (m = 1)
+(``geotex/data/NOTICE.md``).
 ``GEOTEX_EXAMPLES_QUICK=1`` draws a smaller tile.
 
 Run:  python examples/material_constraints.py [OUT_DIR]
@@ -29,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from geotex.data import sample_path
+from geotex.data import sample_path, shared_data_dir
 from geotex.fields.directions import smooth_direction_field
 from geotex.fields.scalar import material_field
 from geotex.image.material.mapping import bake_material_texture, material_locks, update_material
@@ -41,29 +43,19 @@ from geotex.param.pgp import periodic_parameterization
 from geotex.patches.grow import face_adjacency
 from geotex.render import Panel, render_panels
 
-SHARED = Path(os.environ.get("GEOTEX_SHARED_DATA",
-                             Path(sys.argv[0]).resolve().parents[2] / "shared" / "data"))
-IMAGES = SHARED / "images" / "quilting_classic"
+SHARED = shared_data_dir(sys.argv[0])        # None in a clean clone: bundled images
 QUICK = bool(os.environ.get("GEOTEX_EXAMPLES_QUICK"))
 
 
-def synthetic(kind: str, n: int = 96) -> np.ndarray:
-    rng = np.random.default_rng(1)
-    yy, xx = np.mgrid[0:n, 0:n]
-    if kind == "dots":
-        img = np.where((((xx % 24) - 12) ** 2 + ((yy % 24) - 12) ** 2 < 49)[..., None],
-                       [0.2, 0.12, 0.08], [0.85, 0.75, 0.55])
-    else:
-        img = np.where((((xx + yy) % 32) < 12)[..., None], [0.95, 0.9, 0.3], [0.1, 0.15, 0.45])
-    img = img + rng.normal(0, 0.03, img.shape)
-    return np.clip(np.rint(img * 255), 0, 255).astype(np.uint8)
-
-
-def inputs():
-    a, b = IMAGES / "t4_gravel.png", IMAGES / "t6_peppers.png"
-    if a.is_file() and b.is_file():
+def inputs() -> tuple[np.ndarray, np.ndarray, str]:
+    """The two images (m = 0, m = 1) and their caption: quilting classics from the
+    shared data, else two bundled sample photos."""
+    if SHARED is not None:
+        folder = SHARED / "images" / "quilting_classic"
+        a, b = (folder / n for n in ("t4_gravel.png", "t6_peppers.png"))
         return load_texture_image(a), load_texture_image(b), "gravel -> peppers"
-    return synthetic("dots"), synthetic("stripes"), "dots -> stripes (synthetic)"
+    return (load_texture_image(sample_path("water")), load_texture_image(sample_path("bricks")),
+            "water photo -> brick photo")
 
 
 def corner_panel(V, F, textured, title):

@@ -14,7 +14,9 @@ C. the modulated ``m`` (colour).
 Also ``material_periodicity_tile.png``: the four layers (2 x 2 repeats each).
 
 Image: ``t1_bricks`` from ``../shared/data/images``; without the shared
-data, a synthetic brick wall.  ``GEOTEX_EXAMPLES_QUICK=1`` draws a smaller tile.
+data (a clean clone), a 128-pixel crop of the bundled brick wall photo
+(``geotex/data/NOTICE.md``).
+``GEOTEX_EXAMPLES_QUICK=1`` draws a smaller tile.
 
 Run:  python examples/material_periodicity.py [OUT_DIR]
 """
@@ -28,7 +30,7 @@ from pathlib import Path
 import igl
 import numpy as np
 
-from geotex.data import sample_path
+from geotex.data import sample_path, shared_data_dir
 from geotex.fields.directions import projected_direction_field
 from geotex.image.material.mapping import bake_material_texture, modulated_material
 from geotex.image.material.tile import build_periodicity_tile, tile_slices_image
@@ -37,28 +39,20 @@ from geotex.io.images import load_texture_image, texture_to_png_bytes
 from geotex.param.pgp import periodic_parameterization
 from geotex.render import Panel, render_panels
 
-SHARED = Path(os.environ.get("GEOTEX_SHARED_DATA",
-                             Path(sys.argv[0]).resolve().parents[2] / "shared" / "data"))
-BRICKS = SHARED / "images" / "quilting_classic" / "t1_bricks.png"
+SHARED = shared_data_dir(sys.argv[0])        # None in a clean clone: a bundled image
 QUICK = bool(os.environ.get("GEOTEX_EXAMPLES_QUICK"))
-
-
-def synthetic_bricks(n: int = 128) -> np.ndarray:
-    rng = np.random.default_rng(2)
-    yy, xx = np.mgrid[0:n, 0:n]
-    row = yy // 16
-    col = (xx + 16 * (row % 2)) // 32
-    tint = rng.uniform(0.7, 1.1, size=(n // 16 + 1, n // 32 + 2))[row, col]
-    mortar = ((yy % 16) < 2) | (((xx + 16 * (row % 2)) % 32) < 2)
-    img = np.where(mortar[..., None], [0.8, 0.78, 0.72], np.array([0.65, 0.25, 0.18])
-                   * tint[..., None])
-    img = img + rng.normal(0, 0.03, img.shape)
-    return np.clip(np.rint(img * 255), 0, 255).astype(np.uint8)
 
 
 def main(out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
-    img = load_texture_image(BRICKS) if BRICKS.is_file() else synthetic_bricks()
+    if SHARED is not None:
+        label = "bricks (quilting classic)"
+        img = load_texture_image(SHARED / "images" / "quilting_classic" / "t1_bricks.png")
+    else:
+        # a 128-texel crop (left, below the middle) of the 256-texel photo: the tile
+        # resamples its input, and the whole photo would leave bricks 3 texels high
+        label = "brick photo, crop"
+        img = load_texture_image(sample_path("bricks"))[100:228, :128]
     size = 32 if QUICK else 96
     tile = build_periodicity_tile(img, size=size, layers=4, seed=0)
     strip = tile_slices_image(tile, repeat=2, masks=False)
@@ -90,7 +84,7 @@ def main(out: Path) -> None:
         return Panel(Vc, Fc, uv=mesh.uv[mesh.uv_faces].reshape(-1, 2), texture=mesh.texture,
                      closeup=flank, closeup_radius=radius, title=title)
 
-    panels = [textured(repeat, "A: repeat mode (m = 0), flank close-up"),
+    panels = [textured(repeat, f"A: {label}, repeat mode (m = 0)\nflank close-up"),
               textured(hidden, "B: m modulated over 4 layers\n(same mask, other details)"),
               Panel(V, F, scalars=m, cmap="viridis", title="C: m (wavelength 3 tiles)")]
     render_panels(panels, out / "material_periodicity.png", size=(700, 600))

@@ -12,7 +12,8 @@ Writes into OUT_DIR (default docs/gallery):
   2 x 2 to show that it wraps) with their morphed feature masks below.
 
 Images: almonds (m = 0) and peppers (m = 1) from ``../shared/data/images``
-(quilting classics); without the shared data, two synthetic textures.
+(quilting classics); without the shared data (a clean clone), the bundled
+brick wall (m = 0) and water (m = 1) photos (``geotex/data/NOTICE.md``).
 ``GEOTEX_EXAMPLES_QUICK=1`` draws a smaller tile.
 
 Run:  python examples/material_tiles.py [OUT_DIR]
@@ -28,7 +29,7 @@ from pathlib import Path
 import igl
 import numpy as np
 
-from geotex.data import sample_path
+from geotex.data import sample_path, shared_data_dir
 from geotex.fields.directions import smooth_direction_field
 from geotex.image.material.mapping import bake_material_texture, default_material
 from geotex.image.material.tile import build_material_tile, tile_slices_image
@@ -37,30 +38,19 @@ from geotex.io.images import load_texture_image, texture_to_png_bytes
 from geotex.param.pgp import periodic_parameterization
 from geotex.render import Panel, render_panels
 
-SHARED = Path(os.environ.get("GEOTEX_SHARED_DATA",
-                             Path(sys.argv[0]).resolve().parents[2] / "shared" / "data"))
-IMAGES = SHARED / "images" / "quilting_classic"
+SHARED = shared_data_dir(sys.argv[0])        # None in a clean clone: bundled images
 QUICK = bool(os.environ.get("GEOTEX_EXAMPLES_QUICK"))
 
 
-def synthetic(kind: str, n: int = 96) -> np.ndarray:
-    """Dark dots on beige, or bright stripes on blue (fallback inputs)."""
-    rng = np.random.default_rng(0)
-    yy, xx = np.mgrid[0:n, 0:n]
-    if kind == "dots":
-        img = np.where((((xx % 24) - 12) ** 2 + ((yy % 24) - 12) ** 2 < 49)[..., None],
-                       [0.2, 0.12, 0.08], [0.85, 0.75, 0.55])
-    else:
-        img = np.where((((xx + yy) % 32) < 12)[..., None], [0.95, 0.9, 0.3], [0.1, 0.15, 0.45])
-    img = img + rng.normal(0, 0.03, img.shape)
-    return np.clip(np.rint(img * 255), 0, 255).astype(np.uint8)
-
-
 def inputs() -> tuple[np.ndarray, np.ndarray, str]:
-    a, b = IMAGES / "t5_almonds.png", IMAGES / "t6_peppers.png"
-    if a.is_file() and b.is_file():
+    """The two images (m = 0, m = 1) and their caption: quilting classics from the
+    shared data, else two bundled sample photos."""
+    if SHARED is not None:
+        folder = SHARED / "images" / "quilting_classic"
+        a, b = (folder / n for n in ("t5_almonds.png", "t6_peppers.png"))
         return load_texture_image(a), load_texture_image(b), "almonds -> peppers"
-    return synthetic("dots"), synthetic("stripes"), "dots -> stripes (synthetic)"
+    return (load_texture_image(sample_path("bricks")), load_texture_image(sample_path("water")),
+            "brick photo -> water photo")
 
 
 def stacked_slices(tile, *, gap: float = 0.28):
@@ -115,7 +105,7 @@ def main(out: Path) -> None:
                     title=f"Spot, m from tail (0) to head (1)\n"
                           f"{int(params.singular.sum())} singular faces blended"),
               Panel(Vc, Fc, uv=uv, texture=textured.texture, closeup=spot_mid,
-                    closeup_radius=0.25 * float(np.linalg.norm(np.ptp(V, axis=0))),
+                    closeup_radius=0.15 * float(np.linalg.norm(np.ptp(V, axis=0))),
                     title="close-up where m is about 1/2")]
     render_panels(panels, out / "material_tiles.png", size=(700, 650))
     print(f"tile {label}: {t_tile:.1f} s; histogram distance inner layers "

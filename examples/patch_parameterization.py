@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from geotex.data import sample_path
+from geotex.data import sample_path, shared_data_dir
 from geotex.fields.directions import smooth_direction_field
 from geotex.io import read_mesh
 from geotex.param import distortion_summary, field_aligned_parameterization
@@ -27,7 +27,7 @@ from geotex.patches import grow_patch
 from geotex.render import Panel, render_panels
 
 
-SPOT = Path(sys.argv[0]).resolve().parents[2] / "shared" / "data" / "base" / "spot_uv" / "spot.obj"
+SHARED = shared_data_dir(sys.argv[0])        # None in a clean clone: the bundled Spot
 
 
 def checkerboard(cells: int = 8, px: int = 32) -> np.ndarray:
@@ -41,7 +41,8 @@ def main(out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
     # Spot at 5856 faces from the shared data when present (the bundled 2.9k-face
     # copy shows its facets), else the bundled one
-    spot = read_mesh(SPOT if SPOT.exists() else sample_path("spot"))
+    spot = read_mesh(sample_path("spot") if SHARED is None
+                     else SHARED / "base" / "spot_uv" / "spot.obj")
     V, F = spot.vertices[:, [0, 2, 1]] * [-1, 1, 1], spot.faces      # y-up -> z-up
     field = smooth_direction_field(V, F, constraints=[{"point": V[np.argmin(V[:, 1])],
                                                        "direction": [0, 0, 1]}])

@@ -39,7 +39,8 @@ def _installed_files():
 @pytest.mark.parametrize("folder, pattern", [
     ("tiles/catalog", "*.npz"), ("tiles/catalog", "recipes.json"),
     ("shells/catalog", "*.npz"), ("shells/catalog", "recipes.json"),
-    ("data", "*.obj"), ("data", "*.ply"), ("data", "NOTICE.md"),
+    ("data", "*.obj"), ("data", "*.ply"), ("data", "*.jpg"), ("data", "*.png"),
+    ("data", "NOTICE.md"),
 ])
 def test_wheel_carries_the_package_data(folder, pattern):
     files = _installed_files()
