@@ -9,7 +9,9 @@ For each set of the tile catalog (``geotex tiles list``), two pictures:
   set has one family for all sides).
 * ``tiles_NAME_tiling.png``: a random legal 6 x 6 arrangement (planar group),
   welded by exact position and united with a slab into one printable solid;
-  the ticks along two slab edges mark the tile borders.
+  the ticks along two slab edges mark the tile borders. Elements cut by the
+  tiling's outer border are dropped, except the weave's strands, which run
+  across the whole tiling and are capped there (the set's ``tiling_border``).
 
 The script also prints, per set, the seam check and whether the tiling is
 printable.

@@ -257,7 +257,13 @@ def test_catalog_sets_on_catalog_shells_write_printable_files(tmp_path, shell_na
 
     res = _catalog_result(shell_name, set_name)
     assert res.report.printable, (set_name, shell_name, res.report.reasons)
-    assert res.stats.elements > 0.5 * res.stats.quads
+    if set_name == "weave":
+        # strands run across every tile side and close into loops around the
+        # object: far fewer elements than quads, few of them left out
+        s = res.stats
+        assert s.elements > 20 and s.elements_folded + s.elements_floating <= 0.1 * s.elements
+    else:
+        assert res.stats.elements > 0.5 * res.stats.quads
     # judged on the written file: float32 coordinates, corners welded on reading
     out = tmp_path / f"{set_name}.stl"
     export_printable(out, res.vertices, res.faces, report=res.report)
@@ -269,7 +275,7 @@ def test_catalog_sets_on_catalog_shells_write_printable_files(tmp_path, shell_na
 
 
 def test_catalog_has_closed_sets_and_shells():
-    assert {"studs", "knurl", "chainmail", "studs-complete"} <= set(_closed_sets())
+    assert {"studs", "knurl", "chainmail", "studs-complete", "weave"} <= set(_closed_sets())
     assert {"spot", "bob", "blub", "torus"} <= set(_catalog_shells())
 
 

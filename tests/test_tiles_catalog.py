@@ -32,9 +32,10 @@ def test_catalog_set_matches_its_recipe_and_is_seamless(name):
     assert ts.isotropic == r["isotropic"]
     assert ts.metadata["recipe"]["seed"] == r["seed"]
     assert ts.metadata["recipe"]["interior"] == r["interior"]
-    # linked chain mail is cut from its periodic layout (rings picked one by one
-    # would not be linked); every other set is quilted
-    assert r["interior"] == ("periodic" if name == "chainmail" else "quilt")
+    # linked chain mail and the weave are cut from their periodic layouts (rings
+    # picked one by one would not be linked, strands longer than a tile could not
+    # be picked at all); every other set is quilted
+    assert r["interior"] == ("periodic" if name in ("chainmail", "weave") else "quilt")
     assert ts.metadata["exemplar"]["params"] == r["exemplar"]["params"]
     if r["interior"] == "quilt":
         assert ts.metadata["paste_fallbacks"] <= len(ts) // 8
@@ -65,6 +66,16 @@ def test_chainmail_rebuilds_byte_identical_and_holds_linked_rings(tmp_path):
     assert out.read_bytes() == (CATALOG_DIR / "chainmail.npz").read_bytes()
     assert ts.metadata["periodic"]["layout"] == "diagonal 4-in-1"
     assert "linked" in recipes()["chainmail"]["description"]
+
+
+def test_weave_rebuilds_byte_identical_and_runs_strands_across_sides(tmp_path):
+    out = tmp_path / "weave.npz"
+    ts = rebuild("weave")
+    save_tileset(out, ts)
+    assert out.read_bytes() == (CATALOG_DIR / "weave.npz").read_bytes()
+    assert ts.metadata["periodic"]["layout"] == "plain weave"
+    assert ts.metadata["tiling_border"] == "cap"
+    assert "weave" in recipes()["weave"]["description"]
 
 
 def test_catalog_names_and_cli_list(capsys):

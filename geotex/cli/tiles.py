@@ -28,7 +28,7 @@ def register(sub):
     b.add_argument("--interior", choices=("quilt", "paste", "periodic"), default="quilt",
                    help="tile interiors: constrained mesh quilting (default), whole "
                    "exemplar elements pasted between the frame's (fast), or periodic: "
-                   "tiles cut from the exemplar's own periodic layout (linked chainmail; "
+                   "tiles cut from the exemplar's own periodic layout (linked chainmail, weave; "
                    "with --isotropic)")
     b.add_argument("--lattice", action="store_true",
                    help="keep the exemplar's lattice (period = its pitch, which must divide "

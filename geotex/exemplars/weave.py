@@ -7,6 +7,13 @@ centre line rises to ``+amplitude`` where it passes over a crossing strand
 and falls to ``-amplitude`` where it passes under; the profile is a flattened
 cosine (``tanh(k cos)``) so strands stay apart over the whole crossing.  The
 lower halves of the under-crossings sink below ``z = 0`` into the base.
+
+:func:`strand_geometry` and :func:`tile_strands` serve the periodic tile sets
+(:mod:`geotex.tiles.periodic`): the same strands, open tubes that run from one
+side of the unit tile to the other, whose end cross-sections depend only on
+the side's lateral offsets (so a strand continues bit for bit on the
+neighbour tile), and :func:`crossing_clearance` bounds how close two crossing
+strands come.
 """
 
 from __future__ import annotations
@@ -16,6 +23,9 @@ import numpy as np
 from geotex.errors import InputError
 from geotex.exemplars.builders import assemble, concatenate, stack_faces, stack_vertices
 from geotex.exemplars.params import Param
+
+__all__ = ["DESCRIPTION", "PARAMS", "GAP", "build", "strand_geometry", "tile_strands",
+           "crossing_clearance"]
 
 DESCRIPTION = "interlaced over-under strands in two directions (plain weave)"
 GAP = 0.02
@@ -78,9 +88,30 @@ def _strands(along, across, fixed, length, crossings, sign, p, centre_z, amp):
     return assemble(stack_vertices(rings, pole0, pole1), stack_faces(s.size, n))
 
 
-def build(size, rng: np.random.Generator, p: dict):
-    """Return ``(V, F)`` of the strands; see :data:`PARAMS`."""
-    pitch, w, t = p["pitch"], p["width"] / 2, p["thickness"] / 2
+def strand_geometry(p: dict, *, pitch: float | None = None) -> dict:
+    """Half width, half thickness, centre height and amplitude of the strands.
+
+    Parameters
+    ----------
+    p : dict
+        Weave parameters (:data:`PARAMS`).
+    pitch : float, optional
+        Strand spacing to use instead of ``p["pitch"]``.
+
+    Returns
+    -------
+    dict
+        ``w`` (half width), ``t`` (half thickness), ``amp`` (amplitude of the
+        centre line), ``centre`` (its mean height), ``free`` (room left
+        between parallel strands once :data:`GAP` is kept).
+
+    Raises
+    ------
+    InputError
+        The width leaves no gap within the pitch, or crossing strands would touch.
+    """
+    pitch = float(p["pitch"] if pitch is None else pitch)
+    w, t = p["width"] / 2, p["thickness"] / 2
     free = pitch - 2 * w - GAP
     if free < 0:
         raise InputError(f"exemplar 'weave': width {p['width']:g} leaves no gap within pitch "
@@ -97,6 +128,123 @@ def build(size, rng: np.random.Generator, p: dict):
         raise InputError(f"exemplar 'weave': height + depth ({p['height'] + p['depth']:g}) "
                          f"is too small for thickness {p['thickness']:g}: crossing strands "
                          f"would touch; {hint} or lower thickness")
+    return {"w": float(w), "t": float(t), "amp": float(amp), "centre": float(centre_z),
+            "free": float(free)}
+
+
+def crossing_clearance(geom: dict, pitch: float, shift: float, *, samples: int = 121) -> float:
+    """Smallest vertical gap between two crossing strands moved sideways by up to ``shift``.
+
+    The upper strand runs along x over the crossing at the origin, the lower
+    one along y; each is moved sideways by ``-shift``, ``0`` or ``+shift``, and
+    the gap between the upper strand's underside and the lower strand's top
+    is taken on a ``samples x samples`` grid over the square where both
+    overlap (vertical slices, as :func:`tile_strands` meshes them).
+
+    Parameters
+    ----------
+    geom : dict
+        From :func:`strand_geometry`.
+    pitch : float
+        Strand spacing (half a period of the over-under profile).
+    shift : float
+        Largest sideways offset of a strand from its lattice line.
+    samples : int
+        Grid points per axis.
+
+    Returns
+    -------
+    float
+        The smallest gap (negative: the strands would cross).
+    """
+    w, t, amp = geom["w"], geom["t"], geom["amp"]
+    g = np.linspace(-1.0, 1.0, samples)
+    best = np.inf
+    for dx in (-shift, 0.0, shift):          # the lower strand (along y) sits at x = dx
+        for dy in (-shift, 0.0, shift):      # the upper strand (along x) at y = dy
+            x = dx + w * g[:, None]
+            y = dy + w * g[None, :]
+            upper = amp * _profile(np.pi * x / pitch) - t * np.sqrt(
+                np.clip(1 - ((y - dy) / w) ** 2, 0, None))
+            lower = -amp * _profile(np.pi * y / pitch) + t * np.sqrt(
+                np.clip(1 - ((x - dx) / w) ** 2, 0, None))
+            best = min(best, float((upper - lower).min()))
+    return best
+
+
+def _band_faces(k: int, n: int) -> np.ndarray:
+    """Faces of an open tube of ``k`` rings of ``n`` points (outward for rings that
+    turn from +u towards +z, stations along +x)."""
+    rings = np.arange(k * n, dtype=np.int64).reshape(k, n)
+    nxt = np.roll(rings, -1, axis=1)
+    a, b, c, d = rings[:-1], nxt[:-1], nxt[1:], rings[1:]
+    return np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3),
+                           np.stack([a, c, d], -1).reshape(-1, 3)])
+
+
+def tile_strands(start, end, bump, sign, *, geom: dict, resolution: int,
+                 stations: int) -> tuple[np.ndarray, np.ndarray]:
+    """Strands along x across the unit tile, open at ``x = 0`` and ``x = 1``.
+
+    Strand ``m`` of ``n = len(start)`` (``n`` even) follows the lattice line
+    ``y = (m + 1/2) / n`` moved sideways by
+    ``start[m] (1 - h(x)) + end[m] h(x) + bump[m] sin^2(pi x)``, ``h`` the
+    smoothstep ``3 x^2 - 2 x^3`` (so the strand leaves both sides square to
+    them); its centre line rises and falls as ``centre + sign[m] amp
+    profile(pi (n x - 1/2))``, at mid height on the tile sides and at its top
+    or bottom at the crossings ``x = (i + 1/2) / n``. Cross-sections are
+    ellipses in the vertical planes ``x = const``. The end rings at ``x = 0``
+    and ``x = 1`` depend only on ``start`` and ``end`` (same arithmetic for
+    both), so two tiles whose sides carry the same offsets meet bit for bit.
+
+    Parameters
+    ----------
+    start, end, bump : numpy.ndarray, (n,) float64
+        Sideways offsets at ``x = 0``, at ``x = 1`` and mid-tile.
+    sign : numpy.ndarray, (n,) float64
+        ``+1``: the strand passes over at the crossings with ``i`` even.
+    geom : dict
+        From :func:`strand_geometry`.
+    resolution : int
+        Points around each strand.
+    stations : int
+        Cross-sections per pitch (``1 / n``).
+
+    Returns
+    -------
+    V : numpy.ndarray, (n (n stations + 1) resolution, 3) float64
+    F : numpy.ndarray, (2 n n stations resolution, 3) int64
+        Open tubes, outward oriented; strand ``m`` owns one contiguous block of vertices.
+    """
+    start, end = np.asarray(start, float), np.asarray(end, float)
+    bump, sign = np.asarray(bump, float), np.asarray(sign, float)
+    n = start.size
+    k = n * int(stations) + 1
+    s = np.arange(k) / (k - 1)                              # 0 and 1 exactly
+    h = s * s * (3.0 - 2.0 * s)
+    b = np.sin(np.pi * s) ** 2
+    off = start[:, None] * (1.0 - h) + end[:, None] * h + bump[:, None] * b
+    zc = geom["centre"] + geom["amp"] * sign[:, None] * _profile(np.pi * (n * s - 0.5))
+    # the side cross-sections from the side's offsets alone, at mid height exactly
+    off[:, 0], off[:, -1] = start, end
+    zc[:, 0] = zc[:, -1] = geom["centre"]
+    u = (np.arange(n) + 0.5) / n
+    a = 2 * np.pi * np.arange(resolution) / resolution
+    cos_a, sin_a = np.cos(a), np.sin(a)
+    P = np.empty((n, k, resolution, 3))
+    P[..., 0] = s[None, :, None]
+    P[..., 1] = (u[:, None] + off)[..., None] + geom["w"] * cos_a
+    P[..., 2] = zc[..., None] + geom["t"] * sin_a
+    F = _band_faces(k, resolution)
+    faces = (F[None] + (k * resolution * np.arange(n))[:, None, None]).reshape(-1, 3)
+    return P.reshape(-1, 3), faces
+
+
+def build(size, rng: np.random.Generator, p: dict):
+    """Return ``(V, F)`` of the strands; see :data:`PARAMS`."""
+    pitch = p["pitch"]
+    geom = strand_geometry(p)
+    w, amp, centre_z = geom["w"], geom["amp"], geom["centre"]
     nx = max(1, int(round(size[1] / pitch)))         # strands along x (stacked in y)
     ny = max(1, int(round(size[0] / pitch)))         # strands along y
     cy, cx = size[1] / nx, size[0] / ny

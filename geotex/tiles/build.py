@@ -456,7 +456,7 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
         between the frame's (:func:`interior_paste`, fast). ``"periodic"``
         uses neither strips nor quilting: the tiles are cut from the
         exemplar's own periodic layout kept on its lattice
-        (:func:`geotex.tiles.periodic.periodic_tileset`; linked chain mail,
+        (:func:`geotex.tiles.periodic.periodic_tileset`; linked chain mail, weave,
         isotropic sets only, ``lattice`` is not used).
     name : str, optional
         Set name (default: the exemplar's).

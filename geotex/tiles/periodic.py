@@ -1,4 +1,4 @@
-"""Tile sets from a periodic exemplar layout kept on its lattice: linked chain mail.
+"""Tile sets from a periodic exemplar layout kept on its lattice: chain mail, weave.
 
 Linked rings cannot go through the strip-and-quilt pipeline of
 :mod:`geotex.tiles.build`: it picks elements one by one, so a ring taken alone
@@ -30,6 +30,20 @@ classed by the tile lines its footprint crosses:
 A side of colour ``c`` then carries the same cut whichever side it is, bit
 for bit, so the set is isotropic (:func:`geotex.tiles.verify.check_seams`).
 Shifts stay within 0.4 of the free clearance, so linked rings never touch.
+
+The plain weave (:class:`WeaveLayout`, :func:`weave_tileset`) is cut the same
+way but needs no cut at all: its strands run straight across the tile, ``n``
+along x and ``n`` along y (``n = 1 / pitch``, even, so the over-under pattern
+has period 1), and every tile side meets them at mid height, square to the
+side. Each colour is a vector of sideways strand offsets drawn from
+``default_rng(seed)``; a tile's strands run from the offsets of one side's
+colour to those of the opposite side's, with a mid-tile sway from the tile's
+own generator (:func:`geotex.exemplars.weave.tile_strands`). The strands along
+y are the strands along x mirrored across ``x = y``, so a side of colour
+``c`` carries the same cross-sections, bit for bit, whichever side it is, and
+the set is isotropic. Strands are open tubes ending on the tile sides: a
+tiling welds them into strands as long as the tiling
+(:func:`geotex.tiles.tiling.planar_tiling` caps them at its outer border).
 """
 
 from __future__ import annotations
@@ -39,6 +53,8 @@ import numpy as np
 from geotex.errors import GeotexError, InputError
 from geotex.exemplars.chainmail import (DIAGONAL_STEP, diagonal_layout, ring_meshes,
                                         wire_slack)
+from geotex.exemplars.weave import GAP as WEAVE_GAP
+from geotex.exemplars.weave import crossing_clearance, strand_geometry, tile_strands
 from geotex.mesh.topology import concatenated, face_components
 from geotex.progress import report
 from geotex.quilting import coverage_fraction
@@ -46,9 +62,10 @@ from geotex.tiles.clip import split_by_plane
 from geotex.tiles.colors import PLANAR_GROUPS, tile_keys
 from geotex.tiles.tileset import TileSet, tile_rng
 
-__all__ = ["periodic_tileset", "PeriodicLayout", "layout_of", "SUPPORTED"]
+__all__ = ["periodic_tileset", "PeriodicLayout", "WeaveLayout", "weave_tileset", "layout_of",
+           "SUPPORTED"]
 
-SUPPORTED = ("chainmail",)
+SUPPORTED = ("chainmail", "weave")
 SHIFT = 0.4          # largest random ring shift, as a fraction of the free clearance x jitter
 MARGIN = 1e-3        # added to a ring's reach when classing it by the lines it crosses
 OFFSETS = 32         # layout shifts along the diagonal tried (one row step in all)
@@ -151,8 +168,63 @@ class PeriodicLayout:
         return ring_meshes(C, sign, **self.params)
 
 
-def layout_of(exemplar) -> PeriodicLayout:
-    """The :class:`PeriodicLayout` of an exemplar (:data:`SUPPORTED` kinds only).
+class WeaveLayout:
+    """The plain weave of a weave parameter set, fitted to the unit tile.
+
+    Attributes
+    ----------
+    n : int
+        Strands along each axis per tile (even): ``1 / pitch`` rounded to an
+        even number.
+    pitch : float
+        Strand spacing actually used, ``1 / n``.
+    geom : dict
+        Half width, half thickness, centre height, amplitude
+        (:func:`~geotex.exemplars.weave.strand_geometry`).
+    shift : float
+        Largest sideways offset of a strand from its lattice line: ``jitter``
+        times half the room left between parallel strands once the gap is
+        kept. Side offsets and the mid-tile sway take at most half each.
+    clearance : float
+        Smallest vertical gap between crossing strands moved by up to
+        :attr:`shift` (:func:`~geotex.exemplars.weave.crossing_clearance`).
+    resolution, stations : int
+        Points around a strand; cross-sections per pitch.
+    """
+
+    def __init__(self, params: dict):
+        pitch0 = float(params["pitch"])
+        self.n = max(2, 2 * int(round(1.0 / (2.0 * pitch0))))
+        self.pitch = 1.0 / self.n
+        self.geom = strand_geometry(params, pitch=self.pitch)
+        self.shift = float(params["jitter"]) * 0.5 * self.geom["free"]
+        self.clearance = crossing_clearance(self.geom, self.pitch, self.shift)
+        if self.clearance < 2 * WEAVE_GAP:
+            raise InputError(f"periodic weave: crossing strands come {self.clearance:.3g} "
+                             f"apart (need {2 * WEAVE_GAP:g}); lower the jitter or the "
+                             "thickness, or raise the height")
+        self.resolution = int(params["resolution"])
+        self.stations = max(8, self.resolution)
+
+    def side_offsets(self, rng: np.random.Generator) -> np.ndarray:
+        """Sideways offsets ``(n,)`` of the strands crossing one side colour."""
+        return 0.5 * self.shift * rng.uniform(-1.0, 1.0, self.n)
+
+    def strands(self, start, end, rng: np.random.Generator, first_over: bool):
+        """Strands along x from offsets ``start`` (x = 0) to ``end`` (x = 1), sway from ``rng``.
+
+        ``first_over``: strand 0 passes over the first crossing (strands along
+        x); the strands along y, mirrored, pass under it.
+        """
+        bump = self.side_offsets(rng)
+        sign = np.where(np.arange(self.n) % 2 == 0, 1.0, -1.0)
+        return tile_strands(start, end, bump, sign if first_over else -sign, geom=self.geom,
+                            resolution=self.resolution, stations=self.stations)
+
+
+def layout_of(exemplar):
+    """The layout of an exemplar (:data:`SUPPORTED` kinds only): a
+    :class:`PeriodicLayout` for chain mail, a :class:`WeaveLayout` for the weave.
 
     Raises
     ------
@@ -163,6 +235,8 @@ def layout_of(exemplar) -> PeriodicLayout:
     if name not in SUPPORTED:
         raise InputError(f"interior 'periodic' (--interior periodic) needs an exemplar with a "
                          f"periodic tile layout ({', '.join(SUPPORTED)}), got {name!r}")
+    if name == "weave":
+        return WeaveLayout(dict(exemplar.params))
     return PeriodicLayout(dict(exemplar.params))
 
 
@@ -245,6 +319,9 @@ def periodic_tileset(exemplar, *, n_colors, seed: int = 0, name: str | None = No
         raise InputError(f"colors: interior 'periodic' builds isotropic sets, one colour count "
                          f"for all axes, got {tuple(n_colors)!r}")
     lay = layout_of(exemplar)
+    if isinstance(lay, WeaveLayout):
+        return weave_tileset(exemplar, lay, n_colors=n_colors, seed=seed, name=name,
+                             progress=progress)
     N = int(n_colors[0])
     report(progress, "strips")
     rng = np.random.default_rng(seed)
@@ -287,6 +364,68 @@ def periodic_tileset(exemplar, *, n_colors, seed: int = 0, name: str | None = No
                      "offset": round(lay.offset, 9), "rings_per_tile": 2 * lay.n ** 2,
                      "corner_wire_clearance": round(lay.corner_clearance, 6),
                      "unanchored_pieces": lay.loose_pieces},
+        "coverage_mean": round(float(np.mean(coverage)), 6),
+    }
+    height = max(float(V[:, 2].max()) for V, _ in tiles)
+    return TileSet.from_tiles(tiles, groups, cols, n_colors=(N, N, N), height=height,
+                              depth=float(params["depth"]), name=name or exemplar.name,
+                              metadata=meta)
+
+
+def weave_tileset(exemplar, layout: WeaveLayout, *, n_colors, seed: int = 0,
+                  name: str | None = None, progress=None) -> TileSet:
+    """Build the isotropic plain-weave set (see the module notes).
+
+    Parameters
+    ----------
+    exemplar : Exemplar
+        A ``weave`` exemplar (its parameters are recorded).
+    layout : WeaveLayout
+    n_colors : tuple of 3 int
+        Equal colour counts.
+    seed : int
+        Colours draw their offsets from ``default_rng(seed)``, colour by
+        colour; tile ``t`` its mid-tile sway from
+        ``default_rng(SeedSequence(seed, spawn_key=(t,)))``.
+    name : str, optional
+    progress : callable, optional
+        Called with ``"strips"`` and ``"tile i/T"``.
+
+    Returns
+    -------
+    TileSet
+        ``metadata["tiling_border"]`` is ``"cap"``: strands run across the
+        whole of a tiling, so its outer border caps them instead of dropping them.
+    """
+    lay = layout
+    N = int(n_colors[0])
+    report(progress, "strips")
+    rng = np.random.default_rng(seed)
+    side = [lay.side_offsets(rng) for _ in range(N)]
+    groups, cols = tile_keys((N, N, N), PLANAR_GROUPS)
+    tiles, coverage = [], []
+    for t, (cs, ce, cn, cw) in enumerate(cols.tolist()):
+        trng = tile_rng(seed, t)
+        along_x = lay.strands(side[cw], side[ce], trng, True)
+        along_y = _swapped(lay.strands(side[cs], side[cn], trng, False))
+        tile = concatenated([along_x, along_y])
+        tiles.append(tile)
+        coverage.append(coverage_fraction(tile[0], tile[1], (0.0, 0.0, 1.0, 1.0),
+                                          resolution=100))
+        report(progress, f"tile {t + 1}/{len(cols)}")
+    params = dict(exemplar.params)
+    recipe = {"name": exemplar.name, "params": params}
+    meta = {
+        "exemplar": recipe,
+        "recipe": {"exemplar": recipe, "colors": [N, N, N], "planar": False,
+                   "isotropic": True, "lattice": False, "seed": int(seed),
+                   "interior": "periodic"},
+        "isotropic": True,
+        "lattice": None,
+        "periodic": {"layout": "plain weave", "strands_per_axis": lay.n,
+                     "pitch": round(lay.pitch, 9), "shift_max": round(lay.shift, 9),
+                     "crossing_clearance": round(lay.clearance, 6)},
+        "tiling_border": "cap",
         "coverage_mean": round(float(np.mean(coverage)), 6),
     }
     height = max(float(V[:, 2].max()) for V, _ in tiles)

@@ -9,9 +9,13 @@ from geotex.errors import InputError
 from geotex.mesh.needles import SLIVER_TOLERANCE, needle_free
 from geotex.mesh.solid import arrays_of_manifold, manifold_of
 from geotex.mesh.topology import compacted, edge_topology, face_components
+from geotex.quilting.elements import capped
 from geotex.tiles.tileset import TileSet
 
-__all__ = ["random_arrangement", "planar_tiling", "welded", "closed_elements", "on_slab"]
+__all__ = ["random_arrangement", "planar_tiling", "welded", "closed_elements", "on_slab",
+           "BORDERS"]
+
+BORDERS = ("drop", "open", "cap")
 
 
 def random_arrangement(tiles: TileSet, width: int, height: int, *,
@@ -94,7 +98,7 @@ def closed_elements(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarra
     return compacted(V, F[~np.isin(labels, bad)])
 
 
-def planar_tiling(tiles: TileSet, arrangement: np.ndarray, *, border: str = "drop"
+def planar_tiling(tiles: TileSet, arrangement: np.ndarray, *, border: str | None = None
                   ) -> tuple[np.ndarray, np.ndarray]:
     """Lay tiles out on the grid and weld them.
 
@@ -103,16 +107,29 @@ def planar_tiling(tiles: TileSet, arrangement: np.ndarray, *, border: str = "dro
     tiles : TileSet
     arrangement : numpy.ndarray, (h, w) int64
         Tile numbers per cell (see :func:`random_arrangement`).
-    border : {"drop", "open"}
+    border : {"drop", "open", "cap"}, optional
         What to do with the elements cut open by the outer border of the
-        tiling: drop them (the result is a set of closed elements) or keep them.
+        tiling: drop them (the result is a set of closed elements), keep them
+        open, or close their openings with flat caps in the border planes
+        (:func:`geotex.quilting.elements.capped`; for sets whose elements run
+        across the whole tiling, such as the weave's strands). Default: the
+        set's ``metadata["tiling_border"]``, else ``"drop"``.
 
     Returns
     -------
     V : numpy.ndarray, (n, 3) float64
         Positions in tile units; cell ``(j, i)`` covers ``[i, i+1] x [j, j+1]``.
     F : numpy.ndarray, (m, 3) int64
+
+    Raises
+    ------
+    InputError
+        Unknown ``border``, or an opening that cannot be capped.
     """
+    if border is None:
+        border = tiles.metadata.get("tiling_border", "drop")
+    if border not in BORDERS:
+        raise InputError(f"border: expected one of {', '.join(BORDERS)}, got {border!r}")
     h, w = arrangement.shape
     parts_v, parts_f, seam = [], [], []
     offset = 0
@@ -124,9 +141,10 @@ def planar_tiling(tiles: TileSet, arrangement: np.ndarray, *, border: str = "dro
             seam.append((V[:, 0] == 0.0) | (V[:, 0] == 1.0) | (V[:, 1] == 0.0)
                         | (V[:, 1] == 1.0))
             offset += len(V)
-    if border not in ("drop", "open"):
-        raise InputError(f"border: expected 'drop' or 'open', got {border!r}")
     V, F = welded(np.vstack(parts_v), np.vstack(parts_f), np.concatenate(seam))
+    if border == "cap":
+        F, _, _ = capped(V, F, (0.0, 0.0, float(w), float(h)))
+        return closed_elements(V, F)
     return closed_elements(V, F) if border == "drop" else (V, F)
 
 
