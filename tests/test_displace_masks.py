@@ -315,3 +315,15 @@ def test_open_base_is_refused_before_any_relief_work(part, tmp_path, monkeypatch
     F2 = np.vstack([F, F + V.shape[0]])
     with pytest.raises(InputError, match="self-intersecting face pairs"):
         displaced_mesh(V2, F2, "dots", depth=0.5)
+
+
+def test_coordinates_beyond_what_the_output_stores_are_refused_first(part, monkeypatch):
+    """A closed box at +-3.4e38 (FLT_MAX) is refused before the mapping casts it."""
+    import geotex.displace.api as api
+
+    monkeypatch.setattr(api, "load_height_map", lambda *a, **k: pytest.fail("work started"))
+    V, F = part
+    with pytest.raises(InputError, match="coordinates reach 3.4e\\+38 mm"):
+        displaced_mesh(V * 1.7e37, F, "dots", depth=1.0)
+    with pytest.raises(InputError, match="coordinates reach"):
+        displaced_mesh(V * 1e14, F, "dots", depth=1.0, precision=np.float64)

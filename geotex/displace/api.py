@@ -181,16 +181,26 @@ def displaced_mesh(V, F, image, *, depth: float, mapping: str = "triplanar", sca
     Raises
     ------
     InputError
-        A part that is not a closed solid (``check_base``), bad options, an
+        A part that is not a closed solid (``check_base``), coordinates
+        beyond a quarter of ``precision``'s range or 1e15 mm, bad options, an
         absurd depth, a mapping that cannot be made, or a result above
         ``max_faces``.
     """
     V, F = as_mesh_arrays(V, F)
     if F.shape[0] == 0:
         raise InputError("the part has no faces")
+    d = positive_number(depth, name="depth")
+    # coordinates the output cannot store, or the mappings cannot turn into tile
+    # indices, are refused before any work (were NumPy cast warnings, then a refusal
+    # of the finished relief)
+    reach = float(np.abs(V).max())
+    limit = min(float(np.finfo(precision).max) / 4, 1e15)
+    if not reach + d <= limit:
+        raise InputError(f"coordinates reach {reach:.3g} mm, beyond the {limit:.3g} mm that "
+                         f"{np.dtype(precision).name} output and the mappings handle; scale "
+                         "the part down")
     if check_base:
         refuse_broken_part(V, F)
-    d = positive_number(depth, name="depth")
     warns = list(depth_warnings(V, d))
     opt = mapping_options(mapping, scale_u=scale_u, scale_v=scale_v, offset_u=offset_u,
                           offset_v=offset_v, rotation=rotation, sharpness=sharpness,

@@ -58,7 +58,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from geotex.errors import InputError
+from geotex.errors import GeotexError, InputError
+from geotex.io import read_mesh_colors
 from geotex.mesh.geometry import face_normals
 from geotex.mesh.topology import edge_topology
 from geotex.options import finite_number
@@ -341,9 +342,6 @@ def painted_faces(path, V, F, *, color=None, tolerance: float = PAINT_TOLERANCE)
     [0, 1]
     >>> tmp.cleanup()
     """
-    from geotex.errors import GeotexError
-    from geotex.io import read_mesh_colors
-
     p = Path(path)
     col = _paint_color(color)
     tol = finite_number(tolerance, name="mask tolerance")

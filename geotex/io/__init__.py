@@ -17,7 +17,9 @@ error says so ("content looks like a binary STL file; rename it with the .stl
 extension").
 
 Reading returns a :class:`geotex.mesh.Mesh` with ``metadata["format"]`` and
-``metadata["source"]`` set; see each format module for what is read:
+``metadata["source"]`` set (colours are dropped; :func:`read_mesh_colors`
+returns the per-face and per-vertex colours of PLY and OBJ files too); see
+each format module for what is read:
 
 =======  ===============================================================
 .stl     :mod:`geotex.io.stl`: ASCII and binary; corners welded exactly

@@ -2,7 +2,8 @@
 
 Reading
     ``v x y z [w | r g b ...]`` (only x, y, z are used; extra columns such as
-    vertex colours, even ``nan`` ones, are ignored), ``vt u [v [w]]``, and
+    vertex colours, even ``nan`` ones, are ignored; :func:`read_obj_colors`
+    reads ``r g b`` too), ``vt u [v [w]]``, and
     ``f`` corners written ``v``, ``v/vt``, ``v//vn`` or ``v/vt/vn``.  Indices
     start at 1; negative indices count back from the last vertex defined
     before the face.  Polygons with more than three corners are triangulated

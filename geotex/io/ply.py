@@ -6,7 +6,8 @@ Reading
     ``int8 ... float64`` names); its other properties, lists included, are
     skipped.  Per-vertex texture coordinates (``s t``, ``u v``,
     ``texture_u texture_v`` or ``texture_s texture_t``) become ``uv`` with
-    ``uv_faces == faces``.  The ``face`` element's list property
+    ``uv_faces == faces``.  Colours (``red green blue`` and the like, on the
+    vertex and face elements) are read by :func:`read_ply_colors` only.  The ``face`` element's list property
     ``vertex_indices`` (or ``vertex_index``) may use any count and index
     types; polygons are triangulated without overlaps, concave ones included
     (see :func:`geotex.io._common.triangulate_polygons`), and faces with
