@@ -37,7 +37,7 @@ def _numbers(text: str, k: int, flag: str) -> list[float]:
 
 def register(sub):
     from geotex.displace.mappings import MAPPINGS
-    from geotex.displace.masks import CURVES
+    from geotex.displace.masks import CURVES, PAINT_TOLERANCE
 
     p = sub.add_parser("displace", help=HELP, description=HELP + ". The part is refined "
                        "(exact edge splits, creases kept), each vertex reads its height "
@@ -100,9 +100,9 @@ def register(sub):
                    "matched by nearest centroid")
     p.add_argument("--mask-color", metavar="R,G,B", default=None,
                    help="with a painted --mask-faces: select this paint (0-255) instead")
-    p.add_argument("--mask-tolerance", type=float, default=30.0, metavar="T",
+    p.add_argument("--mask-tolerance", type=float, default=PAINT_TOLERANCE, metavar="T",
                    help="colours match when no channel (0-255) differs by more than T "
-                   "(default 30)")
+                   f"(default {PAINT_TOLERANCE:g})")
     p.add_argument("--mask-box", metavar="X0,Y0,Z0,X1,Y1,Z1", help="select faces in a box (mm)")
     p.add_argument("--mask-sphere", metavar="X,Y,Z,R", help="select faces in a sphere (mm)")
     p.add_argument("--mask-normal", metavar="X,Y,Z,DEG",

@@ -259,8 +259,8 @@ def _paint_color(color) -> np.ndarray | None:
     return np.asarray(vals, dtype=np.float64)
 
 
-def _painted(rgb: np.ndarray, color, tol: float, where: str) -> tuple[np.ndarray, str]:
-    """Which of ``rgb`` (k, 3) are painted, and a description of the rule."""
+def _painted(rgb: np.ndarray, color, tol: float, where: str) -> np.ndarray:
+    """Which of ``rgb`` (k, 3) are painted (see the module notes)."""
     if rgb.shape[0] == 0:
         raise InputError(f"face selection {where}: the painted mesh has no faces")
     if color is not None:
@@ -271,7 +271,7 @@ def _painted(rgb: np.ndarray, color, tol: float, where: str) -> tuple[np.ndarray
             raise InputError(f"face selection {where}: no colour within {tol:g} of mask color "
                              f"{','.join(f'{v:g}' for v in color)}; the file's colours are "
                              f"{top}")
-        return on, "colour " + ",".join(f"{v:g}" for v in color)
+        return on
     q, inv, cnt = np.unique(np.rint(rgb).astype(np.int64), axis=0, return_inverse=True,
                             return_counts=True)
     order = np.argsort(-cnt, kind="stable")
@@ -281,14 +281,15 @@ def _painted(rgb: np.ndarray, color, tol: float, where: str) -> tuple[np.ndarray
     if cnt[order[0]] == cnt[order[1]]:
         raise InputError(f"face selection {where}: colours {','.join(map(str, q[order[0]]))} "
                          f"and {','.join(map(str, q[order[1]]))} are equally common, so the "
-                         "unpainted one is unknown; give the paint as mask color R,G,B")
+                         "unpainted one is unknown; name the paint's colour (mask color R,G,B, "
+                         "--mask-color in the command)")
     base = q[order[0]].astype(np.float64)
     on = np.abs(rgb - base).max(axis=1) > tol
     if not on.any():
         raise InputError(f"face selection {where}: every colour is within {tol:g} of the base "
                          f"colour {','.join(map(str, q[order[0]]))}: nothing is painted (lower "
-                         "the mask tolerance or give mask color)")
-    return on, "not the base colour " + ",".join(map(str, q[order[0]]))
+                         "the mask tolerance, --mask-tolerance in the command)")
+    return on
 
 
 def painted_faces(path, V, F, *, color=None, tolerance: float = PAINT_TOLERANCE) -> np.ndarray:
@@ -361,9 +362,9 @@ def painted_faces(path, V, F, *, color=None, tolerance: float = PAINT_TOLERANCE)
     if Fp.shape[0] == 0:
         raise InputError(f"face selection {p}: the painted mesh has no faces")
     if face_rgb is not None:
-        sel, _ = _painted(face_rgb, col, tol, str(p))
+        sel = _painted(face_rgb, col, tol, str(p))
     else:
-        on, _ = _painted(vertex_rgb, col, tol, str(p))
+        on = _painted(vertex_rgb, col, tol, str(p))
         sel = on[Fp].sum(axis=1) >= 2
         if not sel.any():
             raise InputError(f"face selection {p}: no face has two painted corners (paint "

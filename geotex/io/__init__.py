@@ -57,7 +57,8 @@ from geotex.io.stl import read_stl, write_stl
 from geotex.io.threemf import read_3mf, write_3mf
 from geotex.mesh.record import Mesh
 
-__all__ = ["read_mesh", "read_mesh_colors", "write_mesh", "weld_exact", "READ_FORMATS", "WRITE_FORMATS",
+__all__ = ["read_mesh", "read_mesh_colors", "write_mesh", "weld_exact", "READ_FORMATS",
+           "WRITE_FORMATS",
            "atomic_output", "atomic_group", "sniff_format", "format_of"]
 
 READ_FORMATS = (".stl", ".obj", ".ply", ".off", ".3mf", ".glb")

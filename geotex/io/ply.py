@@ -7,9 +7,9 @@ Reading
     skipped.  Per-vertex texture coordinates (``s t``, ``u v``,
     ``texture_u texture_v`` or ``texture_s texture_t``) become ``uv`` with
     ``uv_faces == faces``.  Colours (``red green blue`` and the like, on the
-    vertex and face elements) are read by :func:`read_ply_colors` only.  The ``face`` element's list property
-    ``vertex_indices`` (or ``vertex_index``) may use any count and index
-    types; polygons are triangulated without overlaps, concave ones included
+    vertex and face elements) are read by :func:`read_ply_colors` only.  The
+    ``face`` element's list property ``vertex_indices`` (or ``vertex_index``)
+    may use any count and index types; polygons are triangulated without overlaps, concave ones included
     (see :func:`geotex.io._common.triangulate_polygons`), and faces with
     fewer than three corners are skipped (counted in
     ``metadata["skipped_faces"]``).  Any other element (edges, materials,
