@@ -314,9 +314,9 @@ def test_lapped_mapping_is_printable_and_refuses_a_named_field():
 
 def test_broken_bases_give_one_line_and_no_file(tmp_path):
     """An empty file and a part with a repeated-index face are refused at once (exit 2,
-    one line naming the problem, before any relief is built); through the Python API,
-    degenerate faces leave vertices without a normal, which do not move (no NaN
-    coordinates)."""
+    one line naming the problem, before any relief is built), by the Python API too;
+    with the base check turned off, degenerate faces leave vertices without a normal,
+    which do not move (no NaN coordinates)."""
     from geotex.io import write_mesh
     from geotex.mesh.record import Mesh
 
@@ -337,5 +337,8 @@ def test_broken_bases_give_one_line_and_no_file(tmp_path):
     assert "not a closed solid to displace: open" in res.stderr
     assert len(res.stderr.strip().splitlines()) == 1 and not out.exists()
     from geotex.displace import displaced_mesh
-    r = displaced_mesh(V, F, "dots", depth=0.5, target_faces=5000, judge=False)
+    with pytest.raises(InputError, match="not a closed solid to displace: open"):
+        displaced_mesh(V, F, "dots", depth=0.5, target_faces=5000, judge=False)
+    r = displaced_mesh(V, F, "dots", depth=0.5, target_faces=5000, judge=False,
+                       check_base=False)
     assert np.isfinite(r.vertices).all()

@@ -21,6 +21,7 @@ FLAGS = {"depth": "--depth", "scale_u": "--scale-u", "scale_v": "--scale-v",
          "fill seed faces": "--mask-fill", "fill_angle": "--fill-angle",
          "field": "--field", "field direction": "--field", "refining to edges": "--edge-mm",
          "face selection": "--mask-faces", "the mask": "mask options",
+         "mask color": "--mask-color", "mask tolerance": "--mask-tolerance",
          "the uv mapping": "--mapping uv"}
 
 
@@ -36,7 +37,7 @@ def _numbers(text: str, k: int, flag: str) -> list[float]:
 
 def register(sub):
     from geotex.displace.mappings import MAPPINGS
-    from geotex.displace.masks import CURVES
+    from geotex.displace.masks import CURVES, PAINT_TOLERANCE
 
     p = sub.add_parser("displace", help=HELP, description=HELP + ". The part is refined "
                        "(exact edge splits, creases kept), each vertex reads its height "
@@ -91,7 +92,17 @@ def register(sub):
                    help="faces within DEG of facing down stay flat (default 5; 0: off)")
     p.add_argument("--mask-top", type=float, default=0.0, metavar="DEG",
                    help="faces within DEG of facing up stay flat (default 0: off)")
-    p.add_argument("--mask-faces", metavar="FILE.json", help="face selection: JSON face indices")
+    p.add_argument("--mask-faces", metavar="FILE.json|PAINTED.ply|PAINTED.obj",
+                   help="face selection: JSON face indices, or the part painted in any editor "
+                   "(PLY with per-face or per-vertex colours, OBJ with v x y z r g b): faces "
+                   "whose colour is not the part's most common colour are selected (vertex "
+                   "colours: 2 of 3 corners); the painted file may be re-indexed, faces are "
+                   "matched by nearest centroid")
+    p.add_argument("--mask-color", metavar="R,G,B", default=None,
+                   help="with a painted --mask-faces: select this paint (0-255) instead")
+    p.add_argument("--mask-tolerance", type=float, default=PAINT_TOLERANCE, metavar="T",
+                   help="colours match when no channel (0-255) differs by more than T "
+                   f"(default {PAINT_TOLERANCE:g})")
     p.add_argument("--mask-box", metavar="X0,Y0,Z0,X1,Y1,Z1", help="select faces in a box (mm)")
     p.add_argument("--mask-sphere", metavar="X,Y,Z,R", help="select faces in a sphere (mm)")
     p.add_argument("--mask-normal", metavar="X,Y,Z,DEG",
@@ -134,7 +145,8 @@ def run(args) -> int:
     if not base.is_file():
         raise UsageError(f"{base}: no such file")
     image_is_file = args.image not in library_names()
-    out = guard_output(args.output, args.base, args.image if image_is_file else None)
+    out = guard_output(args.output, args.base, args.image if image_is_file else None,
+                       args.mask_faces)
     if out.suffix.lower() not in PRINT_FORMATS:
         raise UsageError(f"{out}: cannot write a print as '{out.suffix}'; use .stl or .3mf")
     if image_is_file and not Path(args.image).is_file():
@@ -154,15 +166,24 @@ def run(args) -> int:
     field = args.field
     if field is not None and field not in ("smooth", "curvature"):
         field = _numbers(field, 3, "--field")
+    mask_color = None
+    if args.mask_color is not None:
+        if args.mask_faces is None:
+            raise UsageError("--mask-color needs a painted --mask-faces PLY/OBJ file")
+        mask_color = _numbers(args.mask_color, 3, "--mask-color")
+        if not all(0 <= v <= 255 for v in mask_color):
+            raise UsageError(f"--mask-color {args.mask_color!r}: give R,G,B in 0-255")
+    if not (math.isfinite(args.mask_tolerance) and 0 <= args.mask_tolerance <= 255):
+        raise UsageError(f"--mask-tolerance {args.mask_tolerance}: give a number in 0-255")
+    if args.mask_faces is not None and not Path(args.mask_faces).is_file():
+        raise UsageError(f"--mask-faces {args.mask_faces}: no such file")
     from geotex.displace import DISPLACE_STAGES, displace_file, mask_options
-    from geotex.displace.masks import face_selection_file
     from geotex.errors import InputError, NotPrintableError
     from geotex.progress import stage_bar
 
     try:
-        faces = face_selection_file(args.mask_faces) if args.mask_faces else None
         masks = mask_options(
-            bottom_angle=args.mask_bottom, top_angle=args.mask_top, faces=faces,
+            bottom_angle=args.mask_bottom, top_angle=args.mask_top,
             box=_numbers(args.mask_box, 6, "--mask-box") if args.mask_box else None,
             sphere=_numbers(args.mask_sphere, 4, "--mask-sphere") if args.mask_sphere else None,
             normal_cone=(_numbers(args.mask_normal, 4, "--mask-normal")
@@ -177,7 +198,9 @@ def run(args) -> int:
                     cap_angle=args.cap_angle, symmetric=args.symmetric, blur=args.blur,
                     invert=args.invert, masks=masks, edge_length=args.edge_mm,
                     target_faces=args.faces, max_faces=args.max_faces,
-                    decimate_to=args.decimate, field=field, seed=args.seed)
+                    decimate_to=args.decimate, field=field, seed=args.seed,
+                    mask_file=args.mask_faces, mask_color=mask_color,
+                    mask_tolerance=args.mask_tolerance)
         status = EXIT_OK
         with stage_bar(len(DISPLACE_STAGES), "displace") as bar:
             try:
@@ -200,6 +223,8 @@ def run(args) -> int:
     for w in res.warnings:
         print(f"geotex: warning: {w}", file=sys.stderr)
     s = res.stats
+    if "mask_file_faces" in s:
+        print(f"face selection {args.mask_faces}: {s['mask_file_faces']} base faces selected")
     if status == EXIT_OK:
         print(f"wrote {out}: {s['faces']} faces, {args.mapping} mapping, depth "
               f"{args.depth:g} mm, printable as written (checked on the file's own coordinates)")

@@ -7,11 +7,12 @@ core :func:`geotex.relief.displaced_solid`.
 """
 
 from geotex.displace.api import (DISPLACE_STAGES, DisplaceResult, depth_warnings,
-                                 displace_file, displaced_mesh)
+                                 displace_file, displaced_mesh, refuse_broken_part)
 from geotex.displace.heightmap import filtered_height_map, load_height_map, sample_periodic
 from geotex.displace.mappings import MAPPINGS, MappingOptions, mapping_options
-from geotex.displace.masks import MaskOptions, mask_options
+from geotex.displace.masks import MaskOptions, face_selection, mask_options, painted_faces
 
 __all__ = ["displaced_mesh", "displace_file", "DisplaceResult", "depth_warnings",
            "DISPLACE_STAGES", "MAPPINGS", "MappingOptions", "mapping_options", "MaskOptions",
-           "mask_options", "load_height_map", "filtered_height_map", "sample_periodic"]
+           "mask_options", "face_selection", "painted_faces", "refuse_broken_part",
+           "load_height_map", "filtered_height_map", "sample_periodic"]

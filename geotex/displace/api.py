@@ -10,14 +10,15 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from geotex.check.report import check_mesh
 from geotex.displace.heightmap import filtered_height_map, load_height_map
 from geotex.displace.mappings import mapping_options, projected_heights
-from geotex.displace.masks import MaskOptions, mask_weights, selected_faces
+from geotex.displace.masks import (PAINT_TOLERANCE, MaskOptions, face_selection, mask_weights,
+                                   selected_faces)
 from geotex.errors import InputError
 from geotex.io import read_mesh
 from geotex.mesh.arrays import as_mesh_arrays
@@ -27,7 +28,7 @@ from geotex.progress import report
 from geotex.relief import DEFAULT_MAX_FACES, displaced_solid, edge_length_for_faces
 
 __all__ = ["displaced_mesh", "displace_file", "stored_judge", "DisplaceResult", "depth_warnings",
-           "DEFAULT_TARGET_FACES", "DISPLACE_STAGES"]
+           "refuse_broken_part", "DEFAULT_TARGET_FACES", "DISPLACE_STAGES"]
 
 #: Default size of the refined mesh.
 DEFAULT_TARGET_FACES = 1_000_000
@@ -118,14 +119,17 @@ def displaced_mesh(V, F, image, *, depth: float, mapping: str = "triplanar", sca
                    target_faces: int = DEFAULT_TARGET_FACES,
                    max_faces: int = DEFAULT_MAX_FACES, decimate_to: int | None = None,
                    uv=None, field=None, seed: int = 0, precision=np.float32,
-                   judge: bool = True, progress=None) -> DisplaceResult:
+                   judge: bool = True, check_base: bool = True,
+                   progress=None) -> DisplaceResult:
     """Displace a part (millimetres) by a height map under a mapping.
 
     Parameters
     ----------
     V : array_like, (n, 3) float64
     F : array_like, (m, 3) int64
-        A closed manifold part, in millimetres.
+        A closed, manifold, consistently oriented part without
+        self-intersections, in millimetres (refused at once otherwise; see
+        ``check_base``).
     image : str, os.PathLike or array_like
         A library name (:func:`geotex.displace.library.library_names`), an
         image file or an array (see :func:`~geotex.displace.heightmap.load_height_map`).
@@ -164,6 +168,10 @@ def displaced_mesh(V, F, image, *, depth: float, mapping: str = "triplanar", sca
     judge : bool, optional
         Judge the result as stored (and lower the relief where it crosses
         itself); ``False`` skips the check (the result is then not verified).
+    check_base : bool, optional
+        Refuse a broken part before any work (:func:`refuse_broken_part`);
+        ``False`` when the caller has checked it already (as
+        :func:`displace_file` does on the file as read).
     progress : callable, optional
 
     Returns
@@ -173,13 +181,26 @@ def displaced_mesh(V, F, image, *, depth: float, mapping: str = "triplanar", sca
     Raises
     ------
     InputError
-        Bad options, an absurd depth, a mapping that cannot be made, or a
-        result above ``max_faces``.
+        A part that is not a closed solid (``check_base``), coordinates
+        beyond a quarter of ``precision``'s range or 1e15 mm, bad options, an
+        absurd depth, a mapping that cannot be made, or a result above
+        ``max_faces``.
     """
     V, F = as_mesh_arrays(V, F)
     if F.shape[0] == 0:
         raise InputError("the part has no faces")
     d = positive_number(depth, name="depth")
+    # coordinates the output cannot store, or the mappings cannot turn into tile
+    # indices, are refused before any work (were NumPy cast warnings, then a refusal
+    # of the finished relief)
+    reach = float(np.abs(V).max())
+    limit = min(float(np.finfo(precision).max) / 4, 1e15)
+    if not reach + d <= limit:
+        raise InputError(f"coordinates reach {reach:.3g} mm, beyond the {limit:.3g} mm that "
+                         f"{np.dtype(precision).name} output and the mappings handle; scale "
+                         "the part down")
+    if check_base:
+        refuse_broken_part(V, F)
     warns = list(depth_warnings(V, d))
     opt = mapping_options(mapping, scale_u=scale_u, scale_v=scale_v, offset_u=offset_u,
                           offset_v=offset_v, rotation=rotation, sharpness=sharpness,
@@ -273,15 +294,29 @@ def _read_part(path, *, step_quality: str = "standard"):
     return mesh.vertices, mesh.faces, uv
 
 
-def _refuse_broken_part(V, F, name) -> None:
-    """Raise InputError when the part is not a closed, manifold, oriented, embedded solid.
+def refuse_broken_part(V, F, *, name: str = "the part") -> None:
+    """Refuse a part that is not a closed, manifold, oriented solid free of self-intersections.
 
-    Checked on the part as read, before any refinement, so that a broken file is
-    refused at once (a relief built on it would be judged not printable only after
-    all the work). Degenerate faces and several bodies are accepted: the relief
-    copes with both.
+    Run on the part before any refinement, so that a broken part is refused at
+    once (a relief built on it would only be judged not printable after all
+    the work).  Degenerate faces and several bodies are accepted: the relief
+    copes with both.  One :func:`geotex.check.report.check_mesh` of the base
+    (topology and self-intersections; manifold3d's opinion is not asked, its
+    closed / manifold / oriented verdict is the topology stage's).
+
+    Parameters
+    ----------
+    V : array_like, (n, 3) float64
+    F : array_like, (m, 3) int64
+    name : str, optional
+        How the message names the part (a file name).
+
+    Raises
+    ------
+    InputError
+        Naming every problem found, and ``geotex repair`` as the way out.
     """
-    r = check_mesh(V, F, max_examples=1)
+    r = check_mesh(V, F, manifold3d=False, max_examples=1)
     problems = []
     if r.boundary_edges:
         problems.append(f"open ({r.boundary_edges} boundary edges)")
@@ -297,7 +332,8 @@ def _refuse_broken_part(V, F, name) -> None:
 
 
 def displace_file(base, image, output, *, depth: float, size_mm: float | None = None,
-                  step_quality: str = "standard", force: bool = False, progress=None,
+                  step_quality: str = "standard", mask_file=None, mask_color=None,
+                  mask_tolerance: float = PAINT_TOLERANCE, force: bool = False, progress=None,
                   **options) -> DisplaceResult:
     """Read a part, displace it by a height map, and write it only if printable.
 
@@ -315,6 +351,16 @@ def displace_file(base, image, output, *, depth: float, size_mm: float | None = 
         Scale the part so its largest extent is this many millimetres.
     step_quality : str, optional
         STEP tessellation preset (``coarse``, ``standard``, ``fine``).
+    mask_file : str or os.PathLike, optional
+        A face selection: JSON face indices, or a painted copy of the base
+        (PLY with per-face or per-vertex colours, OBJ with vertex colours),
+        matched to the base as read (before ``size_mm``); see
+        :func:`geotex.displace.masks.face_selection`.  It replaces the
+        ``faces`` of ``options["masks"]``.
+    mask_color : sequence of 3 floats, optional
+        The paint colour (0..255); default: any colour but the most common.
+    mask_tolerance : float, optional
+        Per-channel colour tolerance (0..255).
     force : bool, optional
         Write even when not printable.
     progress : callable, optional
@@ -329,7 +375,8 @@ def displace_file(base, image, output, *, depth: float, size_mm: float | None = 
     Raises
     ------
     InputError
-        Unreadable files, bad options.
+        Unreadable files, a part that is not a closed solid (refused before
+        any relief work), a bad selection file, bad options.
     NotPrintableError
         The result is not printable as stored (nothing written) and not ``force``.
     """
@@ -340,14 +387,20 @@ def displace_file(base, image, output, *, depth: float, size_mm: float | None = 
     V, F, uv = _read_part(base, step_quality=step_quality)
     if F.shape[0] == 0:
         raise InputError(f"{base}: the mesh has no faces")
-    _refuse_broken_part(V, F, base)
+    refuse_broken_part(V, F, name=str(base))
+    if mask_file is not None:
+        sel = face_selection(mask_file, V, F, color=mask_color, tolerance=mask_tolerance)
+        masks = options.get("masks") or MaskOptions()
+        options["masks"] = replace(masks, faces=np.flatnonzero(sel))
+    elif mask_color is not None:
+        raise InputError("mask color needs a painted face-selection file")
     if size_mm is not None:
         s = positive_number(size_mm, name="size_mm") / float(np.ptp(V, axis=0).max())
         V = V * s
     read_s = time.perf_counter() - t
     if options.get("mapping") == "uv" and "uv" not in options:
         options["uv"] = uv
-    res = displaced_mesh(V, F, image, depth=depth, progress=progress,
+    res = displaced_mesh(V, F, image, depth=depth, progress=progress, check_base=False,
                          precision=stored_precision(Path(output).suffix), **options)
     t = time.perf_counter()
     report(progress, "write")
@@ -356,4 +409,6 @@ def displace_file(base, image, output, *, depth: float, size_mm: float | None = 
     stats = dict(res.stats)
     stats["seconds"] = dict(stats["seconds"], read=round(read_s, 3),
                             write=round(time.perf_counter() - t, 3))
+    if mask_file is not None:
+        stats["mask_file_faces"] = int(options["masks"].faces.size)
     return DisplaceResult(res.vertices, res.faces, rep, stats, res.warnings)

@@ -17,7 +17,9 @@ error says so ("content looks like a binary STL file; rename it with the .stl
 extension").
 
 Reading returns a :class:`geotex.mesh.Mesh` with ``metadata["format"]`` and
-``metadata["source"]`` set; see each format module for what is read:
+``metadata["source"]`` set (colours are dropped; :func:`read_mesh_colors`
+returns the per-face and per-vertex colours of PLY and OBJ files too); see
+each format module for what is read:
 
 =======  ===============================================================
 .stl     :mod:`geotex.io.stl`: ASCII and binary; corners welded exactly
@@ -47,15 +49,16 @@ from geotex.errors import (GeotexError, InputError, MeshFileError, MissingFileEr
 from geotex.io._common import gc_paused, weld_exact
 from geotex.io.atomic import atomic_group, atomic_output
 from geotex.io.glb import read_glb, write_glb
-from geotex.io.obj import read_obj, write_obj
+from geotex.io.obj import read_obj, read_obj_colors, write_obj
 from geotex.io.off import read_off, write_off
-from geotex.io.ply import read_ply, write_ply
+from geotex.io.ply import read_ply, read_ply_colors, write_ply
 from geotex.io.sniff import mismatch_hint, sniff_format
 from geotex.io.stl import read_stl, write_stl
 from geotex.io.threemf import read_3mf, write_3mf
 from geotex.mesh.record import Mesh
 
-__all__ = ["read_mesh", "write_mesh", "weld_exact", "READ_FORMATS", "WRITE_FORMATS",
+__all__ = ["read_mesh", "read_mesh_colors", "write_mesh", "weld_exact", "READ_FORMATS",
+           "WRITE_FORMATS",
            "atomic_output", "atomic_group", "sniff_format", "format_of"]
 
 READ_FORMATS = (".stl", ".obj", ".ply", ".off", ".3mf", ".glb")
@@ -63,6 +66,7 @@ WRITE_FORMATS = (".stl", ".obj", ".ply", ".off", ".3mf", ".glb")
 
 _READERS = {"stl": read_stl, "obj": read_obj, "ply": read_ply, "off": read_off,
             "3mf": read_3mf, "glb": read_glb}
+_COLOR_READERS = {"ply": read_ply_colors, "obj": read_obj_colors}
 _WRITERS = {"stl": write_stl, "ply": write_ply, "off": write_off, "3mf": write_3mf,
             "glb": write_glb}
 _NAMES = {"stl": "STL", "obj": "OBJ", "ply": "PLY", "off": "OFF", "3mf": "3MF",
@@ -142,6 +146,49 @@ def read_mesh(path, *, format: str | None = None) -> Mesh:
     >>> mesh.n_vertices, mesh.n_faces
     (829, 1654)
     """
+    return _read(path, format, _READERS)
+
+
+def read_mesh_colors(path, *, format: str | None = None):
+    """Read a triangle mesh with its per-face and per-vertex colours (PLY, OBJ).
+
+    PLY: ``red green blue`` (or ``r g b``, ``diffuse_*``) properties of the
+    ``face`` and ``vertex`` elements, ASCII or binary, integer (0..255) or
+    float (0..1) types (:func:`geotex.io.ply.read_ply_colors`).  OBJ: the
+    ``v x y z r g b`` extension (:func:`geotex.io.obj.read_obj_colors`).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A ``.ply`` or ``.obj`` file.
+    format : str, optional
+        ``"ply"`` or ``"obj"`` whatever the extension.
+
+    Returns
+    -------
+    mesh : geotex.mesh.Mesh
+        As :func:`read_mesh` reads it (same faces in the same order).
+    face_colors : numpy.ndarray, (m, 3) float64 or None
+        Per triangle (a polygon's colour on each of its triangles), 0..255.
+    vertex_colors : numpy.ndarray, (n, 3) float64 or None
+        0..255.
+
+    Raises
+    ------
+    MissingFileError, MeshFileError
+        As :func:`read_mesh`; also non-finite or negative colours.
+    UnsupportedFormatError
+        A format other than PLY or OBJ (the other readers hold no colours).
+    """
+    key = format_of(path, format)
+    if key not in _COLOR_READERS:
+        raise UnsupportedFormatError(
+            path, f"colours are read from PLY and OBJ files only, not {_NAMES[key]}")
+    return _read(path, key, _COLOR_READERS)
+
+
+def _read(path, format, readers):
+    """``readers[key](path, data)`` with read_mesh's checks and one-line errors."""
     path = Path(path)
     if not path.exists():
         raise MissingFileError(f"{path}: no such file")
@@ -163,7 +210,7 @@ def read_mesh(path, *, format: str | None = None) -> Mesh:
         raise MeshFileError(path, "file is empty")
     try:
         with gc_paused():
-            return _READERS[key](path, data)
+            return readers[key](path, data)
     except MemoryError:
         raise
     except GeotexError as exc:

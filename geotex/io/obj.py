@@ -2,7 +2,8 @@
 
 Reading
     ``v x y z [w | r g b ...]`` (only x, y, z are used; extra columns such as
-    vertex colours, even ``nan`` ones, are ignored), ``vt u [v [w]]``, and
+    vertex colours, even ``nan`` ones, are ignored; :func:`read_obj_colors`
+    reads ``r g b`` too), ``vt u [v [w]]``, and
     ``f`` corners written ``v``, ``v/vt``, ``v//vn`` or ``v/vt/vn``.  Indices
     start at 1; negative indices count back from the last vertex defined
     before the face.  Polygons with more than three corners are triangulated
@@ -48,7 +49,7 @@ from geotex.io._common import (build_mesh, decode_text, first_bad_number, format
 from geotex.io.images import load_texture_image, texture_to_png_bytes
 from geotex.io.limits import MAX_SIDECAR_BYTES, RefusedInput, read_bounded, sidecar_file
 
-__all__ = ["read_obj", "write_obj"]
+__all__ = ["read_obj", "read_obj_colors", "write_obj"]
 
 _CONTINUATION = re.compile(r"\\[ \t]*(?:\r\n|\n|\r)")
 _KNOWN = frozenset("""v vt vn vp f fo l p o g s usemtl mtllib cstype deg bmat step curv curv2
@@ -104,6 +105,33 @@ def read_obj(path, data: bytes):
         On a zero or out-of-range face index, a malformed number, or content
         that is not OBJ at all.
     """
+    return _read_obj(path, data, colors=False)[0]
+
+
+def read_obj_colors(path, data: bytes):
+    """Parse OBJ bytes into a mesh and its per-vertex colours.
+
+    Vertex colours are the common extension ``v x y z r g b`` (a seventh
+    value, alpha, is ignored): read when every ``v`` line has at least six
+    values, as 0..1 when no colour value exceeds 1, else as 0..255.
+
+    Returns
+    -------
+    mesh : geotex.mesh.Mesh
+    face_colors : None
+        OBJ has no per-face colours (materials are not read as colours).
+    vertex_colors : numpy.ndarray, (n, 3) float64 or None
+        0..255.
+
+    Raises
+    ------
+    MeshFileError
+        As :func:`read_obj`, and for non-finite or negative colours.
+    """
+    return _read_obj(path, data, colors=True)
+
+
+def _read_obj(path, data: bytes, *, colors: bool):
     text = decode_text(path, data, "OBJ")
     if "\r" in text:
         text = text.replace("\r\n", "\n").replace("\r", "\n")
@@ -120,7 +148,7 @@ def read_obj(path, data: bytes):
                     path, f"not an OBJ file: line {text.count(chr(10), 0, match.start()) + 1} "
                           f"starts with the unknown statement {match.group(1)[:40]!r} and "
                           "there are no 'v' vertex lines")
-    V = _parse_vertices(src, v_rows)
+    V, rgb = _parse_vertices(src, v_rows, colors=colors)
     f_rows = [r for k, r in statements if k == "f"]
     vt_rows = [r for k, r in statements if k == "vt"] if f_rows else []
     faces, uv, uv_faces, skipped = _parse_faces(src, f_rows, V, vt_rows)
@@ -129,33 +157,53 @@ def read_obj(path, data: bytes):
         meta["skipped_faces"] = skipped
     texture = None
     mtllibs = [r.strip() for k, r in statements if k == "mtllib" and r.strip()]
-    if mtllibs:
+    if mtllibs and not colors:
         used = [r.strip() for k, r in statements if k == "usemtl" and r.strip()]
         texture, image, note = _find_texture(Path(str(path)), mtllibs, used)
         if note:
             meta["texture_warning"] = note
         if image is not None:
             meta["texture_file"] = str(image)
-    return build_mesh(path, V, faces, fmt="obj", uv=uv, uv_faces=uv_faces,
+    mesh = build_mesh(path, V, faces, fmt="obj", uv=uv, uv_faces=uv_faces,
                       texture=texture, metadata=meta)
+    return mesh, None, rgb
 
 
-def _parse_vertices(src: _Source, rows: list[str]) -> np.ndarray:
+def _parse_vertices(src: _Source, rows: list[str], *, colors: bool = False):
+    """Vertex positions (n, 3) and, with ``colors``, colours (n, 3) in 0..255 or None."""
     if not rows:
-        return np.zeros((0, 3))
+        return np.zeros((0, 3)), None
     counts, values, tokens = token_table(rows)
     short = np.flatnonzero(counts < 3)
     if short.size:
         i = int(short[0])
         src.fail(_V, i, f"vertex needs x y z, got {int(counts[i])} values")
     starts = line_starts(counts)
+    rgb = None
+    if colors and (counts >= 6).all():
+        cols = starts[:, None] + np.arange(3, 6)
+        if values is not None:
+            rgb = values[cols]
+        else:
+            picked = [tokens[j] for j in cols.ravel().tolist()]
+            try:
+                rgb = np.array(picked, dtype=np.float64).reshape(-1, 3)
+            except ValueError:
+                row = next(j // 3 for j, t in enumerate(picked) if first_bad_number([t]) != "?")
+                src.fail(_V, row, f"bad vertex colour {first_bad_number(picked)!r}")
+        ok = (np.isfinite(rgb) & (rgb >= 0)).all(axis=1)
+        if not ok.all():
+            row = int(np.flatnonzero(~ok)[0])
+            src.fail(_V, row, f"vertex colour {rgb[row].tolist()} is not a finite, "
+                              "non-negative colour")
+        rgb = rgb * 255.0 if rgb.max() <= 1.0 else rgb
     if values is not None:
         if (counts == 3).all():
-            return values.reshape(-1, 3)
-        return values[starts[:, None] + np.arange(3)]
+            return values.reshape(-1, 3), rgb
+        return values[starts[:, None] + np.arange(3)], rgb
     picked = [tokens[j] for j in (starts[:, None] + np.arange(3)).ravel().tolist()]
     try:
-        return np.array(picked, dtype=np.float64).reshape(-1, 3)
+        return np.array(picked, dtype=np.float64).reshape(-1, 3), rgb
     except ValueError:
         row = next(j // 3 for j, t in enumerate(picked) if first_bad_number([t]) != "?")
         src.fail(_V, row, f"bad vertex coordinate {first_bad_number(picked)!r}")

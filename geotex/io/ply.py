@@ -6,9 +6,10 @@ Reading
     ``int8 ... float64`` names); its other properties, lists included, are
     skipped.  Per-vertex texture coordinates (``s t``, ``u v``,
     ``texture_u texture_v`` or ``texture_s texture_t``) become ``uv`` with
-    ``uv_faces == faces``.  The ``face`` element's list property
-    ``vertex_indices`` (or ``vertex_index``) may use any count and index
-    types; polygons are triangulated without overlaps, concave ones included
+    ``uv_faces == faces``.  Colours (``red green blue`` and the like, on the
+    vertex and face elements) are read by :func:`read_ply_colors` only.  The
+    ``face`` element's list property ``vertex_indices`` (or ``vertex_index``)
+    may use any count and index types; polygons are triangulated without overlaps, concave ones included
     (see :func:`geotex.io._common.triangulate_polygons`), and faces with
     fewer than three corners are skipped (counted in
     ``metadata["skipped_faces"]``).  Any other element (edges, materials,
@@ -39,7 +40,7 @@ from geotex.errors import MeshFileError
 from geotex.io._common import (build_mesh, first_bad_number, format_rows, per_vertex_uv,
                                triangulate_polygons)
 
-__all__ = ["read_ply", "write_ply", "PLY_TYPES"]
+__all__ = ["read_ply", "read_ply_colors", "write_ply", "PLY_TYPES"]
 
 PLY_TYPES = {
     "char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1",
@@ -51,6 +52,8 @@ _FORMATS = {"ascii": None, "binary_little_endian": "<", "binary_big_endian": ">"
 _END_HEADER = re.compile(rb"(?:\r?\n)end_header[ \t]*(?:\r?\n|\Z)")
 _UV_NAMES = (("s", "t"), ("u", "v"), ("texture_u", "texture_v"), ("texture_s", "texture_t"))
 _FACE_LISTS = ("vertex_indices", "vertex_index")
+_COLOR_NAMES = (("red", "green", "blue"), ("r", "g", "b"),
+                ("diffuse_red", "diffuse_green", "diffuse_blue"))
 
 
 class _Property:
@@ -144,6 +147,56 @@ def read_ply(path, data: bytes):
         On a bad header, missing ``x y z``, truncated data (the message gives
         the number of bytes or values expected), or non-finite coordinates.
     """
+    return _read_ply(path, data, colors=False)[0]
+
+
+def read_ply_colors(path, data: bytes):
+    """Parse PLY bytes into a mesh and its per-face and per-vertex colours.
+
+    Colours are the ``red green blue`` properties (also ``r g b`` or
+    ``diffuse_red diffuse_green diffuse_blue``; alpha is ignored) of the
+    ``face`` and ``vertex`` elements, of any scalar type.  Integer types are
+    read as 0..255; float types as 0..1 when no value exceeds 1, else as
+    0..255.  A polygon's colour goes to every triangle it is split into.
+
+    Returns
+    -------
+    mesh : geotex.mesh.Mesh
+    face_colors : numpy.ndarray, (m, 3) float64 or None
+        Per triangle, 0..255.
+    vertex_colors : numpy.ndarray, (n, 3) float64 or None
+        0..255.
+
+    Raises
+    ------
+    MeshFileError
+        As :func:`read_ply`, and for non-finite or negative colours.
+    """
+    return _read_ply(path, data, colors=True)
+
+
+def _color_names(element):
+    """The names of the scalar colour properties of ``element``, or None."""
+    if element is None:
+        return None
+    return next((names for names in _COLOR_NAMES
+                 if all(element.prop(n) is not None and not element.prop(n).is_list
+                        for n in names)), None)
+
+
+def _colors(path, vals, names, element, what):
+    """(k, 3) float64 colours in 0..255 from the parsed property columns."""
+    C = np.stack([np.asarray(vals[n], dtype=np.float64) for n in names], axis=1)
+    if not np.isfinite(C).all() or (C < 0).any():
+        bad = int(np.flatnonzero(~(np.isfinite(C) & (C >= 0)).all(axis=1))[0])
+        raise MeshFileError(path, f"PLY {what} {bad} has the colour {C[bad].tolist()} "
+                                  "(colours must be finite and non-negative)")
+    if all(element.prop(n).dtype[0] == "f" for n in names) and (C.size == 0 or C.max() <= 1.0):
+        C = C * 255.0
+    return C
+
+
+def _read_ply(path, data: bytes, *, colors: bool):
     fmt, elements, body_start = _parse_header(path, data)
     vertex = next((e for e in elements if e.name == "vertex"), None)
     if vertex is None:
@@ -163,9 +216,11 @@ def read_ply(path, data: bytes):
     uv_names = next((pair for pair in _UV_NAMES
                      if all(vertex.prop(n) is not None and not vertex.prop(n).is_list
                             for n in pair)), None)
-    wanted = {"vertex": ["x", "y", "z"] + list(uv_names or ())}
+    v_colors = _color_names(vertex) if colors else None
+    f_colors = _color_names(face) if colors and face_list is not None else None
+    wanted = {"vertex": ["x", "y", "z"] + list(uv_names or ()) + list(v_colors or ())}
     if face_list is not None:
-        wanted["face"] = [face_list.name]
+        wanted["face"] = [face_list.name] + list(f_colors or ())
     if _FORMATS[fmt] is None:
         values = _read_ascii_body(path, data[body_start:], elements, wanted)
     else:
@@ -175,16 +230,28 @@ def read_ply(path, data: bytes):
     uv = None
     if uv_names is not None:
         uv = np.stack([vals[uv_names[0]], vals[uv_names[1]]], axis=1).astype(np.float64)
+    vertex_rgb = None if v_colors is None else _colors(path, vals, v_colors, vertex, "vertex")
+    face_rgb = None
     F = np.zeros((0, 3), dtype=np.int64)
     skipped = 0
     if "face" in values:
         counts, flat = values["face"][face_list.name]
-        F, skipped = triangulate_polygons(counts, flat.astype(np.int64), V)
+        flat = flat.astype(np.int64)
+        if f_colors is None:
+            F, skipped = triangulate_polygons(counts, flat, V)
+        else:
+            # the polygon of every corner rides along, so each triangle knows its polygon
+            poly = np.repeat(np.arange(counts.shape[0], dtype=np.int64), counts)
+            T, skipped = triangulate_polygons(counts, np.stack([flat, poly], axis=1), V)
+            F = T[:, :, 0]
+            rgb = _colors(path, values["face"], f_colors, face, "face")
+            face_rgb = rgb[T[:, 0, 1]]
     meta = {"ply_format": fmt}
     if skipped:
         meta["skipped_faces"] = skipped
-    return build_mesh(path, V, F, fmt="ply", uv=uv, uv_faces=F if uv is not None else None,
+    mesh = build_mesh(path, V, F, fmt="ply", uv=uv, uv_faces=F if uv is not None else None,
                       metadata=meta)
+    return mesh, face_rgb, vertex_rgb
 
 
 # --------------------------------------------------------------------------- binary
