@@ -78,7 +78,14 @@ vertices use the three nearest parent corners (see
 :class:`geotex.patches.flatten.BarycentricHierarchy`); the mask is rasterized on the CPU at a matching
 resolution of at most ``match_size`` pixels (the image is block-averaged to
 it) instead of rendered by graphics hardware; the colour space is an
-opponent space instead of HSV (see :mod:`geotex.image.fftmatch`).
+opponent space instead of HSV (see :mod:`geotex.image.fftmatch`); the
+flattening uses mean value coordinates over the parent polygon instead of
+the paper's three-corner stable base, which folds faces where the chosen
+corners change (``flattening``, see
+:func:`geotex.patches.flatten.barycentric_hierarchy`); the mask is drawn in
+a frame turned so that the main neighbour's orientation is one of the
+searched orientations, and its exact continuation is a candidate (the paper
+draws the mask at a random orientation to avoid such trivial solutions).
 """
 
 from __future__ import annotations
