@@ -183,12 +183,15 @@ class HPMResult:
 
 
 def check_hpm_base(V, F) -> None:
-    """Refuse a base that is not one closed, edge-manifold, oriented surface.
+    """Refuse a base that is not closed, edge-manifold and consistently oriented.
+
+    Several closed parts are accepted (each is started at a random position
+    of the image when it has no textured neighbour).
 
     Raises
     ------
     InputError
-        Naming what is wrong (open, non-manifold, badly oriented, several parts).
+        Naming what is wrong (open, non-manifold, badly oriented).
     """
     topo = edge_topology(F, V.shape[0])
     if topo.non_manifold.size:
