@@ -169,10 +169,11 @@ def test_hierarchy_errors():
 # barycentric flattening
 # ---------------------------------------------------------------------------
 
-def test_flattening_is_exact_on_a_plane():
+@pytest.mark.parametrize("coordinates", ["mean_value", "stable_base"])
+def test_flattening_is_exact_on_a_plane(coordinates):
     V, F = jittered_disc(200, seed=2)
     H = cluster_hierarchy(V, F)
-    bh = barycentric_hierarchy(V, F, H)
+    bh = barycentric_hierarchy(V, F, H, coordinates=coordinates)
     for li in range(len(H) - 1):
         N, e1, e2 = cluster_frames(V, F, H[li].labels, H[li].n_clusters)
         for c in range(min(4, H[li].n_clusters)):
@@ -181,6 +182,33 @@ def test_flattening_is_exact_on_a_plane():
             assert np.array_equal(np.sort(faces), H[li].faces(c))
             q = np.stack([V[verts] @ e1[c], V[verts] @ e2[c]], axis=1)
             assert np.abs(uv - q).max() < 1e-9
+
+
+def test_mean_value_flattening_folds_fewer_clusters_than_the_stable_base():
+    # a fine torus: the stable base (three parent corners per vertex) switches corners
+    # between neighbouring vertices and the map jumps there, longer than the edges;
+    # mean value coordinates are smooth (here 1 folded cluster of 36 against 4)
+    V, F = torus(1.0, 0.35, n_major=96, n_minor=48)
+    H = cluster_hierarchy(V, F, seed=0)
+    folds = {}
+    for mode in ("mean_value", "stable_base"):
+        bh = barycentric_hierarchy(V, F, H, coordinates=mode)
+        n = 0
+        for li in (2,):
+            N, e1, e2 = cluster_frames(V, F, H[li].labels, H[li].n_clusters)
+            for c in range(H[li].n_clusters):
+                poly = control_polygon(V, H[li].controls(c), e1[c], e2[c])
+                verts, uv, faces = flatten_cluster(bh, li, c, poly)
+                U = np.zeros((len(V), 2))
+                U[verts] = uv
+                t = U[F[faces]]
+                d = (t[:, 1, 0] - t[:, 0, 0]) * (t[:, 2, 1] - t[:, 0, 1]) \
+                    - (t[:, 1, 1] - t[:, 0, 1]) * (t[:, 2, 0] - t[:, 0, 0])
+                n += bool((d <= 0).any())
+        folds[mode] = n
+    assert folds["mean_value"] < folds["stable_base"]
+    with pytest.raises(InputError, match="coordinates"):
+        barycentric_hierarchy(V, F, H, coordinates="harmonic")
 
 
 def test_flattening_fixed_vertices_are_kept_and_spread():
@@ -465,6 +493,9 @@ def test_cli_hpm_errors(files, capsys):
         assert err([str(base), "--image", str(img), "--orientation-spread", bad,
                     "-o", str(tmp / "a.glb")]) == (
             f"geotex: error: --orientation-spread {bad}: give degrees >= 0 or 'any'")
+    for bad in ("0", "-0.1", "nan", "1.5"):
+        assert err([str(base), "--image", str(img), "--band", bad,
+                    "-o", str(tmp / "a.glb")]).startswith(f"geotex: error: --band {float(bad)!r}")
     assert not (tmp / "a.glb").exists()
 
 

@@ -37,6 +37,12 @@ def register(sub):
     p.add_argument("--max-error", type=float, default=0.35, metavar="E",
                    help="largest relative matching error accepted before a cluster is "
                         "subdivided (default 0.35; 1 = as bad as random pixels)")
+    p.add_argument("--band", type=float, default=0.06, metavar="W",
+                   help="width of the band of textured neighbours matched along a patch "
+                        "border, as a fraction of the image width (default 0.06; the paper "
+                        "widens it for anisotropic and structured patterns: on Spot with "
+                        "bricks 0.12 lowered the border/within colour difference from "
+                        "about 1.34 to 1.24, with twice as many faces filled at face level)")
     p.add_argument("--report", default=None, metavar="R.json",
                    help="also write per-level counts and matching errors")
     add_relief_arguments(p, what="the mapped image's luminance")
@@ -94,6 +100,8 @@ def run(args) -> int:
         raise UsageError(f"--scale {args.scale!r}: give a positive surface length in mm")
     if args.angle is not None and not math.isfinite(args.angle):
         raise UsageError(f"--angle {args.angle!r}: give a finite angle in degrees")
+    if not (math.isfinite(args.band) and 0 < args.band <= 1):
+        raise UsageError(f"--band {args.band!r}: give a fraction of the image width in (0, 1]")
     if not (math.isfinite(args.max_error) and args.max_error > 0):
         raise UsageError(f"--max-error {args.max_error!r}: give a positive number")
     mesh = read_mesh(args.base)
@@ -118,7 +126,8 @@ def run(args) -> int:
         with stage_bar(8, "hpm") as bar:
             result = hpm_texture(V, F, image, scale=scale, field=field, angle=args.angle,
                                  seed=args.seed, max_error=args.max_error,
-                                 orientation_spread=spread, progress=bar)
+                                 orientation_spread=spread, band_distance=args.band,
+                                 progress=bar)
     except Exception as exc:
         from geotex.errors import InputError
         if isinstance(exc, InputError):

@@ -78,7 +78,14 @@ vertices use the three nearest parent corners (see
 :class:`geotex.patches.flatten.BarycentricHierarchy`); the mask is rasterized on the CPU at a matching
 resolution of at most ``match_size`` pixels (the image is block-averaged to
 it) instead of rendered by graphics hardware; the colour space is an
-opponent space instead of HSV (see :mod:`geotex.image.fftmatch`).
+opponent space instead of HSV (see :mod:`geotex.image.fftmatch`); the
+flattening uses mean value coordinates over the parent polygon instead of
+the paper's three-corner stable base, which folds faces where the chosen
+corners change (``flattening``, see
+:func:`geotex.patches.flatten.barycentric_hierarchy`); the mask is drawn in
+a frame turned so that the main neighbour's orientation is one of the
+searched orientations, and its exact continuation is a candidate (the paper
+draws the mask at a random orientation to avoid such trivial solutions).
 """
 
 from __future__ import annotations
@@ -176,12 +183,15 @@ class HPMResult:
 
 
 def check_hpm_base(V, F) -> None:
-    """Refuse a base that is not one closed, edge-manifold, oriented surface.
+    """Refuse a base that is not closed, edge-manifold and consistently oriented.
+
+    Several closed parts are accepted (each is started at a random position
+    of the image when it has no textured neighbour).
 
     Raises
     ------
     InputError
-        Naming what is wrong (open, non-manifold, badly oriented, several parts).
+        Naming what is wrong (open, non-manifold, badly oriented).
     """
     topo = edge_topology(F, V.shape[0])
     if topo.non_manifold.size:
@@ -284,7 +294,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                 max_flat_error: float = 0.2, band: float = 0.2,
                 orientation_spread: float | None = 30.0,
                 band_mode: str = "distance", band_distance: float = 0.06,
-                match_size: int = 200,
+                match_size: int = 200, flattening: str = "mean_value",
                 snap: float = 1.5, relax: bool = True, progress=None) -> HPMResult:
     """Texture a closed mesh with patches of one image, coarse to fine (see module docstring).
 
@@ -336,6 +346,12 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
     match_size : int, optional
         Largest image side used for matching (the image is block-averaged
         down to it; texture coordinates still refer to the full image).
+    flattening : {"mean_value", "stable_base"}, optional
+        Coordinates of the recursive barycentric flattening (eq. 1), see
+        :func:`geotex.patches.flatten.barycentric_hierarchy`:
+        ``"stable_base"`` is the paper's (three parent corners with the
+        smallest coordinates), which folds faces where neighbouring vertices
+        pick different corners; ``"mean_value"`` is smooth.
     snap : float, optional
         Shared border vertices whose coordinates differ from the
         neighbour's by less than this many (full-resolution) pixels take
@@ -370,6 +386,9 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
     if band_mode not in ("topological", "distance"):
         raise InputError(f"band_mode must be 'topological' or 'distance', got {band_mode!r}")
     match_size = count(match_size, name="match_size", minimum=16)
+    if flattening not in ("mean_value", "stable_base"):
+        raise InputError(f"flattening must be 'mean_value' or 'stable_base', got "
+                         f"{flattening!r}")
     snap = finite_number(snap, name="snap")
     if angle is not None:
         angle = finite_number(angle, name="angle")
@@ -389,7 +408,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
     rng = np.random.default_rng(seed)
     report(progress, "hierarchy")
     Hc = cluster_hierarchy(V, F, seed=int(rng.integers(2**31)))
-    bh = barycentric_hierarchy(V, F, Hc)
+    bh = barycentric_hierarchy(V, F, Hc, coordinates=flattening)
     L = len(Hc.levels)
     adj = face_adjacency(V, F)
     FF = adj.face_neighbors
@@ -498,19 +517,19 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         p = (P / f - t) @ R / ppm_m
         return np.column_stack([p[:, 0], -p[:, 1]])
 
-    def continuation(bverts, bl, tb, I, origin):
-        """Rigid placement continuing a neighbour's own coordinates, and its error.
+    def neighbour_fit(bverts, bl):
+        """Rigid placement continuing the main neighbour's own coordinates.
 
         The band vertices whose texture coordinates agree, restricted to the
         neighbouring placement that holds most of them, give a least-squares
-        rotation + translation from the cluster's frame to the image (that
-        neighbour "positioned exactly next to" the cluster).  One placement
-        only: the neighbours of a cluster are in general rotated with respect
-        to each other, and a fit over all of them is no rigid motion of any
-        (on Spot with bricks its median residual was a third of the band's
-        size, against 5 % for one neighbour).  The FFT search only sees
-        ``orientations`` discrete angles, this candidate any angle; its
-        rotation is also the neighbours' orientation that ``spread`` keeps.
+        rotation + translation (matching pixels = R pix + t) from the
+        cluster's frame to the image: that neighbour "positioned exactly next
+        to" the cluster.  One placement only: the neighbours of a cluster are
+        in general rotated with respect to each other, and a fit over all of
+        them is no rigid motion of any (on Spot with bricks its median
+        residual was a third of the band's size, against 5 % for one
+        neighbour).  Its rotation is the neighbours' orientation that
+        ``spread`` keeps and that the orientation grid is aligned on.
         """
         A = st.agreed()[bverts] / f
         ok = np.flatnonzero(np.isfinite(A[:, 0]))
@@ -528,11 +547,14 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         R = (U @ Wt).T
         if np.linalg.det(R) < 0:
             return None
-        t = ym - R @ xm
+        return R, ym - R @ xm
+
+    def band_error(R, t, tb, I, origin):
+        """Squared mask error of the placement ``R q + t`` of the raster frame ``q``."""
         ty, tx = np.divmod(tb, wm)
         q = np.stack([tx + 0.5, ty + 0.5], 1) + origin
         S = _sample(small, q @ R.T + t)
-        return R, t, float(np.sum((I[tb] - S) ** 2))
+        return float(np.sum((I[tb] - S) ** 2))
 
     def inside_image(P):
         return bool((P[:, 0] >= 0).all() and (P[:, 0] <= W_img).all()
@@ -630,22 +652,39 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             bl[bverts] = bloc
         Lall = np.zeros((V.shape[0], 2))
         Lall[verts] = loc
+        # orientation grid: without a field, the raster frame is turned so that the main
+        # neighbour's orientation is exactly one of the searched orientations (the FFT
+        # candidates then include the exact continuation of its pattern, and the others
+        # lie at multiples of 360 / orientations degrees from it)
+        nfit = None
+        Rd = np.eye(2)
+        if band_faces.size and fvec is None and st.n_patch > 0:
+            nfit = neighbour_fit(bverts, bl)
+            if nfit is not None:
+                a_nb = np.arctan2(nfit[0][0, 1], nfit[0][0, 0])
+                dev = (spectra.angles - a_nb + np.pi) % (2 * np.pi) - np.pi
+                dl = -dev[int(np.argmin(np.abs(dev)))]          # a_nb - nearest angle
+                Rd = np.array([[np.cos(dl), np.sin(dl)], [-np.sin(dl), np.cos(dl)]])
+
+        def qpix(x):
+            return pix(x) @ Rd.T
+
         # raster: footprint = cluster + band, origin at its bbox corner
         pts = loc if not band_faces.size else np.vstack([loc, bl[np.unique(F[band_faces])]])
-        pp = pix(pts)
+        pp = qpix(pts)
         origin = np.floor(pp.min(axis=0)) - 1.0
         ext = np.ceil(pp.max(axis=0)) - origin + 1.0
         if ext[0] >= wm or ext[1] >= hm:
             refuse(li, 'too_large')
             return None
-        tri_c = pix(Lall[F[faces]].reshape(-1, 2)).reshape(-1, 3, 2) - origin
+        tri_c = qpix(Lall[F[faces]].reshape(-1, 2)).reshape(-1, 3, 2) - origin
         K = np.zeros(hm * wm)
         t_, _, _ = rasterize_triangles(tri_c, wm, hm)
         K[t_] = 1.0
         I = np.zeros((hm * wm, small.shape[2]))
         J = np.zeros(hm * wm)
         if band_faces.size:
-            tri_b = pix(bl[F[band_faces]].reshape(-1, 2)).reshape(-1, 3, 2) - origin
+            tri_b = qpix(bl[F[band_faces]].reshape(-1, 2)).reshape(-1, 3, 2) - origin
             tb, fb, bb = rasterize_triangles(tri_b, wm, hm)
             uvb = np.einsum("tk,tkd->td", bb, st.corner[band_faces[fb]]) / f
             I[tb] = _sample(small, uvb)
@@ -667,7 +706,11 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             pick = okp[int(rng.integers(okp.size))]
             err = 0.0
         else:
-            cont = continuation(bverts, bl, tb, I, origin) if fvec is None else None
+            cont = None
+            if nfit is not None:
+                # the neighbour's placement in the turned raster frame: R Rd^T q + t
+                Rc = nfit[0] @ Rd.T
+                cont = (Rc, nfit[1], band_error(Rc, nfit[1], tb, I, origin))
             which = allowed
             if cont is not None and spread is not None:
                 # orientation propagates from the neighbours (paper §3): only the
@@ -687,7 +730,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             near = np.flatnonzero(flat <= best + 1e-9 * (1.0 + best))
             pick = near[int(rng.integers(near.size))]
             if cont is not None and cont[2] <= best:
-                Pc = to_image(loc, cont[0], cont[1])
+                Pc = to_image(loc, cont[0] @ Rd, cont[1])
                 if inside_image(Pc):
                     best, pick = cont[2], None
                     levels[li].continued += 1
@@ -701,6 +744,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             kk, dy, dx = np.unravel_index(pick, Eg.shape)
             rot_k = int(kk if which is None else np.asarray(which)[kk])
             R_, t_ = fft_placement(rot_k, np.array([dx, dy], dtype=np.float64) - origin)
+        R_ = R_ @ Rd                     # back from the turned raster frame
         P = to_image(loc, R_, t_)
         # border cracks: snap to the neighbour's coordinates where they (nearly) agree
         nb_uv = vertex_uv_of_done(verts)

@@ -18,13 +18,24 @@ for the whole hierarchy (:func:`barycentric_hierarchy`):
   (the paper's case 1);
 * any other control vertex (on the parent's border or inside) is projected
   onto the parent's mean plane together with the parent's control points,
-  and gets triangle barycentric coordinates with respect to the three
-  parent control points that give the smallest coordinates (largest
-  absolute value minimal): the paper's *stable base choice*.  The paper
-  projects vertices on a parent edge along the mean normal of that edge
-  instead; here every non-control vertex uses the parent's plane, which
-  keeps the coordinates of a vertex shared by two sibling clusters
-  identical (both come from the same parent).
+  and gets, by default, mean value coordinates (Floater 2003) with respect
+  to the whole projected parent polygon.  The paper instead takes triangle
+  barycentric coordinates with respect to the three parent control points
+  that give the smallest coordinates (its *stable base choice*, available
+  as ``coordinates="stable_base"``).  The texture-space control polygon is
+  laid out with 3D edge lengths, so it is not an affine image of the
+  projected polygon, and two neighbouring vertices that pick different
+  triangles get positions from two different affine maps: the flattening
+  jumps along the lines where the choice changes, and on fine meshes the
+  jumps are longer than the edges and fold faces (Spot at 30k faces with
+  water: most refusals on the coarser levels were such folds).  Mean value
+  coordinates are smooth and exact for affine maps (a flat cluster still
+  maps exactly), so the map has no jumps; a vertex whose coordinates are
+  not finite or too large (a projected polygon folded over itself) falls
+  back to the stable base.  The paper also projects vertices on a parent
+  edge along the mean normal of that edge; here every non-control vertex
+  uses the parent's plane, which keeps the coordinates of a vertex shared
+  by two sibling clusters identical (both come from the same parent).
 
 A mesh vertex reached through several faces (with different ancestors) gets
 the average of its values (the paper's treatment of *in-cluster cracks*),
@@ -48,6 +59,8 @@ __all__ = ["BarycentricHierarchy", "barycentric_hierarchy", "control_polygon",
            "flatten_cluster", "polygon_coordinates", "cluster_frames", "edge_band"]
 
 _CHUNK = 4096
+#: Largest absolute mean value coordinate accepted before falling back to the stable base.
+MVC_LIMIT = 4.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -61,11 +74,13 @@ class BarycentricHierarchy:
         The mesh faces.
     normals : list of numpy.ndarray, (c, 3) float64
         Unit mean-plane normal of every cluster of every level.
-    base : list of numpy.ndarray, (s, 3) int64
+    base : list of numpy.ndarray, (s, w) int64
         For every control slot of level ``l >= 1`` (CSR order of
-        ``levels[l].control_vertices``), three control slots of level
-        ``l - 1`` (global slot indices); level 0 holds an empty array.
-    weights : list of numpy.ndarray, (s, 3) float64
+        ``levels[l].control_vertices``), ``w`` control slots of level
+        ``l - 1`` (global slot indices; ``w = 3`` for the stable base, the
+        largest parent polygon for mean value coordinates, unused columns
+        with weight 0); level 0 holds an empty array.
+    weights : list of numpy.ndarray, (s, w) float64
         The barycentric coordinates (sum 1) with respect to ``base``.
     topo_base, topo_weights : list of numpy.ndarray, (s, 3)
         The *topological* barycentric coordinates (§4.1) of every control
@@ -166,6 +181,46 @@ def _stable_barycentric(poly: np.ndarray, valid: np.ndarray, x: np.ndarray):
     return out_i, out_w
 
 
+def _mean_value(poly: np.ndarray, x: np.ndarray):
+    """Mean value coordinates (Floater 2003) of points w.r.t. their polygons.
+
+    ``poly`` (N, k, 2) closed polygons (all k corners real), ``x`` (N, 2).
+    Returns weights (N, k), summing to 1, smooth in ``x`` and exact for
+    affine maps; a point on a polygon edge gets the linear coordinates on
+    it.  Rows where the coordinates are not finite get nan.
+    """
+    s = poly - x[:, None, :]                                   # (N, k, 2)
+    r = np.linalg.norm(s, axis=2)
+    sn = np.roll(s, -1, axis=1)
+    rn = np.roll(r, -1, axis=1)
+    cr = s[..., 0] * sn[..., 1] - s[..., 1] * sn[..., 0]
+    dt = np.sum(s * sn, axis=2)
+    scale = np.maximum(r * rn, 1e-300)
+    on_edge = (np.abs(cr) <= 1e-12 * scale) & (dt < 0)        # x inside segment i, i + 1
+    flat = np.abs(cr) <= 1e-12 * scale
+    tan = np.where(flat, 0.0, (r * rn - dt) / np.where(flat, 1.0, cr))
+    w = (tan + np.roll(tan, 1, axis=1)) / np.maximum(r, 1e-300)
+    tot = w.sum(axis=1, keepdims=True)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        lam = w / tot
+    # exact cases: x on a corner, x on an edge
+    k = poly.shape[1]
+    at = r <= 1e-12 * np.maximum(r.max(axis=1, keepdims=True), 1e-300)
+    rows = np.flatnonzero(at.any(axis=1))
+    lam[rows] = at[rows] / at[rows].sum(axis=1, keepdims=True)
+    rows_e, ei = np.nonzero(on_edge & ~at.any(axis=1, keepdims=True))
+    if rows_e.size:
+        t = r[rows_e, ei] / np.maximum(r[rows_e, ei] + rn[rows_e, ei], 1e-300)
+        lam[rows_e] = 0.0
+        lam[rows_e, ei] = 1.0 - t
+        lam[rows_e, (ei + 1) % k] = t
+    bad = ~np.isfinite(lam).all(axis=1) | (np.abs(tot[:, 0]) <= 1e-300)
+    bad[rows] = False
+    bad[rows_e] = False
+    lam[bad] = np.nan
+    return lam
+
+
 def polygon_coordinates(V, corners, normal, e1, e2, points):
     """Stable-base barycentric coordinates of points w.r.t. one 3D control polygon.
 
@@ -194,7 +249,8 @@ def polygon_coordinates(V, corners, normal, e1, e2, points):
     return _stable_barycentric(np.broadcast_to(q, (p, k, 2)), np.ones((p, k), bool), x)
 
 
-def barycentric_hierarchy(V, F, hierarchy: ClusterHierarchy) -> BarycentricHierarchy:
+def barycentric_hierarchy(V, F, hierarchy: ClusterHierarchy, *,
+                          coordinates: str = "mean_value") -> BarycentricHierarchy:
     """Precompute ``C_bary`` (eq. 1) for every control slot of every level.
 
     Parameters
@@ -202,11 +258,33 @@ def barycentric_hierarchy(V, F, hierarchy: ClusterHierarchy) -> BarycentricHiera
     V : numpy.ndarray, (n, 3) float64
     F : numpy.ndarray, (m, 3) int64
     hierarchy : ClusterHierarchy
+    coordinates : {"mean_value", "stable_base"}, optional
+        How a control vertex that is not a parent corner is expressed in
+        the parent's projected control polygon.  ``"stable_base"`` is the
+        paper's choice: triangle coordinates w.r.t. the three parent corners
+        that give the smallest coordinates.  Neighbouring vertices then pick
+        different triangles, and since the texture-space control polygon is
+        laid out with 3D lengths (not an affine image of the projected one)
+        the map jumps where the choice changes; on fine meshes these jumps
+        are longer than the edges and fold faces.  ``"mean_value"`` (default)
+        uses mean value coordinates w.r.t. the whole parent polygon: smooth,
+        exact for affine maps (a flat cluster still maps exactly), no jumps.
+        A vertex where they are not finite or exceed ``MVC_LIMIT`` in
+        absolute value (projected polygon folded over itself) falls back to
+        the stable base.
 
     Returns
     -------
     BarycentricHierarchy
+
+    Raises
+    ------
+    InputError
+        If ``coordinates`` is not one of the two names.
     """
+    if coordinates not in ("mean_value", "stable_base"):
+        raise InputError(f"coordinates must be 'mean_value' or 'stable_base', got "
+                         f"{coordinates!r}")
     V = np.asarray(V, dtype=np.float64)
     normals, bases, weights = [], [], []
     frames = []
@@ -221,10 +299,11 @@ def barycentric_hierarchy(V, F, hierarchy: ClusterHierarchy) -> BarycentricHiera
         S = lv.control_vertices.size
         slot_cluster = np.repeat(np.arange(lv.n_clusters), np.diff(lv.control_ptr))
         par = lv.parent[slot_cluster]
-        base = np.zeros((S, 3), np.int64)
-        w = np.zeros((S, 3))
         pk = np.diff(pv.control_ptr)
         usable = pk[par] >= 3
+        width = 3 if coordinates == "stable_base" else max(3, int(pk[par].max(initial=3)))
+        base = np.zeros((S, width), np.int64)
+        w = np.zeros((S, width))
         # case 1: the vertex is a control vertex of the parent
         key_p = np.repeat(np.arange(pv.n_clusters), pk) * np.int64(V.shape[0]) + pv.control_vertices
         key = par * np.int64(V.shape[0]) + lv.control_vertices
@@ -250,12 +329,23 @@ def barycentric_hierarchy(V, F, hierarchy: ClusterHierarchy) -> BarycentricHiera
             q = np.stack([np.einsum("tkd,td->tk", Q, e1), np.einsum("tkd,td->tk", Q, e2)], 2)
             P = V[lv.control_vertices[todo]]
             x = np.stack([np.sum(P * e1, 1), np.sum(P * e2, 1)], 1)
+            base[todo] = start[:, None]
             # group by polygon size to keep the triangle enumeration small
             for k in np.unique(kk):
                 sel = np.flatnonzero(kk == k)
+                if coordinates == "mean_value":
+                    lam = _mean_value(q[sel, :k], x[sel])
+                    good = np.isfinite(lam).all(axis=1)
+                    good[good] = np.abs(lam[good]).max(axis=1) <= MVC_LIMIT
+                    g = sel[good]
+                    base[todo[g], :k] = start[g][:, None] + np.arange(k)[None, :]
+                    w[todo[g], :k] = lam[good]
+                    sel = sel[~good]
+                    if sel.size == 0:
+                        continue
                 ii, ww = _stable_barycentric(q[sel, :k], valid[sel, :k], x[sel])
-                base[todo[sel]] = start[sel][:, None] + ii
-                w[todo[sel]] = ww
+                base[todo[sel], :3] = start[sel][:, None] + ii
+                w[todo[sel], :3] = ww
         bases.append(base)
         weights.append(w)
     tb, tw = _topological(V, hierarchy)
