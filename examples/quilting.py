@@ -5,7 +5,7 @@ Mesh quilting: every procedural exemplar beside a larger patch synthesized from 
 For each exemplar kind of ``geotex.exemplars`` (a 2 x 2 patch), a 4 x 4 texture
 (four times the area) is quilted: copies of the exemplar are placed where they
 match what is already there (matching energy + ICP, on the exemplar's
-lattice), corresponding elements are merged (graph cut + Laplacian pull +
+lattice), corresponding elements are merged (graph cut + welded seam, or pull +
 stitch, exact union as the fallback: the weave's strands of successive copies
 join into strands that run across the patch) and elements crossing the border
 are clipped to it.  Each caption gives the element count, the joins, and the

@@ -19,7 +19,7 @@ covered them.  Until every cell of the output domain ``[0, W] x [0, H]`` is occu
    ``reach`` cells of the seed.
 4. **Place**: each element of the copy whose footprint centre lies in a
    claimed cell is added as it is when it touches nothing; merged
-   (:mod:`~geotex.quilting.merge`: graph cut, Laplacian pull, stitch) when
+   (:mod:`~geotex.quilting.merge`: graph cut, weld or pull and stitch) when
    it touches exactly one element of the texture and corresponds to it (an
    ICP-aligned copy of it, possibly overlapping it only in part, like two
    pieces of one strand); dropped when it touches several, collides with an

@@ -17,7 +17,7 @@ from geotex.mesh.geometry import face_normals
 from geotex.mesh.topology import edge_topology, half_edges
 
 __all__ = ["boundary_loops", "closest_on_polyline", "pair_loops", "strip_between",
-           "seam_quality"]
+           "zip_loops", "seam_normal_jumps"]
 
 
 def boundary_loops(F: np.ndarray, n_vertices: int) -> list[np.ndarray] | None:
@@ -135,20 +135,160 @@ def strip_between(a: np.ndarray, Pa: np.ndarray, b: np.ndarray, Pb: np.ndarray
         Strip triangles; each boundary half-edge of both loops appears once,
         reversed, so the result is closed and consistently oriented.
     """
+    na, nb = a.size, b.size
+    start, steps = _strip_steps(Pa, Pb)
+    b = np.roll(b[::-1], -start)
+    tris = np.empty((na + nb, 3), dtype=np.int64)
+    i = j = 0
+    for k, step in enumerate(steps):
+        if step == 1:
+            tris[k] = (a[i % na], b[j % nb], a[(i + 1) % na])
+            i += 1
+        else:
+            tris[k] = (b[j % nb], b[(j + 1) % nb], a[i % na])
+            j += 1
+    return tris
+
+
+def zip_loops(F: np.ndarray, a: np.ndarray, Pa: np.ndarray, b: np.ndarray, Pb: np.ndarray,
+              *, weld: float = 0.0) -> tuple[np.ndarray, np.ndarray, dict] | None:
+    """Weld two boundary loops into one seam without a strip (a zipper).
+
+    The two loops are interleaved in the order of the shortest-diagonal walk
+    (:func:`strip_between`): every vertex of ``b`` that the walk visits
+    between ``a[i]`` and ``a[i + 1]`` is inserted into the boundary edge
+    ``a[i] -> a[i + 1]`` (its face becomes a fan of triangles over the same
+    third vertex), and likewise every vertex of ``a`` into the edges of
+    ``b``.  Both loops then run through the same ``na + nb`` vertices, in
+    opposite directions, so the two pieces share the seam: closed, no gap,
+    no new vertices.  A vertex of ``b`` that the walk visits next to a
+    vertex of ``a`` closer than ``weld`` times the shorter loop edge at
+    either becomes that vertex (corresponding loops: copies of one
+    cross-section), so the fans do not get triangles of nearly zero width.
+    The caller places the seam vertices (they should lie on one curve, in
+    the walk's order, or the fans fold) and drops the vertices of ``b``
+    that were welded.
+
+    Parameters
+    ----------
+    F : numpy.ndarray, (m, 3) int64
+        Faces of both pieces (global vertex ids).
+    a, b : numpy.ndarray, (na,) and (nb,) int64
+        The loops in their pieces' boundary half-edge order (global ids).
+    Pa, Pb : numpy.ndarray, (na, 3) and (nb, 3) float64
+        Their positions (for the walk and the weld test).
+    weld : float, optional
+        Weld distance relative to the loop edge lengths (0: never).
+
+    Returns
+    -------
+    faces : numpy.ndarray, (m + k, 3) int64
+        The faces with the boundary faces of both loops split into fans (a
+        split face keeps its row, the other triangles of its fan come last).
+    parent : numpy.ndarray, (m + k,) int64
+        Row of ``F`` every face comes from.
+    welded : dict of int -> int
+        Vertex of ``b`` -> the vertex of ``a`` that replaced it.
+
+    Or ``None`` when a boundary half-edge of a loop is not used by exactly
+    one face.
+    """
+    na, nb = a.size, b.size
+    start, steps = _strip_steps(Pa, Pb)
+    rb = np.roll(b[::-1], -start)
+    order = []                                   # the seam: vertices in walk order
+    i = j = 0
+    for step in steps:
+        if step == 1:
+            i += 1
+            order.append(int(a[i % na]))
+        else:
+            j += 1
+            order.append(int(rb[j % nb]))
+    side = {int(v): 0 for v in a}
+    side.update({int(v): 1 for v in b})
+    pos = {int(v): p for v, p in zip(a.tolist(), Pa)}
+    pos.update({int(v): p for v, p in zip(b.tolist(), Pb)})
+    ea = np.linalg.norm(Pa - np.roll(Pa, -1, axis=0), axis=1)
+    eb = np.linalg.norm(Pb - np.roll(Pb, -1, axis=0), axis=1)
+    reach = {int(v): min(x, y) for v, x, y in zip(a.tolist(), ea, np.roll(ea, 1))}
+    reach.update({int(v): min(x, y) for v, x, y in zip(b.tolist(), eb, np.roll(eb, 1))})
+    rep = {}
+    taken = set()
+    for k in range(len(order)):
+        u, v = order[k], order[(k + 1) % len(order)]
+        if side[u] == side[v] or u in taken or v in taken:
+            continue
+        if np.linalg.norm(pos[u] - pos[v]) < weld * min(reach[u], reach[v]):
+            ua, vb = (u, v) if side[u] == 0 else (v, u)
+            rep[vb] = ua
+            taken.update((u, v))
+    order = [v for v in order if v not in rep]
+    where = {v: k for k, v in enumerate(order)}
+    where.update({vb: where[va] for vb, va in rep.items()})
+    n = len(order)
+    faces = [list(f) for f in F.tolist()]
+    parent = list(range(len(faces)))
+    owner = {}
+    for f, (x, y, z) in enumerate(faces):
+        for u, v in ((x, y), (y, z), (z, x)):
+            owner[(u, v)] = f
+    jobs = []
+    # edges of A run along the walk; those of B against it
+    for k in range(na):
+        u, v = int(a[k]), int(a[(k + 1) % na])
+        ku, kv = where[u], where[v]
+        jobs.append((u, v, [order[(ku + t) % n] for t in range(1, (kv - ku) % n)]))
+    for k in range(nb):
+        u, v = int(b[k]), int(b[(k + 1) % nb])
+        ku, kv = where[u], where[v]
+        between = [order[(kv + t) % n] for t in range(1, (ku - kv) % n)]
+        jobs.append((u, v, between[::-1]))
+    if any((u, v) not in owner or (v, u) in owner for u, v, _ in jobs):
+        return None
+    for u, v, ins in jobs:
+        f = owner[(u, v)]
+        if not ins:
+            continue
+        x, y, z = faces[f]
+        c = ({x, y, z} - {u, v}).pop()
+        chain = [u, *ins, v]
+        fan = [[chain[t], chain[t + 1], c] for t in range(len(chain) - 1)]
+        faces[f] = fan[0]
+        owner[(c, u)] = f
+        for t, tri in enumerate(fan[1:], 1):
+            faces.append(tri)
+            parent.append(parent[f])
+            owner[(tri[0], tri[1])] = len(faces) - 1
+        owner[(v, c)] = len(faces) - 1 if len(fan) > 1 else f
+        del owner[(u, v)]
+    out = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    if rep:
+        alias = np.arange(max(int(out.max()) + 1, 1))
+        alias[list(rep)] = list(rep.values())
+        out = alias[out]
+    return out, np.asarray(parent, dtype=np.int64), rep
+
+
+def _strip_steps(Pa: np.ndarray, Pb: np.ndarray) -> tuple[int, list[int]]:
+    """Start of the reversed ``b`` loop and the steps of the shortest-diagonal walk.
+
+    ``b`` runs the other way along the seam: it is walked backwards
+    (``b[::-1]`` rolled by ``start``).  Each step advances ``a`` (1) or ``b``
+    (2); the walk starts by advancing ``a`` and ends by advancing ``b``.
+    """
     # B runs the other way along the seam: walk it backwards, starting where
     # the two loops line up best once their centroids are matched (the loops
     # may be offset by more than the element is thick, e.g. two cross-sections
     # of a strand on a slope: then the vertex of B nearest to a[0] can lie on
     # the wrong side and the strip would twist)
-    b = b[::-1]
     Pb = Pb[::-1]
-    na, nb = a.size, b.size
+    na, nb = Pa.shape[0], Pb.shape[0]
     Ra, Rb = Pa - Pa.mean(axis=0), Pb - Pb.mean(axis=0)
     walk = np.floor(np.arange(na) * nb / na + 0.5).astype(np.int64)
     idx = (np.arange(nb)[:, None] + walk[None, :]) % nb                 # (starts, na)
     spread = np.linalg.norm(Rb[idx] - Ra[None], axis=2).sum(axis=1)
     start = int(np.argmin(spread))
-    b = np.roll(b, -start)
     Pb = np.roll(Pb, -start, axis=0)
     ia = np.arange(na + 1) % na
     ib = np.arange(nb + 1) % nb
@@ -181,39 +321,28 @@ def strip_between(a: np.ndarray, Pa: np.ndarray, b: np.ndarray, Pb: np.ndarray
             i -= 1
         else:
             j -= 1
-    tris = np.empty((na + nb, 3), dtype=np.int64)
-    i = j = 0
-    for k, step in enumerate(reversed(steps)):
-        if step == 1:
-            tris[k] = (a[i % na], b[j % nb], a[(i + 1) % na])
-            i += 1
-        else:
-            tris[k] = (b[j % nb], b[(j + 1) % nb], a[i % na])
-            j += 1
-    return tris
+    return start, steps[::-1]
 
 
-def seam_quality(V, F, ma, mb, loops_a, loops_b, off, pairs):
-    """Largest loop-to-loop gap and largest normal jump (degrees) across the seam.
+def seam_normal_jumps(V: np.ndarray, F: np.ndarray, labels: np.ndarray) -> np.ndarray:
+    """Normal jumps (degrees) across the seams between differently labelled faces.
 
-    ``F`` holds piece A's ``ma`` faces, then piece B's ``mb`` faces, then the
-    strips.  The gap is the largest distance of a vertex of an A loop to its
-    partner B loop.  The normal jump is the largest angle between the normals
-    of the two faces on a loop edge, one of the piece and one of the strip:
-    the bend the seam puts into the surface.  Loop edges run across the
-    element (along a cut through it), so where the strip continues the two
-    pieces smoothly the angle is as small as the element's own bends along
-    its length, whatever creases its cross-section has.
+    ``labels`` (m,) tells the pieces apart (e.g. 0 for piece A, 1 for piece
+    B, 2 for a stitch strip).  At every edge whose two faces carry different
+    labels, the angle between the two face normals: the bend the seam puts
+    into the surface.  Seams run across the element (along a cut through
+    it), so where the join continues the two pieces smoothly the angle is as
+    small as the element's own bends along its length, whatever creases its
+    cross-section has.
+
+    Returns
+    -------
+    numpy.ndarray, (k,) float64
+        One angle per seam edge (empty when there is none).
     """
-    gaps = [np.linalg.norm(V[loops_a[i]] - closest_on_polyline(V[loops_a[i]],
-                                                               V[loops_b[j] + off]), axis=1).max()
-            for i, j in pairs]
     topo = edge_topology(F, V.shape[0])
     ef = topo.edge_faces()[topo.face_count == 2]
-    strip = ma + mb
-    across = (ef[:, 0] >= strip) != (ef[:, 1] >= strip)
-    if not across.any():
-        return float(max(gaps)), float("nan")
+    across = labels[ef[:, 0]] != labels[ef[:, 1]]
     N = face_normals(V, F)
     cosang = np.einsum("ij,ij->i", N[ef[across, 0]], N[ef[across, 1]])
-    return float(max(gaps)), float(np.degrees(np.arccos(np.clip(cosang, -1.0, 1.0))).max())
+    return np.degrees(np.arccos(np.clip(cosang, -1.0, 1.0)))

@@ -1,0 +1,167 @@
+"""Benchmark: seams of merged elements (normal jump and gap where two elements were joined).
+
+Every merge the quilting engine makes is recorded (``merge_elements`` wrapped
+where :mod:`geotex.quilting.placement` calls it), on
+
+1. single strand merges: two copies of a weave strand overlapping by one
+   pitch (the cases of ``tests/test_quilting.py``), and two different studs
+   fused (the general, non-corresponding path);
+2. quilted weaves (the only procedural exemplar whose elements join in
+   quilting): 2x2 -> 3x3 (seed 1, the test), 2x1.5 -> 4x3 (seed 0, the
+   quilting benchmark) and 2x2 -> 4x4 (seed 0, examples/quilting.py);
+3. catalog tile sets rebuilt from their recipes (``studs``, ``knurl``; with
+   ``--all`` also ``scales-planar`` and ``studs-complete``), every merge of
+   every tile's interior quilting, including merges the builder later undoes.
+
+For stitched merges: normal jump (degrees) at every seam edge -- the angle
+between the two faces on either side of an edge of the seam -- summarised as
+the mean over all seam edges, the mean of each merge's largest, and the
+largest; and the seam gap (largest distance between the two seam curves
+that had to be bridged, relative to the mean edge length of the pair; 0
+when they are welded).  Corresponding pairs (copies of one element, pieces
+of one strand) and other fused pairs are reported apart.
+
+Run:  python benchmarks/bench_seams.py [--all] [--label TEXT] [--json PATH]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from collections import defaultdict
+
+import numpy as np
+
+import geotex.quilting.placement as placement
+from geotex.exemplars import exemplar
+from geotex.mesh.geometry import mean_edge_length
+from geotex.mesh.primitives import icosphere
+from geotex.quilting import merge_elements, quilt_texture, split_elements
+
+RECORD: list = []
+_merge = placement.merge_elements
+
+
+def _recording(VA, FA, VB, FB, **kw):
+    r = _merge(VA, FA, VB, FB, **kw)
+    _note(r, VA, FA, VB, FB)
+    return r
+
+
+def _note(r, VA, FA, VB, FB):
+    h = 0.5 * (mean_edge_length(np.asarray(VA, float), np.asarray(FA), per_face=True)
+               + mean_edge_length(np.asarray(VB, float), np.asarray(FB), per_face=True))
+    RECORD.append({"status": r.status, "corresponding": bool(r.corresponding),
+                   "gap": r.seam_gap / h, "jump_max": r.seam_normal_jump,
+                   "jump_mean": r.seam_normal_jump_mean,
+                   "edges": int(getattr(r, "seam_edges", 0))})
+
+
+def stud(center, r=0.15, sub=3):
+    V, F = icosphere(sub)
+    V = V * [r, r, 0.2]
+    V[:, 2] = np.where(V[:, 2] > 0, V[:, 2], np.maximum(V[:, 2], -0.05))
+    return V + [center[0], center[1], 0.0], F
+
+
+def strand(k):
+    ex = exemplar("weave", size=(2.0, 2.0), seed=0)
+    e = split_elements(ex.vertices, ex.faces, element_ids=ex.elements())[k]
+    return e.V, e.F
+
+
+def summary(rows):
+    st = [r for r in rows if r["status"] == "stitched"]
+    out = {"merges": len(rows), "stitched": len(st),
+           "union": sum(r["status"] == "union" for r in rows)}
+    for tag, sel in (("corresponding", [r for r in st if r["corresponding"]]),
+                     ("other", [r for r in st if not r["corresponding"]])):
+        if not sel:
+            out[tag] = None
+            continue
+        mx = np.array([r["jump_max"] for r in sel])
+        mn = np.array([r["jump_mean"] for r in sel])
+        ed = np.array([max(r["edges"], 1) for r in sel])
+        out[tag] = {"n": len(sel), "welded": sum(r["gap"] == 0 for r in sel),
+                    "jump_edge_mean": float(np.nansum(mn * ed) / ed[np.isfinite(mn)].sum()),
+                    "jump_merge_mean": float(np.nanmean(mn)),
+                    "jump_maxima_mean": float(np.nanmean(mx)),
+                    "jump_max": float(np.nanmax(mx)),
+                    "gap_max": float(np.nanmax([r["gap"] for r in sel]))}
+    return out
+
+
+def picture(path):
+    """Close-up of one strand seam: the strip (weld=False) beside the weld."""
+    from geotex.render import Panel, render_panels
+    VB, FB = strand(0)
+    VA = VB + [1.0, 0.0, 0.0]
+    before = merge_elements(VA, FB, VB, FB, corresponding_only=True, weld=False)
+    after = merge_elements(VA, FB, VB, FB, corresponding_only=True)
+    strip = np.arange(before.faces.shape[0]) >= before.faces.shape[0] - 2 * 12
+    centre = before.vertices[np.unique(before.faces[strip])].mean(axis=0)
+    render_panels([
+        Panel(before.vertices, before.faces, scalars=strip.astype(float), cmap="coolwarm",
+              show_edges=True, closeup=centre, closeup_radius=0.2,
+              title=f"before: strip (red), gap {before.seam_gap:.3f}, normal jump "
+                    f"{before.seam_normal_jump_mean:.1f} mean / {before.seam_normal_jump:.1f} max"),
+        Panel(after.vertices, after.faces, show_edges=True, closeup=centre, closeup_radius=0.2,
+              title=f"after: welded, gap 0, normal jump {after.seam_normal_jump_mean:.1f} mean / "
+                    f"{after.seam_normal_jump:.1f} max")], path, size=(800, 600), up="z")
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--all", action="store_true")
+    ap.add_argument("--only", default="")
+    ap.add_argument("--json")
+    ap.add_argument("--picture", help="write a before/after close-up of a strand seam here")
+    args = ap.parse_args()
+    if args.picture:
+        picture(args.picture)
+        return
+    placement.merge_elements = _recording
+    results = {}
+
+    def case(name, fn):
+        if args.only and args.only not in name:
+            return
+        RECORD.clear()
+        t0 = time.perf_counter()
+        fn()
+        results[name] = summary(list(RECORD))
+        results[name]["seconds"] = round(time.perf_counter() - t0, 1)
+        print(name, json.dumps(results[name]), flush=True)
+
+    def strands():
+        for k, shift in ((0, (1.0, 0.0)), (0, (-1.0, 0.0)), (4, (0.0, 1.0))):
+            VB, FB = strand(k)
+            VA = VB + [shift[0], shift[1], 0.0]
+            r = merge_elements(VA, FB, VB, FB, corresponding_only=True)
+            _note(r, VA, FB, VB, FB)
+
+    def studs():
+        VA, FA = stud((0, 0))
+        for off in ((0.15, 0.05), (0.22, 0.1)):
+            VB, FB = stud(off, r=0.14)
+            r = merge_elements(VA, FA, VB, FB, align=False)
+            _note(r, VA, FA, VB, FB)
+
+    case("strand pairs (3)", strands)
+    case("two studs fused (2)", studs)
+    for (sx, sy), (ox, oy), seed in (((2.0, 2.0), (3.0, 3.0), 1), ((2.0, 1.5), (4.0, 3.0), 0),
+                                     ((2.0, 2.0), (4.0, 4.0), 0)):
+        ex = exemplar("weave", size=(sx, sy), seed=0)
+        case(f"weave quilt {sx:g}x{sy:g} -> {ox:g}x{oy:g} seed {seed}",
+             lambda: quilt_texture(ex, out_size=(ox, oy), seed=seed, boundary="clip"))
+    from geotex.tiles.catalog import rebuild
+    for name in ("studs", "knurl") + (("scales-planar", "studs-complete") if args.all else ()):
+        case(f"tiles {name}", lambda: rebuild(name))
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump(results, fh, indent=1)
+
+
+if __name__ == "__main__":
+    main()
