@@ -57,9 +57,14 @@ def main(out: Path) -> None:
         assert back.n_faces == mesh.n_faces and back.has_uv
         if path.suffix == ".glb":                    # turned back to z-up for the picture
             back = back.replace(vertices=back.vertices[:, [0, 2, 1]] * [1.0, -1.0, 1.0])
-        assert np.allclose(back.vertices[back.faces], mesh.vertices[mesh.faces], atol=1e-6)
+        err = float(np.abs(back.vertices[back.faces] - mesh.vertices[mesh.faces]).max())
+        assert err < 1e-6
+        size = sum(p.stat().st_size for p in out.glob(path.stem + ".*")
+                   if p.suffix in (path.suffix, ".mtl", ".png") and p.name != "textured_export.png")
+        title = (f"read back from {path.name}: {back.n_faces:,} faces, {len(back.uv):,} uv, "
+                 f"{size / 1024:.0f} KB, max position error {err:.1e}")
         panels.append(Panel(back.vertices, back.faces, uv=back.uv, uv_faces=back.uv_faces,
-                            texture=back.texture, title=f"read back from {path.name}"))
+                            texture=back.texture, title=title))
     render_panels(panels, out / "textured_export.png", size=(700, 550))
     print(f"wrote {obj} (+ .mtl, .png), {glb}, {out / 'textured_export.png'}")
 
