@@ -350,27 +350,13 @@ def periodic_tileset(exemplar, *, n_colors, seed: int = 0, name: str | None = No
         coverage.append(coverage_fraction(tile[0], tile[1], (0.0, 0.0, 1.0, 1.0),
                                           resolution=100))
         report(progress, f"tile {t + 1}/{len(cols)}")
-    params = dict(exemplar.params)
-    recipe = {"name": exemplar.name, "params": params}
-    meta = {
-        "exemplar": recipe,
-        "recipe": {"exemplar": recipe, "colors": [N, N, N], "planar": False,
-                   "isotropic": True, "lattice": False, "seed": int(seed),
-                   "interior": "periodic"},
-        "isotropic": True,
-        "lattice": None,
-        "periodic": {"layout": "diagonal 4-in-1", "rings_per_row": lay.n,
-                     "radius": round(float(lay.radius), 9), "shift_max": round(lay.shift, 9),
-                     "offset": round(lay.offset, 9), "rings_per_tile": 2 * lay.n ** 2,
-                     "corner_wire_clearance": round(lay.corner_clearance, 6),
-                     "unanchored_pieces": lay.loose_pieces},
-        "coverage_mean": round(float(np.mean(coverage)), 6),
-    }
-    height = max(float(V[:, 2].max()) for V, _ in tiles)
-    return TileSet.from_tiles(tiles, groups, cols, n_colors=(N, N, N), height=height,
-                              depth=float(params["depth"]), name=name or exemplar.name,
-                              metadata=meta)
-
+    periodic = {"layout": "diagonal 4-in-1", "rings_per_row": lay.n,
+                "radius": round(float(lay.radius), 9), "shift_max": round(lay.shift, 9),
+                "offset": round(lay.offset, 9), "rings_per_tile": 2 * lay.n ** 2,
+                "corner_wire_clearance": round(lay.corner_clearance, 6),
+                "unanchored_pieces": lay.loose_pieces}
+    return _assembled(exemplar, tiles, coverage, groups, cols, N=N, seed=seed, name=name,
+                      periodic=periodic)
 
 def weave_tileset(exemplar, layout: WeaveLayout, *, n_colors, seed: int = 0,
                   name: str | None = None, progress=None) -> TileSet:
@@ -413,6 +399,16 @@ def weave_tileset(exemplar, layout: WeaveLayout, *, n_colors, seed: int = 0,
         coverage.append(coverage_fraction(tile[0], tile[1], (0.0, 0.0, 1.0, 1.0),
                                           resolution=100))
         report(progress, f"tile {t + 1}/{len(cols)}")
+    periodic = {"layout": "plain weave", "strands_per_axis": lay.n,
+                "pitch": round(lay.pitch, 9), "shift_max": round(lay.shift, 9),
+                "crossing_clearance": round(lay.clearance, 6)}
+    return _assembled(exemplar, tiles, coverage, groups, cols, N=N, seed=seed, name=name,
+                      periodic=periodic, extra={"tiling_border": "cap"})
+
+
+def _assembled(exemplar, tiles, coverage, groups, cols, *, N, seed, name, periodic,
+               extra=None) -> TileSet:
+    """The isotropic periodic :class:`TileSet` of ``tiles`` with its recipe and metadata."""
     params = dict(exemplar.params)
     recipe = {"name": exemplar.name, "params": params}
     meta = {
@@ -422,10 +418,8 @@ def weave_tileset(exemplar, layout: WeaveLayout, *, n_colors, seed: int = 0,
                    "interior": "periodic"},
         "isotropic": True,
         "lattice": None,
-        "periodic": {"layout": "plain weave", "strands_per_axis": lay.n,
-                     "pitch": round(lay.pitch, 9), "shift_max": round(lay.shift, 9),
-                     "crossing_clearance": round(lay.clearance, 6)},
-        "tiling_border": "cap",
+        "periodic": periodic,
+        **(extra or {}),
         "coverage_mean": round(float(np.mean(coverage)), 6),
     }
     height = max(float(V[:, 2].max()) for V, _ in tiles)
