@@ -105,6 +105,14 @@ def main(out_dir=None):
               title=f"--mask-faces painted.ply --mask-width 1.5, hexagons 1 mm: "
                     f"{r.faces.shape[0] // 1000}k faces, {verdict}"),
     ]
+    # close-up on the soft border: the lowest painted face lies on it, on the
+    # flank the camera sees
+    C = V[F].mean(axis=1)
+    border = C[face_painted][np.argmin(C[face_painted][:, 2])]
+    panels.append(Panel(r.vertices, r.faces, color="#c9b38f", closeup=border,
+                        closeup_radius=12.0,
+                        title="close-up: the relief ramps down over 1.5 mm along "
+                              "the painted faces' zig-zag edge"))
     path = out / "displace_painted.png"
     render_panels(panels, path, size=(700, 700), up="z")
     print(f"wrote {path}")
