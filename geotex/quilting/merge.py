@@ -11,7 +11,8 @@ Element ``A`` (already in the texture; may carry fixed vertices) and element
    element: the shift is small (position: at most ``max_shift`` of ``B``'s
    narrow width) and, after it, the two surfaces coincide over the common
    box of their footprints, seen from both sides (shape: ``match_fraction``
-   of the vertices of each within ``match_tol`` of the other).  ICP alone
+   of the vertices of each within ``match_tol`` of the other, or inside
+   it).  ICP alone
    fits the few vertices of ``B`` over the overlap of two neighbouring
    elements well enough; fusing those made the two-bump elements of the
    tile sets (normal jumps of 130-180 degrees at their seams).  If
