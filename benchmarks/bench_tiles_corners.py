@@ -16,6 +16,9 @@ With ``--baseline DIR`` the same measure is taken on the ``NAME.npz`` files of
 DIR (e.g. the catalog of an earlier commit, extracted with ``git show``) and
 shown as "before".
 
+The results file's section from the heading "## Notes" on is hand-written and
+kept when the table is written again.
+
 Run:  python benchmarks/bench_tiles_corners.py [--baseline DIR [--baseline-label TEXT]]
 """
 
@@ -37,6 +40,7 @@ from geotex.tiles.verify import check_seams, corner_density
 
 RESULTS = Path(__file__).parent / "results"
 TARGET = 0.85
+NOTES = "## Notes"      # from this heading on, results/tiles_corners.md is hand-written
 
 
 def side_seams(V, F, grid) -> dict:
@@ -154,7 +158,13 @@ def main() -> None:
         "face).",
         "",
     ]
-    (RESULTS / "tiles_corners.md").write_text("\n".join(lines))
+    md = RESULTS / "tiles_corners.md"
+    kept = ""
+    if md.is_file():
+        old = md.read_text()
+        if "\n" + NOTES in old:            # hand-written notes stay below the table
+            kept = old[old.index("\n" + NOTES) + 1:]
+    md.write_text("\n".join(lines) + ("\n" + kept if kept else ""))
 
 
 if __name__ == "__main__":
