@@ -16,6 +16,9 @@ With ``--baseline DIR`` the same measure is taken on the ``NAME.npz`` files of
 DIR (e.g. the catalog of an earlier commit, extracted with ``git show``) and
 shown as "before".
 
+The results file's section from the heading "## Notes" on is hand-written and
+kept when the table is written again.
+
 Run:  python benchmarks/bench_tiles_corners.py [--baseline DIR [--baseline-label TEXT]]
 """
 
@@ -29,20 +32,49 @@ from pathlib import Path
 
 import numpy as np
 
+from geotex.mesh.geometry import face_normals
+from geotex.mesh.topology import edge_topology
 from geotex.tiles import list_tilesets, load_named, load_tileset
 from geotex.tiles.tiling import planar_tiling, random_arrangement
 from geotex.tiles.verify import check_seams, corner_density
 
 RESULTS = Path(__file__).parent / "results"
 TARGET = 0.85
+NOTES = "## Notes"      # from this heading on, results/tiles_corners.md is hand-written
+
+
+def side_seams(V, F, grid) -> dict:
+    """Seams across the inner tile sides of a welded planar tiling.
+
+    Edges lying on an inner grid line (both ends at the same whole ``u`` in
+    ``1 .. W-1``, or ``v``), where an element crosses from one tile into the
+    next: ``open`` counts those with one face only (a gap: the sides did not
+    weld), ``jump_mean`` / ``jump_max`` the angle (degrees) between the two
+    faces of the welded ones, one in each tile.
+    """
+    topo = edge_topology(F, len(V))
+    E = topo.edges
+    P, Q = V[E[:, 0]], V[E[:, 1]]
+    on = np.zeros(len(E), dtype=bool)
+    for axis, n in ((0, grid[0]), (1, grid[1])):
+        line = (P[:, axis] == Q[:, axis]) & (P[:, axis] == np.round(P[:, axis]))
+        on |= line & (P[:, axis] >= 1) & (P[:, axis] <= n - 1)
+    two = on & (topo.face_count == 2)
+    ef = topo.edge_faces()[two]
+    N = face_normals(V, F)
+    ang = np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", N[ef[:, 0]], N[ef[:, 1]]),
+                                       -1.0, 1.0)))
+    return {"edges": int(two.sum()), "open": int((on & (topo.face_count == 1)).sum()),
+            "jump_mean": round(float(ang.mean()), 3) if ang.size else None,
+            "jump_max": round(float(ang.max()), 3) if ang.size else None}
 
 
 def measure(tiles) -> dict:
-    """Corner density figures of one tile set on a 6 x 6 tiling."""
+    """Corner density figures and tile-side seams of one tile set on a 6 x 6 tiling."""
     V, F = planar_tiling(tiles, random_arrangement(tiles, 6, 6, seed=0), border="open")
     d = corner_density(V, F, (6, 6))
     return {"corner": round(d.corner, 4), "elsewhere": round(d.elsewhere, 4),
-            "ratio": round(d.ratio, 4)}
+            "ratio": round(d.ratio, 4), "sides": side_seams(V, F, (6, 6))}
 
 
 def main() -> None:
@@ -92,8 +124,9 @@ def main() -> None:
         "",
         "| set | kind | tiles | MB | seamless | corner / elsewhere before | ratio before "
         "| corner / elsewhere after | ratio after | stitched seams | seam gap max | "
-        "normal jump mean / max (deg) |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "normal jump mean / max (deg) | side seam edges (open) | side normal jump "
+        "mean / max (deg) |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
         b, a = r.get("before"), r["after"]
@@ -105,7 +138,9 @@ def main() -> None:
             + f"{a['corner']:.3f} / {a['elsewhere']:.3f} | {a['ratio']:.2f} | "
             f"{r['stitched_seams']} | {fmt(r['seam_gap_max'], '.3f')} | "
             f"{fmt(r['seam_normal_jump_mean'], '.1f')} / "
-            f"{fmt(r['seam_normal_jump_max'], '.1f')} |")
+            f"{fmt(r['seam_normal_jump_max'], '.1f')} | "
+            f"{a['sides']['edges']} ({a['sides']['open']}) | "
+            f"{fmt(a['sides']['jump_mean'], '.2f')} / {fmt(a['sides']['jump_max'], '.1f')} |")
     lines += [
         "",
         "Seam columns: joins stitched inside the tiles by the quilting engine when a "
@@ -115,10 +150,21 @@ def main() -> None:
         "They count merges that the tile builder later undid (a merge that fused two "
         "different elements is reverted), so they describe the engine, not only what "
         "ships. Tile sides weld by exact position: gap 0, checked bit for bit by "
-        "`check_seams`.",
+        "`check_seams`. Side seam columns: the edges of the welded 6 x 6 tiling on the "
+        "inner tile lines, where elements cross from one tile into the next (in brackets "
+        "those left open, i.e. not welded), and the angle between the two faces of each "
+        "(one in each tile): an element cut by a side keeps its own surface across it, "
+        "so the angle is that of the element's own faces there (0 where the cut split a "
+        "face).",
         "",
     ]
-    (RESULTS / "tiles_corners.md").write_text("\n".join(lines))
+    md = RESULTS / "tiles_corners.md"
+    kept = ""
+    if md.is_file():
+        old = md.read_text()
+        if "\n" + NOTES in old:            # hand-written notes stay below the table
+            kept = old[old.index("\n" + NOTES) + 1:]
+    md.write_text("\n".join(lines) + ("\n" + kept if kept else ""))
 
 
 if __name__ == "__main__":

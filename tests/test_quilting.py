@@ -611,3 +611,33 @@ def test_touching_detects_copies_contacts_and_crossings():
     assert not coincides(e, at(0.05)) and not coincides(e, at(0.0, 0.05))
     big = Element(V * [1.2, 1.2, 1.0], F, np.zeros(len(V), bool))
     assert not coincides(e, big)
+
+
+@pytest.mark.parametrize("offset, r", [((0.13, 0.0), 0.16), ((0.09, 0.09), 0.15),
+                                       ((0.0, 0.0), 0.22)])
+def test_merge_refuses_neighbouring_elements_that_only_look_alike(offset, r):
+    # the pairs the tile builder used to fuse into two-bump elements (normal
+    # jumps of 130-180 degrees at their seams): a neighbouring stud that ICP
+    # can slide onto A (shift 0.41-0.43 of its width), and a wider stud in
+    # the same place (shift 0, but the surfaces do not coincide)
+    VA, FA = stud((0.0, 0.0))
+    VB, FB = stud(offset, r=r)
+    r = merge_elements(VA, FA, VB, FB, corresponding_only=True)
+    assert r.status == "dropped" and not r.corresponding
+    assert np.array_equal(r.vertices, VA) and np.array_equal(r.faces, FA)
+    # unaligned (the retry after a collision) it does not fuse them either
+    u = merge_elements(VA, FA, VB, FB, align=False, corresponding_only=True)
+    assert u.status == "dropped"
+
+
+def test_merge_of_a_frame_half_with_the_copy_of_its_element_keeps_the_half():
+    # the copy goes on beyond the tile side (x = 0): inside the tile it adds
+    # nothing, whatever its part outside; a small offset is aligned away
+    V, F = _open_half((0.05, 0.3), 0)
+    F2, cap, on_cut = capped(V, F, (0, 0, 1, 1))
+    for dx in (0.0, 0.012):
+        VB, FB = stud((0.05 + dx, 0.3 - dx))
+        r = merge_elements(V, F2, VB, FB, fixed_a=on_cut, cap_a=cap, domain=(0, 0, 1, 1),
+                           corresponding_only=True)
+        assert r.status == "absorbed", (dx, r.status, r.reason)
+        assert np.array_equal(r.vertices, V) and np.array_equal(r.faces, F2)

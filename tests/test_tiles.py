@@ -399,7 +399,12 @@ def test_quilted_interiors_keep_side_vertices_bit_exact_and_elements_closed(
                 assert closed_element_ok(e.V, e.F) == ""
             assert e.V[:, :2].min() >= 0 and e.V[:, :2].max() <= 1
     assert differ == len(iso_set)     # quilting made every interior its own
-    assert iso_set.metadata["merged_elements"] > 0
+    # a stud copy is either the same stud as the one it overlaps (absorbed) or
+    # a different one (dropped): none is fused with its neighbour into a
+    # two-bump element (before the correspondence test, 10+ merges per set,
+    # with normal jumps of 130-180 degrees at their seams)
+    assert iso_set.metadata["merged_elements"] == 0
+    assert "stitched_seams" not in iso_set.metadata
 
 
 def test_quilted_tiling_is_watertight_and_printable(iso_set):

@@ -130,7 +130,7 @@ def place_element(p: Element, elements: list, domain, stats: PlacementStats, *,
         if optional:
             return False
         r = merge_elements(e.V, e.F, p.V, p.F, fixed_a=e.fixed, domain=domain, align=False,
-                           cap_a=e.cap)
+                           corresponding_only=True, cap_a=e.cap)
         if r.status == "separate" or _collides(r, elements, k):
             stats.dropped["collision"] += 1
             return False

@@ -37,7 +37,8 @@ from geotex.tiles.strips import (GAP, element_boxes, largest_footprint, lattice_
 from geotex.tiles.tileset import TileSet, tile_rng
 from geotex.tiles.verify import side_boundaries
 
-__all__ = ["build_tileset", "built_tile", "tile_rng", "TilePlan", "interior_quilt",
+__all__ = ["build_tileset", "plan_tileset", "PlannedSet", "built_tile", "tile_rng", "TilePlan",
+           "interior_quilt",
            "interior_paste", "INTERIOR_METHODS", "BUILD_STAGES", "Source"]
 
 INTERIOR_METHODS = ("quilt", "paste", "periodic")
@@ -412,6 +413,103 @@ def built_tile(plan: TilePlan, t: int) -> tuple[tuple[np.ndarray, np.ndarray], d
     return tile, stats
 
 
+@dataclass(frozen=True)
+class PlannedSet:
+    """A tile set drawn but not yet built: strips, frames and the plan of every tile.
+
+    Attributes
+    ----------
+    plan : TilePlan
+        What :func:`built_tile` fills the tiles from.
+    strips : dict of int -> list of Strip
+        Edge strips of every axis class (0, 1, 2; one list shared by all
+        classes in an isotropic set), colour by colour.
+    groups : numpy.ndarray, (T, 2) int64
+    cols : numpy.ndarray, (T, 4) int64
+        Axis classes and side colours (south, east, north, west) of every tile.
+    n_colors : tuple of 3 int
+    height, depth : float
+        Exemplar relief height and base depth.
+    recipe : dict
+        Exemplar name and parameters.
+    """
+
+    plan: TilePlan
+    strips: dict
+    groups: np.ndarray
+    cols: np.ndarray
+    n_colors: tuple
+    height: float
+    depth: float
+    recipe: dict
+
+
+def plan_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool = False,
+                 lattice: bool = False, seed: int = 0, interior: str = "quilt",
+                 progress=None) -> PlannedSet:
+    """Draw the strips of a set and place them into the frame of every tile.
+
+    The first half of :func:`build_tileset` (same options, same random
+    draws): the strips come from ``default_rng(seed)``, the tiles are then
+    independent (:func:`built_tile`). Useful to look at the stages of the
+    paper's pipeline (strips, frame, interior; its Fig. 3).
+
+    Returns
+    -------
+    PlannedSet
+
+    Raises
+    ------
+    InputError
+        As :func:`build_tileset` (not for ``interior="periodic"``, which has
+        no strips).
+    """
+    if interior not in ("quilt", "paste"):
+        raise InputError(f"interior: strips and frames are planned for 'quilt' or 'paste', "
+                         f"got {interior!r}")
+    if isotropic and planar:
+        raise InputError("isotropic and planar exclude each other: an isotropic set is "
+                         "already the n^4 tiles of the plane, usable on a closed polycube")
+    src, height, depth, recipe = _exemplar_arrays(exemplar)
+    n_colors = parse_colors(colors, planar=planar)
+    if isotropic and len(set(n_colors)) != 1:
+        raise InputError(f"colors: an isotropic set has one colour count for all axes, got "
+                         f"{colors!r}")
+    rng = np.random.default_rng(seed)
+    report(progress, "strips")
+    largest_footprint(src.lo, src.hi)
+    grid = _lattice(src) if lattice else None
+    strips, taken = {}, set()
+    if isotropic:
+        strips[0], taken = pick_strips(src.V, src.F, src.size, count=n_colors[0],
+                                       along=STRIP_AXIS[0], rng=rng, lattice=grid)
+    else:
+        # colour by colour, the classes in turn: a strip meets only the other
+        # classes' strips at a corner, and the first strips chosen keep their
+        # corner elements, so no class takes every corner
+        strips = {cls: [] for cls in range(3) if n_colors[cls]}
+        for k in range(max(n_colors)):
+            for cls in strips:
+                if k < n_colors[cls]:
+                    before = [st for c in strips if c != cls for st in strips[c]]
+                    new, taken = pick_strips(src.V, src.F, src.size, count=1,
+                                             along=STRIP_AXIS[cls], rng=rng, taken=taken,
+                                             lattice=grid, chosen_before=before,
+                                             meets_itself=False)
+                    strips[cls] += new
+    if isotropic:
+        strips[1] = strips[2] = strips[0]
+    groups, cols = tile_keys(n_colors, PLANAR_GROUPS if planar or isotropic
+                             else COMPLETE_GROUPS)
+
+    frames = [frame_of((strips[a], strips[b]), c)
+              for (a, b), c in zip(groups.tolist(), cols.tolist())]
+    plan = TilePlan(src=src, frames=frames, interior=interior, lattice=grid, seed=int(seed),
+                    pixels=ExemplarPixels(src.V, src.F, src.labels, src.lo, src.hi))
+    return PlannedSet(plan=plan, strips=strips, groups=groups, cols=cols,
+                      n_colors=tuple(n_colors), height=height, depth=depth, recipe=recipe)
+
+
 def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool = False,
                   lattice: bool = False, seed: int = 0, interior: str = "quilt",
                   name: str | None = None, progress=None, map_tiles=None) -> TileSet:
@@ -511,42 +609,11 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
             exemplar = make(exemplar)
         return periodic_tileset(exemplar, n_colors=parse_colors(colors, planar=False),
                                 seed=seed, name=name, progress=progress)
-    src, height, depth, recipe = _exemplar_arrays(exemplar)
-    n_colors = parse_colors(colors, planar=planar)
-    if isotropic and len(set(n_colors)) != 1:
-        raise InputError(f"colors: an isotropic set has one colour count for all axes, got "
-                         f"{colors!r}")
-    rng = np.random.default_rng(seed)
-    report(progress, "strips")
-    largest_footprint(src.lo, src.hi)
-    grid = _lattice(src) if lattice else None
-    strips, taken = {}, set()
-    if isotropic:
-        strips[0], taken = pick_strips(src.V, src.F, src.size, count=n_colors[0],
-                                       along=STRIP_AXIS[0], rng=rng, lattice=grid)
-    else:
-        # colour by colour, the classes in turn: a strip meets only the other
-        # classes' strips at a corner, and the first strips chosen keep their
-        # corner elements, so no class takes every corner
-        strips = {cls: [] for cls in range(3) if n_colors[cls]}
-        for k in range(max(n_colors)):
-            for cls in strips:
-                if k < n_colors[cls]:
-                    before = [st for c in strips if c != cls for st in strips[c]]
-                    new, taken = pick_strips(src.V, src.F, src.size, count=1,
-                                             along=STRIP_AXIS[cls], rng=rng, taken=taken,
-                                             lattice=grid, chosen_before=before,
-                                             meets_itself=False)
-                    strips[cls] += new
-    if isotropic:
-        strips[1] = strips[2] = strips[0]
-    groups, cols = tile_keys(n_colors, PLANAR_GROUPS if planar or isotropic
-                             else COMPLETE_GROUPS)
-
-    frames = [frame_of((strips[a], strips[b]), c)
-              for (a, b), c in zip(groups.tolist(), cols.tolist())]
-    plan = TilePlan(src=src, frames=frames, interior=interior, lattice=grid, seed=int(seed),
-                    pixels=ExemplarPixels(src.V, src.F, src.labels, src.lo, src.hi))
+    planned = plan_tileset(exemplar, colors=colors, planar=planar, isotropic=isotropic,
+                           lattice=lattice, seed=seed, interior=interior, progress=progress)
+    plan, groups, cols = planned.plan, planned.groups, planned.cols
+    n_colors, grid, recipe = planned.n_colors, plan.lattice, planned.recipe
+    frames = plan.frames
     n = len(frames)
     results = [None] * n
     mapped = map_tiles(built_tile, plan, n) if map_tiles is not None \
@@ -584,6 +651,6 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
                         seam_normal_jump_mean=round(float(np.nansum(S[:, 0] * S[:, 2])
                                                           / S[:, 0].sum()), 3),
                         seam_normal_jump_max=round(float(np.nanmax(S[:, 3])), 3))
-    return TileSet.from_tiles(tiles, groups, cols, n_colors=n_colors, height=height,
-                              depth=depth, name=name or recipe["name"] or "tileset",
+    return TileSet.from_tiles(tiles, groups, cols, n_colors=n_colors, height=planned.height,
+                              depth=planned.depth, name=name or recipe["name"] or "tileset",
                               metadata=meta)
