@@ -48,10 +48,11 @@ into the original image.
    triangles of a polygon laid out with 3D lengths) it is flattened by
    projection onto its mean plane (if that is within ``max_flat_error``),
    and if imposing the neighbours' border folds it, its free flattening is
-   kept.  A match above ``max_error`` is still refused there: the face-level
-   filling (5) continues the neighbours' maps, which on Spot showed weaker
-   borders (mean colour jump 0.06-0.10) than patches forced above the
-   threshold (0.17).  The report counts, per level, why clusters were
+   kept.  A match above ``max_error`` is still refused there: the face
+   level (5) retries its faces in smaller groups, with more of their
+   neighbours textured (forcing such patches above the threshold had given
+   a mean colour jump of 0.17 at their borders on Spot, against 0.06-0.10
+   for faces unfolded from their neighbours).  The report counts, per level, why clusters were
    refused (``refused``) and the two fallbacks (``projected``,
    ``free_border``).
 4. Cracks: a vertex reached through several faces gets the mean of its
