@@ -159,7 +159,8 @@ def run(args) -> int:
     rep = result.report()
     placed = sum(lv["placed"] for lv in rep["levels"])
     print(f"{args.base}: {placed} patches over {F.shape[0]} faces "
-          f"({rep['levels'][-1]['filled_faces']} faces filled at face level), "
+          f"(face level: {rep['levels'][-1]['matched_faces']} faces matched, "
+          f"{rep['levels'][-1]['filled_faces']} unfolded), "
           f"{result.uv.shape[0]} texture coordinates")
     print("wrote " + " and ".join(str(p) for p in written))
     return EXIT_OK
