@@ -71,6 +71,32 @@ def border_rotation(V, F, uv, uv_faces, regions):
     return ang[(r0 != r1) & (r0 >= 0) & (r1 >= 0)]
 
 
+def continuity_regions(V, F, uv_faces):
+    """Faces joined across every edge where the texture map is continuous.
+
+    Two faces sharing an edge are in one region when both ends of the edge
+    have the same uv index in both faces.  The seams are then exactly where
+    the map jumps, whatever placement textured the faces (a face unfolded
+    from a neighbour continues it; a patch region would count its edges as
+    borders although the texture is continuous there).
+    """
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components
+
+    topo = edge_topology(F, V.shape[0])
+    two = topo.face_count == 2
+    ef, ed = topo.edge_faces()[two], topo.edges[two]
+
+    def corner_uv(f, v):
+        return uv_faces[f, np.argmax(F[f] == v[:, None], axis=1)]
+
+    same = ((corner_uv(ef[:, 0], ed[:, 0]) == corner_uv(ef[:, 1], ed[:, 0]))
+            & (corner_uv(ef[:, 0], ed[:, 1]) == corner_uv(ef[:, 1], ed[:, 1])))
+    G = sp.csr_matrix((np.ones(int(same.sum())), (ef[same, 0], ef[same, 1])),
+                      shape=(F.shape[0],) * 2)
+    return connected_components(G, directed=False)[1]
+
+
 def timed(fn, repeat):
     best = (float("inf"), 0.0, None)
     for _ in range(repeat):
@@ -128,7 +154,7 @@ def main():
              "0.06 of the image width).", "",
              "## 1. Time", "",
              "| faces | image | wall (s) | CPU (s) | load avg | patches placed | subdivided | "
-             "faces filled at face level | uv / vertices |",
+             "faces matched / unfolded at face level | uv / vertices |",
              "|---|---|---|---|---|---|---|---|---|"]
     runs = {}
     for faces, label in ((10000, "gravel 128"), (10000, "water 256"), (10000, "water 512"),
@@ -144,7 +170,8 @@ def main():
         rec["timing"].append({"faces": int(F.shape[0]), "image": label, "wall": w, "cpu": c,
                               "load": load, "report": rep})
         lines.append(f"| {F.shape[0]} | {label} | {w:.2f} | {c:.2f} | {load:.1f} | {placed} | "
-                     f"{sub} | {rep['levels'][-1]['filled_faces']} | "
+                     f"{sub} | {rep['levels'][-1]['matched_faces']} / "
+                     f"{rep['levels'][-1]['filled_faces']} | "
                      f"{r.uv.shape[0]} / {V.shape[0]} |")
         print(lines[-1], flush=True)
     def per_level(rep):
@@ -153,13 +180,14 @@ def main():
             why = ", ".join(f"{k} {v}" for k, v in lv.get("refused", {}).items())
             extra = [f"projected {lv['projected']}"] if lv.get("projected") else []
             extra += [f"free border {lv['free_border']}"] if lv.get("free_border") else []
+            extra += [f"{lv['matched_faces']} faces matched"] if lv.get("matched_faces") else []
             out.append(f"level {lv['level']} ({lv['clusters']} clusters): {lv['placed']} placed, "
                        f"{lv['subdivided']} subdivided"
                        + (f" ({why})" if why else "")
                        + (f", {', '.join(extra)}" if extra else "")
                        + ", mean error "
                        + ("-" if lv["mean_error"] is None else format(lv["mean_error"], ".3f"))
-                       + (f", {lv['filled_faces']} faces filled" if lv["filled_faces"] else ""))
+                       + (f", {lv['filled_faces']} faces unfolded" if lv["filled_faces"] else ""))
         return "; ".join(out)
 
     lines += ["", "Per level (10k faces, water 256): "
@@ -168,9 +196,9 @@ def main():
               + per_level(runs[(30000, "water 256")].report()), ""]
     lines += ["## 2. Seams and distortion beside lapped textures (10k faces, same scale)", "",
               "| image | method | wall (s) | border / within colour difference | border | "
-              "within | stretch mean | stretch p95 | flipped faces | rotation across borders "
-              "(median / p75, degrees) |",
-              "|---|---|---|---|---|---|---|---|---|---|"]
+              "within | where the map jumps: border / within | stretch mean | stretch p95 | "
+              "flipped faces | rotation across borders (median / p75, degrees) |",
+              "|---|---|---|---|---|---|---|---|---|---|---|"]
     V, F = meshes[10000]
     for label in ("gravel 128", "bricks 192", "water 256"):
         img = imgs[label]
@@ -181,7 +209,8 @@ def main():
         w = next(t["wall"] for t in rec["timing"] if t["image"] == label and t["faces"] ==
                  F.shape[0])
         rot = border_rotation(V, F, r.uv, r.uv_faces, r.patch)
-        rows = [("hpm", w, s, d, rot)]
+        sj = seam_contrast(V, F, r.uv, r.uv_faces, img, continuity_regions(V, F, r.uv_faces))
+        rows = [("hpm", w, s, d, rot, sj)]
         patches = texture_patches(img)
         wl, _, lt = timed(lambda: lapped_texture(V, F, patches, scale=scale, seed=0),
                           args.repeat)
@@ -198,23 +227,30 @@ def main():
                                 uv_faces=np.arange(3 * F.shape[0]).reshape(-1, 3))
         rl = border_rotation(V, F, topuv.reshape(-1, 2), np.arange(3 * F.shape[0]).reshape(-1, 3),
                              top)
-        rows.append(("lapped (+ atlas)", wl + wa, sl, dl, rl))
-        for name, wall, s_, d_, ro in rows:
+        rows.append(("lapped (+ atlas)", wl + wa, sl, dl, rl, None))
+        for name, wall, s_, d_, ro, sj_ in rows:
             q50, q75 = np.quantile(ro, [0.5, 0.75])
             lines.append(f"| {label} | {name} | {wall:.2f} | {s_.ratio:.2f} | {s_.border:.4f} | "
-                         f"{s_.within:.4f} | {d_.stretch.mean:.3f} | {d_.stretch.p95:.3f} | "
+                         f"{s_.within:.4f} | "
+                         + ("-" if sj_ is None else f"{sj_.ratio:.2f}") + " | "
+                         f"{d_.stretch.mean:.3f} | {d_.stretch.p95:.3f} | "
                          f"{d_.n_flipped} | {q50:.1f} / {q75:.1f} |")
             rec["quality"].append({"image": label, "method": name, "wall": wall,
                                    "seam_ratio": s_.ratio, "border": s_.border,
                                    "within": s_.within, "stretch_mean": d_.stretch.mean,
                                    "stretch_p95": d_.stretch.p95, "flipped": d_.n_flipped,
-                                   "rotation_median": float(q50), "rotation_p75": float(q75)})
+                                   "rotation_median": float(q50), "rotation_p75": float(q75),
+                                   "jump_ratio": None if sj_ is None else sj_.ratio})
             print(lines[-1], flush=True)
     lines += ["", "Border / within: mean RGB distance (0..sqrt 3) between the colours the two "
               "faces of an edge show just either side of it (10 % of the way to their opposite "
               "vertices), over border edges divided by over inner edges.  hpm regions are its "
-              "placed patches (every face filled at face level is a region of its own, so its "
-              "edges count as borders); lapped regions are the top paste of every face, whose "
+              "placed patches (every face unfolded at face level is a region of its own, so its "
+              "edges count as borders, although an unfolded face continues its neighbour's map "
+              "across one edge: the more faces are unfolded, the lower this ratio); 'where the "
+              "map jumps' takes as regions the faces joined across every edge where the uv is "
+              "continuous, so that borders are exactly the discontinuities of the map; "
+              "lapped regions are the top paste of every face, whose "
               "borders lapped textures hide with the splotch's alpha fall-off.  Stretch is "
               "s1/s2 of the map from the surface into the image (1 = no anisotropic "
               "distortion).  Rotation across borders: the angle between the texture-space "

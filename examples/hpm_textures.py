@@ -89,8 +89,9 @@ def textured(V, F, img, scale, *, seed=0, title=""):
     r = hpm_texture(V, F, img, scale=scale, seed=seed)
     rep = r.report()
     placed = sum(lv["placed"] for lv in rep["levels"])
-    print(f"  {title}: {placed} patches, {rep['levels'][-1]['filled_faces']} faces filled, "
-          f"{time.perf_counter() - t:.1f} s")
+    last = rep["levels"][-1]
+    print(f"  {title}: {placed} patches, face level: {last['matched_faces']} faces matched, "
+          f"{last['filled_faces']} unfolded, {time.perf_counter() - t:.1f} s")
     Vs, Fs, uv = split(V, F, r.uv, r.uv_faces)
     return Panel(Vs, Fs, uv=uv, texture=img, title=f"{title}\n{placed} patches"), r
 

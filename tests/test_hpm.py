@@ -575,3 +575,83 @@ def test_cli_hpm_relief_is_printable_and_refuses_a_textured_suffix(files, capsys
     assert main(["hpm", str(base), "--image", str(img), "--displace", "0.05",
                  "-o", str(tmp / "x.glb")]) == 2
     assert "--displace" in capsys.readouterr().err and not (tmp / "x.glb").exists()
+
+
+# ---------------------------------------------------------------------------
+# face level and sub-pixel refinement
+# ---------------------------------------------------------------------------
+
+def test_refine_placement_recovers_a_subpixel_shift_and_angle():
+    from geotex.image.hpm import _refine_placement, _sample
+    img = opponent_colors(noise_image(64, 64, seed=3).astype(np.float64) / 255.0)
+    yy, xx = np.mgrid[0:14, 0:14]
+    q = np.column_stack([xx.ravel() + 0.5, yy.ravel() + 0.5]) - 7.0
+    a = np.radians(4.0)
+    R_true = np.array([[np.cos(a), np.sin(a)], [-np.sin(a), np.cos(a)]])
+    t_true = np.array([30.3, 27.6])
+    target = _sample(img, q @ R_true.T + t_true)
+    # start where the FFT would: the nearest whole pixel, the grid orientation 0
+    R0, t0 = np.eye(2), np.round(t_true)
+    e_start = float(np.sum((target - _sample(img, q @ R0.T + t0)) ** 2))
+    R1, t1, e1 = _refine_placement(img, R0, t0, q, target, 2 * np.pi / 20)
+    assert e1 < 0.1 * e_start
+    assert np.linalg.norm(t1 - t_true) < 0.15
+    assert abs(np.degrees(np.arctan2(R1[0, 1], R1[0, 0])) - 4.0) < 1.0
+    # never worse than the start, even where the start is already the optimum
+    R2, t2, e2 = _refine_placement(img, R_true, t_true, q, target, 2 * np.pi / 20)
+    assert e2 <= 1e-12 and np.allclose(t2, t_true) and np.allclose(R2, R_true)
+
+
+@pytest.fixture(scope="module")
+def face_level_runs():
+    # the torus of test_hpm_fills_few_faces_at_face_level, where some finest
+    # clusters are refused and their faces reach the face level
+    V, F = torus(1.0, 0.4, n_major=48, n_minor=16)
+    img = noise_image(64, 64)
+    kw = dict(scale=0.6, seed=2, max_error=0.2)
+    return V, F, {fm: hpm_texture(V, F, img, face_match=fm, **kw) for fm in (True, False)}
+
+
+def test_hpm_face_level_matches_remaining_faces(face_level_runs):
+    V, F, runs = face_level_runs
+    on, off = runs[True], runs[False]
+    lv_on, lv_off = on.report()["levels"][-1], off.report()["levels"][-1]
+    # the same faces reach the face level (the cluster levels do not depend on it)
+    reached = lv_off["filled_faces"]
+    assert reached > 20 and lv_off["matched_faces"] == 0 and lv_off["placed"] == 0
+    assert lv_on["matched_faces"] + lv_on["filled_faces"] == reached
+    assert lv_on["matched_faces"] > lv_on["filled_faces"] and lv_on["placed"] > 0
+    # matched faces are placements of the face level; unfolded ones have none
+    L = len(on.levels)
+    matched = (on.face_level == L - 1) & (on.patch >= 0)
+    assert np.count_nonzero(matched) == lv_on["matched_faces"]
+    assert np.count_nonzero(on.patch < 0) == lv_on["filled_faces"]
+    assert lv_on["mean_error"] is not None and 0 <= lv_on["mean_error"] <= 0.2
+    # every face textured, no face reversed in texture space
+    t = on.uv[on.uv_faces]
+    d = (t[:, 1, 0] - t[:, 0, 0]) * (t[:, 2, 1] - t[:, 0, 1]) \
+        - (t[:, 1, 1] - t[:, 0, 1]) * (t[:, 2, 0] - t[:, 0, 0])
+    assert np.isfinite(on.uv).all() and (d > 0).all()
+
+
+def test_hpm_face_group_and_subpixel_options_are_checked():
+    V, F = icosphere(2)
+    img = noise_image(32, 32)
+    with pytest.raises(InputError, match="face_group"):
+        hpm_texture(V, F, img, scale=3.0, face_group=0)
+    a = hpm_texture(V, F, img, scale=3.0, seed=4, subpixel=True)
+    b = hpm_texture(V, F, img, scale=3.0, seed=4, subpixel=True)
+    assert np.array_equal(a.uv, b.uv) and np.array_equal(a.uv_faces, b.uv_faces)
+
+
+def test_cli_hpm_face_level_and_subpixel_flags(files):
+    tmp, base, img = files
+    reps = {}
+    for flags in (["--face-level", "unfold"], ["--subpixel"]):
+        out, rep = tmp / "fl.glb", tmp / "fl.json"
+        assert main(["hpm", str(base), "--image", str(img), "--scale", "0.8", "--max-error",
+                     "0.15", "-o", str(out), "--report", str(rep)] + flags) == 0
+        reps[flags[0]] = json.loads(rep.read_text())["levels"][-1]
+    assert reps["--face-level"]["matched_faces"] == 0
+    assert reps["--face-level"]["filled_faces"] > 0
+    assert reps["--subpixel"]["matched_faces"] > 0

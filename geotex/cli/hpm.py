@@ -40,9 +40,16 @@ def register(sub):
     p.add_argument("--band", type=float, default=0.06, metavar="W",
                    help="width of the band of textured neighbours matched along a patch "
                         "border, as a fraction of the image width (default 0.06; the paper "
-                        "widens it for anisotropic and structured patterns: on Spot with "
-                        "bricks 0.12 lowered the border/within colour difference from "
-                        "about 1.34 to 1.24, with twice as many faces filled at face level)")
+                        "widens it for anisotropic and structured patterns; on Spot 0.12 "
+                        "left a fifth of the faces to the face level and made the seams where "
+                        "the map jumps more visible, see docs/architecture.md)")
+    p.add_argument("--face-level", choices=("match", "unfold"), default="match",
+                   help="faces left after the finest cluster level: matched against the "
+                        "image in small groups, unfolding only those that still match badly "
+                        "(default), or all unfolded from a textured neighbour")
+    p.add_argument("--subpixel", action="store_true",
+                   help="refine every match below the pixel and orientation grids (did not "
+                        "lower the seams on Spot; off by default)")
     p.add_argument("--report", default=None, metavar="R.json",
                    help="also write per-level counts and matching errors")
     add_relief_arguments(p, what="the mapped image's luminance")
@@ -127,7 +134,8 @@ def run(args) -> int:
             result = hpm_texture(V, F, image, scale=scale, field=field, angle=args.angle,
                                  seed=args.seed, max_error=args.max_error,
                                  orientation_spread=spread, band_distance=args.band,
-                                 progress=bar)
+                                 face_match=args.face_level == "match",
+                                 subpixel=args.subpixel, progress=bar)
     except Exception as exc:
         from geotex.errors import InputError
         if isinstance(exc, InputError):
@@ -151,7 +159,8 @@ def run(args) -> int:
     rep = result.report()
     placed = sum(lv["placed"] for lv in rep["levels"])
     print(f"{args.base}: {placed} patches over {F.shape[0]} faces "
-          f"({rep['levels'][-1]['filled_faces']} faces filled at face level), "
+          f"(face level: {rep['levels'][-1]['matched_faces']} faces matched, "
+          f"{rep['levels'][-1]['filled_faces']} unfolded), "
           f"{result.uv.shape[0]} texture coordinates")
     print("wrote " + " and ".join(str(p) for p in written))
     return EXIT_OK
