@@ -63,6 +63,15 @@ def test_flat_tile_on_flat_quad_is_the_identity_up_to_scale(studs):
     # and the elements that lie wholly inside these quads come out of the full map the same
     m = mapped_tiles(shell, studs, only, scale=0.25)
     assert m.vertices.shape[0] > 0
+    # every mapped face copies the tile face tile_faces names, vertex for vertex (a
+    # vertex welded across a tile side keeps its twin's u, v: compare w there)
+    assert m.tile_faces.shape == (len(m.faces),)
+    local = studs.faces[m.tile_faces] + studs.vertex_offsets[
+        np.searchsorted(studs.face_offsets, m.tile_faces, side="right") - 1][:, None]
+    want, have = studs.vertices[local], m.tile_points[m.faces]
+    on_side = np.isin(want[..., :2], (0.0, 1.0)).any(axis=-1)
+    assert np.array_equal(want[..., 2], have[..., 2])
+    assert np.array_equal(want[~on_side], have[~on_side]) and (~on_side).sum() > 100
     d = np.abs(m.vertices[:, None, :] - got[None, :, :]).max(axis=2).min(axis=1)
     assert d.max() < 1e-12
 
