@@ -63,6 +63,15 @@ def test_flat_tile_on_flat_quad_is_the_identity_up_to_scale(studs):
     # and the elements that lie wholly inside these quads come out of the full map the same
     m = mapped_tiles(shell, studs, only, scale=0.25)
     assert m.vertices.shape[0] > 0
+    # every mapped face copies the tile face tile_faces names, vertex for vertex (a
+    # vertex welded across a tile side keeps its twin's u, v: compare w there)
+    assert m.tile_faces.shape == (len(m.faces),)
+    local = studs.faces[m.tile_faces] + studs.vertex_offsets[
+        np.searchsorted(studs.face_offsets, m.tile_faces, side="right") - 1][:, None]
+    want, have = studs.vertices[local], m.tile_points[m.faces]
+    on_side = np.isin(want[..., :2], (0.0, 1.0)).any(axis=-1)
+    assert np.array_equal(want[..., 2], have[..., 2])
+    assert np.array_equal(want[~on_side], have[~on_side]) and (~on_side).sum() > 100
     d = np.abs(m.vertices[:, None, :] - got[None, :, :]).max(axis=2).min(axis=1)
     assert d.max() < 1e-12
 
@@ -300,3 +309,50 @@ def test_folded_elements_are_shrunk_in_place_rather_than_dropped():
     m = mapped_tiles(shell, tiles, tq, scale=h / tiles.height, anchor=0.2 * shell.tile_size)
     folded = element_contacts(m.vertices, m.faces).folded
     assert folded.size == s.elements_folded + s.elements_reseated
+
+
+def test_union_composes_separate_elements_and_unites_only_those_that_meet():
+    import manifold3d
+
+    from geotex.mapping.union import element_contacts, element_pairs, united_with_base
+    from geotex.mesh.primitives import icosphere
+    from geotex.mesh.solid import manifold_of
+    from geotex.mesh.topology import concatenated
+
+    V, F = box((0, 0, 0), (4, 4, 1), divisions=8)
+    Vs, Fs = icosphere(2)
+    # spheres half sunk into the top face: most alone, a chain of three that
+    # overlap one another, and a pair that overlaps
+    centres = [(0.5, 0.5), (1.5, 0.5), (2.5, 0.5), (3.5, 3.5), (0.5, 2.0), (0.8, 2.0),
+               (1.1, 2.0), (3.0, 2.0), (3.3, 2.1)]
+    X, G = concatenated([(Vs * 0.2 + (x, y, 1.0), Fs) for x, y in centres])
+    contacts = element_contacts(X, G)
+    assert contacts.folded.size == 0
+    assert contacts.touching.tolist() == [[4, 5], [5, 6], [7, 8]]
+    label, pairs = element_pairs(X, G, touching=contacts.touching, label=contacts.label)
+    assert np.array_equal(label, contacts.label) and pairs.tolist() == [[4, 5], [5, 6], [7, 8]]
+    V2, F2, stats = united_with_base(V, F, X, G, contacts=contacts)
+    assert (stats.elements, stats.groups, stats.floating, stats.folded) == (9, 2, 0, 0)
+    # the same solid as manifold3d's union of the base and every sphere, one by one
+    ref = manifold3d.Manifold.batch_boolean(
+        [manifold_of(V, F)] + [manifold_of(Vs * 0.2 + (x, y, 1.0), Fs) for x, y in centres],
+        manifold3d.OpType.Add)
+    got = manifold_of(V2, F2)
+    assert got.status() == manifold3d.Error.NoError
+    assert got.volume() == pytest.approx(ref.volume(), rel=1e-9)
+    assert got.genus() == 0 and len(F2) == ref.num_tri()
+    rep = check_mesh(V2, F2)
+    assert rep.printable, rep
+    # left out: an element of the chain (the other two still meet) and a lone one
+    exclude = np.zeros(9, dtype=bool)
+    exclude[[0, 4]] = True
+    V3, F3, stats = united_with_base(V, F, X, G, contacts=contacts, exclude=exclude)
+    assert stats.elements == 7
+    ref = manifold3d.Manifold.batch_boolean(
+        [manifold_of(V, F)] + [manifold_of(Vs * 0.2 + (x, y, 1.0), Fs)
+                               for k, (x, y) in enumerate(centres) if not exclude[k]],
+        manifold3d.OpType.Add)
+    assert manifold_of(V3, F3).volume() == pytest.approx(ref.volume(), rel=1e-9)
+    # same inputs, same bytes
+    V4, F4, _ = united_with_base(V, F, X, G, contacts=contacts)
+    assert V4.tobytes() == V2.tobytes() and F4.tobytes() == F2.tobytes()

@@ -16,7 +16,7 @@ from geotex.mesh.topology import edge_topology
 from geotex.tiles import (TileSet, build_tileset, check_seams, load_tileset, on_slab,
                           planar_tiling, random_arrangement, save_tileset, tile_count)
 from geotex.quilting import closed_element_ok
-from geotex.tiles.clip import split_by_plane
+from geotex.tiles.clip import refined_by_plane, split_by_plane
 from geotex.tiles.colors import side_classes
 from geotex.tiles.verify import side_boundaries
 
@@ -137,6 +137,31 @@ def test_split_by_plane_halves_share_their_cut_and_weld_shut():
         return 0.5 * np.linalg.norm(np.cross(W[G[:, 1]] - W[G[:, 0]], W[G[:, 2]] - W[G[:, 0]]),
                                     axis=1).sum()
     assert area(Vb, Fb) + area(Va, Fa) == pytest.approx(area(V, F), rel=1e-12)
+
+
+def test_refined_by_plane_keeps_the_surface_and_its_cut_closes_the_part_below():
+    V, F = icosphere(3)
+    cut = refined_by_plane(V, F, axis=2, value=0.2345, ordered=True)
+    W, G = cut.vertices, cut.faces
+    # one surface, refined: closed, consistently oriented, same area, every face on one side
+    topo = edge_topology(G, len(W))
+    assert not topo.boundary.any() and not topo.inconsistent.any()
+    z = W[G, 2]
+    assert np.all(z[cut.above] >= 0.2345) and np.all(z[~cut.above] <= 0.2345)
+    assert np.all(W[cut.cut.ravel(), 2] == 0.2345) and len(cut.cut) > 0
+    # the cut, read as a lid's boundary, runs against the part below: lid + below
+    # has no boundary (the lid is a fan around the centre of the cut)
+    below = G[~cut.above]
+    centre = len(W)
+    lid = np.column_stack([cut.cut, np.full(len(cut.cut), centre)])
+    Wl = np.vstack([W, W[cut.cut[:, 0]].mean(axis=0)])
+    topo = edge_topology(np.vstack([below, lid]), len(Wl))
+    assert not topo.boundary.any() and not topo.inconsistent.any()
+    # split_by_plane is this refinement, separated
+    (Vb, Fb), (Va, Fa) = split_by_plane(V, F, axis=2, value=0.2345, ordered=True)
+    assert len(Fb) == (~cut.above).sum() and len(Fa) == cut.above.sum()
+    assert np.array_equal(np.sort(Vb[Fb].reshape(-1, 9), axis=0),
+                          np.sort(W[below].reshape(-1, 9), axis=0))
 
 
 def test_planar_set_has_every_colour_combination(planar_set):

@@ -102,6 +102,8 @@ class MappedTiles:
         Quad every vertex was mapped through.
     tile_points : numpy.ndarray, (N, 3) float64
         Its ``(u, v, w)`` in that quad's tile frame.
+    tile_faces : numpy.ndarray, (M,) int64
+        Index in ``tiles.faces`` of the tile face every face copies.
     """
 
     vertices: np.ndarray
@@ -110,6 +112,7 @@ class MappedTiles:
     dropped_faces: int
     quads: np.ndarray
     tile_points: np.ndarray
+    tile_faces: np.ndarray
 
 
 def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: float,
@@ -137,6 +140,9 @@ def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: floa
     """
     pc = shell.polycube
     uvw, quad_of_vertex, faces, _ = gathered_tiles(tiles, tile_of_quad)
+    t = np.asarray(tile_of_quad, dtype=np.int64)
+    t = t[t >= 0]
+    tile_faces = _ranges(tiles.face_offsets[t], np.diff(tiles.face_offsets)[t])
     # weld side vertices with their twins across quad edges
     on, keys = side_keys(uvw, quad_of_vertex, pc.layout.quad_edge)
     side_idx = np.flatnonzero(on)
@@ -161,6 +167,7 @@ def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: floa
         open_piece[piece[lonely]] = True
         keep_face = ~open_piece[piece[faces[:, 0]]]
         faces = faces[keep_face]
+        tile_faces = tile_faces[keep_face]
     used = np.zeros(len(uvw), dtype=bool)
     used[faces.ravel()] = True
     new_index = np.cumsum(used) - 1
@@ -168,7 +175,7 @@ def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: floa
     X = shell_positions(shell, quad_of_vertex[kept], uvw[kept], scale=scale,
                         depth_scale=depth_scale(tiles, scale, anchor))
     return MappedTiles(X, new_index[faces], int(on.sum() - start.sum()),
-                       int((~keep_face).sum()), quad_of_vertex[kept], uvw[kept])
+                       int((~keep_face).sum()), quad_of_vertex[kept], uvw[kept], tile_faces)
 
 
 def depth_scale(tiles: TileSet, scale: float, anchor) -> float:

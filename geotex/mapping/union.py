@@ -2,14 +2,21 @@
 
 Mapped elements are closed, but the shell map can bend neighbours into each
 other where it is strongly distorted. manifold3d unites any number of
-operands correctly as long as each operand is free of self-intersection, so
-the elements are split into a few groups of pairwise separate ones: a greedy
-colouring of the graph of elements that meet (one exact self-intersection
-test of all elements finds those, and the elements the map folds onto
-themselves, which are left out). Every group is one multi-component operand;
-one batch boolean adds the groups to the base.
+operands correctly as long as each operand is free of self-intersection. One
+exact self-intersection test of all elements finds the elements the map folds
+onto themselves (left out) and the few pairs that meet. Those few are
+coloured into groups of pairwise separate ones and united among themselves in
+a small boolean; every other element meets nothing, so all of them and that
+small union form one operand without any boolean, and one boolean adds it to
+the base (each extra operand of a batch boolean is another pass over the
+whole result).
 Pieces of the result that are not part of the body (elements that float above
 a concave base) are left out, so the print is one solid.
+
+The boolean's time is the element-base intersections, not the triangle count:
+cutting elements in tile space and sending only their bottoms with a lid
+through it was measured and does not pay (``benchmarks/bench_union_split.py``,
+``benchmarks/results/union_split.md``).
 """
 
 from __future__ import annotations
@@ -24,10 +31,11 @@ from geotex.check.intersections import self_intersecting_pairs
 from geotex.errors import GeotexError
 from geotex.mesh.needles import SLIVER_TOLERANCE, needle_free
 from geotex.mesh.solid import arrays_of_manifold, manifold_of
-from geotex.mesh.topology import compacted, face_components, greedy_colouring
+from geotex.mesh.topology import compacted, concatenated, face_components, greedy_colouring
 from geotex.progress import report
 
 __all__ = ["united_with_base", "element_contacts", "ElementContacts", "element_groups",
+           "element_pairs",
            "UnionStats", "SLIVER_TOLERANCE", "UNION_STAGES"]
 
 #: Stage names passed to the ``progress`` callback of :func:`united_with_base`.
@@ -44,7 +52,9 @@ class UnionStats:
     elements : int
         Elements added to the base.
     groups : int
-        Operands the elements were split into (elements within one do not touch).
+        Groups the elements were coloured into (elements within one do not
+        touch; the elements of the groups after the first are united among
+        themselves before the base is added).
     floating : int
         Pieces that did not reach the base and were left out.
     folded : int
@@ -96,14 +106,13 @@ def element_contacts(X: np.ndarray, G: np.ndarray) -> ElementContacts:
     return ElementContacts(label, np.unique(a[same]), touching.reshape(-1, 2))
 
 
-def element_groups(X: np.ndarray, G: np.ndarray, *, touching=None, moved=None, label=None
-                   ) -> tuple[np.ndarray, np.ndarray]:
-    """Split elements into groups whose members do not meet.
+def element_pairs(X: np.ndarray, G: np.ndarray, *, touching=None, moved=None, label=None
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """Pairs of elements that must not share an operand of the union.
 
-    Without ``touching``, members of a group have bounding boxes that do not
-    overlap. With it (from :func:`element_contacts`), only elements that
-    meet, and elements whose box overlaps one that has ``moved`` since,
-    are kept apart, so most elements share the first group.
+    Without ``touching``, every pair whose bounding boxes overlap. With it
+    (from :func:`element_contacts`), the pairs that meet, and the box
+    overlaps of elements that have ``moved`` since.
 
     Parameters
     ----------
@@ -120,11 +129,10 @@ def element_groups(X: np.ndarray, G: np.ndarray, *, touching=None, moved=None, l
 
     Returns
     -------
-    element : numpy.ndarray, (l,) int64
+    label : numpy.ndarray, (l,) int64
         Element (connected component) of every face.
-    group : numpy.ndarray, (n_elements,) int64
-        Group of every element, ``0 .. n_groups - 1`` (greedy colouring, largest
-        degree first, so deterministic).
+    pairs : numpy.ndarray, (q, 2) int64
+        Element pairs (a pair may repeat).
     """
     # lazy: scipy.spatial (~0.1 s) is slow to import
     from scipy.spatial import cKDTree
@@ -154,7 +162,44 @@ def element_groups(X: np.ndarray, G: np.ndarray, *, touching=None, moved=None, l
             was_moved[np.asarray(moved, dtype=np.int64)] = True
         cand = np.concatenate([np.asarray(touching, dtype=np.int64).reshape(-1, 2),
                                cand[was_moved[cand].any(axis=1)]])
-    return label, greedy_colouring(n_el, cand)
+    return label, np.asarray(cand, dtype=np.int64).reshape(-1, 2)
+
+
+def element_groups(X: np.ndarray, G: np.ndarray, *, touching=None, moved=None, label=None
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """Split elements into groups whose members do not meet.
+
+    Without ``touching``, members of a group have bounding boxes that do not
+    overlap. With it (from :func:`element_contacts`), only elements that
+    meet, and elements whose box overlaps one that has ``moved`` since,
+    are kept apart, so most elements share the first group
+    (:func:`element_pairs` lists the pairs kept apart).
+
+    Parameters
+    ----------
+    X, G, touching, moved, label
+        As in :func:`element_pairs`.
+
+    Returns
+    -------
+    element : numpy.ndarray, (l,) int64
+        Element (connected component) of every face.
+    group : numpy.ndarray, (n_elements,) int64
+        Group of every element, ``0 .. n_groups - 1`` (greedy colouring, largest
+        degree first, so deterministic).
+    """
+    label, pairs = element_pairs(X, G, touching=touching, moved=moved, label=label)
+    n_el = int(label.max()) + 1 if label.size else 0
+    return label, greedy_colouring(n_el, pairs)
+
+
+def _check_elements(solids) -> None:
+    """Raise if manifold3d rejects an operand built from the elements."""
+    bad = [s for s in solids if s.status() != manifold3d.Error.NoError]
+    if bad:
+        raise GeotexError("the mapped texture elements are not closed "
+                          f"({bad[0].status().name}); the tile set may be broken "
+                          "(check it with 'geotex tiles check')")
 
 
 def united_with_base(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray, *,
@@ -205,21 +250,36 @@ def united_with_base(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray,
         contacts = element_contacts(X, G)
     moved = np.zeros(0, dtype=np.int64) if moved is None else np.asarray(moved, np.int64)
     folded = np.setdiff1d(contacts.folded, moved)
-    label, group = element_groups(X, G, touching=contacts.touching, moved=moved,
-                                  label=contacts.label)
-    group[folded] = -1
+    label, pairs = element_pairs(X, G, touching=contacts.touching, moved=moved,
+                                 label=contacts.label)
+    n_el = int(label.max()) + 1
+    usable = np.ones(n_el, dtype=bool)
+    usable[folded] = False
     if exclude is not None:
-        group[np.asarray(exclude, dtype=bool)] = -1
-    solids = [base]
-    for g in range(int(group.max()) + 1):
-        solids.append(manifold_of(*compacted(X, G[group[label] == g])))
-    bad = [s for s in solids[1:] if s.status() != manifold3d.Error.NoError]
-    if bad:
-        raise GeotexError("the mapped texture elements are not closed "
-                          f"({bad[0].status().name}); the tile set may be broken "
-                          "(check it with 'geotex tiles check')")
+        usable[np.asarray(exclude, dtype=bool)] = False
+    pairs = pairs[usable[pairs].all(axis=1)]
+    group = greedy_colouring(n_el, pairs)
+    group[~usable] = -1
+    # elements that meet another are united among themselves first, in a small
+    # boolean of their groups; every other element meets nothing, so they and
+    # that union are one operand as they are (no boolean), and one boolean
+    # adds it to the base. Each extra operand of a batch boolean costs a pass
+    # over the whole result: on Spot with studs this saves 17-20% of the boolean
+    meets = np.zeros(n_el, dtype=bool)
+    meets[pairs.ravel()] = True
+    pieces = [compacted(X, G[(usable & ~meets)[label]])]
+    if meets.any():
+        solids = [manifold_of(*compacted(X, G[((group == g) & meets)[label]]))
+                  for g in range(int(group.max()) + 1)]
+        _check_elements(solids)
+        pieces.append(arrays_of_manifold(manifold3d.Manifold.batch_boolean(
+            solids, manifold3d.OpType.Add)))
     report(progress, UNION_STAGES[1])
-    solid = manifold3d.Manifold.batch_boolean(solids, manifold3d.OpType.Add)
+    solid = base
+    if usable.any():
+        elements = manifold_of(*concatenated(pieces))
+        _check_elements([elements])
+        solid = manifold3d.Manifold.batch_boolean([base, elements], manifold3d.OpType.Add)
     solid.num_tri()                      # evaluate here (manifold3d is lazy)
     report(progress, UNION_STAGES[2])
     # the boolean leaves needle triangles (area ~1e-13 of the solid) where element

@@ -9,42 +9,34 @@ seamless: two neighbouring tiles receive the two halves of one edge strip.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from geotex.mesh.topology import compacted, edge_topology
 
-__all__ = ["split_by_plane"]
+__all__ = ["split_by_plane", "refined_by_plane", "PlaneCut"]
 
 
-def split_by_plane(V: np.ndarray, F: np.ndarray, *, axis: int, value: float,
-                   snap: float = 1e-7, ordered: bool = False
-                   ) -> tuple[tuple[np.ndarray, np.ndarray],
-                                                  tuple[np.ndarray, np.ndarray]]:
-    """Cut a mesh with the plane ``x[axis] = value`` into its two sides.
+def refined_by_plane(V: np.ndarray, F: np.ndarray, *, axis: int, value: float,
+                     snap: float = 1e-7, ordered: bool = False) -> PlaneCut:
+    """Refine a mesh along the plane ``x[axis] = value``, keeping it in one piece.
+
+    Every edge that crosses the plane gets one new vertex (its ``axis``
+    coordinate set to ``value`` exactly) and every crossed face is split in
+    three, so each face lies on one side. :func:`split_by_plane` is this
+    followed by separating the sides.
 
     Parameters
     ----------
     V : numpy.ndarray, (n, 3) float64
     F : numpy.ndarray, (m, 3) int64
-    axis : int
-        0, 1 or 2.
-    value : float
-        Plane position along ``axis``.
-    snap : float
-        Vertices closer than this to the plane are first pushed to
-        ``value + snap`` so that no cut triangle degenerates.
-    ordered : bool
-        Compute every cut vertex from the crossing edge's endpoint below the
-        plane, whatever the vertex numbering: a mesh and its mirror image
-        (two axes swapped) cut by the mirrored planes give mirror-image cut
-        vertices bit for bit. Default False: from the edge's first vertex.
+    axis, value, snap, ordered
+        As in :func:`split_by_plane`.
 
     Returns
     -------
-    below, above : tuple of (V, F)
-        The parts with ``x[axis] <= value`` and ``x[axis] >= value``; both are
-        compacted, keep the input orientation, and their vertices on the plane
-        are bit-identical.
+    PlaneCut
     """
     V = np.array(V, dtype=np.float64)
     F = np.asarray(F, dtype=np.int64)
@@ -88,4 +80,67 @@ def split_by_plane(V: np.ndarray, F: np.ndarray, *, axis: int, value: float,
     pair_pos = np.concatenate([~lone_is_pos, ~lone_is_pos])
     above = np.vstack([whole_pos, lone_tri[lone_is_pos], pair[pair_pos]])
     below = np.vstack([whole_neg, lone_tri[~lone_is_pos], pair[~pair_pos]])
-    return compacted(W, below), compacted(W, above)
+    # the below side's faces run q -> p along the cut where the lone vertex is
+    # below (in L, p, q) and p -> q where it is above (in p, B, q): its cap runs back
+    cap = np.where(lone_is_pos[:, None], np.stack([p, q], axis=1), np.stack([q, p], axis=1))
+    return PlaneCut(W, np.vstack([below, above]),
+                    np.arange(len(below) + len(above)) >= len(below), cap.reshape(-1, 2))
+
+
+class PlaneCut(NamedTuple):
+    """A mesh refined along a plane (:func:`refined_by_plane`).
+
+    Attributes
+    ----------
+    vertices : numpy.ndarray, (n + c, 3) float64
+        The input vertices (those within ``snap`` of the plane pushed off it),
+        then one new vertex per crossing edge, on the plane.
+    faces : numpy.ndarray, (k, 3) int64
+        Faces below the plane, then those above (input orientation).
+    above : numpy.ndarray, (k,) bool
+        Faces above the plane.
+    cut : numpy.ndarray, (e, 2) int64
+        The cut as directed edges ``a -> b`` between new vertices, running the
+        way a lid that closes the part below would run (opposite to the
+        below part's faces, the same way as the part above's).
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    above: np.ndarray
+    cut: np.ndarray
+
+
+def split_by_plane(V: np.ndarray, F: np.ndarray, *, axis: int, value: float,
+                   snap: float = 1e-7, ordered: bool = False
+                   ) -> tuple[tuple[np.ndarray, np.ndarray],
+                                                  tuple[np.ndarray, np.ndarray]]:
+    """Cut a mesh with the plane ``x[axis] = value`` into its two sides.
+
+    Parameters
+    ----------
+    V : numpy.ndarray, (n, 3) float64
+    F : numpy.ndarray, (m, 3) int64
+    axis : int
+        0, 1 or 2.
+    value : float
+        Plane position along ``axis``.
+    snap : float
+        Vertices closer than this to the plane are first pushed to
+        ``value + snap`` so that no cut triangle degenerates.
+    ordered : bool
+        Compute every cut vertex from the crossing edge's endpoint below the
+        plane, whatever the vertex numbering: a mesh and its mirror image
+        (two axes swapped) cut by the mirrored planes give mirror-image cut
+        vertices bit for bit. Default False: from the edge's first vertex.
+
+    Returns
+    -------
+    below, above : tuple of (V, F)
+        The parts with ``x[axis] <= value`` and ``x[axis] >= value``; both are
+        compacted, keep the input orientation, and their vertices on the plane
+        are bit-identical.
+    """
+    cut = refined_by_plane(V, F, axis=axis, value=value, snap=snap, ordered=ordered)
+    return (compacted(cut.vertices, cut.faces[~cut.above]),
+            compacted(cut.vertices, cut.faces[cut.above]))
