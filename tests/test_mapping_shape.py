@@ -1,0 +1,105 @@
+"""Elements keep their shape on objects: footprint measure and the shaped shell map."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from geotex.errors import InputError
+from geotex.exemplars import exemplar
+from geotex.mapping import edge_colors, mapped_tiles, tiles_for_quads
+from geotex.mapping.shape import element_footprints, shaped_positions
+from geotex.mesh.primitives import box, torus
+from geotex.mesh.topology import face_components
+from geotex.shells import build_shell
+from geotex.shells.locate import interpolated
+from geotex.tiles import build_tileset
+from geotex.tiles.tiling import planar_tiling, random_arrangement
+
+
+@pytest.fixture(scope="module")
+def studs():
+    return build_tileset(exemplar("studs", seed=1, resolution=6), colors=1, seed=0,
+                         interior="paste")
+
+
+@pytest.fixture(scope="module")
+def torus_shell():
+    # a thin-ish torus on a coarse grid: its voxel staircases make the quads
+    # rectangles and rhombi (mean conformal ratio well above 1)
+    V, F = torus(1.0, 0.4, n_major=48, n_minor=24)
+    return build_shell(V, F, tile_size=0.4, name="torus")
+
+
+def test_footprints_of_known_shapes():
+    # two boxes: 2 x 1 and 1 x 1 footprints (height 0.3), projected along z
+    V1, F1 = box((0, 0, 0), (2, 1, 0.3))
+    V2, F2 = box((5, 0, 0), (6, 1, 0.3))
+    V = np.vstack([V1, V2])
+    F = np.vstack([F1, F2 + len(V1)])
+    label = np.repeat([0, 1], [len(F1), len(F2)])
+    fp = element_footprints(V, F, label, np.array([[0, 0, 1.0], [0, 0, 2.0]]))
+    assert np.allclose(fp.area, [2.0, 1.0])
+    # a uniform 2 x 1 rectangle: standard deviations in the ratio 2 : 1
+    assert np.allclose(fp.aspect, [2.0, 1.0])
+    assert fp.cv == pytest.approx(np.std([2.0, 1.0]) / 1.5)
+    # seen along x, the first box is 1 x 0.3
+    fx = element_footprints(V, F, label, np.array([[1.0, 0, 0], [1.0, 0, 0]]))
+    assert np.allclose(fx.area, [0.3, 0.3]) and np.allclose(fx.aspect, [1 / 0.3, 1 / 0.3])
+    with pytest.raises(InputError):
+        element_footprints(V, F, label[:-1], np.zeros((2, 3)))
+
+
+def _footprints(shell, tiles, *, shaped):
+    pc = shell.polycube
+    colors = edge_colors(pc.layout.edge_axis, tiles.n_colors, seed=0)
+    tq = tiles_for_quads(tiles, pc.layout.quad_axes, pc.layout.quad_edge, colors)
+    m = mapped_tiles(shell, tiles, tq, scale=0.2 * shell.tile_size / tiles.height,
+                     shaped=shaped)
+    n, label = face_components(m.faces, m.vertices.shape[0])
+    face, bary = pc.locate(m.quads, m.tile_points[:, :2])
+    d = interpolated(shell.D, pc.F, face, bary)
+    vl = np.zeros(m.vertices.shape[0], dtype=np.int64)
+    vl[m.faces.ravel()] = np.repeat(label, 3)
+    normal = np.stack([np.bincount(vl, weights=d[:, j], minlength=n) for j in range(3)], 1)
+    quads_of = [np.unique(m.quads[vl == e]).size for e in range(n)]
+    return element_footprints(m.vertices, m.faces, label, normal), np.array(quads_of), m
+
+
+def test_shaped_elements_are_round_and_even_where_the_plain_map_squashes_them(
+        torus_shell, studs):
+    V, F = planar_tiling(studs, random_arrangement(studs, 6, 6, seed=0))
+    n, label = face_components(F, V.shape[0])
+    planar = element_footprints(V, F, label, np.tile([0.0, 0.0, 1.0], (n, 1)))
+    plain, _, _ = _footprints(torus_shell, studs, shaped=False)
+    shaped, quads_of, m = _footprints(torus_shell, studs, shaped=True)
+    # the plain map squashes the studs (this is what the shaped map is for) ...
+    assert plain.aspect.mean() > 1.2 and plain.cv > 3 * max(planar.cv, 0.02)
+    # ... the shaped map keeps them round and of one size (issue 14: CV <= 1.5 x planar)
+    assert shaped.aspect.mean() < 1.06 and np.percentile(shaped.aspect, 95) < 1.12
+    assert shaped.cv <= 1.5 * planar.cv + 0.01
+    # elements welded across a tile side are unfolded into one frame: as round
+    across = quads_of > 1
+    assert across.sum() > 10
+    assert shaped.aspect[across].mean() < 1.08
+    # same inputs, same bytes
+    again = _footprints(torus_shell, studs, shaped=True)[2]
+    assert again.vertices.tobytes() == m.vertices.tobytes()
+
+
+def test_shaped_positions_checks_its_arguments(torus_shell):
+    q = np.zeros(3, dtype=np.int64)
+    uvw = np.full((3, 3), 0.5)
+    with pytest.raises(InputError):
+        shaped_positions(torus_shell, q, uvw, np.zeros(2, dtype=np.int64), scale=0.1)
+    with pytest.raises(InputError):
+        shaped_positions(torus_shell, q, uvw, np.zeros(3, dtype=np.int64), scale=0.1,
+                         evening=2.0)
+    # a single point element stays on its plain-mapped place
+    X = shaped_positions(torus_shell, q[:1], uvw[:1], np.zeros(1, dtype=np.int64), scale=0.1)
+    pc = torus_shell.polycube
+    face, bary = pc.locate(q[:1], uvw[:1, :2])
+    y = interpolated(pc.Y, pc.F, face, bary)
+    d = interpolated(torus_shell.D, pc.F, face, bary)
+    d /= np.linalg.norm(d)
+    assert np.abs(X - (y + 0.05 * d)).max() < 1e-9
