@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 from geotex.errors import InputError
 from geotex.exemplars import exemplar
-from geotex.mapping import edge_colors, mapped_tiles, tiles_for_quads
+from geotex.mapping import edge_colors, mapped_tiles, textured_solid, tiles_for_quads
 from geotex.mapping.shape import element_footprints, shaped_positions
 from geotex.mesh.primitives import box, torus
 from geotex.mesh.topology import face_components
@@ -103,3 +105,12 @@ def test_shaped_positions_checks_its_arguments(torus_shell):
     d = interpolated(torus_shell.D, pc.F, face, bary)
     d /= np.linalg.norm(d)
     assert np.abs(X - (y + 0.05 * d)).max() < 1e-9
+
+
+def test_a_set_can_ask_for_the_plain_map(torus_shell, studs):
+    plain_set = dataclasses.replace(studs, metadata=dict(studs.metadata, shell_map="plain"))
+    a = textured_solid(torus_shell, plain_set, seed=1, check=False)
+    b = textured_solid(torus_shell, studs, seed=1, check=False, shaped=False)
+    c = textured_solid(torus_shell, studs, seed=1, check=False)
+    assert a.vertices.tobytes() == b.vertices.tobytes()
+    assert a.vertices.shape != c.vertices.shape or not np.array_equal(a.vertices, c.vertices)

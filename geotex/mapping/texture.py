@@ -202,7 +202,7 @@ def _elements_near(points, X, G, exclude=None) -> np.ndarray:
 
 
 def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = True,
-                   shaped: bool = True, progress=None) -> TexturedSolid:
+                   shaped: bool | None = None, progress=None) -> TexturedSolid:
     """Lay ``tiles`` over ``shell`` and unite them with its base.
 
     Parameters
@@ -222,7 +222,11 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
         Map every small element as one shape similar to its tile shape, of
         one size (:func:`~geotex.mapping.shape.shaped_positions`); False maps
         tile points one by one through the quad map (elements then take the
-        quads' shapes and sizes).
+        quads' shapes and sizes). Default: the set's
+        ``metadata["shell_map"]`` (``"plain"`` or ``"shaped"``), else shaped;
+        a set whose elements interlock (linked rings) may need ``"plain"``,
+        since shaped elements keep their size where the quads are squashed
+        and can then meet their neighbours.
     progress : callable, optional
         Called with each stage and step of :data:`MAP_PROGRESS` (the times in
         ``stats.seconds`` are per stage of :data:`MAP_STAGES`).
@@ -241,6 +245,8 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise InputError(f"seed must be a non-negative integer, got {seed!r}")
     h = texture_height(shell, tiles, height)
+    if shaped is None:
+        shaped = tiles.metadata.get("shell_map", "shaped") != "plain"
     pc = shell.polycube
     times = {}
     t0 = time.perf_counter()
