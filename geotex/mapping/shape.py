@@ -227,14 +227,76 @@ def shaped_positions(shell, quads, uvw, element, *, scale: float,
         # the others (only shrunk): about their centre, in world
         i2 = idx[~sim]
         target[~sim] = y_mean[el[~sim]] + f[el[~sim]][:, None] * (y[i2] - y_mean[el[~sim]])
-        # back onto the fitted surface, on faces that face the way the offset does
-        foot, fface = SurfaceProjector(pc.Y, pc.F).project(target, d[idx])
-        fb = _barycentric(foot, *(pc.Y[pc.F[fface, i]] for i in range(3)))
-        y[idx] = foot
+        # back onto the fitted surface: the nearest point found by walking the
+        # point's own quad, else the closest point on faces that face the way
+        # the offset does
+        fface, fb, lost = _walked_feet(pc, quads[idx], uvw[idx, :2], target)
+        if lost.any():
+            foot, fface[lost] = SurfaceProjector(pc.Y, pc.F).project(target[lost], d[idx[lost]])
+            fb[lost] = _barycentric(foot, *(pc.Y[pc.F[fface[lost], i]] for i in range(3)))
+        y[idx] = interpolated(pc.Y, pc.F, fface, fb)
         d[idx] = _unit(interpolated(shell.D, pc.F, fface, fb))
     below = float(scale if depth_scale is None else depth_scale)
     height = np.where(w < 0, w * below, w * float(scale))
     return y + height[:, None] * d
+
+
+def _walked_feet(pc, quads, uv, target, *, steps: int = 4):
+    """Closest points of ``target`` on the fitted surface, walking each point's quad.
+
+    From the tile point ``uv`` of quad ``quads``, repeat: locate the sub-grid
+    face, find the closest point of ``target`` in the plane of its fitted
+    triangle and the tile point that the triangle's linear map gives there;
+    done once that point lies in the face itself. Points whose walk leaves
+    the quad or does not settle within ``steps`` are ``lost`` (the caller
+    finds them by a search).
+
+    Returns
+    -------
+    face : (k,) int64
+    bary : (k, 3) float64
+    lost : (k,) bool
+    """
+    r = pc.res
+    k = quads.size
+    face = np.zeros(k, dtype=np.int64)
+    bary = np.zeros((k, 3))
+    lost = np.ones(k, dtype=bool)
+    todo = np.arange(k)
+    cur = np.clip(uv, 0.0, 1.0)
+    for _ in range(steps):
+        if todo.size == 0:
+            break
+        f, _ = pc.locate(quads[todo], cur[todo])
+        corners = pc.F[f]
+        Y0 = pc.Y[corners[:, 0]]
+        E1, E2 = pc.Y[corners[:, 1]] - Y0, pc.Y[corners[:, 2]] - Y0
+        g = target[todo] - Y0
+        a, b, c = (np.einsum("ij,ij->i", E1, E1), np.einsum("ij,ij->i", E1, E2),
+                   np.einsum("ij,ij->i", E2, E2))
+        det = a * c - b * b
+        det = np.where(np.abs(det) > 0, det, 1.0)
+        p, q = np.einsum("ij,ij->i", E1, g), np.einsum("ij,ij->i", E2, g)
+        b1, b2 = (c * p - b * q) / det, (a * q - b * p) / det
+        inside = (b1 >= -1e-9) & (b2 >= -1e-9) & (b1 + b2 <= 1.0 + 1e-9)
+        done = todo[inside]
+        face[done] = f[inside]
+        bary[done] = np.stack([1.0 - b1 - b2, b1, b2], axis=1)[inside]
+        lost[done] = False
+        # the tile point of the plane's foot (the triangle's map, extended)
+        local = f % (2 * r * r)
+        upper = local >= r * r
+        cell = local % (r * r)
+        ci, cj = cell // r, cell % r
+        # corners in tile units: lower (i,j),(i+1,j),(i+1,j+1); upper (i,j),(i+1,j+1),(i,j+1)
+        du1, dv1 = np.where(upper, 1.0, 1.0), np.where(upper, 1.0, 0.0)
+        du2, dv2 = np.where(upper, 0.0, 1.0), np.where(upper, 1.0, 1.0)
+        nu = (ci + b1 * du1 + b2 * du2) / r
+        nv = (cj + b1 * dv1 + b2 * dv2) / r
+        within = ~inside & (nu >= 0.0) & (nu <= 1.0) & (nv >= 0.0) & (nv <= 1.0)
+        cur[todo[within]] = np.stack([nu, nv], axis=1)[within]
+        todo = todo[within]
+    return face, bary, lost
 
 
 def _home_frame(layout, quads, uv, element, n_el):
