@@ -114,3 +114,14 @@ def test_a_set_can_ask_for_the_plain_map(torus_shell, studs):
     c = textured_solid(torus_shell, studs, seed=1, check=False)
     assert a.vertices.tobytes() == b.vertices.tobytes()
     assert a.vertices.shape != c.vertices.shape or not np.array_equal(a.vertices, c.vertices)
+
+
+def test_lattice_sets_keep_the_plain_map_unless_they_ask(torus_shell, studs):
+    lattice = dataclasses.replace(studs, metadata=dict(studs.metadata, lattice=[0.5, 0.0, 0.0]))
+    asks = dataclasses.replace(lattice, metadata=dict(lattice.metadata, shell_map="shaped"))
+    plain = textured_solid(torus_shell, studs, seed=2, check=False, shaped=False)
+    shaped = textured_solid(torus_shell, studs, seed=2, check=False, shaped=True)
+    a = textured_solid(torus_shell, lattice, seed=2, check=False)
+    b = textured_solid(torus_shell, asks, seed=2, check=False)
+    assert a.vertices.tobytes() == plain.vertices.tobytes()
+    assert b.vertices.tobytes() == shaped.vertices.tobytes()

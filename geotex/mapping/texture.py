@@ -223,10 +223,12 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
         one size (:func:`~geotex.mapping.shape.shaped_positions`); False maps
         tile points one by one through the quad map (elements then take the
         quads' shapes and sizes). Default: the set's
-        ``metadata["shell_map"]`` (``"plain"`` or ``"shaped"``), else shaped;
-        a set whose elements interlock (linked rings) may need ``"plain"``,
-        since shaped elements keep their size where the quads are squashed
-        and can then meet their neighbours.
+        ``metadata["shell_map"]`` (``"plain"`` or ``"shaped"``); without it,
+        plain for lattice sets (``metadata["lattice"]``, e.g. knurl: elements
+        packed edge to edge, whose lattice stays closed only if they follow
+        the quads) and shaped for the others. A set whose elements interlock
+        (linked rings) may need ``"plain"``, since shaped elements keep their
+        size where the quads are squashed and can then meet their neighbours.
     progress : callable, optional
         Called with each stage and step of :data:`MAP_PROGRESS` (the times in
         ``stats.seconds`` are per stage of :data:`MAP_STAGES`).
@@ -246,7 +248,8 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
         raise InputError(f"seed must be a non-negative integer, got {seed!r}")
     h = texture_height(shell, tiles, height)
     if shaped is None:
-        shaped = tiles.metadata.get("shell_map", "shaped") != "plain"
+        lattice = tiles.metadata.get("lattice") is not None
+        shaped = tiles.metadata.get("shell_map", "plain" if lattice else "shaped") != "plain"
     pc = shell.polycube
     times = {}
     t0 = time.perf_counter()
