@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from geotex.check.intersections import self_intersecting_pairs
-from geotex.mapping.shape import shaped_positions
+from geotex.mapping.shape import SPREAD, shaped_positions
 from geotex.mesh.topology import vertex_components
 from geotex.shells.locate import interpolated
 from geotex.tiles.tileset import TileSet
@@ -113,6 +113,9 @@ class MappedTiles:
         Element (connected component) of every vertex, ``0 .. e - 1``.
     shaped : bool
         Whether the elements were mapped as shapes (see :func:`mapped_tiles`).
+    shift : numpy.ndarray, (N, 3) float64
+        World move of every vertex's element by the spreading of overlapping
+        shaped elements (zero with the plain map).
     """
 
     vertices: np.ndarray
@@ -123,6 +126,7 @@ class MappedTiles:
     tile_points: np.ndarray
     element: np.ndarray
     shaped: bool = True
+    shift: np.ndarray | None = None
 
 
 def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: float,
@@ -147,7 +151,9 @@ def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: floa
         Map every element narrower than
         :data:`~geotex.mapping.shape.MAX_EXTENT` tiles as one shape, similar
         to its tile shape (:func:`~geotex.mapping.shape.shaped_positions`);
-        False maps every point through the quad map (:func:`shell_positions`).
+        Shaped elements that would overlap are pushed apart along the surface
+        (:func:`~geotex.mapping.shape.spread_centres`). False maps every point
+        through the quad map (:func:`shell_positions`).
 
     Returns
     -------
@@ -187,13 +193,15 @@ def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: floa
     _, element = vertex_components(faces, kept.size)
     below = depth_scale(tiles, scale, anchor)
     if shaped:
-        X = shaped_positions(shell, quad_of_vertex[kept], uvw[kept], element, scale=scale,
-                             depth_scale=below)
+        X, shift = shaped_positions(shell, quad_of_vertex[kept], uvw[kept], element,
+                                    scale=scale, depth_scale=below, spread=SPREAD,
+                                    return_shift=True)
     else:
         X = shell_positions(shell, quad_of_vertex[kept], uvw[kept], scale=scale,
                             depth_scale=below)
+        shift = np.zeros_like(X)
     return MappedTiles(X, faces, int(on.sum() - start.sum()), int((~keep_face).sum()),
-                       quad_of_vertex[kept], uvw[kept], element, bool(shaped))
+                       quad_of_vertex[kept], uvw[kept], element, bool(shaped), shift)
 
 
 def depth_scale(tiles: TileSet, scale: float, anchor) -> float:
@@ -284,7 +292,8 @@ def reseated_elements(shell, mapped: "MappedTiles", label: np.ndarray, elements,
         vel[local.ravel()] = np.repeat(np.repeat(np.arange(still.size), counts), 3)
         Xe = shaped_positions(shell, mapped.quads[verts], mapped.tile_points[verts], vel,
                               scale=scale, depth_scale=depth_scale,
-                              shrink=np.full(still.size, float(f)), similar=mapped.shaped)
+                              shrink=np.full(still.size, float(f)), similar=mapped.shaped,
+                              shift=None if mapped.shift is None else mapped.shift[verts])
         fstart = np.cumsum(counts) - counts
         left = []
         for j, e in enumerate(still):

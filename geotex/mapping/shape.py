@@ -42,13 +42,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from geotex.errors import InputError
 from geotex.param.polycube_fit import SurfaceProjector
 from geotex.param.polycube_quads import chart_axes
 from geotex.shells.locate import interpolated
 
-__all__ = ["map_jacobian", "shaped_positions", "ElementFootprints", "element_footprints",
+__all__ = ["map_jacobian", "shaped_positions", "spread_centres", "SPREAD", "GAP", "ElementFootprints", "element_footprints",
            "MAX_EXTENT", "EVENING"]
 
 #: Elements wider than this (tile sides, in ``u`` or ``v``) keep the plain
@@ -57,6 +58,12 @@ MAX_EXTENT = 0.75
 
 #: Default blend between the map's local area scale (0) and the shell's mean scale (1).
 EVENING = 1.0
+
+#: Rounds of :func:`spread_centres` run by :func:`~geotex.mapping.place.mapped_tiles`.
+SPREAD = 60
+
+#: Clearance kept between spread elements: centres at least ``GAP * (r_i + r_j)`` apart.
+GAP = 1.05
 
 
 def _unit(X: np.ndarray) -> np.ndarray:
@@ -127,8 +134,8 @@ def _barycentric(X, A, B, C) -> np.ndarray:
 
 def shaped_positions(shell, quads, uvw, element, *, scale: float,
                      depth_scale: float | None = None, evening: float = EVENING,
-                     max_extent: float = MAX_EXTENT, shrink=None, similar: bool = True
-                     ) -> np.ndarray:
+                     max_extent: float = MAX_EXTENT, shrink=None, similar: bool = True,
+                     spread: int = 0, shift=None, return_shift: bool = False):
     """Shell positions of tile points, every small element mapped as one similar shape.
 
     Parameters
@@ -158,10 +165,22 @@ def shaped_positions(shell, quads, uvw, element, *, scale: float,
     similar : bool, optional
         False: no similarity; the footprint is only shrunk by ``shrink``
         (with no shrink, the plain map).
+    spread : int, optional
+        Rounds of :func:`spread_centres`: similar elements that would overlap
+        (their footprint circles closer than :data:`GAP`) are pushed apart
+        along the surface.
+    shift : array_like, (k, 3) float64, optional
+        World translation of every point's element (one per element), added
+        before the points are laid back on the surface (the shifts found by
+        an earlier call with ``return_shift``).
+    return_shift : bool, optional
+        Also return the shift of every point's element.
 
     Returns
     -------
-    numpy.ndarray, (k, 3) float64
+    X : numpy.ndarray, (k, 3) float64
+    shift : numpy.ndarray, (k, 3) float64
+        Only with ``return_shift``.
 
     Raises
     ------
@@ -182,7 +201,7 @@ def shaped_positions(shell, quads, uvw, element, *, scale: float,
     if not float(max_extent) > 0:
         raise InputError(f"max_extent must be positive, got {max_extent!r}")
     if k == 0:
-        return np.zeros((0, 3))
+        return (np.zeros((0, 3)), np.zeros((0, 3))) if return_shift else np.zeros((0, 3))
     n_el = int(element.max()) + 1
     if element.min() < 0:
         raise InputError("element labels must be non-negative")
@@ -214,6 +233,22 @@ def shaped_positions(shell, quads, uvw, element, *, scale: float,
     scl = np.sqrt(sig[:, 0] * sig[:, 1]) ** (1.0 - float(evening)) * mean_side ** float(evening)
     moved = (ok | (f != 1.0))[element]
     w = uvw[:, 2] * f[element]
+    offset = np.zeros((n_el, 3))
+    if shift is not None:
+        sh = np.asarray(shift, dtype=np.float64)
+        if sh.shape != (k, 3):
+            raise InputError(f"shift must have shape ({k}, 3), got {sh.shape}")
+        offset[element] = sh
+    offset[~ok] = 0.0
+    if spread and ok.any():
+        # footprint radius of every element, world
+        r2 = np.zeros(n_el)
+        np.maximum.at(r2, element, ((uvh - uv_mean[element]) ** 2).sum(axis=1))
+        radius = f * scl * np.sqrt(r2)
+        normal = _unit(np.cross(R[:, :, 0], R[:, :, 1]))
+        sel = np.flatnonzero(ok)
+        offset[sel] += spread_centres(y_mean[sel] + offset[sel], radius[sel], normal[sel],
+                                      rounds=int(spread))
     if moved.any():
         idx = np.flatnonzero(moved)
         el = element[idx]
@@ -222,8 +257,9 @@ def shaped_positions(shell, quads, uvw, element, *, scale: float,
         # similar shapes: the least-squares placement of the element's tile shape,
         # scaled and turned as the map is around it
         i1 = idx[sim]
-        target[sim] = y_mean[el[sim]] + (f[el[sim]] * scl[el[sim]])[:, None] * np.einsum(
-            "ijk,ik->ij", R[el[sim]], uvh[i1] - uv_mean[el[sim]])
+        target[sim] = (y_mean[el[sim]] + offset[el[sim]]
+                       + (f[el[sim]] * scl[el[sim]])[:, None] * np.einsum(
+                           "ijk,ik->ij", R[el[sim]], uvh[i1] - uv_mean[el[sim]]))
         # the others (only shrunk): about their centre, in world
         i2 = idx[~sim]
         target[~sim] = y_mean[el[~sim]] + f[el[~sim]][:, None] * (y[i2] - y_mean[el[~sim]])
@@ -238,7 +274,62 @@ def shaped_positions(shell, quads, uvw, element, *, scale: float,
         d[idx] = _unit(interpolated(shell.D, pc.F, fface, fb))
     below = float(scale if depth_scale is None else depth_scale)
     height = np.where(w < 0, w * below, w * float(scale))
-    return y + height[:, None] * d
+    X = y + height[:, None] * d
+    return (X, offset[element]) if return_shift else X
+
+
+def spread_centres(centre, radius, normal, *, rounds: int = SPREAD, gap: float = GAP
+                   ) -> np.ndarray:
+    """Tangential moves that push overlapping discs apart.
+
+    Elements keep one size while the polycube's quads vary in area, so where
+    the quads are squashed their centres lie closer than in the tile. Each
+    round, every pair of discs (centre, radius, in the plane normal to
+    ``normal``) closer than ``gap * (r_i + r_j)`` is pushed apart by half the
+    shortfall, shared equally, along the line between the centres projected
+    into the tangent plane.
+
+    Parameters
+    ----------
+    centre : numpy.ndarray, (e, 3) float64
+    radius : numpy.ndarray, (e,) float64
+    normal : numpy.ndarray, (e, 3) float64
+        Unit normals.
+    rounds : int
+    gap : float
+
+    Returns
+    -------
+    numpy.ndarray, (e, 3) float64
+        The move of every centre.
+    """
+    start = np.asarray(centre, dtype=np.float64)
+    c = start.copy()
+    radius = np.asarray(radius, dtype=np.float64)
+    if c.shape[0] < 2:
+        return np.zeros_like(c)
+    reach = 2.0 * gap * float(radius.max())
+    for _ in range(int(rounds)):
+        pairs = cKDTree(c).query_pairs(reach, output_type="ndarray")
+        if pairs.size == 0:
+            break
+        i, j = pairs[:, 0], pairs[:, 1]
+        v = c[j] - c[i]
+        nrm = _unit(normal[i] + normal[j])
+        v -= np.einsum("ij,ij->i", v, nrm)[:, None] * nrm
+        dist = np.linalg.norm(v, axis=1)
+        short = gap * (radius[i] + radius[j]) - dist
+        hit = (short > 0) & (dist > 0)
+        if not hit.any():
+            break
+        push = (0.25 * short[hit] / dist[hit])[:, None] * v[hit]
+        move = np.zeros_like(c)
+        np.add.at(move, i[hit], -push)
+        np.add.at(move, j[hit], push)
+        # stay in each element's own tangent plane
+        move -= np.einsum("ij,ij->i", move, normal)[:, None] * normal
+        c += move
+    return c - start
 
 
 def _walked_feet(pc, quads, uv, target, *, steps: int = 4):
