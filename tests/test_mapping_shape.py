@@ -10,7 +10,8 @@ import pytest
 from geotex.errors import InputError
 from geotex.exemplars import exemplar
 from geotex.mapping import edge_colors, mapped_tiles, textured_solid, tiles_for_quads
-from geotex.mapping.shape import element_footprints, shaped_positions
+from geotex.mapping.shape import element_footprints, shaped_positions, spread_centres
+from geotex.mapping.union import element_contacts
 from geotex.mesh.primitives import box, torus
 from geotex.mesh.topology import face_components
 from geotex.shells import build_shell
@@ -125,3 +126,24 @@ def test_lattice_sets_keep_the_plain_map_unless_they_ask(torus_shell, studs):
     b = textured_solid(torus_shell, asks, seed=2, check=False)
     assert a.vertices.tobytes() == plain.vertices.tobytes()
     assert b.vertices.tobytes() == shaped.vertices.tobytes()
+
+
+def test_spread_centres_pushes_overlapping_discs_apart_in_their_plane():
+    # three discs of radius 1 on the plane z = 0, two of them overlapping
+    c = np.array([[0.0, 0, 0], [1.0, 0, 0], [10.0, 0, 0]])
+    n = np.tile([0.0, 0, 1], (3, 1))
+    move = spread_centres(c, np.ones(3), n, rounds=60, gap=1.05)
+    out = c + move
+    assert np.linalg.norm(out[1] - out[0]) >= 2.0 * 1.05 * 0.99
+    assert np.allclose(move[2], 0.0)                  # the free disc stays
+    assert np.allclose(move[:, 2], 0.0)               # moves stay in the tangent plane
+    assert np.allclose(move[0] + move[1], 0.0)        # shared equally
+    assert not spread_centres(c[2:], np.ones(1), n[2:]).any()
+
+
+def test_shaped_elements_do_not_press_into_each_other(torus_shell, studs):
+    _, _, plain = _footprints(torus_shell, studs, shaped=False)
+    _, _, shaped = _footprints(torus_shell, studs, shaped=True)
+    meeting = [np.unique(element_contacts(m.vertices, m.faces).touching).size
+               for m in (plain, shaped)]
+    assert meeting[1] <= meeting[0] + 5, meeting

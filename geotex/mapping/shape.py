@@ -21,8 +21,9 @@ the offset directions there. ``s`` is ``sqrt(s1 s2)`` (the map's own area
 scale) blended with the shell's mean tile side by ``evening`` (1, the
 default: every element gets the same size; 0: sizes follow the quads' areas,
 as with the plain map). Where quads are squashed the elements keep their
-shape and size and lie closer together (they may touch; the union merges
-them); where quads are stretched they lie farther apart.
+shape and size and so would press into each other; :func:`spread_centres`
+pushes such elements apart along the surface (``spread`` rounds) before
+they are laid on it. Where quads are stretched they lie farther apart.
 
 This departs from the paper (which maps tile geometry point by point through
 the polycube's inverse projection): tile sides still meet exactly (an element
