@@ -66,6 +66,10 @@ SPREAD = 60
 #: Clearance kept between spread elements: centres at least ``GAP * (r_i + r_j)`` apart.
 GAP = 1.05
 
+#: Pairs closer than this fraction of their tile distance are pushed, to at most
+#: ``2 - TILE_SLACK`` times it (a map without distortion moves nothing).
+TILE_SLACK = 0.98
+
 
 def _unit(X: np.ndarray) -> np.ndarray:
     n = np.linalg.norm(X, axis=-1, keepdims=True)
@@ -247,9 +251,12 @@ def shaped_positions(shell, quads, uvw, element, *, scale: float,
         np.maximum.at(r2, element, ((uvh - uv_mean[element]) ** 2).sum(axis=1))
         radius = f * scl * np.sqrt(r2)
         normal = _unit(np.cross(R[:, :, 0], R[:, :, 1]))
+        # world offset -> its length in the tile, scaled as the element is
+        ideal = ((f * scl)[:, None, None] / np.maximum(sig, 1e-300)[:, :, None]
+                 * np.transpose(Uj, (0, 2, 1)))
         sel = np.flatnonzero(ok)
         offset[sel] += spread_centres(y_mean[sel] + offset[sel], radius[sel], normal[sel],
-                                      rounds=int(spread))
+                                      rounds=int(spread), ideal=ideal[sel])
     if moved.any():
         idx = np.flatnonzero(moved)
         el = element[idx]
@@ -279,8 +286,8 @@ def shaped_positions(shell, quads, uvw, element, *, scale: float,
     return (X, offset[element]) if return_shift else X
 
 
-def spread_centres(centre, radius, normal, *, rounds: int = SPREAD, gap: float = GAP
-                   ) -> np.ndarray:
+def spread_centres(centre, radius, normal, *, rounds: int = SPREAD, gap: float = GAP,
+                   ideal=None) -> np.ndarray:
     """Tangential moves that push overlapping discs apart.
 
     Elements keep one size while the polycube's quads vary in area, so where
@@ -288,7 +295,11 @@ def spread_centres(centre, radius, normal, *, rounds: int = SPREAD, gap: float =
     round, every pair of discs (centre, radius, in the plane normal to
     ``normal``) closer than ``gap * (r_i + r_j)`` is pushed apart by half the
     shortfall, shared equally, along the line between the centres projected
-    into the tangent plane.
+    into the tangent plane. With ``ideal``, only pairs squeezed below
+    :data:`TILE_SLACK` of their distance in the tile (scaled as the elements
+    are) are pushed, and to at most ``2 - TILE_SLACK`` times that distance:
+    elements that touch or overlap in the tile itself stay as they are, and an
+    undistorted map moves nothing.
 
     Parameters
     ----------
@@ -298,6 +309,11 @@ def spread_centres(centre, radius, normal, *, rounds: int = SPREAD, gap: float =
         Unit normals.
     rounds : int
     gap : float
+    ideal : numpy.ndarray, (e, 2, 3) float64, optional
+        Per element, the linear map taking a world offset from its centre to
+        that offset's length in the tile times the element's scale; the
+        distance of a pair in the tile is the mean of both maps applied to
+        the pair's starting offset.
 
     Returns
     -------
@@ -319,8 +335,17 @@ def spread_centres(centre, radius, normal, *, rounds: int = SPREAD, gap: float =
         nrm = _unit(normal[i] + normal[j])
         v -= np.einsum("ij,ij->i", v, nrm)[:, None] * nrm
         dist = np.linalg.norm(v, axis=1)
-        short = gap * (radius[i] + radius[j]) - dist
-        hit = (short > 0) & (dist > 0)
+        want = gap * (radius[i] + radius[j])
+        hit = dist > 0
+        if ideal is not None:
+            d0 = start[j] - start[i]
+            tile = 0.5 * (np.linalg.norm(np.einsum("kab,kb->ka", ideal[i], d0), axis=1)
+                          + np.linalg.norm(np.einsum("kab,kb->ka", ideal[j], d0), axis=1))
+            # only pairs squeezed below their tile distance, to a little beyond it
+            want = np.minimum(want, (2.0 - TILE_SLACK) * tile)
+            hit &= dist < TILE_SLACK * tile
+        short = want - dist
+        hit &= short > 0
         if not hit.any():
             break
         push = (0.25 * short[hit] / dist[hit])[:, None] * v[hit]
