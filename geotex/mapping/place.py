@@ -241,7 +241,7 @@ def shell_positions(shell, quads: np.ndarray, uvw: np.ndarray, *, scale: float,
 
 
 def reseated_elements(shell, mapped: "MappedTiles", label: np.ndarray, elements, *,
-                      scale: float, depth_scale: float, factors=(0.75, 0.55)
+                      scale: float, depth_scale: float, factors=(0.75, 0.55, 0.4, 0.3)
                       ) -> tuple[np.ndarray, np.ndarray]:
     """Shrink folded elements about their centre and map them again.
 
