@@ -2,7 +2,8 @@
 
 :func:`textured_solid` runs the whole job; its steps are :func:`edge_colors`
 and :func:`tiles_for_quads` (which tile where), :func:`mapped_tiles` (tile
-geometry into shell space, welded), :func:`element_contacts` and
+geometry into shell space, welded; small elements mapped as similar shapes of
+one size, :mod:`geotex.mapping.shape`), :func:`element_contacts` and
 :func:`reseated_elements` (elements the map folds, shrunk in place where that
 helps) and :func:`united_with_base` (one solid).
 """

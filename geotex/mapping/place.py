@@ -9,6 +9,12 @@ vertices ``(t, w)`` (``t`` the coordinate along the edge, running the same way i
 both quads), so the key ``(edge, t, w)`` merges them exactly and the shared
 vertex is mapped once. Elements left open (next to a quad that received no
 tile) are dropped.
+
+By default every small element is then mapped as one shape
+(:func:`geotex.mapping.shape.shaped_positions`): its centre follows the
+map, its footprint a similarity of the tile's, so studs stay round where the
+polycube's quads are rectangles or rhombi. ``shaped=False`` maps point by
+point (:func:`shell_positions`).
 """
 
 from __future__ import annotations
@@ -18,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from geotex.check.intersections import self_intersecting_pairs
+from geotex.mapping.shape import SPREAD, shaped_positions
 from geotex.mesh.topology import vertex_components
 from geotex.shells.locate import interpolated
 from geotex.tiles.tileset import TileSet
@@ -104,6 +111,13 @@ class MappedTiles:
         Its ``(u, v, w)`` in that quad's tile frame.
     tile_faces : numpy.ndarray, (M,) int64
         Index in ``tiles.faces`` of the tile face every face copies.
+    element : numpy.ndarray, (N,) int64
+        Element (connected component) of every vertex, ``0 .. e - 1``.
+    shaped : bool
+        Whether the elements were mapped as shapes (see :func:`mapped_tiles`).
+    shift : numpy.ndarray, (N, 3) float64
+        World move of every vertex's element by the spreading of overlapping
+        shaped elements (zero with the plain map).
     """
 
     vertices: np.ndarray
@@ -113,10 +127,13 @@ class MappedTiles:
     quads: np.ndarray
     tile_points: np.ndarray
     tile_faces: np.ndarray
+    element: np.ndarray
+    shaped: bool = True
+    shift: np.ndarray | None = None
 
 
 def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: float,
-                 anchor: float | None = None) -> MappedTiles:
+                 anchor: float | None = None, shaped: bool = True) -> MappedTiles:
     """Map the chosen tiles of every quad into the shell and weld them.
 
     Parameters
@@ -133,6 +150,13 @@ def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: floa
         there (never shrunk). A deep anchor makes the elements' side walls,
         not their flat bottoms, cross the base, so the union meets steep
         intersections instead of nearly coincident faces.
+    shaped : bool, optional
+        Map every element narrower than
+        :data:`~geotex.mapping.shape.MAX_EXTENT` tiles as one shape, similar
+        to its tile shape (:func:`~geotex.mapping.shape.shaped_positions`);
+        Shaped elements that would overlap are pushed apart along the surface
+        (:func:`~geotex.mapping.shape.spread_centres`). False maps every point
+        through the quad map (:func:`shell_positions`).
 
     Returns
     -------
@@ -172,10 +196,20 @@ def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: floa
     used[faces.ravel()] = True
     new_index = np.cumsum(used) - 1
     kept = np.flatnonzero(used)
-    X = shell_positions(shell, quad_of_vertex[kept], uvw[kept], scale=scale,
-                        depth_scale=depth_scale(tiles, scale, anchor))
-    return MappedTiles(X, new_index[faces], int(on.sum() - start.sum()),
-                       int((~keep_face).sum()), quad_of_vertex[kept], uvw[kept], tile_faces)
+    faces = new_index[faces]
+    _, element = vertex_components(faces, kept.size)
+    below = depth_scale(tiles, scale, anchor)
+    if shaped:
+        X, shift = shaped_positions(shell, quad_of_vertex[kept], uvw[kept], element,
+                                    scale=scale, depth_scale=below, spread=SPREAD,
+                                    return_shift=True)
+    else:
+        X = shell_positions(shell, quad_of_vertex[kept], uvw[kept], scale=scale,
+                            depth_scale=below)
+        shift = np.zeros_like(X)
+    return MappedTiles(X, faces, int(on.sum() - start.sum()), int((~keep_face).sum()),
+                       quad_of_vertex[kept], uvw[kept], tile_faces, element, bool(shaped),
+                       shift)
 
 
 def depth_scale(tiles: TileSet, scale: float, anchor) -> float:
@@ -215,15 +249,16 @@ def shell_positions(shell, quads: np.ndarray, uvw: np.ndarray, *, scale: float,
 
 
 def reseated_elements(shell, mapped: "MappedTiles", label: np.ndarray, elements, *,
-                      scale: float, depth_scale: float, factors=(0.75, 0.55)
+                      scale: float, depth_scale: float, factors=(0.75, 0.55, 0.4, 0.3)
                       ) -> tuple[np.ndarray, np.ndarray]:
-    """Shrink folded elements in tile space about their centre and map them again.
+    """Shrink folded elements about their centre and map them again.
 
     An element the shell map folds onto itself (where the map bends it
-    around a crease) is scaled about the centre of its footprint (``u, v``)
-    and its height (``w``) by each of ``factors`` in turn, mapped again and
-    kept at the first size whose mapped faces do not cross each other
-    (exact test). Elements that span several quads are not changed.
+    around a crease) is scaled about the centre of its footprint and in
+    height by each of ``factors`` in turn, mapped again (as a shape when
+    ``mapped.shaped``, see :func:`~geotex.mapping.shape.shaped_positions`)
+    and kept at the first size whose mapped faces do not cross each other
+    (exact test).
 
     Parameters
     ----------
@@ -247,24 +282,34 @@ def reseated_elements(shell, mapped: "MappedTiles", label: np.ndarray, elements,
     """
     X = mapped.vertices.copy()
     G = mapped.faces
+    still = np.unique(np.asarray(elements, dtype=np.int64))
+    if still.size == 0:
+        return X, still
     order = np.argsort(label, kind="stable")
     starts = np.searchsorted(label[order], np.arange(int(label.max()) + 2))
-    still = []
-    for e in np.asarray(elements, dtype=np.int64):
-        faces = G[order[starts[e]:starts[e + 1]]]
+    for f in factors:
+        if still.size == 0:
+            break
+        # every still folded element at once, numbered 0 .. len(still) - 1
+        counts = starts[still + 1] - starts[still]
+        rows = order[_ranges(starts[still], counts)]
+        faces = G[rows]
         verts, local = np.unique(faces, return_inverse=True)
-        quads = mapped.quads[verts]
-        if np.any(quads != quads[0]):
-            still.append(e)
-            continue
-        uvw = mapped.tile_points[verts]
-        centre = 0.5 * (uvw[:, :2].min(axis=0) + uvw[:, :2].max(axis=0))
-        for f in factors:
-            P = np.column_stack([centre + f * (uvw[:, :2] - centre), f * uvw[:, 2]])
-            Xe = shell_positions(shell, quads, P, scale=scale, depth_scale=depth_scale)
-            if self_intersecting_pairs(Xe, local.reshape(-1, 3), max_pairs=1).size == 0:
-                X[verts] = Xe
-                break
-        else:
-            still.append(e)
-    return X, np.asarray(still, dtype=np.int64)
+        local = local.reshape(-1, 3)
+        vel = np.empty(verts.size, dtype=np.int64)
+        vel[local.ravel()] = np.repeat(np.repeat(np.arange(still.size), counts), 3)
+        Xe = shaped_positions(shell, mapped.quads[verts], mapped.tile_points[verts], vel,
+                              scale=scale, depth_scale=depth_scale,
+                              shrink=np.full(still.size, float(f)), similar=mapped.shaped,
+                              shift=None if mapped.shift is None else mapped.shift[verts])
+        fstart = np.cumsum(counts) - counts
+        left = []
+        for j, e in enumerate(still):
+            fj = local[fstart[j]:fstart[j] + counts[j]]
+            vj, lj = np.unique(fj, return_inverse=True)
+            if self_intersecting_pairs(Xe[vj], lj.reshape(-1, 3), max_pairs=1).size == 0:
+                X[verts[vj]] = Xe[vj]
+            else:
+                left.append(e)
+        still = np.asarray(left, dtype=np.int64)
+    return X, still

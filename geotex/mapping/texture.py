@@ -202,7 +202,7 @@ def _elements_near(points, X, G, exclude=None) -> np.ndarray:
 
 
 def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = True,
-                   progress=None) -> TexturedSolid:
+                   shaped: bool | None = None, progress=None) -> TexturedSolid:
     """Lay ``tiles`` over ``shell`` and unite them with its base.
 
     Parameters
@@ -218,6 +218,17 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
     check : bool, optional
         Round the result to float32 (what an STL stores), collapse the slivers
         the rounding breaks and run the full validity check on it.
+    shaped : bool, optional
+        Map every small element as one shape similar to its tile shape, of
+        one size (:func:`~geotex.mapping.shape.shaped_positions`); False maps
+        tile points one by one through the quad map (elements then take the
+        quads' shapes and sizes). Default: the set's
+        ``metadata["shell_map"]`` (``"plain"`` or ``"shaped"``); without it,
+        plain for lattice sets (``metadata["lattice"]``, e.g. knurl: elements
+        packed edge to edge, whose lattice stays closed only if they follow
+        the quads) and shaped for the others. A set whose elements interlock
+        (linked rings) may need ``"plain"``, since shaped elements keep their
+        size where the quads are squashed and can then meet their neighbours.
     progress : callable, optional
         Called with each stage and step of :data:`MAP_PROGRESS` (the times in
         ``stats.seconds`` are per stage of :data:`MAP_STAGES`).
@@ -236,6 +247,9 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise InputError(f"seed must be a non-negative integer, got {seed!r}")
     h = texture_height(shell, tiles, height)
+    if shaped is None:
+        lattice = tiles.metadata.get("lattice") is not None
+        shaped = tiles.metadata.get("shell_map", "plain" if lattice else "shaped") != "plain"
     pc = shell.polycube
     times = {}
     t0 = time.perf_counter()
@@ -248,7 +262,7 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
     t = time.perf_counter()
     scale = h / tiles.height
     mapped = mapped_tiles(shell, tiles, tile_of_quad, scale=scale,
-                          anchor=ANCHOR * shell.tile_size)
+                          anchor=ANCHOR * shell.tile_size, shaped=shaped)
     times["map"] = time.perf_counter() - t
     report(progress, "union")
     t = time.perf_counter()

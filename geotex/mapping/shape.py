@@ -1,0 +1,542 @@
+"""Elements that keep their shape on objects: a per-element similarity shell map.
+
+The polycube map from tile coordinates onto the base is far from conformal
+where the base is oblique to the voxel grid: a staircase of voxel faces has
+more quads across the steps than along them, so its fitted quads are
+rectangles (about ``1 : 0.7`` on a 45-degree slope), and near polycube
+corners of valence 3, 5 or 6 the quads are rhombi. Mapped point by point, a
+round stud becomes an ellipse whose size and direction follow the quads (the
+"star" where charts meet).
+
+:func:`shaped_positions` maps every small element (a connected component of
+the welded tile geometry) as a unit instead. Its points are expressed in
+the frame of its *home* quad (the quad holding most of them; points in a
+quad across one of its sides are unfolded across that side). With the map's
+Jacobian averaged over the element in that frame, ``J = U S V^T`` (tile units
+to world), the element's tile shape is placed by the similarity
+``y = c + s U V^T (uv - uv_mean)`` (``c`` the mean of its plain-mapped
+base points: the least-squares placement), laid back on the fitted surface
+(closest point, on faces facing the way the offset does) and raised along
+the offset directions there. ``s`` is ``sqrt(s1 s2)`` (the map's own area
+scale) blended with the shell's mean tile side by ``evening`` (1, the
+default: every element gets the same size; 0: sizes follow the quads' areas,
+as with the plain map). Where quads are squashed the elements keep their
+shape and size and so would press into each other; :func:`spread_centres`
+pushes such elements apart along the surface (``spread`` rounds) before
+they are laid on it. Where quads are stretched they lie farther apart.
+
+This departs from the paper (which maps tile geometry point by point through
+the polycube's inverse projection): tile sides still meet exactly (an element
+cut by a tile side is welded before it is mapped, and it moves as one piece),
+but an element no longer fills exactly the part of its quad that it fills in
+the tile. Elements wider than ``max_extent`` tiles (weave strands, long scales)
+and elements reaching past a side of a quad next to their home quad (around
+a polycube corner) keep the plain map.
+
+:func:`element_footprints` measures what this is for: the area and the
+elongation of every element's footprint (its projection onto its tangent
+plane).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from geotex.errors import InputError
+from geotex.param.polycube_fit import SurfaceProjector
+from geotex.param.polycube_quads import chart_axes
+from geotex.shells.locate import interpolated
+
+__all__ = ["map_jacobian", "shaped_positions", "spread_centres", "ElementFootprints",
+           "element_footprints", "MAX_EXTENT", "EVENING", "SPREAD", "GAP", "TILE_SLACK"]
+
+#: Elements wider than this (tile sides, in ``u`` or ``v``) keep the plain
+#: point-by-point map.
+MAX_EXTENT = 0.75
+
+#: Default blend between the map's local area scale (0) and the shell's mean scale (1).
+EVENING = 1.0
+
+#: Rounds of :func:`spread_centres` run by :func:`~geotex.mapping.place.mapped_tiles`.
+SPREAD = 60
+
+#: Clearance kept between spread elements: centres at least ``GAP * (r_i + r_j)`` apart.
+GAP = 1.05
+
+#: Pairs closer than this fraction of their tile distance are pushed, to at most
+#: ``2 - TILE_SLACK`` times it (a map without distortion moves nothing).
+TILE_SLACK = 0.98
+
+
+def _unit(X: np.ndarray) -> np.ndarray:
+    n = np.linalg.norm(X, axis=-1, keepdims=True)
+    return np.divide(X, n, out=np.zeros_like(X), where=n > 0)
+
+
+def map_jacobian(pc) -> np.ndarray:
+    """Jacobian of the map tile -> fitted surface, per sub-grid face.
+
+    Parameters
+    ----------
+    pc : PolyCube
+
+    Returns
+    -------
+    numpy.ndarray, (m, 3, 2) float64
+        ``J[f]`` maps the tile coordinates ``(u, v)`` of face ``f``'s quad to
+        world units. Zero on faces whose polycube triangle is degenerate.
+    """
+    F = pc.F
+    _, a1, a2 = chart_axes(pc.layout.quad_label[pc.layout.face_quad])
+    rows = np.arange(F.shape[0])
+    P = pc.P[F]                                              # (m, 3, 3) tile units
+    uv = np.stack([P[rows[:, None], np.arange(3)[None], a1[:, None]],
+                   P[rows[:, None], np.arange(3)[None], a2[:, None]]], axis=-1)   # (m, 3, 2)
+    B = np.stack([uv[:, 1] - uv[:, 0], uv[:, 2] - uv[:, 0]], axis=2)            # (m, 2, 2)
+    E = np.stack([pc.Y[F[:, 1]] - pc.Y[F[:, 0]], pc.Y[F[:, 2]] - pc.Y[F[:, 0]]], axis=2)
+    det = B[:, 0, 0] * B[:, 1, 1] - B[:, 0, 1] * B[:, 1, 0]
+    ok = np.abs(det) > 0
+    inv = np.zeros_like(B)
+    inv[ok, 0, 0], inv[ok, 1, 1] = B[ok, 1, 1] / det[ok], B[ok, 0, 0] / det[ok]
+    inv[ok, 0, 1], inv[ok, 1, 0] = -B[ok, 0, 1] / det[ok], -B[ok, 1, 0] / det[ok]
+    return E @ inv
+
+
+def _tangent_frames(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Two unit tangents per unit normal, ``(k, 3)`` each, right-handed with it."""
+    helper = np.where((np.abs(n[:, 0]) < 0.9)[:, None], [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
+    e1 = _unit(np.cross(n, helper))
+    return e1, np.cross(n, e1)
+
+
+def _group_mean(values: np.ndarray, group: np.ndarray, n: int) -> np.ndarray:
+    """Mean of ``values`` (k, ...) per group ``0 .. n - 1``."""
+    flat = values.reshape(values.shape[0], -1)
+    count = np.maximum(np.bincount(group, minlength=n), 1).astype(np.float64)
+    out = np.stack([np.bincount(group, weights=flat[:, j], minlength=n)
+                    for j in range(flat.shape[1])], axis=1) / count[:, None]
+    return out.reshape((n,) + values.shape[1:])
+
+
+def _barycentric(X, A, B, C) -> np.ndarray:
+    """Barycentric coordinates of points ``X`` in triangles ``(A, B, C)``, ``(k, 3)``."""
+    v0, v1, v2 = B - A, C - A, X - A
+    d00 = np.einsum("ij,ij->i", v0, v0)
+    d01 = np.einsum("ij,ij->i", v0, v1)
+    d11 = np.einsum("ij,ij->i", v1, v1)
+    d20 = np.einsum("ij,ij->i", v2, v0)
+    d21 = np.einsum("ij,ij->i", v2, v1)
+    den = d00 * d11 - d01 * d01
+    den = np.where(np.abs(den) > 0, den, 1.0)
+    b1 = (d11 * d20 - d01 * d21) / den
+    b2 = (d00 * d21 - d01 * d20) / den
+    bary = np.clip(np.stack([1.0 - b1 - b2, b1, b2], axis=1), 0.0, None)
+    return bary / np.maximum(bary.sum(axis=1, keepdims=True), 1e-300)
+
+
+def shaped_positions(shell, quads, uvw, element, *, scale: float,
+                     depth_scale: float | None = None, evening: float = EVENING,
+                     max_extent: float = MAX_EXTENT, shrink=None, similar: bool = True,
+                     spread: int = 0, shift=None, return_shift: bool = False):
+    """Shell positions of tile points, every small element mapped as one similar shape.
+
+    Parameters
+    ----------
+    shell : Shell
+    quads : array_like, (k,) int64
+        Quad every point is mapped through.
+    uvw : array_like, (k, 3) float64
+        Tile coordinates; ``w`` in tile units.
+    element : array_like, (k,) int64
+        Element (``0 .. e - 1``) of every point; the points of one element
+        move together.
+    scale : float
+        World length of one unit of ``w`` above the surface.
+    depth_scale : float, optional
+        The same below the surface (default ``scale``).
+    evening : float, optional
+        In ``[0, 1]``: 0 keeps the map's local area scale, 1 gives every
+        element the shell's mean scale (see the module docstring).
+    max_extent : float, optional
+        Elements whose footprint is wider than this many tile sides (in
+        ``u`` or ``v``) keep the plain map
+        (:func:`geotex.mapping.place.shell_positions`).
+    shrink : array_like, (e,) float64, optional
+        Factor per element applied to its footprint (about its centre) and
+        its height (1: none); used to re-seat elements that the map folds.
+    similar : bool, optional
+        False: no similarity; the footprint is only shrunk by ``shrink``
+        (with no shrink, the plain map).
+    spread : int, optional
+        Rounds of :func:`spread_centres`: similar elements that would overlap
+        (their footprint circles closer than :data:`GAP`) are pushed apart
+        along the surface.
+    shift : array_like, (k, 3) float64, optional
+        World translation of every point's element (one per element), added
+        before the points are laid back on the surface (the shifts found by
+        an earlier call with ``return_shift``).
+    return_shift : bool, optional
+        Also return the shift of every point's element.
+
+    Returns
+    -------
+    X : numpy.ndarray, (k, 3) float64
+    shift : numpy.ndarray, (k, 3) float64
+        Only with ``return_shift``.
+
+    Raises
+    ------
+    InputError
+        Mismatched array lengths, ``evening`` outside ``[0, 1]``, or a
+        non-positive ``max_extent``.
+    """
+    pc = shell.polycube
+    quads = np.asarray(quads, dtype=np.int64)
+    uvw = np.asarray(uvw, dtype=np.float64)
+    element = np.asarray(element, dtype=np.int64)
+    k = quads.size
+    if uvw.shape != (k, 3) or element.shape != (k,):
+        raise InputError(f"quads, uvw and element must describe the same {k} points "
+                         f"(got uvw {uvw.shape}, element {element.shape})")
+    if not 0.0 <= float(evening) <= 1.0:
+        raise InputError(f"evening must lie in [0, 1], got {evening!r}")
+    if not float(max_extent) > 0:
+        raise InputError(f"max_extent must be positive, got {max_extent!r}")
+    if k == 0:
+        return (np.zeros((0, 3)), np.zeros((0, 3))) if return_shift else np.zeros((0, 3))
+    n_el = int(element.max()) + 1
+    if element.min() < 0:
+        raise InputError("element labels must be non-negative")
+    f = np.ones(n_el) if shrink is None else np.asarray(shrink, dtype=np.float64)
+    if f.shape != (n_el,):
+        raise InputError(f"shrink must have one factor per element ({n_el}), got {f.shape}")
+    face, bary = pc.locate(quads, uvw[:, :2])
+    YD = interpolated(np.hstack([pc.Y, shell.D]), pc.F, face, bary)
+    y, d = YD[:, :3], _unit(YD[:, 3:])
+    # the shell's mean tile side (world): the size every element gets with evening = 1
+    cross = np.cross(pc.Y[pc.F[:, 1]] - pc.Y[pc.F[:, 0]], pc.Y[pc.F[:, 2]] - pc.Y[pc.F[:, 0]])
+    mean_side = float(np.sqrt(0.5 * np.linalg.norm(cross, axis=1).sum() / pc.layout.n_quads))
+    J = map_jacobian(pc)[face]                                       # (k, 3, 2)
+    home, uvh, unfolded = _home_frame(pc.layout, quads, uvw[:, :2], element, n_el)
+    # the map's Jacobian in the home quad's frame, over the element's points there
+    at_home = quads == home[element]
+    cnt = np.maximum(np.bincount(element[at_home], minlength=n_el), 1)
+    Jm = np.stack([np.bincount(element[at_home], weights=J[at_home, i, j], minlength=n_el)
+                   for i in range(3) for j in range(2)], axis=1).reshape(n_el, 3, 2)
+    Jm /= cnt[:, None, None]
+    Uj, sig, Vt = np.linalg.svd(Jm, full_matrices=False)
+    R = Uj @ Vt                                                      # (e, 3, 2), rotation part
+    uv_mean = _group_mean(uvh, element, n_el)
+    y_mean = _group_mean(y, element, n_el)
+    span = np.zeros(n_el)
+    np.maximum.at(span, element, np.abs(uvh - uv_mean[element]).max(axis=1))
+    ok = ((sig[:, 1] > 1e-9 * mean_side) & (2.0 * span <= float(max_extent)) & unfolded
+          & bool(similar))
+    scl = np.sqrt(sig[:, 0] * sig[:, 1]) ** (1.0 - float(evening)) * mean_side ** float(evening)
+    moved = (ok | (f != 1.0))[element]
+    w = uvw[:, 2] * f[element]
+    offset = np.zeros((n_el, 3))
+    if shift is not None:
+        sh = np.asarray(shift, dtype=np.float64)
+        if sh.shape != (k, 3):
+            raise InputError(f"shift must have shape ({k}, 3), got {sh.shape}")
+        offset[element] = sh
+    offset[~ok] = 0.0
+    if spread and ok.any():
+        # footprint radius of every element, world
+        r2 = np.zeros(n_el)
+        np.maximum.at(r2, element, ((uvh - uv_mean[element]) ** 2).sum(axis=1))
+        radius = f * scl * np.sqrt(r2)
+        normal = _unit(np.cross(R[:, :, 0], R[:, :, 1]))
+        # world offset -> its length in the tile, scaled as the element is
+        ideal = ((f * scl)[:, None, None] / np.maximum(sig, 1e-300)[:, :, None]
+                 * np.transpose(Uj, (0, 2, 1)))
+        sel = np.flatnonzero(ok)
+        offset[sel] += spread_centres(y_mean[sel] + offset[sel], radius[sel], normal[sel],
+                                      rounds=int(spread), ideal=ideal[sel])
+    if moved.any():
+        idx = np.flatnonzero(moved)
+        el = element[idx]
+        sim = ok[el]
+        target = np.empty((idx.size, 3))
+        # similar shapes: the least-squares placement of the element's tile shape,
+        # scaled and turned as the map is around it
+        i1 = idx[sim]
+        target[sim] = (y_mean[el[sim]] + offset[el[sim]]
+                       + (f[el[sim]] * scl[el[sim]])[:, None] * np.einsum(
+                           "ijk,ik->ij", R[el[sim]], uvh[i1] - uv_mean[el[sim]]))
+        # the others (only shrunk): about their centre, in world
+        i2 = idx[~sim]
+        target[~sim] = y_mean[el[~sim]] + f[el[~sim]][:, None] * (y[i2] - y_mean[el[~sim]])
+        # back onto the fitted surface: the nearest point found by walking the
+        # point's own quad, else the closest point on faces that face the way
+        # the offset does
+        fface, fb, lost = _walked_feet(pc, quads[idx], uvw[idx, :2], target)
+        if lost.any():
+            foot, fface[lost] = SurfaceProjector(pc.Y, pc.F).project(target[lost], d[idx[lost]])
+            fb[lost] = _barycentric(foot, *(pc.Y[pc.F[fface[lost], i]] for i in range(3)))
+        y[idx] = interpolated(pc.Y, pc.F, fface, fb)
+        d[idx] = _unit(interpolated(shell.D, pc.F, fface, fb))
+    below = float(scale if depth_scale is None else depth_scale)
+    height = np.where(w < 0, w * below, w * float(scale))
+    X = y + height[:, None] * d
+    return (X, offset[element]) if return_shift else X
+
+
+def spread_centres(centre, radius, normal, *, rounds: int = SPREAD, gap: float = GAP,
+                   ideal=None) -> np.ndarray:
+    """Tangential moves that push overlapping discs apart.
+
+    Elements keep one size while the polycube's quads vary in area, so where
+    the quads are squashed their centres lie closer than in the tile. Each
+    round, every pair of discs (centre, radius, in the plane normal to
+    ``normal``) closer than ``gap * (r_i + r_j)`` is pushed apart by half the
+    shortfall, shared equally, along the line between the centres projected
+    into the tangent plane. With ``ideal``, only pairs squeezed below
+    :data:`TILE_SLACK` of their distance in the tile (scaled as the elements
+    are) are pushed, and to at most ``2 - TILE_SLACK`` times that distance:
+    elements that touch or overlap in the tile itself stay as they are, and an
+    undistorted map moves nothing.
+
+    Parameters
+    ----------
+    centre : numpy.ndarray, (e, 3) float64
+    radius : numpy.ndarray, (e,) float64
+    normal : numpy.ndarray, (e, 3) float64
+        Unit normals.
+    rounds : int
+    gap : float
+    ideal : numpy.ndarray, (e, 2, 3) float64, optional
+        Per element, the linear map taking a world offset from its centre to
+        that offset's length in the tile times the element's scale; the
+        distance of a pair in the tile is the mean of both maps applied to
+        the pair's starting offset.
+
+    Returns
+    -------
+    numpy.ndarray, (e, 3) float64
+        The move of every centre.
+    """
+    start = np.asarray(centre, dtype=np.float64)
+    c = start.copy()
+    radius = np.asarray(radius, dtype=np.float64)
+    if c.shape[0] < 2:
+        return np.zeros_like(c)
+    reach = 2.0 * gap * float(radius.max())
+    for _ in range(int(rounds)):
+        pairs = cKDTree(c).query_pairs(reach, output_type="ndarray")
+        if pairs.size == 0:
+            break
+        i, j = pairs[:, 0], pairs[:, 1]
+        v = c[j] - c[i]
+        nrm = _unit(normal[i] + normal[j])
+        v -= np.einsum("ij,ij->i", v, nrm)[:, None] * nrm
+        dist = np.linalg.norm(v, axis=1)
+        want = gap * (radius[i] + radius[j])
+        hit = dist > 0
+        if ideal is not None:
+            d0 = start[j] - start[i]
+            tile = 0.5 * (np.linalg.norm(np.einsum("kab,kb->ka", ideal[i], d0), axis=1)
+                          + np.linalg.norm(np.einsum("kab,kb->ka", ideal[j], d0), axis=1))
+            # only pairs squeezed below their tile distance, to a little beyond it
+            want = np.minimum(want, (2.0 - TILE_SLACK) * tile)
+            hit &= dist < TILE_SLACK * tile
+        short = want - dist
+        hit &= short > 0
+        if not hit.any():
+            break
+        push = (0.25 * short[hit] / dist[hit])[:, None] * v[hit]
+        move = np.zeros_like(c)
+        np.add.at(move, i[hit], -push)
+        np.add.at(move, j[hit], push)
+        # stay in each element's own tangent plane
+        move -= np.einsum("ij,ij->i", move, normal)[:, None] * normal
+        c += move
+    return c - start
+
+
+def _walked_feet(pc, quads, uv, target, *, steps: int = 4):
+    """Closest points of ``target`` on the fitted surface, walking each point's quad.
+
+    From the tile point ``uv`` of quad ``quads``, repeat: locate the sub-grid
+    face, find the closest point of ``target`` in the plane of its fitted
+    triangle and the tile point that the triangle's linear map gives there;
+    done once that point lies in the face itself. Points whose walk leaves
+    the quad or does not settle within ``steps`` are ``lost`` (the caller
+    finds them by a search).
+
+    Returns
+    -------
+    face : (k,) int64
+    bary : (k, 3) float64
+    lost : (k,) bool
+    """
+    r = pc.res
+    k = quads.size
+    face = np.zeros(k, dtype=np.int64)
+    bary = np.zeros((k, 3))
+    lost = np.ones(k, dtype=bool)
+    todo = np.arange(k)
+    cur = np.clip(uv, 0.0, 1.0)
+    for _ in range(steps):
+        if todo.size == 0:
+            break
+        f, _ = pc.locate(quads[todo], cur[todo])
+        corners = pc.F[f]
+        Y0 = pc.Y[corners[:, 0]]
+        E1, E2 = pc.Y[corners[:, 1]] - Y0, pc.Y[corners[:, 2]] - Y0
+        g = target[todo] - Y0
+        a, b, c = (np.einsum("ij,ij->i", E1, E1), np.einsum("ij,ij->i", E1, E2),
+                   np.einsum("ij,ij->i", E2, E2))
+        det = a * c - b * b
+        det = np.where(np.abs(det) > 0, det, 1.0)
+        p, q = np.einsum("ij,ij->i", E1, g), np.einsum("ij,ij->i", E2, g)
+        b1, b2 = (c * p - b * q) / det, (a * q - b * p) / det
+        inside = (b1 >= -1e-9) & (b2 >= -1e-9) & (b1 + b2 <= 1.0 + 1e-9)
+        done = todo[inside]
+        face[done] = f[inside]
+        bary[done] = np.stack([1.0 - b1 - b2, b1, b2], axis=1)[inside]
+        lost[done] = False
+        # the tile point of the plane's foot (the triangle's map, extended)
+        local = f % (2 * r * r)
+        upper = local >= r * r
+        cell = local % (r * r)
+        ci, cj = cell // r, cell % r
+        # corners in tile units: lower (i,j),(i+1,j),(i+1,j+1); upper (i,j),(i+1,j+1),(i,j+1)
+        du1, dv1 = np.where(upper, 1.0, 1.0), np.where(upper, 1.0, 0.0)
+        du2, dv2 = np.where(upper, 0.0, 1.0), np.where(upper, 1.0, 1.0)
+        nu = (ci + b1 * du1 + b2 * du2) / r
+        nv = (cj + b1 * dv1 + b2 * dv2) / r
+        within = ~inside & (nu >= 0.0) & (nu <= 1.0) & (nv >= 0.0) & (nv <= 1.0)
+        cur[todo[within]] = np.stack([nu, nv], axis=1)[within]
+        todo = todo[within]
+    return face, bary, lost
+
+
+def _home_frame(layout, quads, uv, element, n_el):
+    """Every element's home quad (the one with most of its points) and its points there.
+
+    Points in a quad that shares a side with the home quad are unfolded
+    across that side into the home frame (the tile coordinate ``t`` along a
+    side is the same in both quads, and the two quads lie on opposite sides
+    of it); elements with points elsewhere are not ``unfolded``.
+
+    Returns
+    -------
+    home : (e,) int64
+    uvh : (k, 2) float64
+    unfolded : (e,) bool
+    """
+    pair = element * layout.n_quads + quads
+    keys, counts = np.unique(pair, return_counts=True)
+    el_of = keys // layout.n_quads
+    # per element the pair with most points (ties: the lowest quad)
+    order = np.lexsort((-counts, el_of))
+    first = np.ones(order.size, dtype=bool)
+    first[1:] = el_of[order][1:] != el_of[order][:-1]
+    home = np.zeros(n_el, dtype=np.int64)
+    home[el_of[order][first]] = keys[order][first] % layout.n_quads
+    h = home[element]
+    uvh = uv.copy()
+    away = np.flatnonzero(quads != h)
+    found = np.ones(quads.size, dtype=bool)
+    if away.size:
+        E = layout.quad_edge[h[away]]                                # (a, 4) home sides
+        eq, es = layout.edge_quads[E], layout.edge_sides[E]          # (a, 4, 2)
+        q = quads[away]
+        mine = eq[:, :, 0] == q[:, None]
+        hit = mine | (eq[:, :, 1] == q[:, None])
+        ok = hit.any(axis=1)
+        side_h = np.argmax(hit, axis=1)                              # home side crossed
+        rows = np.arange(away.size)
+        pick = np.where(mine[rows, side_h], 0, 1)
+        side_q = es[rows, side_h, pick]                              # the same side in q
+        u, v = uv[away, 0], uv[away, 1]
+        t = np.select([side_q == 0, side_q == 1, side_q == 2], [u, v, u], v)
+        n = np.select([side_q == 0, side_q == 1, side_q == 2], [v, 1.0 - u, 1.0 - v], u)
+        n = -n                                                       # beyond the home side
+        uh = np.select([side_h == 0, side_h == 1, side_h == 2], [t, 1.0 - n, t], n)
+        vh = np.select([side_h == 0, side_h == 1, side_h == 2], [n, t, 1.0 - n], t)
+        uvh[away] = np.where(ok[:, None], np.stack([uh, vh], axis=1), uv[away])
+        found[away] = ok
+    unfolded = np.ones(n_el, dtype=bool)
+    unfolded[element[~found]] = False
+    return home, uvh, unfolded
+
+
+@dataclass(frozen=True)
+class ElementFootprints:
+    """Footprints of elements: their projection onto their tangent planes.
+
+    Attributes
+    ----------
+    area : numpy.ndarray, (e,) float64
+        Footprint area (half the projected area of the closed element's faces).
+    aspect : numpy.ndarray, (e,) float64
+        Elongation ``sqrt(l1 / l2) >= 1`` of the footprint's second moments.
+    """
+
+    area: np.ndarray
+    aspect: np.ndarray
+
+    @property
+    def cv(self) -> float:
+        """Coefficient of variation of the areas (std / mean)."""
+        return float(self.area.std() / self.area.mean()) if self.area.size else 0.0
+
+
+def element_footprints(V, F, label, normal) -> ElementFootprints:
+    """Area and elongation of every element's footprint.
+
+    Parameters
+    ----------
+    V : array_like, (n, 3) float64
+    F : array_like, (m, 3) int64
+        Closed elements.
+    label : array_like, (m,) int64
+        Element ``0 .. e - 1`` of every face.
+    normal : array_like, (e, 3) float64
+        Direction each element is projected along (its base's normal).
+
+    Returns
+    -------
+    ElementFootprints
+
+    Raises
+    ------
+    InputError
+        Mismatched shapes.
+    """
+    V = np.asarray(V, dtype=np.float64)
+    F = np.asarray(F, dtype=np.int64)
+    label = np.asarray(label, dtype=np.int64)
+    normal = _unit(np.asarray(normal, dtype=np.float64))
+    if label.shape != (F.shape[0],) or normal.ndim != 2 or normal.shape[1] != 3:
+        raise InputError("label needs one entry per face and normal one row (3) per element")
+    n_el = normal.shape[0]
+    if label.size and (label.min() < 0 or label.max() >= n_el):
+        raise InputError("face labels must lie in [0, number of normals)")
+    e1, e2 = _tangent_frames(normal)
+    P = V[F]                                                        # (m, 3, 3)
+    q = np.stack([np.einsum("mij,mj->mi", P, e1[label]),
+                  np.einsum("mij,mj->mi", P, e2[label])], axis=2)    # (m, 3, 2)
+    a = 0.5 * np.abs((q[:, 1, 0] - q[:, 0, 0]) * (q[:, 2, 1] - q[:, 0, 1])
+                     - (q[:, 2, 0] - q[:, 0, 0]) * (q[:, 1, 1] - q[:, 0, 1]))
+    ssum = q.sum(axis=1)
+    second = (np.einsum("mia,mib->mab", q, q) + ssum[:, :, None] * ssum[:, None, :]) / 12.0
+    area = np.bincount(label, weights=a, minlength=n_el)
+    safe = np.maximum(area, 1e-300)
+    first = np.stack([np.bincount(label, weights=a * c, minlength=n_el)
+                      for c in (ssum[:, 0] / 3, ssum[:, 1] / 3)], axis=1) / safe[:, None]
+    M = np.stack([np.bincount(label, weights=a * second[:, i, j], minlength=n_el)
+                  for i, j in ((0, 0), (0, 1), (1, 1))], axis=1) / safe[:, None]
+    cxx = M[:, 0] - first[:, 0] ** 2
+    cxy = M[:, 1] - first[:, 0] * first[:, 1]
+    cyy = M[:, 2] - first[:, 1] ** 2
+    half = 0.5 * (cxx + cyy)
+    r = np.sqrt(np.maximum(0.25 * (cxx - cyy) ** 2 + cxy ** 2, 0.0))
+    l1, l2 = half + r, np.maximum(half - r, 1e-300)
+    return ElementFootprints(area=0.5 * area, aspect=np.sqrt(np.maximum(l1, 0.0) / l2))
