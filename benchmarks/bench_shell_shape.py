@@ -38,12 +38,11 @@ import numpy as np
 
 from geotex.mapping import (edge_colors, mapped_tiles, texture_height, textured_solid,
                             tiles_for_quads)
-from geotex.mapping.shape import element_footprints
+from geotex.mapping.shape import element_directions, element_footprints
 from geotex.mapping.union import element_contacts
 from geotex.mapping.texture import ANCHOR
 from geotex.mesh.topology import face_components
 from geotex.shells import load_named as load_shell
-from geotex.shells.locate import interpolated
 from geotex.tiles.catalog import load_named as load_tiles
 from geotex.tiles.tiling import planar_tiling, random_arrangement
 
@@ -79,11 +78,7 @@ def object_footprints(shell, tiles, *, shaped: bool) -> dict:
                          anchor=ANCHOR * shell.tile_size, shaped=shaped)
         cpu.append(time.process_time() - t)
     n, label = face_components(m.faces, m.vertices.shape[0])
-    face, bary = pc.locate(m.quads, m.tile_points[:, :2])
-    d = interpolated(shell.D, pc.F, face, bary)
-    vlabel = np.zeros(m.vertices.shape[0], dtype=np.int64)
-    vlabel[m.faces.ravel()] = np.repeat(label, 3)
-    normal = np.stack([np.bincount(vlabel, weights=d[:, j], minlength=n) for j in range(3)], 1)
+    normal = element_directions(shell, m, label)
     out = _figures(element_footprints(m.vertices, m.faces, label, normal))
     out["cpu_map"] = round(min(cpu), 3)
     touching = element_contacts(m.vertices, m.faces).touching

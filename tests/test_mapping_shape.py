@@ -10,7 +10,8 @@ import pytest
 from geotex.errors import InputError
 from geotex.exemplars import exemplar
 from geotex.mapping import edge_colors, mapped_tiles, textured_solid, tiles_for_quads
-from geotex.mapping.shape import element_footprints, shaped_positions, spread_centres
+from geotex.mapping.shape import (element_directions, element_footprints, shaped_positions,
+                                  spread_centres)
 from geotex.mapping.union import element_contacts
 from geotex.mesh.primitives import box, torus
 from geotex.mesh.topology import face_components
@@ -60,11 +61,9 @@ def _footprints(shell, tiles, *, shaped):
     m = mapped_tiles(shell, tiles, tq, scale=0.2 * shell.tile_size / tiles.height,
                      shaped=shaped)
     n, label = face_components(m.faces, m.vertices.shape[0])
-    face, bary = pc.locate(m.quads, m.tile_points[:, :2])
-    d = interpolated(shell.D, pc.F, face, bary)
+    normal = element_directions(shell, m, label)
     vl = np.zeros(m.vertices.shape[0], dtype=np.int64)
     vl[m.faces.ravel()] = np.repeat(label, 3)
-    normal = np.stack([np.bincount(vl, weights=d[:, j], minlength=n) for j in range(3)], 1)
     quads_of = [np.unique(m.quads[vl == e]).size for e in range(n)]
     return element_footprints(m.vertices, m.faces, label, normal), np.array(quads_of), m
 

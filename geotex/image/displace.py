@@ -33,6 +33,7 @@ from geotex.errors import InputError
 from geotex.image.composite import composite_at, luminance
 from geotex.image.records import LappedTexture
 from geotex.mesh.arrays import as_mesh_arrays
+from geotex.mesh.geometry import clamped_barycentric
 from geotex.relief import displaced_solid
 
 __all__ = ["displace", "surface_points", "height_at"]
@@ -58,19 +59,7 @@ def surface_points(V, F, P) -> tuple[np.ndarray, np.ndarray]:
     _, I, C = igl.point_mesh_squared_distance(np.ascontiguousarray(P), V, F)
     I = np.asarray(I, dtype=np.int64).ravel()
     A, B, Cc = V[F[I, 0]], V[F[I, 1]], V[F[I, 2]]
-    v0, v1, v2 = B - A, Cc - A, np.asarray(C) - A
-    d00 = np.einsum("ij,ij->i", v0, v0)
-    d01 = np.einsum("ij,ij->i", v0, v1)
-    d11 = np.einsum("ij,ij->i", v1, v1)
-    d20 = np.einsum("ij,ij->i", v2, v0)
-    d21 = np.einsum("ij,ij->i", v2, v1)
-    den = d00 * d11 - d01 * d01
-    den = np.where(den > 0, den, 1.0)
-    b1 = (d11 * d20 - d01 * d21) / den
-    b2 = (d00 * d21 - d01 * d20) / den
-    bary = np.clip(np.stack([1.0 - b1 - b2, b1, b2], axis=1), 0.0, None)
-    bary /= bary.sum(axis=1, keepdims=True)
-    return I, bary
+    return I, clamped_barycentric(np.asarray(C, dtype=np.float64), A, B, Cc)
 
 def height_at(V, F, lapped: LappedTexture, P, *, invert: bool = False) -> np.ndarray:
     """Composited luminance of the lapped texture at points near the surface.

@@ -46,11 +46,12 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from geotex.errors import InputError
+from geotex.mesh.geometry import clamped_barycentric
 from geotex.param.polycube_fit import SurfaceProjector
 from geotex.param.polycube_quads import chart_axes
 from geotex.shells.locate import interpolated
 
-__all__ = ["map_jacobian", "shaped_positions", "spread_centres", "ElementFootprints",
+__all__ = ["map_jacobian", "element_directions", "shaped_positions", "spread_centres", "ElementFootprints",
            "element_footprints", "MAX_EXTENT", "EVENING", "SPREAD", "GAP", "TILE_SLACK"]
 
 #: Elements wider than this (tile sides, in ``u`` or ``v``) keep the plain
@@ -119,22 +120,6 @@ def _group_mean(values: np.ndarray, group: np.ndarray, n: int) -> np.ndarray:
     out = np.stack([np.bincount(group, weights=flat[:, j], minlength=n)
                     for j in range(flat.shape[1])], axis=1) / count[:, None]
     return out.reshape((n,) + values.shape[1:])
-
-
-def _barycentric(X, A, B, C) -> np.ndarray:
-    """Barycentric coordinates of points ``X`` in triangles ``(A, B, C)``, ``(k, 3)``."""
-    v0, v1, v2 = B - A, C - A, X - A
-    d00 = np.einsum("ij,ij->i", v0, v0)
-    d01 = np.einsum("ij,ij->i", v0, v1)
-    d11 = np.einsum("ij,ij->i", v1, v1)
-    d20 = np.einsum("ij,ij->i", v2, v0)
-    d21 = np.einsum("ij,ij->i", v2, v1)
-    den = d00 * d11 - d01 * d01
-    den = np.where(np.abs(den) > 0, den, 1.0)
-    b1 = (d11 * d20 - d01 * d21) / den
-    b2 = (d00 * d21 - d01 * d20) / den
-    bary = np.clip(np.stack([1.0 - b1 - b2, b1, b2], axis=1), 0.0, None)
-    return bary / np.maximum(bary.sum(axis=1, keepdims=True), 1e-300)
 
 
 def shaped_positions(shell, quads, uvw, element, *, scale: float,
@@ -277,7 +262,7 @@ def shaped_positions(shell, quads, uvw, element, *, scale: float,
         fface, fb, lost = _walked_feet(pc, quads[idx], uvw[idx, :2], target)
         if lost.any():
             foot, fface[lost] = SurfaceProjector(pc.Y, pc.F).project(target[lost], d[idx[lost]])
-            fb[lost] = _barycentric(foot, *(pc.Y[pc.F[fface[lost], i]] for i in range(3)))
+            fb[lost] = clamped_barycentric(foot, *(pc.Y[pc.F[fface[lost], i]] for i in range(3)))
         y[idx] = interpolated(pc.Y, pc.F, fface, fb)
         d[idx] = _unit(interpolated(shell.D, pc.F, fface, fb))
     below = float(scale if depth_scale is None else depth_scale)
@@ -486,6 +471,33 @@ class ElementFootprints:
     def cv(self) -> float:
         """Coefficient of variation of the areas (std / mean)."""
         return float(self.area.std() / self.area.mean()) if self.area.size else 0.0
+
+
+def element_directions(shell, mapped, label) -> np.ndarray:
+    """Mean offset direction ``d`` of the shell under every mapped element.
+
+    Parameters
+    ----------
+    shell : Shell
+    mapped : MappedTiles
+        Tiles mapped over ``shell`` (:func:`geotex.mapping.place.mapped_tiles`).
+    label : numpy.ndarray, (m,) int64
+        Element ``0 .. e - 1`` of every face of ``mapped.faces``.
+
+    Returns
+    -------
+    numpy.ndarray, (e, 3) float64
+        Not normalised (the sum over the element's face corners); the
+        projection direction :func:`element_footprints` takes.
+    """
+    pc = shell.polycube
+    face, bary = pc.locate(mapped.quads, mapped.tile_points[:, :2])
+    d = interpolated(shell.D, pc.F, face, bary)
+    label = np.asarray(label, dtype=np.int64)
+    n = int(label.max()) + 1 if label.size else 0
+    vlabel = np.zeros(mapped.vertices.shape[0], dtype=np.int64)
+    vlabel[mapped.faces.ravel()] = np.repeat(label, 3)
+    return np.stack([np.bincount(vlabel, weights=d[:, j], minlength=n) for j in range(3)], 1)
 
 
 def element_footprints(V, F, label, normal) -> ElementFootprints:

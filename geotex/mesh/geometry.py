@@ -9,6 +9,7 @@ from geotex.mesh.topology import edge_topology
 
 __all__ = [
     "face_cross",
+    "clamped_barycentric",
     "face_areas",
     "face_normals",
     "vertex_normals",
@@ -24,6 +25,36 @@ def face_cross(V: np.ndarray, F: np.ndarray) -> np.ndarray:
     """Return ``(v1 - v0) x (v2 - v0)`` per face, ``(m, 3)`` float64."""
     v0 = V[F[:, 0]]
     return np.cross(V[F[:, 1]] - v0, V[F[:, 2]] - v0)
+
+
+def clamped_barycentric(X: np.ndarray, A: np.ndarray, B: np.ndarray, C: np.ndarray
+                        ) -> np.ndarray:
+    """Barycentric coordinates of points in triangles, clamped to the triangle.
+
+    Parameters
+    ----------
+    X, A, B, C : numpy.ndarray, (k, 3) float64
+        Points and the corners of their triangles.
+
+    Returns
+    -------
+    numpy.ndarray, (k, 3) float64
+        Coordinates of ``X`` projected into the plane of ``(A, B, C)``, negative
+        ones set to 0 and the rest rescaled to sum to 1 (a degenerate triangle
+        gives ``(1, 0, 0)``).
+    """
+    v0, v1, v2 = B - A, C - A, X - A
+    d00 = np.einsum("ij,ij->i", v0, v0)
+    d01 = np.einsum("ij,ij->i", v0, v1)
+    d11 = np.einsum("ij,ij->i", v1, v1)
+    d20 = np.einsum("ij,ij->i", v2, v0)
+    d21 = np.einsum("ij,ij->i", v2, v1)
+    den = d00 * d11 - d01 * d01
+    den = np.where(den > 0, den, 1.0)
+    b1 = (d11 * d20 - d01 * d21) / den
+    b2 = (d00 * d21 - d01 * d20) / den
+    bary = np.clip(np.stack([1.0 - b1 - b2, b1, b2], axis=1), 0.0, None)
+    return bary / bary.sum(axis=1, keepdims=True)
 
 
 def face_areas(V: np.ndarray, F: np.ndarray) -> np.ndarray:
