@@ -226,9 +226,11 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
         ``metadata["shell_map"]`` (``"plain"`` or ``"shaped"``); without it,
         plain for lattice sets (``metadata["lattice"]``, e.g. knurl: elements
         packed edge to edge, whose lattice stays closed only if they follow
-        the quads) and shaped for the others. A set whose elements interlock
-        (linked rings) may need ``"plain"``, since shaped elements keep their
-        size where the quads are squashed and can then meet their neighbours.
+        the quads) and for periodic sets (``metadata["periodic"]``: the linked
+        rings of chain mail and the strands of weave interlock, and shaped
+        rings of one size, moved one by one, cut into their neighbours where
+        the quads are squashed: on Spot the union then fused them and took
+        about three times as long), shaped for the others.
     progress : callable, optional
         Called with each stage and step of :data:`MAP_PROGRESS` (the times in
         ``stats.seconds`` are per stage of :data:`MAP_STAGES`).
@@ -248,8 +250,8 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
         raise InputError(f"seed must be a non-negative integer, got {seed!r}")
     h = texture_height(shell, tiles, height)
     if shaped is None:
-        lattice = tiles.metadata.get("lattice") is not None
-        shaped = tiles.metadata.get("shell_map", "plain" if lattice else "shaped") != "plain"
+        packed = any(tiles.metadata.get(k) is not None for k in ("lattice", "periodic"))
+        shaped = tiles.metadata.get("shell_map", "plain" if packed else "shaped") != "plain"
     pc = shell.polycube
     times = {}
     t0 = time.perf_counter()
