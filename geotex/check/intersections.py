@@ -64,7 +64,7 @@ from geotex.jit import JIT_MIN_SIZE, compiled, helper
 from geotex.mesh.arrays import as_mesh_arrays
 from geotex.mesh.topology import edge_topology
 
-__all__ = ["self_intersecting_pairs", "REL_TOL", "ABS_TOL"]
+__all__ = ["self_intersecting_pairs", "self_intersecting_pairs_touching", "REL_TOL", "ABS_TOL"]
 
 #: Tolerance of the geometric predicates relative to the local triangle size
 #: (the longest edge of the two triangles of a pair).
@@ -198,6 +198,126 @@ def self_intersecting_pairs(V, F, *, max_pairs=None, topology=None) -> np.ndarra
     else:
         pairs = _distinct_pairs(V, F, max_pairs, topo=topo)
     return pairs
+
+
+def self_intersecting_pairs_touching(V, F, faces) -> np.ndarray:
+    """Return the intersecting pairs of :func:`self_intersecting_pairs` with a face in ``faces``.
+
+    Exactly the rows of ``self_intersecting_pairs(V, F)`` whose first or
+    second face is in ``faces``, at a cost that grows with ``faces`` and the
+    faces near them, not with the mesh: after a few vertices moved, the new
+    crossings are the pairs touching the faces at those vertices.
+
+    Parameters
+    ----------
+    V : array_like, (n, 3) float64
+    F : array_like, (m, 3) int64
+    faces : array_like, (k,) int64
+        Face indices (any order, repeats allowed).
+
+    Returns
+    -------
+    numpy.ndarray, (p, 2) int64
+        Face index pairs ``(i, j)``, ``i < j``, sorted, without repetition.
+
+    Raises
+    ------
+    InputError
+        If ``V``, ``F`` or ``faces`` is malformed.
+
+    Notes
+    -----
+    The predicates see the same numbers as in the full search: coordinates
+    are normalised by the box of the whole mesh, and each face's plane, edge
+    planes, tolerance and box depend on its own corners only.  The faces
+    that may meet the chosen ones are found on a coarse grid of cells at
+    least three times the largest face box of the mesh (a face whose box
+    meets a chosen face's box has a corner in a cell next to one of that
+    face's corners); only those are prepared.  The candidate pairs are the
+    same compiled broad and narrow phase's, restricted to pairs with a
+    chosen face.  Pairs around a vertex with a separated fan (module
+    docstring, step 3), which the full search never tests because the
+    narrow phase provably rejects them, are tested here; the answer is the
+    same.  When faces with the same vertex set are among the prepared
+    faces, the full search is run and its answer filtered.
+    """
+    V, F = as_mesh_arrays(V, F)
+    sel = np.unique(np.asarray(faces, dtype=np.int64).ravel())
+    m = F.shape[0]
+    empty = np.zeros((0, 2), dtype=np.int64)
+    if sel.size and (sel[0] < 0 or sel[-1] >= m):
+        raise InputError(f"faces must be indices in [0, {m}), got {sel[0]} .. {sel[-1]}")
+    if m < 2 or sel.size == 0:
+        return empty
+    Vn = _normalized(V, F)
+    near = _faces_near(Vn, F, sel)
+    sub = F[near]
+    if _duplicate_classes(sub) is not None:          # rare: let the full search group them
+        pairs = self_intersecting_pairs(V, F)
+        keep = np.zeros(m, dtype=bool)
+        keep[sel] = True
+        return pairs[keep[pairs[:, 0]] | keep[pairs[:, 1]]]
+    vids, local = np.unique(sub, return_inverse=True)
+    sub = local.reshape(-1, 3)
+    chosen = np.zeros(near.size, dtype=bool)
+    chosen[np.searchsorted(near, sel)] = True
+    workers = _workers()
+    pool = ThreadPoolExecutor(max_workers=workers)
+    found = []
+    try:
+        fd = _FaceData(Vn[vids], sub, mapper=pool.map)
+        if fd.active.size >= 2 and chosen[fd.active].any():
+            for hits in _in_order(pool, _touching_tasks(fd, chosen), window=2 * workers):
+                if hits.size:
+                    found.append(hits)
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+    if not found:
+        return empty
+    keys = np.sort(np.concatenate(found))
+    k = sub.shape[0]
+    return np.stack([near[keys // k], near[keys % k]], axis=1)   # ``near`` ascends: i < j
+
+
+def _faces_near(Vn, F, sel):
+    """Sorted faces whose box (as the search inflates it) may meet a face of ``sel``'s.
+
+    ``Vn``: the normalised coordinates (:func:`_normalized`).
+
+    A superset, found on a grid of cells at least three times the largest
+    face extent (plus the boxes' inflation) of the whole mesh: corners of
+    two faces whose boxes meet are less than two such extents apart, so in
+    the same or adjacent cells.  ``sel`` is included.
+    """
+    used = np.zeros(Vn.shape[0], dtype=bool)
+    used[F.ravel()] = True
+    ext = 0.0
+    cols = [np.ascontiguousarray(F[:, k]) for k in range(3)]
+    for axis in range(3):
+        x = np.ascontiguousarray(Vn[:, axis])
+        a, b, c = (np.take(x, col) for col in cols)
+        hi = np.maximum(np.maximum(a, b), c)
+        hi -= np.minimum(np.minimum(a, b), c)
+        ext = max(ext, float(hi.max()))
+        del a, b, c, hi
+    lo = Vn[used].min(axis=0)
+    span = float((Vn[used].max(axis=0) - lo).max())
+    # inflation of a box: 2 tol + _BOX32_PAD plus float32 rounding, far below 2**-18
+    # in normalised coordinates (extent below 2)
+    cell = max(3.0 * (ext + 2.0 ** -18), span / 256.0, 2.0 ** -18)
+    cells = np.floor((Vn - lo) / cell).astype(np.int64)
+    np.clip(cells, 0, None, out=cells)               # unreferenced vertices: anywhere
+    dims = cells[used].max(axis=0) + 1
+    np.minimum(cells, dims - 1, out=cells)
+    grid = np.zeros(tuple(int(d) for d in dims), dtype=bool)
+    mark = np.unique(F[sel].ravel())
+    grid[cells[mark, 0], cells[mark, 1], cells[mark, 2]] = True
+    for axis in range(3):                            # dilate by one cell
+        g = np.moveaxis(grid, axis, 0)
+        g[1:] |= g[:-1].copy()
+        g[:-1] |= g[1:].copy()
+    hot = grid[cells[:, 0], cells[:, 1], cells[:, 2]] & used
+    return np.flatnonzero(hot[cols[0]] | hot[cols[1]] | hot[cols[2]])
 
 
 def _distinct_pairs(V, F, max_pairs, *, topo=None):
@@ -357,11 +477,15 @@ def _normalized(V: np.ndarray, F: np.ndarray) -> np.ndarray:
     used = np.zeros(V.shape[0], dtype=bool)
     used[F.ravel()] = True
     U = V[used]
-    half = float(np.max(0.5 * U.max(axis=0) - 0.5 * U.min(axis=0)))
+    lo, hi = U.min(axis=0), U.max(axis=0)
+    del U
+    half = float(np.max(0.5 * hi - 0.5 * lo))
     exponent = int(np.frexp(half)[1]) if half > 0 else 0
-    W = np.ldexp(V, -exponent)              # exact scaling, half-extent in [0.5, 1)
-    Wu = W[used]
-    W -= 0.5 * Wu.min(axis=0) + 0.5 * Wu.max(axis=0)
+    # exact scaling (half-extent in [0.5, 1)): the box of the scaled rows is the
+    # scaled box
+    shift = 0.5 * np.ldexp(lo, -exponent) + 0.5 * np.ldexp(hi, -exponent)
+    W = np.ldexp(V, -exponent)
+    W -= shift
     return W
 
 
@@ -645,6 +769,46 @@ def _pair_tasks(faces: _FaceData):
     Over all tasks, every pair of active faces whose boxes overlap is
     examined exactly once.  A key is ``i * m + j`` with ``i < j``.
     """
+    box, cell0, level = _grid_levels(faces)
+    for lev in np.unique(level):
+        cell = cell0 * _LEVEL_RATIO ** lev
+        cur = np.flatnonzero(level == lev)
+        low = np.flatnonzero(level < lev)
+        yield from _level_tasks(faces, box, cell, cur, _near(box, cur, low))
+
+
+def _touching_tasks(faces: _FaceData, chosen: np.ndarray):
+    """:func:`_pair_tasks` for the pairs with at least one face in ``chosen``.
+
+    ``chosen`` is a boolean over the faces.  A chosen face of level ``L`` is
+    paired on level ``L``'s grid with the chosen faces of its level and below
+    and with every other face (of any level: larger ones simply cover more
+    cells), so every pair of overlapping boxes with a chosen face is examined
+    exactly once.
+    """
+    box, cell0, level = _grid_levels(faces)
+    mine = chosen[faces.active]
+    for lev in np.unique(level[mine]):
+        cell = cell0 * _LEVEL_RATIO ** lev
+        cur = np.flatnonzero(mine & (level == lev))
+        low = np.flatnonzero(~mine | (level < lev))
+        yield from _level_tasks(faces, box, cell, cur, _near(box, cur, low))
+
+
+def _near(box, cur, low):
+    """The rows of ``low`` whose boxes meet the bounding box of the boxes ``cur``."""
+    if low.size:
+        near = np.ones(low.size, dtype=bool)
+        for axis in range(3):
+            lo = box[axis][cur].min()
+            hi = box[3 + axis][cur].max()
+            near &= (box[axis][low] <= hi) & (box[3 + axis][low] >= lo)
+        low = low[near]
+    return low
+
+
+def _grid_levels(faces: _FaceData):
+    """The active faces' boxes (one array per bound), the finest cell and each face's level."""
     # one contiguous array per bound (low x, y, z, high x, y, z)
     box = [np.ascontiguousarray(faces.box32[faces.active, k]) for k in range(6)]
     extent = np.maximum(np.maximum(box[3] - box[0], box[4] - box[1]),
@@ -660,21 +824,7 @@ def _pair_tasks(faces: _FaceData):
         if not short.any():
             break
         level[short] += 1
-    del extent
-    for lev in np.unique(level):
-        cell = cell0 * _LEVEL_RATIO ** lev
-        cur = np.flatnonzero(level == lev)
-        low = np.flatnonzero(level < lev)
-        if low.size:
-            # only smaller faces near the current level's faces can pair up
-            near = np.ones(low.size, dtype=bool)
-            for axis in range(3):
-                lo = box[axis][cur].min()
-                hi = box[3 + axis][cur].max()
-                near &= (box[axis][low] <= hi) & (box[3 + axis][low] >= lo)
-            low = low[near]
-            del near
-        yield from _level_tasks(faces, box, cell, cur, low)
+    return box, cell0, level
 
 
 def _cell_bounds(box, rows, cell):
