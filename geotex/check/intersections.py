@@ -511,10 +511,11 @@ class _FaceData:
         tolerance, and widened to cover the float32 rounding.
     active : (a,) int64
         Non-degenerate faces.
-    masked_columns : list of 3 (m,) int arrays, or None
-        Set by :meth:`mask_unseparated`.
+    masked : bool
+        Whether :meth:`mask_unseparated` has set ``masked_rows``.
     masked_rows : (m, 3) int array
-        The same as one array (``(0, 3)`` until set).
+        Per corner the vertex id, negative where the fan is not separated
+        (``(0, 3)`` until set).
     """
 
     def __init__(self, Vn: np.ndarray, F: np.ndarray, *, mapper=map):
@@ -533,11 +534,11 @@ class _FaceData:
         self.separated = None
         dtype = np.int32 if Vn.shape[0] < 2 ** 31 else np.int64
         self.corner_columns = [F[:, k].astype(dtype) for k in range(3)]
-        self.masked_columns = None
+        self.masked = False
         self.masked_rows = np.empty((0, 3), dtype=np.int32)
 
     def mask_unseparated(self):
-        """Set ``masked_columns``: vertex ids, those of unseparated fans negative.
+        """Set ``masked_rows``: vertex ids, those of unseparated fans negative.
 
         Every corner at a vertex outside ``separated`` gets its own negative
         id, so two faces have an equal masked id exactly when they share a
@@ -545,12 +546,11 @@ class _FaceData:
         """
         m = self.F.shape[0]
         dtype = np.int32 if 3 * m < 2 ** 31 else np.int64
-        self.masked_columns = []
+        self.masked_rows = np.empty((m, 3), dtype=dtype)
         for k, col in enumerate(self.corner_columns):
             own = -(3 * np.arange(m, dtype=np.int64) + k) - 1
-            self.masked_columns.append(
-                np.where(self.separated[col], col, own).astype(dtype))
-        self.masked_rows = np.stack(self.masked_columns, axis=1)
+            self.masked_rows[:, k] = np.where(self.separated[col], col, own)
+        self.masked = True
 
     def _fill(self, bad, s, e):
         F = self.F[s:e]
@@ -956,8 +956,12 @@ def _level_tasks(faces, box, cell, cur, low):
             pos = np.minimum(np.searchsorted(cells, key), cells.size - 1)
             packed = np.concatenate([packed, lpacked[cells[pos] == key]])
             del lpacked, key, pos, cells
+        del lo, hi, all7                            # only the packed keys from here
+        if low.size:
+            del llo, lhi, lowbits
         if packed.size >= JIT_MIN_SIZE:             # by cell, then current level first
-            packed = _sorted_by_high_bits(packed, shift, int(packed.max() >> shift).bit_length())
+            packed = _sorted_by_high_bits_inplace(packed, shift,
+                                                  int(packed.max() >> shift).bit_length())
         else:
             packed.sort()
         first = (packed & 7).astype(np.uint8)
@@ -965,6 +969,7 @@ def _level_tasks(faces, box, cell, cur, low):
         is_low = ((packed >> shift) & 1).astype(bool)
         packed >>= shift + 1
         cellkey = packed
+        del packed
     else:                                           # huge grid: dense cell ids
         r1, f1, c1 = _coordinate_entries(lo, hi, all7, cur)
         if low.size:
@@ -979,6 +984,9 @@ def _level_tasks(faces, box, cell, cur, low):
         rows = np.concatenate([r1, r2])[order].astype(index)
         first = np.concatenate([f1, f2])[order]
         del r1, r2, f1, f2, c1, c2, order
+        del lo, hi, all7
+        if low.size:
+            del llo, lhi, lowbits
     new_cell = np.empty(cellkey.size, dtype=bool)
     new_cell[0] = True
     np.not_equal(cellkey[1:], cellkey[:-1], out=new_cell[1:])
@@ -1002,8 +1010,8 @@ def _level_tasks(faces, box, cell, cur, low):
         # the entries' boxes in entry order (one array per bound): the pairs
         # of a cell read nearby memory
         ebox = [np.take(col, rows) for col in box]
-        if faces.masked_columns is not None:
-            ebox += [np.take(col, face) for col in faces.masked_columns]
+        if faces.masked:
+            ebox += [np.take(faces.masked_rows[:, k], face) for k in range(3)]
     del rows
     for s in range(0, total, _PAIR_CHUNK):
         yield partial(_pair_task, faces, (cum, counts, first, face, ebox),
@@ -1308,9 +1316,22 @@ def _sorted_by_high_bits(keys, shift, bits):
     input order, where a full sort would order them by the low bits too; the
     pairs found do not depend on the order inside a cell.
     """
-    n = keys.shape[0]
-    src = keys.copy()
-    dst = np.empty_like(keys)
+    return _radix_by_high_bits(keys.copy(), shift, bits)
+
+
+@compiled
+def _sorted_by_high_bits_inplace(keys, shift, bits):
+    """:func:`_sorted_by_high_bits` using ``keys`` as scratch (it is overwritten):
+    one array of the size of ``keys`` less at the peak."""
+    return _radix_by_high_bits(keys, shift, bits)
+
+
+@helper
+def _radix_by_high_bits(src, shift, bits):
+    """The radix passes of :func:`_sorted_by_high_bits` on ``src`` (overwritten);
+    returns ``src`` or the scratch array, whichever holds the result."""
+    n = src.shape[0]
+    dst = np.empty_like(src)
     count = np.empty(2048, dtype=np.int64)
     done = 0
     while done < bits:
