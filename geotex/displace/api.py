@@ -96,6 +96,13 @@ def stored_judge(precision):
     so the relief can be lowered there without a second search.  Other
     failures go through :func:`geotex.printing.printable_stored_solid` (its
     rebuild of what rounding broke).
+
+    Called again on the same faces after the relief was lowered (only some
+    vertices moved), it judges locally: the stored form keeps the previous
+    numbering, and :func:`geotex.check.report.recheck_moved` gives exactly
+    the report a full check would (new crossings only among the faces at
+    moved vertices); where that cannot be done (a weld changes, the box
+    changes, several shells...) it judges in full.
     """
 
     last = []          # (faces, rounded input, stored V, stored F, vertex map, report)

@@ -238,7 +238,8 @@ def _lowered_where_crossing(P, F, off, N, gain, pairs, precision):
 
     The first search is the judge's (every pair, whole mesh); later rounds
     only search the faces within a few rings of the lowered region (the
-    judge checks the whole mesh again afterwards).  Rounds halve the relief
+    judge then judges again: the faces at moved vertices against the whole
+    mesh, see :func:`geotex.check.report.recheck_moved`).  Rounds halve the relief
     on the crossing faces and two rings around them; after ``RELIEF_ROUNDS``
     they flatten it on growing rings.
     """
