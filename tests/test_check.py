@@ -198,3 +198,16 @@ def test_recheck_declines_what_it_cannot_do_locally():
     assert recheck_moved(V0, V1, F, few) is not None      # nothing to list: complete
     with pytest.raises(InputError):
         recheck_moved(V0[:-1], V1, F, before)
+
+
+def test_duplicate_faces_still_expand_their_crossing_pairs():
+    V1, F1 = icosphere(2)
+    V2, F2 = icosphere(2, radius=0.8, center=(0.9, 0.1, 0.05))
+    V = np.concatenate([V1, V2])
+    F = np.concatenate([F1, F2 + len(V1)])
+    F = np.concatenate([F, F[:40]])                     # duplicates of faces near the crossing
+    r = check_mesh(V, F, manifold3d=False, max_examples=2 ** 62)
+    from geotex.check.intersections import self_intersecting_pairs
+
+    assert r.duplicate_faces == 40
+    assert r.examples["self_intersecting_pairs"] == self_intersecting_pairs(V, F).tolist()

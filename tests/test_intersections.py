@@ -774,3 +774,12 @@ def test_touching_pairs_with_large_faces_and_duplicates():
     assert gi.self_intersecting_pairs_touching(V2, F2, []).shape == (0, 2)
     with pytest.raises(InputError):
         gi.self_intersecting_pairs_touching(V2, F2, [len(F2)])
+
+
+def test_distinct_faces_hint_skips_only_the_grouping():
+    for V, F in (_bumpy_torus(0, 0.06), two_spheres(level=3)[:2], random_soup(2, m=300, pool=80)):
+        from geotex.mesh.topology import duplicate_face_groups
+
+        assert duplicate_face_groups(F).size == 0
+        assert np.array_equal(self_intersecting_pairs(V, F, distinct_faces=True),
+                              self_intersecting_pairs(V, F))

@@ -93,7 +93,8 @@ _FAN_SAFETY = 8.0
 _KEY_BITS = 62
 
 
-def self_intersecting_pairs(V, F, *, max_pairs=None, topology=None) -> np.ndarray:
+def self_intersecting_pairs(V, F, *, max_pairs=None, topology=None,
+                            distinct_faces: bool = False) -> np.ndarray:
     """Return every pair of faces of a triangle mesh whose triangles intersect.
 
     Parameters
@@ -110,6 +111,11 @@ def self_intersecting_pairs(V, F, *, max_pairs=None, topology=None) -> np.ndarra
     topology : geotex.mesh.topology.EdgeTopology, optional
         ``edge_topology(F, len(V))`` when the caller has it already (large
         meshes use it; it is computed otherwise).
+    distinct_faces : bool, optional
+        The caller knows that no two faces have the same vertex set (for
+        example from :func:`geotex.mesh.topology.duplicate_face_groups`):
+        the grouping of duplicate faces is skipped.  Wrong when there are
+        duplicates: their pairs are then not expanded.
 
     Returns
     -------
@@ -190,7 +196,7 @@ def self_intersecting_pairs(V, F, *, max_pairs=None, topology=None) -> np.ndarra
     topo = None
     if F.size >= JIT_MIN_SIZE:
         topo = edge_topology(F, V.shape[0]) if topology is None else topology
-    classes = _duplicate_classes(F, topo)
+    classes = None if distinct_faces else _duplicate_classes(F, topo)
     if classes is not None:                  # duplicate faces: solve on one per class
         first, cls = classes
         pairs = _distinct_pairs(V, F[first], max_pairs)

@@ -263,7 +263,8 @@ def check_mesh(V, F, *, self_intersections: bool = True, manifold3d: bool = True
     report(progress, "self-intersections")
     if self_intersections and m:
         pairs = (self_intersecting_pairs(V, position_welded_faces(V, F)) if dup_positions
-                 else self_intersecting_pairs(V, F, topology=topo))
+                 else self_intersecting_pairs(V, F, topology=topo,
+                                              distinct_faces=duplicates.size == 0))
     elif self_intersections:
         pairs = np.zeros((0, 2), dtype=np.int64)
 
