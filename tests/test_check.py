@@ -114,3 +114,100 @@ def test_progress_callback_sees_every_stage(sphere):
     seen.clear()
     repair_mesh(V, F, progress=seen.append)
     assert tuple(seen) == REPAIR_STAGES
+
+
+# ---------------------------------------------------------------------------
+# local re-check after moved vertices
+
+ALL = 2 ** 62
+
+
+def _bumpy_sphere(seed=0):
+    V, F = icosphere(4)
+    rng = np.random.default_rng(seed)
+    return V * (1.0 + 0.02 * rng.random(len(V)))[:, None], F
+
+
+def _assert_recheck_is_full(V0, V1, F, k=5):
+    from geotex.check.report import recheck_moved
+
+    before = check_mesh(V0, F, manifold3d=False, max_examples=ALL)
+    got = recheck_moved(V0, V1, F, before, max_examples=k)
+    assert got is not None
+    full = check_mesh(V1, F, manifold3d=False, max_examples=k)
+    assert got == full                   # every field: counts, volume, examples, digest
+    assert got.to_json() == full.to_json()
+    return got
+
+
+def test_recheck_after_moves_equals_the_full_check():
+    V0, F = _bumpy_sphere()
+    rng = np.random.default_rng(1)
+    inner = np.flatnonzero(np.abs(V0[:, 2]) < 0.5)       # away from the box's extremes
+    # small moves: still clean
+    V1 = V0.copy()
+    moved = rng.choice(inner, 40, replace=False)
+    V1[moved] *= 0.99
+    assert _assert_recheck_is_full(V0, V1, F, k=ALL).printable
+    # a few vertices pushed along the surface over their neighbours: crossings
+    V2 = V0.copy()
+    V2[moved[:5], 2] += 0.3
+    rep = _assert_recheck_is_full(V0, V2, F)
+    assert rep.self_intersecting_pairs > 0 and not rep.printable
+    rep = _assert_recheck_is_full(V0, V2, F, k=ALL)
+    # from crossings back to clean, and to other crossings
+    assert _assert_recheck_is_full(V2, V1, F).printable
+    V3 = V2.copy()
+    V3[moved[:2]] = V0[moved[:2]]
+    V3[moved[10:13], 2] -= 0.3
+    assert _assert_recheck_is_full(V2, V3, F).self_intersecting_pairs > 0
+    # a vertex moved onto its face's opposite edge: a degenerate face
+    V4 = V0.copy()
+    a, b, c = F[np.flatnonzero((F == inner[0]).any(axis=1))[0]]
+    q, r = sorted({int(a), int(b), int(c)} - {int(inner[0])})
+    V4[inner[0]] = 0.5 * (V0[q] + V0[r])
+    rep = _assert_recheck_is_full(V0, V4, F)
+    assert rep.degenerate_faces > 0
+    # nothing moved
+    assert _assert_recheck_is_full(V0, V0.copy(), F).printable
+
+
+def test_recheck_declines_what_it_cannot_do_locally():
+    from geotex.check.report import recheck_moved
+
+    V0, F = _bumpy_sphere()
+    before = check_mesh(V0, F, manifold3d=False, max_examples=ALL)
+    top = int(np.argmax(V0[:, 2]))
+    V1 = V0.copy()
+    V1[top, 2] += 0.1                                     # the box grows
+    assert recheck_moved(V0, V1, F, before) is None
+    V1 = V0.copy()
+    V1[5] = V0[7]                                         # lands on another vertex
+    assert recheck_moved(V0, V1, F, before) is None
+    V1 = V0.copy()
+    V1[5] *= 0.999
+    assert recheck_moved(V0 * 1.0001, V1, F, before) is None          # not the judged arrays
+    assert recheck_moved(V0, V1, F, check_mesh(V0, F, max_examples=ALL)) is None   # manifold3d
+    few = check_mesh(V0, F, manifold3d=False, max_examples=0)
+    V2 = V0.copy()
+    inner = np.flatnonzero(np.abs(V0[:, 2]) < 0.5)
+    V2[np.random.default_rng(1).choice(inner, 40, replace=False)[:5], 2] += 0.3
+    crossing = check_mesh(V2, F, manifold3d=False, max_examples=2)
+    assert crossing.self_intersecting_pairs > 2
+    assert recheck_moved(V2, V0, F, crossing) is None     # incomplete example lists
+    assert recheck_moved(V0, V1, F, few) is not None      # nothing to list: complete
+    with pytest.raises(InputError):
+        recheck_moved(V0[:-1], V1, F, before)
+
+
+def test_duplicate_faces_still_expand_their_crossing_pairs():
+    V1, F1 = icosphere(2)
+    V2, F2 = icosphere(2, radius=0.8, center=(0.9, 0.1, 0.05))
+    V = np.concatenate([V1, V2])
+    F = np.concatenate([F1, F2 + len(V1)])
+    F = np.concatenate([F, F[:40]])                     # duplicates of faces near the crossing
+    r = check_mesh(V, F, manifold3d=False, max_examples=2 ** 62)
+    from geotex.check.intersections import self_intersecting_pairs
+
+    assert r.duplicate_faces == 40
+    assert r.examples["self_intersecting_pairs"] == self_intersecting_pairs(V, F).tolist()

@@ -324,3 +324,18 @@ def test_first_use_order_equals_numpy_path(monkeypatch):
                            lambda: topology.first_use_order(F, 310, start=start))
         assert np.array_equal(fast, slow) and np.array_equal(np.sort(fast), np.arange(310))
         assert np.array_equal(fast[:start], np.arange(start))
+
+
+def test_relief_vertex_normals_equal_numpy_path(monkeypatch):
+    import geotex.relief.core as core
+    from geotex.mesh.primitives import closed_cylinder
+    from geotex.relief import refined_by_edge_splits
+
+    V, F = closed_cylinder(10.0, 20.0, n_theta=24, n_height=6, n_cap_rings=3)
+    R = refined_by_edge_splits(V, F, 1.5, corner_bary=True)
+    monkeypatch.setattr(core, "JIT_MIN_SIZE", 0)
+    fast = core._vertex_normals(V, F, R, 30.0)
+    monkeypatch.setattr(core, "JIT_MIN_SIZE", 10 ** 12)
+    slow = core._vertex_normals(V, F, R, 30.0)
+    assert fast.tobytes() == slow.tobytes()
+    assert np.allclose(np.linalg.norm(fast, axis=1), 1.0)

@@ -342,3 +342,32 @@ def test_broken_bases_give_one_line_and_no_file(tmp_path):
     r = displaced_mesh(V, F, "dots", depth=0.5, target_faces=5000, judge=False,
                        check_base=False)
     assert np.isfinite(r.vertices).all()
+
+
+def test_lowered_relief_is_rejudged_locally_and_exactly(monkeypatch):
+    # a fat torus displaced inwards around its hole crosses itself: the relief is
+    # lowered there and judged again; the local re-judge must give the full verdict
+    import geotex.displace.api as api
+    from geotex.check.report import check_mesh
+    from geotex.mesh.primitives import torus
+    from geotex.printing import stored_form
+
+    calls = []
+    original = api.recheck_moved
+
+    def spy(*args, **kwargs):
+        calls.append(original(*args, **kwargs))
+        return calls[-1]
+
+    monkeypatch.setattr(api, "recheck_moved", spy)
+    V, F = torus(4.0, 3.0, n_major=40, n_minor=24)
+    pts = relief_points(V, F, edge_length=0.5)
+    h = 0.5 + 0.5 * np.sin(3.0 * pts.positions[:, 0]) * np.cos(3.0 * pts.positions[:, 1])
+    r = displaced_solid(V, F, points=pts, heights_array=h, depth=1.6,
+                        judge=api.stored_judge(np.float32), precision=np.float32)
+    assert r.stats["relief_reduced_rounds"] > 0
+    assert calls and all(c is not None for c in calls)
+    full = check_mesh(r.vertices, r.faces, manifold3d=False, max_examples=2 ** 62)
+    assert r.report == full and r.report.printable
+    Vs, Fs = stored_form(r.vertices, r.faces, precision=np.float32)
+    assert np.array_equal(Vs, r.vertices) and np.array_equal(Fs, r.faces)

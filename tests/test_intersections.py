@@ -721,3 +721,65 @@ def test_folded_and_thin_fans_match_brute_force(seed):
     F = F.astype(np.int64)
     out = self_intersecting_pairs(V, F)
     assert np.array_equal(out, brute_force(V, F))
+
+
+# ---------------------------------------------------------------------------
+# pairs touching a subset of faces
+
+
+def _touching_reference(V, F, faces):
+    full = self_intersecting_pairs(V, F)
+    keep = np.zeros(len(F), dtype=bool)
+    keep[np.asarray(faces, dtype=np.int64)] = True
+    return full[keep[full[:, 0]] | keep[full[:, 1]]]
+
+
+def _bumpy_torus(seed, amplitude):
+    """A fine torus with jittered vertices: folds and crossings for large amplitudes."""
+    V, F = torus(60, 24)
+    return V + amplitude * np.random.default_rng(seed).normal(size=V.shape), F
+
+
+@pytest.mark.parametrize("jit", [True, False])
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_touching_pairs_equal_the_filtered_full_search(seed, jit, monkeypatch):
+    monkeypatch.setattr(gi, "JIT_MIN_SIZE", 0 if jit else 10 ** 12)
+    rng = np.random.default_rng(seed)
+    cases = [_bumpy_torus(seed, 0.06), _bumpy_torus(seed, 0.005), two_spheres(level=3)[:2],
+             random_soup(seed, m=300, sizes=(0.002, 0.8)), spread_clusters(seed)]
+    V, F = _bumpy_torus(seed, 0.06)
+    assert len(self_intersecting_pairs(V, F)) > 0          # the folded torus crosses itself
+    for V, F in cases:
+        for size in (1, 17, len(F) // 3):
+            faces = rng.choice(len(F), size, replace=False)
+            got = gi.self_intersecting_pairs_touching(V, F, faces)
+            assert got.dtype == np.int64 and got.shape[1] == 2
+            assert np.array_equal(got, _touching_reference(V, F, faces))
+        every = gi.self_intersecting_pairs_touching(V, F, np.arange(len(F)))
+        assert np.array_equal(every, self_intersecting_pairs(V, F))
+
+
+def test_touching_pairs_with_large_faces_and_duplicates():
+    # huge faces of a higher level than the chosen ones, and a duplicated face (full search)
+    V, F = icosphere(4)
+    big = np.array([[-3, -3, 0.1], [3, -3, 0.2], [0, 4, -0.1]])
+    V2 = np.concatenate([V, big])
+    F2 = np.concatenate([F, [[len(V), len(V) + 1, len(V) + 2]]])
+    chosen = np.flatnonzero(np.abs(V2[F2].mean(axis=1)[:, 2]) < 0.2)[:40]
+    got = gi.self_intersecting_pairs_touching(V2, F2, chosen)
+    assert len(got) > 0 and np.array_equal(got, _touching_reference(V2, F2, chosen))
+    F3 = np.concatenate([F2, F2[chosen[:2]][:, ::-1]])
+    got = gi.self_intersecting_pairs_touching(V2, F3, chosen)
+    assert np.array_equal(got, _touching_reference(V2, F3, chosen))
+    assert gi.self_intersecting_pairs_touching(V2, F2, []).shape == (0, 2)
+    with pytest.raises(InputError):
+        gi.self_intersecting_pairs_touching(V2, F2, [len(F2)])
+
+
+def test_distinct_faces_hint_skips_only_the_grouping():
+    for V, F in (_bumpy_torus(0, 0.06), two_spheres(level=3)[:2], random_soup(2, m=300, pool=80)):
+        from geotex.mesh.topology import duplicate_face_groups
+
+        assert duplicate_face_groups(F).size == 0
+        assert np.array_equal(self_intersecting_pairs(V, F, distinct_faces=True),
+                              self_intersecting_pairs(V, F))

@@ -64,7 +64,7 @@ from geotex.jit import JIT_MIN_SIZE, compiled, helper
 from geotex.mesh.arrays import as_mesh_arrays
 from geotex.mesh.topology import edge_topology
 
-__all__ = ["self_intersecting_pairs", "REL_TOL", "ABS_TOL"]
+__all__ = ["self_intersecting_pairs", "self_intersecting_pairs_touching", "REL_TOL", "ABS_TOL"]
 
 #: Tolerance of the geometric predicates relative to the local triangle size
 #: (the longest edge of the two triangles of a pair).
@@ -93,7 +93,8 @@ _FAN_SAFETY = 8.0
 _KEY_BITS = 62
 
 
-def self_intersecting_pairs(V, F, *, max_pairs=None, topology=None) -> np.ndarray:
+def self_intersecting_pairs(V, F, *, max_pairs=None, topology=None,
+                            distinct_faces: bool = False) -> np.ndarray:
     """Return every pair of faces of a triangle mesh whose triangles intersect.
 
     Parameters
@@ -110,6 +111,11 @@ def self_intersecting_pairs(V, F, *, max_pairs=None, topology=None) -> np.ndarra
     topology : geotex.mesh.topology.EdgeTopology, optional
         ``edge_topology(F, len(V))`` when the caller has it already (large
         meshes use it; it is computed otherwise).
+    distinct_faces : bool, optional
+        The caller knows that no two faces have the same vertex set (for
+        example from :func:`geotex.mesh.topology.duplicate_face_groups`):
+        the grouping of duplicate faces is skipped.  Wrong when there are
+        duplicates: their pairs are then not expanded.
 
     Returns
     -------
@@ -190,7 +196,7 @@ def self_intersecting_pairs(V, F, *, max_pairs=None, topology=None) -> np.ndarra
     topo = None
     if F.size >= JIT_MIN_SIZE:
         topo = edge_topology(F, V.shape[0]) if topology is None else topology
-    classes = _duplicate_classes(F, topo)
+    classes = None if distinct_faces else _duplicate_classes(F, topo)
     if classes is not None:                  # duplicate faces: solve on one per class
         first, cls = classes
         pairs = _distinct_pairs(V, F[first], max_pairs)
@@ -198,6 +204,126 @@ def self_intersecting_pairs(V, F, *, max_pairs=None, topology=None) -> np.ndarra
     else:
         pairs = _distinct_pairs(V, F, max_pairs, topo=topo)
     return pairs
+
+
+def self_intersecting_pairs_touching(V, F, faces) -> np.ndarray:
+    """Return the intersecting pairs of :func:`self_intersecting_pairs` with a face in ``faces``.
+
+    Exactly the rows of ``self_intersecting_pairs(V, F)`` whose first or
+    second face is in ``faces``, at a cost that grows with ``faces`` and the
+    faces near them, not with the mesh: after a few vertices moved, the new
+    crossings are the pairs touching the faces at those vertices.
+
+    Parameters
+    ----------
+    V : array_like, (n, 3) float64
+    F : array_like, (m, 3) int64
+    faces : array_like, (k,) int64
+        Face indices (any order, repeats allowed).
+
+    Returns
+    -------
+    numpy.ndarray, (p, 2) int64
+        Face index pairs ``(i, j)``, ``i < j``, sorted, without repetition.
+
+    Raises
+    ------
+    InputError
+        If ``V``, ``F`` or ``faces`` is malformed.
+
+    Notes
+    -----
+    The predicates see the same numbers as in the full search: coordinates
+    are normalised by the box of the whole mesh, and each face's plane, edge
+    planes, tolerance and box depend on its own corners only.  The faces
+    that may meet the chosen ones are found on a coarse grid of cells at
+    least three times the largest face box of the mesh (a face whose box
+    meets a chosen face's box has a corner in a cell next to one of that
+    face's corners); only those are prepared.  The candidate pairs are the
+    same compiled broad and narrow phase's, restricted to pairs with a
+    chosen face.  Pairs around a vertex with a separated fan (module
+    docstring, step 3), which the full search never tests because the
+    narrow phase provably rejects them, are tested here; the answer is the
+    same.  When faces with the same vertex set are among the prepared
+    faces, the full search is run and its answer filtered.
+    """
+    V, F = as_mesh_arrays(V, F)
+    sel = np.unique(np.asarray(faces, dtype=np.int64).ravel())
+    m = F.shape[0]
+    empty = np.zeros((0, 2), dtype=np.int64)
+    if sel.size and (sel[0] < 0 or sel[-1] >= m):
+        raise InputError(f"faces must be indices in [0, {m}), got {sel[0]} .. {sel[-1]}")
+    if m < 2 or sel.size == 0:
+        return empty
+    Vn = _normalized(V, F)
+    near = _faces_near(Vn, F, sel)
+    sub = F[near]
+    if _duplicate_classes(sub) is not None:          # rare: let the full search group them
+        pairs = self_intersecting_pairs(V, F)
+        keep = np.zeros(m, dtype=bool)
+        keep[sel] = True
+        return pairs[keep[pairs[:, 0]] | keep[pairs[:, 1]]]
+    vids, local = np.unique(sub, return_inverse=True)
+    sub = local.reshape(-1, 3)
+    chosen = np.zeros(near.size, dtype=bool)
+    chosen[np.searchsorted(near, sel)] = True
+    workers = _workers()
+    pool = ThreadPoolExecutor(max_workers=workers)
+    found = []
+    try:
+        fd = _FaceData(Vn[vids], sub, mapper=pool.map)
+        if fd.active.size >= 2 and chosen[fd.active].any():
+            for hits in _in_order(pool, _touching_tasks(fd, chosen), window=2 * workers):
+                if hits.size:
+                    found.append(hits)
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+    if not found:
+        return empty
+    keys = np.sort(np.concatenate(found))
+    k = sub.shape[0]
+    return np.stack([near[keys // k], near[keys % k]], axis=1)   # ``near`` ascends: i < j
+
+
+def _faces_near(Vn, F, sel):
+    """Sorted faces whose box (as the search inflates it) may meet a face of ``sel``'s.
+
+    ``Vn``: the normalised coordinates (:func:`_normalized`).
+
+    A superset, found on a grid of cells at least three times the largest
+    face extent (plus the boxes' inflation) of the whole mesh: corners of
+    two faces whose boxes meet are less than two such extents apart, so in
+    the same or adjacent cells.  ``sel`` is included.
+    """
+    used = np.zeros(Vn.shape[0], dtype=bool)
+    used[F.ravel()] = True
+    ext = 0.0
+    cols = [np.ascontiguousarray(F[:, k]) for k in range(3)]
+    for axis in range(3):
+        x = np.ascontiguousarray(Vn[:, axis])
+        a, b, c = (np.take(x, col) for col in cols)
+        hi = np.maximum(np.maximum(a, b), c)
+        hi -= np.minimum(np.minimum(a, b), c)
+        ext = max(ext, float(hi.max()))
+        del a, b, c, hi
+    lo = Vn[used].min(axis=0)
+    span = float((Vn[used].max(axis=0) - lo).max())
+    # inflation of a box: 2 tol + _BOX32_PAD plus float32 rounding, far below 2**-18
+    # in normalised coordinates (extent below 2)
+    cell = max(3.0 * (ext + 2.0 ** -18), span / 256.0, 2.0 ** -18)
+    cells = np.floor((Vn - lo) / cell).astype(np.int64)
+    np.clip(cells, 0, None, out=cells)               # unreferenced vertices: anywhere
+    dims = cells[used].max(axis=0) + 1
+    np.minimum(cells, dims - 1, out=cells)
+    grid = np.zeros(tuple(int(d) for d in dims), dtype=bool)
+    mark = np.unique(F[sel].ravel())
+    grid[cells[mark, 0], cells[mark, 1], cells[mark, 2]] = True
+    for axis in range(3):                            # dilate by one cell
+        g = np.moveaxis(grid, axis, 0)
+        g[1:] |= g[:-1].copy()
+        g[:-1] |= g[1:].copy()
+    hot = grid[cells[:, 0], cells[:, 1], cells[:, 2]] & used
+    return np.flatnonzero(hot[cols[0]] | hot[cols[1]] | hot[cols[2]])
 
 
 def _distinct_pairs(V, F, max_pairs, *, topo=None):
@@ -357,11 +483,15 @@ def _normalized(V: np.ndarray, F: np.ndarray) -> np.ndarray:
     used = np.zeros(V.shape[0], dtype=bool)
     used[F.ravel()] = True
     U = V[used]
-    half = float(np.max(0.5 * U.max(axis=0) - 0.5 * U.min(axis=0)))
+    lo, hi = U.min(axis=0), U.max(axis=0)
+    del U
+    half = float(np.max(0.5 * hi - 0.5 * lo))
     exponent = int(np.frexp(half)[1]) if half > 0 else 0
-    W = np.ldexp(V, -exponent)              # exact scaling, half-extent in [0.5, 1)
-    Wu = W[used]
-    W -= 0.5 * Wu.min(axis=0) + 0.5 * Wu.max(axis=0)
+    # exact scaling (half-extent in [0.5, 1)): the box of the scaled rows is the
+    # scaled box
+    shift = 0.5 * np.ldexp(lo, -exponent) + 0.5 * np.ldexp(hi, -exponent)
+    W = np.ldexp(V, -exponent)
+    W -= shift
     return W
 
 
@@ -387,10 +517,11 @@ class _FaceData:
         tolerance, and widened to cover the float32 rounding.
     active : (a,) int64
         Non-degenerate faces.
-    masked_columns : list of 3 (m,) int arrays, or None
-        Set by :meth:`mask_unseparated`.
+    masked : bool
+        Whether :meth:`mask_unseparated` has set ``masked_rows``.
     masked_rows : (m, 3) int array
-        The same as one array (``(0, 3)`` until set).
+        Per corner the vertex id, negative where the fan is not separated
+        (``(0, 3)`` until set).
     """
 
     def __init__(self, Vn: np.ndarray, F: np.ndarray, *, mapper=map):
@@ -409,11 +540,11 @@ class _FaceData:
         self.separated = None
         dtype = np.int32 if Vn.shape[0] < 2 ** 31 else np.int64
         self.corner_columns = [F[:, k].astype(dtype) for k in range(3)]
-        self.masked_columns = None
+        self.masked = False
         self.masked_rows = np.empty((0, 3), dtype=np.int32)
 
     def mask_unseparated(self):
-        """Set ``masked_columns``: vertex ids, those of unseparated fans negative.
+        """Set ``masked_rows``: vertex ids, those of unseparated fans negative.
 
         Every corner at a vertex outside ``separated`` gets its own negative
         id, so two faces have an equal masked id exactly when they share a
@@ -421,12 +552,11 @@ class _FaceData:
         """
         m = self.F.shape[0]
         dtype = np.int32 if 3 * m < 2 ** 31 else np.int64
-        self.masked_columns = []
+        self.masked_rows = np.empty((m, 3), dtype=dtype)
         for k, col in enumerate(self.corner_columns):
             own = -(3 * np.arange(m, dtype=np.int64) + k) - 1
-            self.masked_columns.append(
-                np.where(self.separated[col], col, own).astype(dtype))
-        self.masked_rows = np.stack(self.masked_columns, axis=1)
+            self.masked_rows[:, k] = np.where(self.separated[col], col, own)
+        self.masked = True
 
     def _fill(self, bad, s, e):
         F = self.F[s:e]
@@ -645,6 +775,46 @@ def _pair_tasks(faces: _FaceData):
     Over all tasks, every pair of active faces whose boxes overlap is
     examined exactly once.  A key is ``i * m + j`` with ``i < j``.
     """
+    box, cell0, level = _grid_levels(faces)
+    for lev in np.unique(level):
+        cell = cell0 * _LEVEL_RATIO ** lev
+        cur = np.flatnonzero(level == lev)
+        low = np.flatnonzero(level < lev)
+        yield from _level_tasks(faces, box, cell, cur, _near(box, cur, low))
+
+
+def _touching_tasks(faces: _FaceData, chosen: np.ndarray):
+    """:func:`_pair_tasks` for the pairs with at least one face in ``chosen``.
+
+    ``chosen`` is a boolean over the faces.  A chosen face of level ``L`` is
+    paired on level ``L``'s grid with the chosen faces of its level and below
+    and with every other face (of any level: larger ones simply cover more
+    cells), so every pair of overlapping boxes with a chosen face is examined
+    exactly once.
+    """
+    box, cell0, level = _grid_levels(faces)
+    mine = chosen[faces.active]
+    for lev in np.unique(level[mine]):
+        cell = cell0 * _LEVEL_RATIO ** lev
+        cur = np.flatnonzero(mine & (level == lev))
+        low = np.flatnonzero(~mine | (level < lev))
+        yield from _level_tasks(faces, box, cell, cur, _near(box, cur, low))
+
+
+def _near(box, cur, low):
+    """The rows of ``low`` whose boxes meet the bounding box of the boxes ``cur``."""
+    if low.size:
+        near = np.ones(low.size, dtype=bool)
+        for axis in range(3):
+            lo = box[axis][cur].min()
+            hi = box[3 + axis][cur].max()
+            near &= (box[axis][low] <= hi) & (box[3 + axis][low] >= lo)
+        low = low[near]
+    return low
+
+
+def _grid_levels(faces: _FaceData):
+    """The active faces' boxes (one array per bound), the finest cell and each face's level."""
     # one contiguous array per bound (low x, y, z, high x, y, z)
     box = [np.ascontiguousarray(faces.box32[faces.active, k]) for k in range(6)]
     extent = np.maximum(np.maximum(box[3] - box[0], box[4] - box[1]),
@@ -660,21 +830,7 @@ def _pair_tasks(faces: _FaceData):
         if not short.any():
             break
         level[short] += 1
-    del extent
-    for lev in np.unique(level):
-        cell = cell0 * _LEVEL_RATIO ** lev
-        cur = np.flatnonzero(level == lev)
-        low = np.flatnonzero(level < lev)
-        if low.size:
-            # only smaller faces near the current level's faces can pair up
-            near = np.ones(low.size, dtype=bool)
-            for axis in range(3):
-                lo = box[axis][cur].min()
-                hi = box[3 + axis][cur].max()
-                near &= (box[axis][low] <= hi) & (box[3 + axis][low] >= lo)
-            low = low[near]
-            del near
-        yield from _level_tasks(faces, box, cell, cur, low)
+    return box, cell0, level
 
 
 def _cell_bounds(box, rows, cell):
@@ -806,8 +962,12 @@ def _level_tasks(faces, box, cell, cur, low):
             pos = np.minimum(np.searchsorted(cells, key), cells.size - 1)
             packed = np.concatenate([packed, lpacked[cells[pos] == key]])
             del lpacked, key, pos, cells
+        del lo, hi, all7                            # only the packed keys from here
+        if low.size:
+            del llo, lhi, lowbits
         if packed.size >= JIT_MIN_SIZE:             # by cell, then current level first
-            packed = _sorted_by_high_bits(packed, shift, int(packed.max() >> shift).bit_length())
+            packed = _sorted_by_high_bits_inplace(packed, shift,
+                                                  int(packed.max() >> shift).bit_length())
         else:
             packed.sort()
         first = (packed & 7).astype(np.uint8)
@@ -815,6 +975,7 @@ def _level_tasks(faces, box, cell, cur, low):
         is_low = ((packed >> shift) & 1).astype(bool)
         packed >>= shift + 1
         cellkey = packed
+        del packed
     else:                                           # huge grid: dense cell ids
         r1, f1, c1 = _coordinate_entries(lo, hi, all7, cur)
         if low.size:
@@ -829,6 +990,9 @@ def _level_tasks(faces, box, cell, cur, low):
         rows = np.concatenate([r1, r2])[order].astype(index)
         first = np.concatenate([f1, f2])[order]
         del r1, r2, f1, f2, c1, c2, order
+        del lo, hi, all7
+        if low.size:
+            del llo, lhi, lowbits
     new_cell = np.empty(cellkey.size, dtype=bool)
     new_cell[0] = True
     np.not_equal(cellkey[1:], cellkey[:-1], out=new_cell[1:])
@@ -852,8 +1016,8 @@ def _level_tasks(faces, box, cell, cur, low):
         # the entries' boxes in entry order (one array per bound): the pairs
         # of a cell read nearby memory
         ebox = [np.take(col, rows) for col in box]
-        if faces.masked_columns is not None:
-            ebox += [np.take(col, face) for col in faces.masked_columns]
+        if faces.masked:
+            ebox += [np.take(faces.masked_rows[:, k], face) for k in range(3)]
     del rows
     for s in range(0, total, _PAIR_CHUNK):
         yield partial(_pair_task, faces, (cum, counts, first, face, ebox),
@@ -1158,9 +1322,22 @@ def _sorted_by_high_bits(keys, shift, bits):
     input order, where a full sort would order them by the low bits too; the
     pairs found do not depend on the order inside a cell.
     """
-    n = keys.shape[0]
-    src = keys.copy()
-    dst = np.empty_like(keys)
+    return _radix_by_high_bits(keys.copy(), shift, bits)
+
+
+@compiled
+def _sorted_by_high_bits_inplace(keys, shift, bits):
+    """:func:`_sorted_by_high_bits` using ``keys`` as scratch (it is overwritten):
+    one array of the size of ``keys`` less at the peak."""
+    return _radix_by_high_bits(keys, shift, bits)
+
+
+@helper
+def _radix_by_high_bits(src, shift, bits):
+    """The radix passes of :func:`_sorted_by_high_bits` on ``src`` (overwritten);
+    returns ``src`` or the scratch array, whichever holds the result."""
+    n = src.shape[0]
+    dst = np.empty_like(src)
     count = np.empty(2048, dtype=np.int64)
     done = 0
     while done < bits:

@@ -4,13 +4,14 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
-from geotex.check.intersections import self_intersecting_pairs
+from geotex.check.intersections import self_intersecting_pairs, self_intersecting_pairs_touching
 from geotex.check.nesting import component_nesting_depth
 from geotex.mesh.arrays import as_mesh_arrays, mesh_digest
+from geotex.errors import InputError
 from geotex.progress import report
 from geotex.mesh.solid import manifold_status
 from geotex.mesh.geometry import bounding_box, component_volumes, degenerate_faces
@@ -18,7 +19,7 @@ from geotex.mesh.topology import (duplicate_face_groups, edge_topology, face_com
                                   non_manifold_vertices, position_welded_faces,
                                   referenced_vertices, repeated_positions)
 
-__all__ = ["CheckReport", "check_mesh", "LARGE_COORDINATE", "CHECK_STAGES"]
+__all__ = ["CheckReport", "check_mesh", "recheck_moved", "LARGE_COORDINATE", "CHECK_STAGES"]
 
 #: Stage names passed to the ``progress`` callback of :func:`check_mesh`.
 CHECK_STAGES = ("topology", "self-intersections", "manifold3d")
@@ -156,6 +157,18 @@ def _first(arr, k):
     return np.asarray(arr)[:k].tolist()
 
 
+def _unit_coordinates(V, lo, hi, m):
+    """Coordinates centred on the box ``lo .. hi`` and scaled to unit half-extent, and the scale.
+
+    Geometric predicates run on these: the verdict does not depend on
+    position or scale, and huge coordinates cannot overflow.
+    """
+    center = 0.5 * lo + 0.5 * hi
+    scale = float(np.max(0.5 * hi - 0.5 * lo)) if m else 1.0
+    scale = scale if scale > 0 and math.isfinite(scale) else 1.0
+    return (V - center) / scale, scale
+
+
 def check_mesh(V, F, *, self_intersections: bool = True, manifold3d: bool = True,
                max_examples: int = 5, source: str | None = None, progress=None
                ) -> CheckReport:
@@ -205,20 +218,13 @@ def check_mesh(V, F, *, self_intersections: bool = True, manifold3d: bool = True
     V, F = as_mesh_arrays(V, F)
     n, m = V.shape[0], F.shape[0]
     k = max_examples
-    reasons: list[str] = []
-    warnings: list[str] = []
     examples: dict[str, list] = {}
 
     report(progress, "topology")
     used = referenced_vertices(F, n)
     unreferenced = int(n - used.sum())
     lo, hi = bounding_box(V[used] if m else V)
-    # geometric predicates run on centred, unit-size coordinates: the verdict
-    # does not depend on position or scale, and huge coordinates cannot overflow
-    center = 0.5 * lo + 0.5 * hi
-    scale = float(np.max(0.5 * hi - 0.5 * lo)) if m else 1.0
-    scale = scale if scale > 0 and math.isfinite(scale) else 1.0
-    Vn = (V - center) / scale
+    Vn, scale = _unit_coordinates(V, lo, hi, m)
 
     topo = edge_topology(F, n)
     boundary = topo.boundary
@@ -257,7 +263,8 @@ def check_mesh(V, F, *, self_intersections: bool = True, manifold3d: bool = True
     report(progress, "self-intersections")
     if self_intersections and m:
         pairs = (self_intersecting_pairs(V, position_welded_faces(V, F)) if dup_positions
-                 else self_intersecting_pairs(V, F, topology=topo))
+                 else self_intersecting_pairs(V, F, topology=topo,
+                                              distinct_faces=duplicates.size == 0))
     elif self_intersections:
         pairs = np.zeros((0, 2), dtype=np.int64)
 
@@ -267,23 +274,149 @@ def check_mesh(V, F, *, self_intersections: bool = True, manifold3d: bool = True
                        and nm_verts.size == 0 and inconsistent.size == 0)
     if closed_manifold and (2 * count - chi) % 2 == 0:
         genus = (2 * count - chi) // 2
+    report(progress, "manifold3d")
+    status = "Empty" if not m else manifold_status(V, F) if manifold3d else "not run"
+    return _verdict(V, F, k, edges=topo.edges, edge_count=int(topo.edges.shape[0]), count=count, boundary=boundary,
+                    nm_edges=nm_edges, nm_verts=nm_verts, inconsistent=inconsistent,
+                    outward=outward, norm_vol=norm_vol, total_volume=total_volume,
+                    degenerate=degenerate, duplicates=duplicates, pairs=pairs, status=status,
+                    unreferenced=unreferenced, dup_positions=dup_positions, chi=chi,
+                    genus=genus, box=(lo, hi), examples=examples, source=source)
 
+
+def recheck_moved(V_before, V, F, before: CheckReport, *, max_examples: int = 5
+                  ) -> CheckReport | None:
+    """The report of a mesh whose vertices moved, from its report before, by local work.
+
+    Gives exactly ``check_mesh(V, F, manifold3d=False, max_examples=...)``
+    when ``before`` is ``check_mesh(V_before, F, manifold3d=False, ...)``
+    and the mesh is a simple case; returns ``None`` otherwise (the caller
+    then runs :func:`check_mesh`).  Only faces at moved vertices change
+    shape, so: the self-intersecting pairs are the old ones without such a
+    face plus :func:`~geotex.check.intersections.self_intersecting_pairs_touching`
+    of those faces; degenerate faces are re-tested among them; the topology
+    (the same ``F``) is unchanged; the volume and orientation are recomputed
+    (a pass over the faces).
+
+    Parameters
+    ----------
+    V_before : array_like, (n, 3) float64
+        The vertices ``before`` judged (checked against its ``digest``).
+    V : array_like, (n, 3) float64
+        The moved vertices.
+    F : array_like, (m, 3) int64
+        The faces of both.
+    before : CheckReport
+        Judged with ``manifold3d=False`` and ``max_examples`` at least the
+        numbers of crossing pairs and of degenerate faces (complete lists).
+    max_examples : int, optional
+        As in :func:`check_mesh`.
+
+    Returns
+    -------
+    CheckReport or None
+        ``None`` unless ``before`` describes ``(V_before, F)`` with complete
+        example lists, and the mesh is one closed, manifold, consistently
+        oriented shell without duplicate faces, unreferenced or repeated
+        vertices, whose bounding box the moves do not change, and no moved
+        vertex lands on another vertex's position.
+
+    Raises
+    ------
+    InputError
+        Malformed arrays, or ``V`` and ``V_before`` of different shapes.
+    """
+    V, F = as_mesh_arrays(V, F)
+    V_before = np.ascontiguousarray(V_before, dtype=np.float64)
+    V = np.ascontiguousarray(V)
+    n, m = V.shape[0], F.shape[0]
+    if V_before.shape != V.shape:
+        raise InputError(f"V_before has shape {V_before.shape}, V has {V.shape}")
+    b = before
+    ex = b.examples
+    pairs_before = ex.get("self_intersecting_pairs", [])
+    degenerate_before = ex.get("degenerate_faces", [])
+    if (m == 0 or b.manifold3d_status != "not run" or not b.self_intersections_checked
+            or b.components != 1 or b.boundary_edges or b.non_manifold_edges
+            or b.non_manifold_vertices or b.inconsistent_edges or b.duplicate_faces
+            or b.unreferenced_vertices or b.duplicate_vertex_positions
+            or b.faces != m or b.vertices != n
+            or len(pairs_before) != b.self_intersecting_pairs
+            or len(degenerate_before) != b.degenerate_faces
+            or b.digest != mesh_digest(V_before, F)):
+        return None
+    lo, hi = bounding_box(V)
+    if not (np.array_equal(lo, b.bbox_min) and np.array_equal(hi, b.bbox_max)):
+        return None               # the normalisations of the predicates would change
+    diff = V.view(np.uint64) != V_before.view(np.uint64)      # bits: -0.0 moved too
+    moved = np.flatnonzero(diff[:, 0] | diff[:, 1] | diff[:, 2])
+    del diff
+    if moved.size == 0:
+        return replace(b, examples={key: val[:max_examples] for key, val in ex.items()})
+    # a moved vertex on another vertex's position: check_mesh would weld for the search
+    same_x = np.flatnonzero(np.isin(V[:, 0], V[moved, 0]))
+    if repeated_positions(V[same_x]):
+        return None
+    at = np.zeros(n, dtype=bool)
+    at[moved] = True
+    touched = np.flatnonzero(at[F[:, 0]] | at[F[:, 1]] | at[F[:, 2]])
+    hit = np.zeros(m, dtype=bool)
+    hit[touched] = True
+    Vn, scale = _unit_coordinates(V, lo, hi, m)
+    old_deg = np.asarray(degenerate_before, dtype=np.int64)
+    degenerate = np.union1d(old_deg[~hit[old_deg]],
+                            touched[degenerate_faces(Vn, F[touched])])
+    old = np.asarray(pairs_before, dtype=np.int64).reshape(-1, 2)
+    old = old[~(hit[old[:, 0]] | hit[old[:, 1]])]
+    new = self_intersecting_pairs_touching(V, F, touched)
+    key = np.sort(np.concatenate([old[:, 0] * m + old[:, 1], new[:, 0] * m + new[:, 1]]))
+    pairs = np.stack([key // m, key % m], axis=1)
+    # one closed shell (nesting depth 0): outward when its volume is positive
+    norm_vol = component_volumes(Vn, F, np.zeros(m, dtype=np.int64), 1)
+    with np.errstate(over="ignore", invalid="ignore"):
+        unit_volume = float(norm_vol.sum())
+        total_volume = float(unit_volume * np.float64(scale) ** 3) if unit_volume else 0.0
+    examples: dict[str, list] = {}
+    wrong = np.flatnonzero(np.sign(norm_vol) != 1.0)
+    outward = bool(wrong.size == 0 and norm_vol.sum() > 0)
+    if wrong.size:
+        examples["inward_components"] = _first(wrong, max_examples)
+    none = np.zeros(0, dtype=np.int64)
+    return _verdict(V, F, max_examples, edges=None, edge_count=b.edges, count=1, boundary=none,
+                    nm_edges=none, nm_verts=none, inconsistent=none, outward=outward,
+                    norm_vol=norm_vol, total_volume=total_volume, degenerate=degenerate,
+                    duplicates=none, pairs=pairs, status=b.manifold3d_status, unreferenced=0,
+                    dup_positions=0, chi=b.euler_characteristic, genus=b.genus,
+                    box=(lo, hi), examples=examples, source=b.source)
+
+
+def _verdict(V, F, k, *, edges, edge_count, count, boundary, nm_edges, nm_verts, inconsistent, outward,
+             norm_vol, total_volume, degenerate, duplicates, pairs, status, unreferenced,
+             dup_positions, chi, genus, box, examples, source) -> CheckReport:
+    """The report of :func:`check_mesh` from its measurements (reasons, warnings, examples).
+
+    ``edges`` (the edge rows) is read only for the examples of bad edges.
+    """
+    n, m = V.shape[0], F.shape[0]
+    lo, hi = box
+    reasons: list[str] = []
+    warnings: list[str] = []
     # verdict
     if m == 0:
         reasons.append("the mesh has no faces" + (" (a point cloud)" if n else ""))
     if boundary.size:
         reasons.append(f"not watertight: {boundary.size} boundary edges")
-        examples["boundary_edges"] = topo.edges[boundary[:k]].tolist()
+        examples["boundary_edges"] = edges[boundary[:k]].tolist()
     if nm_edges.size:
         reasons.append(f"{nm_edges.size} non-manifold edges (used by more than two faces)")
-        examples["non_manifold_edges"] = topo.edges[nm_edges[:k]].tolist()
+        examples["non_manifold_edges"] = edges[nm_edges[:k]].tolist()
     if nm_verts.size:
         reasons.append(f"{nm_verts.size} non-manifold vertices (faces around them do not form one fan)")
         examples["non_manifold_vertices"] = _first(nm_verts, k)
     if inconsistent.size:
         reasons.append(f"inconsistent face orientation: {inconsistent.size} edges "
                        "have both neighbouring faces running the same way")
-        examples["inconsistent_edges"] = topo.edges[inconsistent[:k]].tolist()
+        examples["inconsistent_edges"] = edges[inconsistent[:k]].tolist()
     if outward is False:
         if norm_vol.sum() <= 0:
             reasons.append(f"faces point inward: enclosed volume is {total_volume:.6g}")
@@ -301,8 +434,6 @@ def check_mesh(V, F, *, self_intersections: bool = True, manifold3d: bool = True
         examples["self_intersecting_pairs"] = pairs[:k].tolist()
     if pairs is None and m:
         reasons.append("self-intersections were not checked")
-    report(progress, "manifold3d")
-    status = "Empty" if not m else manifold_status(V, F) if manifold3d else "not run"
     if m and status not in ("NoError", "not run") and not reasons:
         reasons.append(f"manifold3d rejects the mesh ({status})")
 
@@ -318,7 +449,7 @@ def check_mesh(V, F, *, self_intersections: bool = True, manifold3d: bool = True
         warnings.append("enclosed volume overflows float64")
 
     return CheckReport(
-        vertices=n, faces=m, edges=int(topo.edges.shape[0]), components=count,
+        vertices=n, faces=m, edges=edge_count, components=count,
         boundary_edges=int(boundary.size), non_manifold_edges=int(nm_edges.size),
         non_manifold_vertices=int(nm_verts.size), inconsistent_edges=int(inconsistent.size),
         orientation_consistent=bool(inconsistent.size == 0), outward=outward,

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from geotex.check.report import check_mesh
+from geotex.check.report import check_mesh, recheck_moved
 from geotex.displace.heightmap import filtered_height_map, load_height_map
 from geotex.displace.mappings import mapping_options, projected_heights
 from geotex.displace.masks import (PAINT_TOLERANCE, MaskOptions, face_selection, mask_weights,
@@ -96,18 +96,72 @@ def stored_judge(precision):
     so the relief can be lowered there without a second search.  Other
     failures go through :func:`geotex.printing.printable_stored_solid` (its
     rebuild of what rounding broke).
+
+    Called again on the same faces after the relief was lowered (only some
+    vertices moved), it judges locally: the stored form keeps the previous
+    numbering, and :func:`geotex.check.report.recheck_moved` gives exactly
+    the report a full check would (new crossings only among the faces at
+    moved vertices); where that cannot be done (a weld changes, the box
+    changes, several shells...) it judges in full.
     """
 
+    last = []          # (faces, rounded input, stored V, stored F, vertex map, report)
+
     def judge(Vx, Fx):
-        Vs, Fs = stored_form(Vx, Fx, precision=precision)
-        rep = check_mesh(Vs, Fs, manifold3d=False, max_examples=2 ** 62)
+        rep = _rejudged(last, Vx, Fx, precision) if last else None
+        if rep is not None:
+            Vs, Fs = rep[0], last[0][3]
+            rep = rep[1]
+        else:
+            Vs, Fs = stored_form(Vx, Fx, precision=precision)
+            rep = check_mesh(Vs, Fs, manifold3d=False, max_examples=2 ** 62)
         if rep.printable or all(r.endswith("self-intersecting face pairs")
                                 for r in rep.reasons):
+            last[:] = [_judged_state(Vx, Fx, Vs, Fs, rep, precision)]
             return Vs, Fs, rep
+        last[:] = []
         s = printable_stored_solid(Vx, Fx, precision=precision, manifold3d=False)
         return s.vertices, s.faces, s.report
 
     return judge
+
+
+def _rounded(Vx, precision):
+    """Coordinates as :func:`geotex.printing.stored_form` stores them (``-0.0`` as ``0.0``)."""
+    p = np.dtype(precision).type
+    return (np.asarray(Vx, dtype=np.float64).astype(p) + p(0.0)).astype(np.float64)
+
+
+def _judged_state(Vx, Fx, Vs, Fs, rep, precision):
+    """What :func:`_rejudged` needs of a judged call; the map is ``None`` when
+    the stored form welded two input vertices (then there is no shortcut)."""
+    vmap = np.full(np.asarray(Vx).shape[0], -1, dtype=np.int64)
+    vmap[np.asarray(Fx).ravel()] = Fs.ravel()
+    injective = int((vmap >= 0).sum()) == Vs.shape[0]
+    return (Fx, _rounded(Vx, precision), Vs, Fs, vmap if injective else None, rep)
+
+
+def _rejudged(last, Vx, Fx, precision):
+    """The judge's answer for ``(Vx, Fx)`` from the previous call's, when only
+    vertices moved: ``(V_stored, report)`` or ``None`` (judge in full).
+
+    The stored form keeps the previous numbering when the previous one welded
+    no two input vertices and no moved vertex lands on another vertex (which
+    :func:`geotex.check.report.recheck_moved` checks: it returns ``None``
+    then); the report is the local re-check, equal to a full
+    :func:`geotex.check.report.check_mesh` of the stored arrays.
+    """
+    F0, R0, Vs0, Fs, vmap, rep0 = last[0]
+    if vmap is None or Fx is not F0 or np.asarray(Vx).shape[0] != vmap.shape[0]:
+        return None
+    R = _rounded(Vx, precision)
+    diff = R.view(np.uint64) != R0.view(np.uint64)
+    moved = np.flatnonzero(diff[:, 0] | diff[:, 1] | diff[:, 2])
+    moved = moved[vmap[moved] >= 0]
+    Vs = Vs0.copy()
+    Vs[vmap[moved]] = R[moved]
+    rep = recheck_moved(Vs0, Vs, Fs, rep0, max_examples=2 ** 62)
+    return None if rep is None else (Vs, rep)
 
 
 def displaced_mesh(V, F, image, *, depth: float, mapping: str = "triplanar", scale_u=None,

@@ -38,6 +38,7 @@ import scipy.sparse as sp
 
 from geotex.check.intersections import self_intersecting_pairs
 from geotex.errors import InputError
+from geotex.jit import JIT_MIN_SIZE, compiled
 from geotex.mesh.arrays import as_mesh_arrays
 from geotex.options import finite_number, positive_number
 from geotex.progress import report
@@ -135,16 +136,20 @@ def _vertex_normals(V, F, R, crease_angle: float) -> np.ndarray:
     CN = np.asarray(igl.per_corner_normals(V, F, float(crease_angle)), dtype=np.float64)
     CN = CN.reshape(-1, 3, 3)                            # (m, corner, xyz)
     B = R.corner_bary                                    # (k, corner, base corner)
-    P = CN[R.parent]                                     # (k, base corner, xyz)
-    Nc = B[:, :, 0:1] * P[:, None, 0, :]                 # (k, corner, xyz)
-    Nc += B[:, :, 1:2] * P[:, None, 1, :]
-    Nc += B[:, :, 2:3] * P[:, None, 2, :]
-    del P
     n = R.vertices.shape[0]
-    idx = R.faces.ravel()
-    N = np.empty((n, 3))
-    for x in range(3):
-        N[:, x] = np.bincount(idx, weights=Nc[:, :, x].ravel(), minlength=n)
+    if R.faces.size >= JIT_MIN_SIZE:
+        N = np.zeros((n, 3))
+        _corner_normal_sums(CN, B, R.parent, R.faces, N)
+    else:
+        P = CN[R.parent]                                 # (k, base corner, xyz)
+        Nc = B[:, :, 0:1] * P[:, None, 0, :]             # (k, corner, xyz)
+        Nc += B[:, :, 1:2] * P[:, None, 1, :]
+        Nc += B[:, :, 2:3] * P[:, None, 2, :]
+        del P
+        idx = R.faces.ravel()
+        N = np.empty((n, 3))
+        for x in range(3):
+            N[:, x] = np.bincount(idx, weights=Nc[:, :, x].ravel(), minlength=n)
     ln = np.linalg.norm(N, axis=1)
     bad = ~(ln > 1e-12)
     if bad.any():
@@ -155,6 +160,26 @@ def _vertex_normals(V, F, R, crease_angle: float) -> np.ndarray:
     # degenerate base faces leave some vertices without a normal: they do not move
     N[~np.isfinite(N).all(axis=1)] = 0.0
     return N
+
+
+@compiled
+def _corner_normal_sums(CN, B, parent, F, N):
+    """The numpy path of :func:`_vertex_normals` as one loop: each refined
+    corner's Phong-interpolated base corner normal, summed into its vertex
+    (the same products, sums and order: bit for bit), without the (k, 3, 3)
+    temporaries."""
+    for f in range(F.shape[0]):
+        p = parent[f]
+        for c in range(3):
+            b0 = np.float64(B[f, c, 0])
+            b1 = np.float64(B[f, c, 1])
+            b2 = np.float64(B[f, c, 2])
+            v = F[f, c]
+            for x in range(3):
+                t = b0 * CN[p, 0, x]
+                t += b1 * CN[p, 1, x]
+                t += b2 * CN[p, 2, x]
+                N[v, x] += t
 
 
 def relief_points(V, F, *, edge_length: float, crease_angle: float = 30.0,
@@ -213,7 +238,8 @@ def _lowered_where_crossing(P, F, off, N, gain, pairs, precision):
 
     The first search is the judge's (every pair, whole mesh); later rounds
     only search the faces within a few rings of the lowered region (the
-    judge checks the whole mesh again afterwards).  Rounds halve the relief
+    judge then judges again: the faces at moved vertices against the whole
+    mesh, see :func:`geotex.check.report.recheck_moved`).  Rounds halve the relief
     on the crossing faces and two rings around them; after ``RELIEF_ROUNDS``
     they flatten it on growing rings.
     """
@@ -221,19 +247,30 @@ def _lowered_where_crossing(P, F, off, N, gain, pairs, precision):
     gain = gain.copy()
     rounds = 0
     rings = 2
+    cols = [np.ascontiguousarray(F[:, k]) for k in range(3)]
+
+    def at(mask):                                # faces with a vertex in ``mask``
+        return mask[cols[0]] | mask[cols[1]] | mask[cols[2]]
+
+    def grown(mask):                             # one ring more
+        f = at(mask)
+        for col in cols:
+            mask[col[f]] = True
+        return mask
+
     while len(pairs) and rounds < 3 * RELIEF_ROUNDS:
         hit = np.zeros(n, dtype=bool)
         hit[F[np.unique(np.asarray(pairs).ravel())].ravel()] = True
         if rounds >= RELIEF_ROUNDS:                             # flatten, on wider rings
             rings += 1
         for _ in range(rings):
-            hit[F[hit[F].any(axis=1)].ravel()] = True
+            hit = grown(hit)
         gain[hit] = 0.5 * gain[hit] if rounds < RELIEF_ROUNDS else 0.0
         rounds += 1
         near = hit.copy()
         for _ in range(4):
-            near[F[near[F].any(axis=1)].ravel()] = True
-        local = np.flatnonzero(near[F].any(axis=1))
+            near = grown(near)
+        local = np.flatnonzero(at(near))
         Vr = (P + (off * gain)[:, None] * N).astype(precision).astype(np.float64)
         sub = self_intersecting_pairs(Vr, F[local])
         pairs = local[np.asarray(sub, dtype=np.int64).reshape(-1, 2)] if len(sub) else ()
