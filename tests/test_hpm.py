@@ -9,7 +9,7 @@ from scipy.spatial import Delaunay
 from geotex.cli import main
 from geotex.errors import InputError
 from geotex.image.fftmatch import (brute_force_energy, match_energy, opponent_colors,
-                                   texture_spectra)
+                                   pattern_scale, texture_spectra)
 from geotex.image.hpm import hpm_mesh, hpm_texture
 from geotex.io import read_mesh, write_mesh
 from geotex.mesh import edge_topology, face_areas
@@ -257,6 +257,45 @@ def test_fft_energy_equals_brute_force():
     # positions where the footprint would leave the image are refused
     ys, xs = np.nonzero(K)
     assert np.all(~np.isfinite(E[h - ys.max():, :])) and np.all(~np.isfinite(E[:, w - xs.max():]))
+
+
+def checker_image(cell=8, n=96, seed=0):
+    """A grey checkerboard of ``cell``-pixel squares with a little noise, uint8."""
+    rng = np.random.default_rng(seed)
+    yy, xx = np.mgrid[0:n, 0:n]
+    img = np.where(((xx // cell) + (yy // cell)) % 2 == 0, 200.0, 60.0)
+    img += rng.normal(0.0, 10.0, img.shape)
+    return np.repeat(np.clip(img, 0, 255).astype(np.uint8)[:, :, None], 3, axis=2)
+
+
+@pytest.mark.parametrize("cell", [6, 8, 11])
+def test_pattern_scale_of_a_checker_and_of_stripes(cell):
+    # a checker of cell c is a lattice of period vectors (c, c) and (c, -c)
+    ps = pattern_scale(checker_image(cell))
+    assert ps.periodic and ps.periods.shape == (2, 2)
+    assert ps.period == pytest.approx(cell * np.sqrt(2.0), abs=0.01)
+    assert np.allclose(np.sort(np.abs(ps.periods), axis=None), cell)
+    assert ps.coherence < 0.1                     # isotropic
+    # stripes of period p: one repeat, across them; strongly anisotropic, along x
+    p = cell + 3
+    yy = np.arange(96)[:, None] * np.ones((1, 96))
+    img = (127 + 100 * np.sin(2 * np.pi * yy / p)).astype(np.uint8)
+    ps = pattern_scale(img)
+    assert ps.periodic and ps.periods.shape == (1, 2)
+    assert ps.period == pytest.approx(p, abs=0.51)
+    assert ps.coherence > 0.9
+    assert min(ps.orientation, np.pi - ps.orientation) < 0.05
+
+
+def test_pattern_scale_of_noise_is_its_correlation_length():
+    # smooth noise (features of about 8 px): no repeat, a short correlation length
+    for seed in range(3):
+        ps = pattern_scale(noise_image(96, 96, seed=seed))
+        assert not ps.periodic and ps.period == 0.0 and ps.periods.shape == (0, 2)
+        assert 1.0 <= ps.correlation_length <= 8.0
+        assert ps.size == ps.correlation_length
+    with pytest.raises(InputError):
+        pattern_scale(np.zeros((4, 4, 3)))
 
 
 def test_fft_match_finds_a_planted_patch_and_its_rotation():
