@@ -38,6 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy import fft as sfft
+from scipy import ndimage as ndi
 from scipy.ndimage import map_coordinates
 
 from geotex.errors import InputError
@@ -343,7 +344,6 @@ def pattern_scale(image) -> PatternScale:
     InputError
         If the image is not (h, w) or (h, w, 3+) with h, w >= 8.
     """
-    from scipy import ndimage as ndi
 
     a = np.asarray(image, dtype=np.float64)
     if a.ndim == 3 and a.shape[2] >= 3:
