@@ -48,7 +48,8 @@ into the original image.
    triangles of a polygon laid out with 3D lengths) it is flattened by
    projection onto its mean plane (if that is within ``max_flat_error``),
    and if imposing the neighbours' border folds it, its free flattening is
-   kept.  A match above ``max_error`` is still refused there: the face
+   kept.  A match above ``max_error`` is still refused there (for a stochastic
+   sample; a periodic one keeps it, see "Structured patterns" below): the face
    level (5) retries its faces in smaller groups, with more of their
    neighbours textured (forcing such patches above the threshold had given
    a mean colour jump of 0.17 at their borders on Spot, against 0.06-0.10
