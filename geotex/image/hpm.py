@@ -49,7 +49,8 @@ into the original image.
    projection onto its mean plane (if that is within ``max_flat_error``),
    and if imposing the neighbours' border folds it, its free flattening is
    kept.  A match above ``max_error`` is still refused there (for a stochastic
-   sample; a periodic one keeps it, see "Structured patterns" below): the face
+   sample; a periodic one keeps it when its faces are smaller than
+   ``min_patch`` periods, see "Structured patterns" below): the face
    level (5) retries its faces in smaller groups, with more of their
    neighbours textured (forcing such patches above the threshold had given
    a mean colour jump of 0.17 at their borders on Spot, against 0.06-0.10
