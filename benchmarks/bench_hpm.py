@@ -181,6 +181,8 @@ def main():
             extra = [f"projected {lv['projected']}"] if lv.get("projected") else []
             extra += [f"free border {lv['free_border']}"] if lv.get("free_border") else []
             extra += [f"{lv['matched_faces']} faces matched"] if lv.get("matched_faces") else []
+            extra += [f"{lv['forced']} kept above the error threshold (pattern size)"] \
+                if lv.get("forced") else []
             out.append(f"level {lv['level']} ({lv['clusters']} clusters): {lv['placed']} placed, "
                        f"{lv['subdivided']} subdivided"
                        + (f" ({why})" if why else "")

@@ -9,7 +9,7 @@ from scipy.spatial import Delaunay
 from geotex.cli import main
 from geotex.errors import InputError
 from geotex.image.fftmatch import (brute_force_energy, match_energy, opponent_colors,
-                                   texture_spectra)
+                                   pattern_scale, texture_spectra)
 from geotex.image.hpm import hpm_mesh, hpm_texture
 from geotex.io import read_mesh, write_mesh
 from geotex.mesh import edge_topology, face_areas
@@ -259,6 +259,45 @@ def test_fft_energy_equals_brute_force():
     assert np.all(~np.isfinite(E[h - ys.max():, :])) and np.all(~np.isfinite(E[:, w - xs.max():]))
 
 
+def checker_image(cell=8, n=96, seed=0):
+    """A grey checkerboard of ``cell``-pixel squares with a little noise, uint8."""
+    rng = np.random.default_rng(seed)
+    yy, xx = np.mgrid[0:n, 0:n]
+    img = np.where(((xx // cell) + (yy // cell)) % 2 == 0, 200.0, 60.0)
+    img += rng.normal(0.0, 10.0, img.shape)
+    return np.repeat(np.clip(img, 0, 255).astype(np.uint8)[:, :, None], 3, axis=2)
+
+
+@pytest.mark.parametrize("cell", [6, 8, 11])
+def test_pattern_scale_of_a_checker_and_of_stripes(cell):
+    # a checker of cell c is a lattice of period vectors (c, c) and (c, -c)
+    ps = pattern_scale(checker_image(cell))
+    assert ps.periodic and ps.periods.shape == (2, 2)
+    assert ps.period == pytest.approx(cell * np.sqrt(2.0), abs=0.01)
+    assert np.allclose(np.sort(np.abs(ps.periods), axis=None), cell)
+    assert ps.coherence < 0.1                     # isotropic
+    # stripes of period p: one repeat, across them; strongly anisotropic, along x
+    p = cell + 3
+    yy = np.arange(96)[:, None] * np.ones((1, 96))
+    img = (127 + 100 * np.sin(2 * np.pi * yy / p)).astype(np.uint8)
+    ps = pattern_scale(img)
+    assert ps.periodic and ps.periods.shape == (1, 2)
+    assert ps.period == pytest.approx(p, abs=0.51)
+    assert ps.coherence > 0.9
+    assert min(ps.orientation, np.pi - ps.orientation) < 0.05
+
+
+def test_pattern_scale_of_noise_is_its_correlation_length():
+    # smooth noise (features of about 8 px): no repeat, a short correlation length
+    for seed in range(3):
+        ps = pattern_scale(noise_image(96, 96, seed=seed))
+        assert not ps.periodic and ps.period == 0.0 and ps.periods.shape == (0, 2)
+        assert 1.0 <= ps.correlation_length <= 8.0
+        assert ps.size == ps.correlation_length
+    with pytest.raises(InputError):
+        pattern_scale(np.zeros((4, 4, 3)))
+
+
 def test_fft_match_finds_a_planted_patch_and_its_rotation():
     img = noise_image(64, 64, seed=5).astype(np.float64) / 255.0
     T = opponent_colors(img)
@@ -376,14 +415,49 @@ def test_hpm_orientation_propagates_from_the_neighbours():
     # orientation keeps them coherent
     V, F = torus(1.0, 0.4, n_major=96, n_minor=26)
     img = stripe_image()
-    free = border_rotation(V, F, hpm_texture(V, F, img, scale=2.0, seed=1,
+    # (structure=False: the periodic image's lattice continuations would hide the effect)
+    free = border_rotation(V, F, hpm_texture(V, F, img, scale=2.0, seed=1, structure=False,
                                              orientation_spread=None))
-    kept = border_rotation(V, F, hpm_texture(V, F, img, scale=2.0, seed=1))
+    kept = border_rotation(V, F, hpm_texture(V, F, img, scale=2.0, seed=1, structure=False))
     assert free.size and kept.size
     assert np.median(kept) < 0.5 * np.median(free)
     assert np.quantile(kept, 0.75) < 60.0
     with pytest.raises(InputError, match="orientation_spread"):
         hpm_texture(V, F, img, scale=2.0, orientation_spread=-5.0)
+
+
+def test_hpm_periodic_stripes_keep_their_orientation():
+    # stripes of period 8 px: the pattern estimate makes the band half a period wide at
+    # least, continues the neighbours by whole periods and keeps clusters of a few faces
+    # whole; the stripes' rotation across patch borders halves (median 14.4 -> 7.8
+    # degrees here) and no face is left to unfold
+    V, F = torus(1.0, 0.4, n_major=96, n_minor=26)
+    img = stripe_image()
+    scale = 2.0
+    off = hpm_texture(V, F, img, scale=scale, seed=1, structure=False)
+    on = hpm_texture(V, F, img, scale=scale, seed=1)
+    pat = on.report()["pattern"]
+    assert pat["periodic"] and pat["period_px"] == pytest.approx(8.0, abs=0.6)
+    period = pat["period_px"] * scale / img.shape[1]
+    assert pat["min_patch"] == pytest.approx(0.3 * period)
+    assert pat["band_width"] >= 0.5 * period - 1e-12
+    assert pat["band_width"] > off.report()["pattern"]["band_width"]
+    levels = on.report()["levels"]
+    assert sum(lv["forced"] for lv in levels) > 0
+    assert np.count_nonzero(on.patch < 0) <= 0.002 * len(F)
+    r_on, r_off = border_rotation(V, F, on), border_rotation(V, F, off)
+    assert np.median(r_on) < 0.7 * np.median(r_off)
+    assert np.quantile(r_on, 0.75) < np.quantile(r_off, 0.75)
+
+
+def test_hpm_structure_leaves_a_stochastic_sample_alone(mapped):
+    V, F, img, r = mapped
+    pat = r.report()["pattern"]
+    assert not pat["periodic"] and pat["min_patch"] == 0.0
+    off = hpm_texture(V, F, img, scale=3.0, seed=1, structure=False)
+    assert off.uv.tobytes() == r.uv.tobytes() and np.array_equal(off.uv_faces, r.uv_faces)
+    with pytest.raises(InputError, match="min_patch"):
+        hpm_texture(V, F, img, scale=3.0, min_patch=-1.0)
 
 
 def test_hpm_deterministic_and_pure(mapped):
@@ -655,3 +729,27 @@ def test_cli_hpm_face_level_and_subpixel_flags(files):
     assert reps["--face-level"]["matched_faces"] == 0
     assert reps["--face-level"]["filled_faces"] > 0
     assert reps["--subpixel"]["matched_faces"] > 0
+
+
+def test_cli_hpm_structure_flags(tmp_path, capsys):
+    from PIL import Image
+    V, F = torus(1.0, 0.4, n_major=48, n_minor=16)
+    base = tmp_path / "torus.obj"
+    write_mesh(base, Mesh(V, F))
+    img = tmp_path / "stripes.png"
+    Image.fromarray(stripe_image()).save(img)
+    reps = {}
+    for flags in ([], ["--structure", "off"], ["--min-patch", "0"], ["--min-patch", "2"]):
+        out, rep = tmp_path / "s.glb", tmp_path / "s.json"
+        assert main(["hpm", str(base), "--image", str(img), "--scale", "2", "-o", str(out),
+                     "--report", str(rep)] + flags) == 0
+        reps[" ".join(flags)] = json.loads(rep.read_text())
+    assert "periodic image, 8 px period" in capsys.readouterr().out
+    forced = {k: sum(lv["forced"] for lv in r["levels"]) for k, r in reps.items()}
+    assert forced["--min-patch 2"] > forced[""] >= 0
+    assert forced["--structure off"] == 0 and forced["--min-patch 0"] == 0
+    assert reps["--structure off"]["pattern"]["min_patch"] == 0.0
+    assert reps[""]["pattern"]["band_width"] > reps["--structure off"]["pattern"]["band_width"]
+    assert main(["hpm", str(base), "--image", str(img), "--scale", "2", "--min-patch", "-1",
+                 "-o", str(tmp_path / "x.glb")]) != 0
+    assert "--min-patch" in capsys.readouterr().err

@@ -38,12 +38,17 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy import fft as sfft
+from scipy import ndimage as ndi
 from scipy.ndimage import map_coordinates
 
 from geotex.errors import InputError
 
 __all__ = ["opponent_colors", "TextureSpectra", "texture_spectra", "match_energy",
-           "brute_force_energy"]
+           "brute_force_energy", "PatternScale", "pattern_scale"]
+
+#: An autocorrelation peak counts as a repeat of the pattern when it and the value at twice
+#: its lag both reach this (see :func:`pattern_scale`).
+PERIOD_PEAK = 0.15
 
 _WEIGHTS = np.array([[0.299, 0.587, 0.114],
                      [0.25, -0.25, 0.0],
@@ -249,3 +254,183 @@ def brute_force_energy(image, mask, support, dy: int, dx: int) -> float:
     ys, xs = np.nonzero(support)
     d = mask[ys, xs] - image[ys + dy, xs + dx]
     return float(np.sum(support[ys, xs][:, None] * d * d))
+
+
+@dataclass(frozen=True)
+class PatternScale:
+    """Size and anisotropy of the pattern of a sample (:func:`pattern_scale`).
+
+    Attributes
+    ----------
+    periodic : bool
+        Whether the autocorrelation has a peak that repeats (a structured,
+        periodic pattern: bricks, weaves, nets, tiles).
+    period : float
+        Pattern size in pixels: the longer of the two shortest independent
+        repeat vectors (the one found for stripes); 0 when not ``periodic``.
+    periods : numpy.ndarray, (k, 2) float64
+        The repeat vectors ``(x, y)`` found, in pixels (k = 0, 1 or 2).
+    correlation_length : float
+        Lag in pixels at which the ring mean of the autocorrelation falls
+        below ``1/e`` (the size of the features of a stochastic sample).
+    peak : float
+        Strength of the weakest accepted repeat (the smaller of the
+        autocorrelation at the lag and at twice the lag; 0 if none).
+    coherence : float
+        Global anisotropy of the structure tensor, ``(l1 - l2) / (l1 + l2)``
+        of the summed gradient tensor: 0 for an isotropic sample, 1 for
+        straight parallel stripes.
+    orientation : float
+        Dominant direction of the features (radians, along the stripes, x
+        right, y down), meaningful when ``coherence`` is large.
+    """
+
+    periodic: bool
+    period: float
+    periods: np.ndarray
+    correlation_length: float
+    peak: float
+    coherence: float
+    orientation: float
+
+    @property
+    def size(self) -> float:
+        """Pattern size in pixels: ``period`` if periodic, else ``correlation_length``."""
+        return self.period if self.periodic else self.correlation_length
+
+
+def pattern_scale(image) -> PatternScale:
+    """Estimate the size and anisotropy of a sample's pattern.
+
+    The normalised autocorrelation ``rho`` of the luminance (mean removed,
+    divided by the number of overlapping pixels at every lag, so that long
+    lags are not damped; ``rho(0) = 1``) is computed by FFT over lags up to
+    half the image.  Its local maxima (5 x 5 neighbourhood) outside the
+    central lobe (the part connected to lag 0 where ``rho > 0.2``) and
+    within a quarter of the image are repeat candidates, nearest first.  A
+    candidate ``p`` is a repeat of the pattern when both ``rho(p)`` and
+    ``rho(2 p)`` (max over 3 x 3) reach ``PERIOD_PEAK = 0.15``: a pattern
+    repeats at twice its period, a blob-like stochastic sample does not.
+    On the quilting samples the repeats found are rope net 37 / 42 px
+    (peaks 0.50-0.53), slate tiles 15 / 21, bricks 20 / 22 (0.15-0.22),
+    basket weave 34 (0.16-0.17); the stochastic ones give none: gravel (no
+    peak), peppers (0.19 at 14 px but 0.07 at twice it), water (0.14).  The
+    threshold 0.15 sits between water's 0.14 and the weave's 0.16; it is
+    the least robust constant here.  The first repeat is the nearest; the
+    second is the nearest one at more than 30 degrees from it such that
+    ``v - k u`` (``|k| <= 3``) is not in the central lobe (for stripes the
+    lobe is a ridge along them, and every point of the next ridge is a
+    maximum); the pair is reduced to the shortest basis of its lattice
+    (Lagrange-Gauss) and ``period`` is the longer of the two (the pattern
+    cell must hold both).  The search stops at a quarter of the
+    image so that ``2 p`` stays within the half-image of reliable lags:
+    a pattern larger than a quarter of the sample is not seen repeating.
+
+    Anisotropy: the structure tensor (products of Sobel gradients of the
+    luminance) summed over the image; ``coherence`` is the normalised
+    difference of its eigenvalues.
+
+    Parameters
+    ----------
+    image : array_like, (h, w, 3) or (h, w) uint8 or float
+        The sample (RGB: luminance 0.299 R + 0.587 G + 0.114 B).
+
+    Returns
+    -------
+    PatternScale
+
+    Raises
+    ------
+    InputError
+        If the image is not (h, w) or (h, w, 3+) with h, w >= 8.
+    """
+
+    a = np.asarray(image, dtype=np.float64)
+    if a.ndim == 3 and a.shape[2] >= 3:
+        Y = a[:, :, :3] @ _WEIGHTS[0]
+    elif a.ndim == 2:
+        Y = a.copy()
+    else:
+        raise InputError(f"image must be (h, w) or (h, w, 3), got shape {a.shape}")
+    h, w = Y.shape
+    if min(h, w) < 8:
+        raise InputError(f"image must be at least 8 x 8 pixels, got {w} x {h}")
+    Y = Y - Y.mean()
+    var = float(np.mean(Y * Y))
+    # structure tensor
+    gx = ndi.sobel(Y, axis=1)
+    gy = ndi.sobel(Y, axis=0)
+    jxx, jyy, jxy = float(np.sum(gx * gx)), float(np.sum(gy * gy)), float(np.sum(gx * gy))
+    tr = jxx + jyy
+    coherence = float(np.hypot(jxx - jyy, 2 * jxy) / tr) if tr > 0 else 0.0
+    # gradient direction = 0.5 atan2(2 jxy, jxx - jyy); the features run across it
+    orientation = float((0.5 * np.arctan2(2 * jxy, jxx - jyy) + 0.5 * np.pi) % np.pi)
+    empty = np.zeros((0, 2))
+    if var <= 1e-12 * (1.0 + float(np.mean(a * a))):
+        return PatternScale(False, 0.0, empty, 0.0, 0.0, coherence, orientation)
+    shape = (2 * h, 2 * w)
+    spec = sfft.rfft2(Y, s=shape)
+    acf = sfft.irfft2(spec * np.conj(spec), s=shape)
+    one = sfft.rfft2(np.ones((h, w)), s=shape)
+    cnt = sfft.irfft2(one * np.conj(one), s=shape)
+    rho = np.fft.fftshift(acf / np.maximum(np.rint(cnt), 1.0) / var)
+    hy, hx = h // 2, w // 2
+    rho = rho[h - hy:h + hy + 1, w - hx:w + hx + 1]           # lags up to half the image
+    cy, cx = hy, hx
+    yy, xx = np.mgrid[-cy:cy + 1, -cx:cx + 1]
+    R = np.hypot(xx, yy)
+    ring = np.rint(R).astype(np.int64)
+    ring_mean = np.bincount(ring.ravel(), weights=rho.ravel()) / np.bincount(ring.ravel())
+    below = np.flatnonzero(ring_mean < np.exp(-1.0))
+    corr = float(below[0]) if below.size else float(ring_mean.size)
+    lab, _ = ndi.label(rho > 0.2)
+    lobe = lab == lab[cy, cx]
+    cand = ((rho == ndi.maximum_filter(rho, size=5)) & ~lobe & (rho >= PERIOD_PEAK)
+            & (R <= min(h, w) / 4.0))
+    near = ndi.maximum_filter(rho, size=3)
+    py, px = np.nonzero(cand)
+    order = np.lexsort((px, py, R[py, px]))
+    found, strength = [], []
+    for i in order:
+        v = np.array([xx[py[i], px[i]], yy[py[i], px[i]]], dtype=np.float64)
+        if v[1] < 0 or (v[1] == 0 and v[0] < 0):
+            continue                        # rho is symmetric: keep one of +-p
+        qy, qx = int(2 * v[1]) + cy, int(2 * v[0]) + cx
+        if not (0 <= qy < rho.shape[0] and 0 <= qx < rho.shape[1]):
+            continue
+        r2 = float(near[qy, qx])
+        if r2 < PERIOD_PEAK:
+            continue
+        if found:
+            u = found[0]
+            cosang = abs(float(u @ v)) / (np.linalg.norm(u) * np.linalg.norm(v))
+            if cosang > np.cos(np.radians(30.0)):
+                continue
+            # v - k u inside the central lobe (|k| <= 3): v lies on the k-th ridge of
+            # stripes (rho stays high along them), it is not a second lattice vector
+            dup = False
+            for d in (v - k * u for k in (-3, -2, -1, 1, 2, 3)):
+                dy, dx = int(d[1]) + cy, int(d[0]) + cx
+                if 0 <= dy < rho.shape[0] and 0 <= dx < rho.shape[1] and lobe[dy, dx]:
+                    dup = True
+            if dup:
+                continue
+        found.append(v)
+        strength.append(min(float(rho[py[i], px[i]]), r2))
+        if len(found) == 2:
+            break
+    if not found:
+        return PatternScale(False, 0.0, empty, corr, 0.0, coherence, orientation)
+    if len(found) == 2:                  # Lagrange-Gauss reduction: the shortest basis
+        u, v = found
+        while True:
+            if v @ v < u @ u:
+                u, v = v, u
+            k = np.rint((u @ v) / (u @ u))
+            if k == 0:
+                break
+            v = v - k * u
+        found = [u, v]
+    per = np.array(found)
+    return PatternScale(True, float(np.linalg.norm(per, axis=1).max()), per, corr,
+                        float(min(strength)), coherence, orientation)
