@@ -99,7 +99,10 @@ def element_contacts(X: np.ndarray, G: np.ndarray) -> ElementContacts:
     ElementContacts
     """
     _, label = face_components(G, X.shape[0])
-    pairs = self_intersecting_pairs(X, G)
+    # elements are many small closed parts: the exact test sweeps each element
+    # and each pair of elements whose boxes meet (same pairs, same predicates as
+    # the test on its global grid, at about half the cost)
+    pairs = self_intersecting_pairs(X, G, parts=label)
     a, b = label[pairs[:, 0]], label[pairs[:, 1]]
     same = a == b
     touching = np.unique(np.sort(np.stack([a[~same], b[~same]], axis=1), axis=1), axis=0)
