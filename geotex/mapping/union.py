@@ -89,6 +89,11 @@ class ElementContacts(NamedTuple):
 def element_contacts(X: np.ndarray, G: np.ndarray) -> ElementContacts:
     """Elements the map folds, and pairs of elements that meet (one exact test).
 
+    The exact test of all faces (:func:`~geotex.check.intersections.self_intersecting_pairs`)
+    is given the elements as its parts: it sweeps every element and every pair
+    of elements whose boxes overlap instead of a grid over the whole mesh,
+    with the same answer.
+
     Parameters
     ----------
     X : numpy.ndarray, (k, 3) float64
