@@ -808,3 +808,11 @@ def test_parts_must_be_one_integer_per_face(parts):
     V, F = icosphere(0)
     with pytest.raises(InputError):
         self_intersecting_pairs(V, F[:4], parts=parts)
+
+
+def test_parts_sweep_with_max_pairs_gives_a_subset(monkeypatch):
+    V, F, parts = _parts_cases()[0]
+    full = self_intersecting_pairs(V, F)
+    monkeypatch.setattr(gi, "JIT_MIN_SIZE", 0)
+    got = self_intersecting_pairs(V, F, parts=parts, max_pairs=3)
+    assert len(got) == 3 and np.array_equal(got, full[:3])

@@ -120,7 +120,9 @@ def self_intersecting_pairs(V, F, *, max_pairs=None, topology=None, parts=None) 
         examined with the same predicates, so the answer is the same, at less
         cost.  Used only on the compiled path (from ``JIT_MIN_SIZE`` entries of
         ``F``) and when no part has more than 4096 faces;
-        otherwise ignored.
+        otherwise ignored.  With ``max_pairs``, the sweep finds every pair
+        first and keeps the lowest ``max_pairs``: a subset of the answer as
+        without ``parts``, not necessarily the same subset.
 
     Returns
     -------
