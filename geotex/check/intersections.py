@@ -237,7 +237,7 @@ def _distinct_pairs(V, F, max_pairs, *, topo=None, parts=None):
         faces.mask_unseparated()
         found = []
         count = 0
-        swept = None if parts is None else _part_sweep(faces, parts)
+        swept = None if parts is None else _part_sweep(faces, parts, mapper=pool.map)
         if swept is not None:
             found.append(swept)
             count = swept.size
@@ -947,7 +947,7 @@ def _pair_task(faces, level, s, e):
 # broad phase by parts (many small parts: mapped texture elements)
 
 
-def _part_sweep(faces: _FaceData, parts: np.ndarray):
+def _part_sweep(faces: _FaceData, parts: np.ndarray, *, mapper=map):
     """The intersecting pairs as keys ``i * m + j``, found by sweeping parts.
 
     Every pair of active faces whose boxes overlap is examined once, as on the
@@ -955,7 +955,8 @@ def _part_sweep(faces: _FaceData, parts: np.ndarray):
     within a part by a sweep over the low x of their boxes, pairs of two
     parts whose boxes (the union of their faces' boxes) overlap by a sweep
     over the faces of each that overlap the other's box.  ``None`` when a part
-    is too large for sweeping (the caller takes the grid).
+    is too large for sweeping (the caller takes the grid).  The parts are
+    swept in chunks (``mapper``: the thread pool); the keys come back sorted.
     """
     act = faces.active
     part = np.asarray(parts, dtype=np.int64)[act]
@@ -975,8 +976,13 @@ def _part_sweep(faces: _FaceData, parts: np.ndarray):
         pbox[:, k] = np.minimum.reduceat(box[order, k], seg)
         pbox[:, 3 + k] = np.maximum.reduceat(box[order, 3 + k], seg)
     porder = np.argsort(pbox[:, 0], kind="stable").astype(np.int64)
-    return _part_loops(order.astype(np.int64), pstart, pbox, porder, box,
-                       faces.masked_rows, faces.F, faces.V, faces.plane, faces.tol, faces.E)
+    order = order.astype(np.int64)
+    cuts = np.linspace(0, n_parts, min(n_parts, 16) + 1).astype(np.int64)
+    keys = list(mapper(lambda k: _part_loops(order, pstart, pbox, porder, int(cuts[k]),
+                                             int(cuts[k + 1]), box, faces.masked_rows,
+                                             faces.F, faces.V, faces.plane, faces.tol,
+                                             faces.E), range(cuts.size - 1)))
+    return np.sort(np.concatenate(keys)) if keys else np.zeros(0, dtype=np.int64)
 
 
 @helper
@@ -990,10 +996,12 @@ def _pushed(out, found, key):
 
 
 @compiled
-def _part_loops(order, pstart, pbox, porder, box, mrows, F, V, plane, tol, E):
+def _part_loops(order, pstart, pbox, porder, c0, c1, box, mrows, F, V, plane, tol, E):
     """Sweeps of :func:`_part_sweep`: ``order`` holds the active faces by part,
     then low x; part ``p`` is ``order[pstart[p]:pstart[p + 1]]``; ``porder``
-    lists the parts by the low x of their boxes ``pbox``.  Returns the keys."""
+    lists the parts by the low x of their boxes ``pbox``.  Sweeps parts
+    ``c0 .. c1 - 1`` and the pairs of parts whose first (in ``porder``) is
+    ``porder[c0 .. c1 - 1]``.  Returns the keys."""
     # the box and fan tests are written out in the loops: a call passing
     # arrays costs reference counting, which would cost more than the tests
     m = F.shape[0]
@@ -1001,7 +1009,7 @@ def _part_loops(order, pstart, pbox, porder, box, mrows, F, V, plane, tol, E):
     out = np.empty(1024, dtype=np.int64)
     found = 0
     n_parts = pstart.shape[0] - 1
-    for p in range(n_parts):                     # within a part
+    for p in range(c0, c1):                      # within a part
         s, e = pstart[p], pstart[p + 1]
         for x in range(s, e):
             fa = order[x]
@@ -1024,7 +1032,7 @@ def _part_loops(order, pstart, pbox, porder, box, mrows, F, V, plane, tol, E):
                     found += 1
     la = np.empty(4096, dtype=np.int64)
     lb = np.empty(4096, dtype=np.int64)
-    for ia in range(n_parts):                    # pairs of parts whose boxes meet
+    for ia in range(c0, c1):                     # pairs of parts whose boxes meet
         p = porder[ia]
         for ib in range(ia + 1, n_parts):
             q = porder[ib]
