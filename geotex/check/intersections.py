@@ -1030,8 +1030,11 @@ def _part_loops(order, pstart, pbox, porder, c0, c1, box, mrows, F, V, plane, to
                 if _pair_hits(min(fa, fb), max(fa, fb), F, V, plane, tol, E):
                     out = _pushed(out, found, min(fa, fb) * m + max(fa, fb))
                     found += 1
-    la = np.empty(4096, dtype=np.int64)
-    lb = np.empty(4096, dtype=np.int64)
+    largest = 0
+    for p in range(n_parts):
+        largest = max(largest, pstart[p + 1] - pstart[p])
+    la = np.empty(largest, dtype=np.int64)
+    lb = np.empty(largest, dtype=np.int64)
     for ia in range(c0, c1):                     # pairs of parts whose boxes meet
         p = porder[ia]
         for ib in range(ia + 1, n_parts):
