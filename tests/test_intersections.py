@@ -783,3 +783,97 @@ def test_distinct_faces_hint_skips_only_the_grouping():
         assert duplicate_face_groups(F).size == 0
         assert np.array_equal(self_intersecting_pairs(V, F, distinct_faces=True),
                               self_intersecting_pairs(V, F))
+
+
+# parts=: the sweep by parts gives the grid's answer
+
+
+def _parts_cases():
+    """(V, F, parts) meshes of many small parts: overlapping and touching
+    spheres, a folded sphere, a chain of cubes sharing faces, duplicates."""
+    from geotex.mesh.primitives import box as cube
+    from geotex.mesh.topology import concatenated, face_components
+
+    rng = np.random.default_rng(13)
+    Vs, Fs = icosphere(1)
+    cases = []
+    for _ in range(3):                        # spheres, some overlapping
+        centres = rng.uniform(0.0, 3.0, size=(25, 3))
+        radii = rng.uniform(0.2, 0.6, size=25)
+        V, F = concatenated([(Vs * r + c, Fs) for c, r in zip(centres, radii)])
+        cases.append((V, F))
+    # a sphere folded onto itself (one vertex pushed through the far side),
+    # touching one neighbour exactly at a vertex
+    Vf = Vs.copy()
+    top = int(np.argmax(Vf[:, 2]))
+    Vf[top] = (0.0, 0.0, -1.3)
+    lo, hi = Vs[int(np.argmin(Vs[:, 2]))], Vs[int(np.argmax(Vs[:, 2]))]
+    Vt = Vs + (hi - lo)                       # its lowest vertex on the other's highest
+    cases.append(concatenated([(Vf, Fs), (Vs + (3.0, 0.0, 0.0), Fs), (Vt + (3.0, 0, 0), Fs)]))
+    # a chain of unit cubes sharing faces (coplanar overlaps), unwelded
+    cases.append(concatenated([cube((k, 0.0, 0.0), (k + 1.0, 1.0, 1.0), divisions=2)
+                               for k in range(6)]))
+    out = [(V, F, face_components(F, V.shape[0])[1]) for V, F in cases]
+    # the same spheres with arbitrary parts (not components) and a duplicated face
+    V, F = cases[0]
+    Fd = np.vstack([F, F[5:6, ::-1]])
+    out.append((V, Fd, rng.integers(0, 40, size=len(Fd))))
+    return out
+
+
+@pytest.mark.parametrize("case", range(6))
+def test_parts_sweep_gives_the_grid_answer(case, monkeypatch):
+    V, F, parts = _parts_cases()[case]
+    reference = self_intersecting_pairs(V, F)
+    monkeypatch.setattr(gi, "JIT_MIN_SIZE", 0)         # the sweep is compiled only
+    calls = []
+    real = gi._part_loops
+
+    def spy(*args):
+        calls.append(1)
+        return real(*args)
+
+    monkeypatch.setattr(gi, "_part_loops", spy)
+    got = self_intersecting_pairs(V, F, parts=parts)
+    assert calls                                           # the sweep answered
+    assert np.array_equal(got, reference)
+    assert reference.size                                  # every case has contacts
+
+
+def test_parts_sweep_gives_the_grid_answer_on_random_soup(monkeypatch):
+    rng = np.random.default_rng(5)
+    V = rng.uniform(0.0, 1.0, size=(120, 3))
+    F = rng.integers(0, 120, size=(200, 3))
+    F = F[(F[:, 0] != F[:, 1]) & (F[:, 1] != F[:, 2]) & (F[:, 0] != F[:, 2])]
+    reference = self_intersecting_pairs(V, F)
+    monkeypatch.setattr(gi, "JIT_MIN_SIZE", 0)
+    for n_parts in (1, 7, len(F)):
+        parts = rng.integers(0, n_parts, size=len(F))
+        assert np.array_equal(self_intersecting_pairs(V, F, parts=parts), reference)
+
+
+def test_parts_too_large_fall_back_to_the_grid(monkeypatch):
+    V, F = icosphere(2)
+    W = V + 0.3
+    V2, F2 = np.vstack([V, W]), np.vstack([F, F + len(V)])
+    reference = self_intersecting_pairs(V2, F2)
+    monkeypatch.setattr(gi, "JIT_MIN_SIZE", 0)
+    monkeypatch.setattr(gi, "_PART_MAX_FACES", 100)
+    monkeypatch.setattr(gi, "_part_loops", None)         # must not be reached
+    got = self_intersecting_pairs(V2, F2, parts=np.repeat([0, 1], len(F)))
+    assert np.array_equal(got, reference) and reference.size
+
+
+@pytest.mark.parametrize("parts", [np.zeros(3, int), np.zeros((4, 1), int), np.zeros(4)])
+def test_parts_must_be_one_integer_per_face(parts):
+    V, F = icosphere(0)
+    with pytest.raises(InputError):
+        self_intersecting_pairs(V, F[:4], parts=parts)
+
+
+def test_parts_sweep_with_max_pairs_gives_a_subset(monkeypatch):
+    V, F, parts = _parts_cases()[0]
+    full = self_intersecting_pairs(V, F)
+    monkeypatch.setattr(gi, "JIT_MIN_SIZE", 0)
+    got = self_intersecting_pairs(V, F, parts=parts, max_pairs=3)
+    assert len(got) == 3 and np.array_equal(got, full[:3])

@@ -356,3 +356,39 @@ def test_union_composes_separate_elements_and_unites_only_those_that_meet():
     # same inputs, same bytes
     V4, F4, _ = united_with_base(V, F, X, G, contacts=contacts)
     assert V4.tobytes() == V2.tobytes() and F4.tobytes() == F2.tobytes()
+
+
+def test_element_contacts_equal_the_full_exact_test_on_a_real_layout(monkeypatch):
+    """The sweep by elements gives the folded set and touching pairs of the
+    plain exact test of all mapped faces (catalog shell Spot, studs)."""
+    import geotex.check.intersections as gi
+    from geotex.check.intersections import self_intersecting_pairs
+    from geotex.mapping import element_contacts
+    from geotex.mesh.topology import face_components
+    from geotex.shells import load_named as load_shell
+    from geotex.tiles.catalog import load_named as load_tiles
+
+    shell, tiles = load_shell("spot"), load_tiles("studs")
+    pc = shell.polycube
+    colors = edge_colors(pc.layout.edge_axis, tiles.n_colors, seed=0)
+    tq = tiles_for_quads(tiles, pc.layout.quad_axes, pc.layout.quad_edge, colors,
+                         bare=pc.quad_folded)
+    h = texture_height(shell, tiles)
+    m = mapped_tiles(shell, tiles, tq, scale=h / tiles.height, anchor=0.2 * shell.tile_size)
+    X, G = m.vertices, m.faces
+    # the old element_contacts: one exact test of all faces on the global grid
+    _, label = face_components(G, X.shape[0])
+    pairs = self_intersecting_pairs(X, G)
+    a, b = label[pairs[:, 0]], label[pairs[:, 1]]
+    same = a == b
+    touching = np.unique(np.sort(np.stack([a[~same], b[~same]], axis=1), axis=1), axis=0)
+    monkeypatch.setattr(gi, "JIT_MIN_SIZE", 0)          # the sweep at any size
+    swept = []
+    real = gi._part_loops
+    monkeypatch.setattr(gi, "_part_loops", lambda *args: swept.append(1) or real(*args))
+    c = element_contacts(X, G)
+    assert swept
+    assert np.array_equal(c.label, label)
+    assert np.array_equal(c.folded, np.unique(a[same]))
+    assert np.array_equal(c.touching, touching.reshape(-1, 2))
+    assert c.touching.size                    # studs meet there (none is folded)

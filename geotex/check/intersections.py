@@ -89,12 +89,14 @@ _NARROW_CHUNK = 32_768
 _MAX_WORKERS = 4
 # Safety factor of the fan separation bound (see _separated_fans).
 _FAN_SAFETY = 8.0
+# Largest part swept by parts= (a sweep is quadratic in the worst case).
+_PART_MAX_FACES = 4096
 # Bits of the packed sort key (cell, level flag, face, corner flags).
 _KEY_BITS = 62
 
 
 def self_intersecting_pairs(V, F, *, max_pairs=None, topology=None,
-                            distinct_faces: bool = False) -> np.ndarray:
+                            distinct_faces: bool = False, parts=None) -> np.ndarray:
     """Return every pair of faces of a triangle mesh whose triangles intersect.
 
     Parameters
@@ -116,6 +118,17 @@ def self_intersecting_pairs(V, F, *, max_pairs=None, topology=None,
         example from :func:`geotex.mesh.topology.duplicate_face_groups`):
         the grouping of duplicate faces is skipped.  Wrong when there are
         duplicates: their pairs are then not expanded.
+    parts : array_like, (m,) int, optional
+        A part number for every face (for example its connected component).
+        When the mesh is many small parts (mapped texture elements), candidate
+        pairs are then enumerated by sweeping each part and each pair of parts
+        whose boxes overlap instead of on the global grid: the same pairs are
+        examined with the same predicates, so the answer is the same, at less
+        cost.  Used only on the compiled path (from ``JIT_MIN_SIZE`` entries of
+        ``F``) and when no part has more than 4096 faces;
+        otherwise ignored.  With ``max_pairs``, the sweep finds every pair
+        first and keeps the lowest ``max_pairs``: a subset of the answer as
+        without ``parts``, not necessarily the same subset.
 
     Returns
     -------
@@ -127,7 +140,8 @@ def self_intersecting_pairs(V, F, *, max_pairs=None, topology=None,
     ------
     InputError
         If ``V`` or ``F`` is malformed (shape, non-finite values, indices out
-        of range) or ``max_pairs`` is not a non-negative integer.
+        of range), ``max_pairs`` is not a non-negative integer or ``parts`` is
+        not one integer per face.
 
     Notes
     -----
@@ -190,19 +204,27 @@ def self_intersecting_pairs(V, F, *, max_pairs=None, topology=None,
                 f"max_pairs must be a non-negative integer or None, got {max_pairs!r}")
         max_pairs = int(max_pairs)
     m = F.shape[0]
+    if parts is not None:
+        parts = np.asarray(parts)
+        if parts.shape != (m,) or (m and not np.issubdtype(parts.dtype, np.integer)):
+            raise InputError(f"parts must be one integer per face, shape ({m},), "
+                             f"got {parts.dtype} {parts.shape}")
     empty = np.zeros((0, 2), dtype=np.int64)
     if m < 2 or max_pairs == 0:
         return empty
     topo = None
     if F.size >= JIT_MIN_SIZE:
         topo = edge_topology(F, V.shape[0]) if topology is None else topology
+    else:
+        parts = None                         # the part sweep is compiled only
     classes = None if distinct_faces else _duplicate_classes(F, topo)
     if classes is not None:                  # duplicate faces: solve on one per class
         first, cls = classes
-        pairs = _distinct_pairs(V, F[first], max_pairs)
+        pairs = _distinct_pairs(V, F[first], max_pairs,
+                                parts=None if parts is None else parts[first])
         pairs = _expanded(first[pairs], cls, max_pairs)
     else:
-        pairs = _distinct_pairs(V, F, max_pairs, topo=topo)
+        pairs = _distinct_pairs(V, F, max_pairs, topo=topo, parts=parts)
     return pairs
 
 
@@ -326,9 +348,9 @@ def _faces_near(Vn, F, sel):
     return np.flatnonzero(hot[cols[0]] | hot[cols[1]] | hot[cols[2]])
 
 
-def _distinct_pairs(V, F, max_pairs, *, topo=None):
+def _distinct_pairs(V, F, max_pairs, *, topo=None, parts=None):
     """:func:`self_intersecting_pairs` for faces with distinct vertex sets
-    (``topo``: their edge topology, when known)."""
+    (``topo``: their edge topology, when known; ``parts``: see there)."""
     m = F.shape[0]
     empty = np.zeros((0, 2), dtype=np.int64)
     workers = _workers()
@@ -341,7 +363,12 @@ def _distinct_pairs(V, F, max_pairs, *, topo=None):
         faces.mask_unseparated()
         found = []
         count = 0
-        for hits in _in_order(pool, _pair_tasks(faces), window=2 * workers):
+        swept = None if parts is None else _part_sweep(faces, parts, mapper=pool.map)
+        if swept is not None:
+            found.append(swept)
+            count = swept.size
+        for hits in (() if swept is not None else
+                     _in_order(pool, _pair_tasks(faces), window=2 * workers)):
             if hits.size:
                 found.append(hits)
                 count += hits.size
@@ -1078,6 +1105,148 @@ def _pair_task(faces, level, s, e):
         hit[s:s + _NARROW_CHUNK] = _intersecting(faces, i[s:s + _NARROW_CHUNK],
                                                  j[s:s + _NARROW_CHUNK])
     return i[hit] * faces.F.shape[0] + j[hit]
+
+
+# ---------------------------------------------------------------------------
+# broad phase by parts (many small parts: mapped texture elements)
+
+
+def _part_sweep(faces: _FaceData, parts: np.ndarray, *, mapper=map):
+    """The intersecting pairs as keys ``i * m + j``, found by sweeping parts.
+
+    Every pair of active faces whose boxes overlap is examined once, as on the
+    grid (:func:`_pair_tasks`), with the same filters and narrow phase: pairs
+    within a part by a sweep over the low x of their boxes, pairs of two
+    parts whose boxes (the union of their faces' boxes) overlap by a sweep
+    over the faces of each that overlap the other's box.  ``None`` when a part
+    is too large for sweeping (the caller takes the grid).  The parts are
+    swept in chunks (``mapper``: the thread pool); the keys come back sorted.
+    """
+    act = faces.active
+    part = np.asarray(parts, dtype=np.int64)[act]
+    if act.size == 0:
+        return np.zeros(0, dtype=np.int64)
+    _, part, count = np.unique(part, return_inverse=True, return_counts=True)
+    part = part.ravel()
+    if count.max() > _PART_MAX_FACES:
+        return None
+    box = faces.box32
+    order = act[np.lexsort((box[act, 0], part))]          # by part, then low x
+    pstart = np.concatenate([[0], np.cumsum(count)]).astype(np.int64)
+    n_parts = count.size
+    pbox = np.empty((n_parts, 6), dtype=np.float32)
+    seg = pstart[:-1]
+    for k in range(3):
+        pbox[:, k] = np.minimum.reduceat(box[order, k], seg)
+        pbox[:, 3 + k] = np.maximum.reduceat(box[order, 3 + k], seg)
+    porder = np.argsort(pbox[:, 0], kind="stable").astype(np.int64)
+    order = order.astype(np.int64)
+    cuts = np.linspace(0, n_parts, min(n_parts, 16) + 1).astype(np.int64)
+    keys = list(mapper(lambda k: _part_loops(order, pstart, pbox, porder, int(cuts[k]),
+                                             int(cuts[k + 1]), box, faces.masked_rows,
+                                             faces.F, faces.V, faces.plane, faces.tol,
+                                             faces.E), range(cuts.size - 1)))
+    return np.sort(np.concatenate(keys)) if keys else np.zeros(0, dtype=np.int64)
+
+
+@helper
+def _pushed(out, found, key):
+    if found == out.shape[0]:
+        grown = np.empty(2 * out.shape[0], dtype=np.int64)
+        grown[:found] = out[:found]
+        out = grown
+    out[found] = key
+    return out
+
+
+@compiled
+def _part_loops(order, pstart, pbox, porder, c0, c1, box, mrows, F, V, plane, tol, E):
+    """Sweeps of :func:`_part_sweep`: ``order`` holds the active faces by part,
+    then low x; part ``p`` is ``order[pstart[p]:pstart[p + 1]]``; ``porder``
+    lists the parts by the low x of their boxes ``pbox``.  Sweeps parts
+    ``c0 .. c1 - 1`` and the pairs of parts whose first (in ``porder``) is
+    ``porder[c0 .. c1 - 1]``.  Returns the keys."""
+    # the box and fan tests are written out in the loops: a call passing
+    # arrays costs reference counting, which would cost more than the tests
+    m = F.shape[0]
+    masked = mrows.shape[0] > 0
+    out = np.empty(1024, dtype=np.int64)
+    found = 0
+    n_parts = pstart.shape[0] - 1
+    for p in range(c0, c1):                      # within a part
+        s, e = pstart[p], pstart[p + 1]
+        for x in range(s, e):
+            fa = order[x]
+            hx = box[fa, 3]
+            for y in range(x + 1, e):
+                fb = order[y]
+                if box[fb, 0] > hx:
+                    break
+                if (box[fa, 0] > box[fb, 3] or box[fa, 1] > box[fb, 4] or box[fb, 1] > box[fa, 4]
+                        or box[fa, 2] > box[fb, 5] or box[fb, 2] > box[fa, 5]):
+                    continue
+                if masked and (mrows[fa, 0] == mrows[fb, 0] or mrows[fa, 0] == mrows[fb, 1]
+                               or mrows[fa, 0] == mrows[fb, 2] or mrows[fa, 1] == mrows[fb, 0]
+                               or mrows[fa, 1] == mrows[fb, 1] or mrows[fa, 1] == mrows[fb, 2]
+                               or mrows[fa, 2] == mrows[fb, 0] or mrows[fa, 2] == mrows[fb, 1]
+                               or mrows[fa, 2] == mrows[fb, 2]):
+                    continue
+                if _pair_hits(min(fa, fb), max(fa, fb), F, V, plane, tol, E):
+                    out = _pushed(out, found, min(fa, fb) * m + max(fa, fb))
+                    found += 1
+    largest = 0
+    for p in range(n_parts):
+        largest = max(largest, pstart[p + 1] - pstart[p])
+    la = np.empty(largest, dtype=np.int64)
+    lb = np.empty(largest, dtype=np.int64)
+    for ia in range(c0, c1):                     # pairs of parts whose boxes meet
+        p = porder[ia]
+        for ib in range(ia + 1, n_parts):
+            q = porder[ib]
+            if pbox[q, 0] > pbox[p, 3]:
+                break
+            if (pbox[p, 1] > pbox[q, 4] or pbox[q, 1] > pbox[p, 4]
+                    or pbox[p, 2] > pbox[q, 5] or pbox[q, 2] > pbox[p, 5]):
+                continue
+            na = 0
+            for x in range(pstart[p], pstart[p + 1]):
+                f = order[x]
+                if not (box[f, 0] > pbox[q, 3] or pbox[q, 0] > box[f, 3] or box[f, 1] > pbox[q, 4]
+                        or pbox[q, 1] > box[f, 4] or box[f, 2] > pbox[q, 5]
+                        or pbox[q, 2] > box[f, 5]):
+                    la[na] = f
+                    na += 1
+            nb = 0
+            for x in range(pstart[q], pstart[q + 1]):
+                f = order[x]
+                if not (box[f, 0] > pbox[p, 3] or pbox[p, 0] > box[f, 3] or box[f, 1] > pbox[p, 4]
+                        or pbox[p, 1] > box[f, 4] or box[f, 2] > pbox[p, 5]
+                        or pbox[p, 2] > box[f, 5]):
+                    lb[nb] = f
+                    nb += 1
+            start = 0                            # both lists by low x
+            for x in range(na):
+                fa = la[x]
+                while start < nb and box[lb[start], 3] < box[fa, 0]:
+                    start += 1                   # cannot meet fa nor any later face
+                for y in range(start, nb):
+                    fb = lb[y]
+                    if box[fb, 0] > box[fa, 3]:
+                        break
+                    if (box[fb, 3] < box[fa, 0] or box[fa, 1] > box[fb, 4]
+                            or box[fb, 1] > box[fa, 4] or box[fa, 2] > box[fb, 5]
+                            or box[fb, 2] > box[fa, 5]):
+                        continue
+                    if masked and (mrows[fa, 0] == mrows[fb, 0] or mrows[fa, 0] == mrows[fb, 1]
+                                   or mrows[fa, 0] == mrows[fb, 2] or mrows[fa, 1] == mrows[fb, 0]
+                                   or mrows[fa, 1] == mrows[fb, 1] or mrows[fa, 1] == mrows[fb, 2]
+                                   or mrows[fa, 2] == mrows[fb, 0] or mrows[fa, 2] == mrows[fb, 1]
+                                   or mrows[fa, 2] == mrows[fb, 2]):
+                        continue
+                    if _pair_hits(min(fa, fb), max(fa, fb), F, V, plane, tol, E):
+                        out = _pushed(out, found, min(fa, fb) * m + max(fa, fb))
+                        found += 1
+    return out[:found].copy()
 
 
 # ---------------------------------------------------------------------------

@@ -89,6 +89,11 @@ class ElementContacts(NamedTuple):
 def element_contacts(X: np.ndarray, G: np.ndarray) -> ElementContacts:
     """Elements the map folds, and pairs of elements that meet (one exact test).
 
+    The exact test of all faces (:func:`~geotex.check.intersections.self_intersecting_pairs`)
+    is given the elements as its parts: it sweeps every element and every pair
+    of elements whose boxes overlap instead of a grid over the whole mesh,
+    with the same answer.
+
     Parameters
     ----------
     X : numpy.ndarray, (k, 3) float64
@@ -99,7 +104,10 @@ def element_contacts(X: np.ndarray, G: np.ndarray) -> ElementContacts:
     ElementContacts
     """
     _, label = face_components(G, X.shape[0])
-    pairs = self_intersecting_pairs(X, G)
+    # elements are many small closed parts: the exact test sweeps each element
+    # and each pair of elements whose boxes meet (same pairs, same predicates as
+    # the test on its global grid, at about half the cost)
+    pairs = self_intersecting_pairs(X, G, parts=label)
     a, b = label[pairs[:, 0]], label[pairs[:, 1]]
     same = a == b
     touching = np.unique(np.sort(np.stack([a[~same], b[~same]], axis=1), axis=1), axis=0)
