@@ -28,6 +28,7 @@ import datetime
 import json
 import os
 import platform
+import re
 import time
 from pathlib import Path
 
@@ -259,7 +260,12 @@ def main():
               "vectors of a border edge seen from its two faces (how much the pattern turns "
               "there; hpm: placed patches, filled faces left out; lapped: top pastes).", ""]
     out = HERE / "results" / "hpm.md"
-    out.write_text("\n".join(lines))
+    kept = ""
+    if out.exists():                # sections headed "... (written by hand)" stay below
+        old = out.read_text()
+        hand = re.search(r"^## [^\n]*\(written by hand\)", old, flags=re.M)
+        kept = old[hand.start():] if hand else ""
+    out.write_text("\n".join(lines) + ("\n" + kept if kept else ""))
     (HERE / "results" / "hpm.json").write_text(json.dumps(rec, indent=1))
     print(f"wrote {out}")
 
