@@ -214,6 +214,16 @@ def test_cli_map_texture_and_errors(tmp_path, capsys, torus_shell, iso_studs):
     assert not (tmp_path / "y.stl").exists()
 
 
+def _mapped_seed0(shell, tiles):
+    """``tiles`` mapped over ``shell`` as the main job maps them (seed 0, default height)."""
+    pc = shell.polycube
+    colors = edge_colors(pc.layout.edge_axis, tiles.n_colors, seed=0)
+    tq = tiles_for_quads(tiles, pc.layout.quad_axes, pc.layout.quad_edge, colors,
+                         bare=pc.quad_folded)
+    h = texture_height(shell, tiles)
+    return mapped_tiles(shell, tiles, tq, scale=h / tiles.height, anchor=0.2 * shell.tile_size)
+
+
 def _closed_sets():
     from geotex.tiles.catalog import list_tilesets
 
@@ -301,12 +311,7 @@ def test_folded_elements_are_shrunk_in_place_rather_than_dropped():
     # Blub's fins fold some studs; most of those are re-seated, smaller
     assert s.elements_reseated > s.elements_folded / 2 > 0
     # the re-seated elements are free of self-crossings (only the rest are left out)
-    pc = shell.polycube
-    colors = edge_colors(pc.layout.edge_axis, tiles.n_colors, seed=0)
-    tq = tiles_for_quads(tiles, pc.layout.quad_axes, pc.layout.quad_edge, colors,
-                         bare=pc.quad_folded)
-    h = texture_height(shell, tiles)
-    m = mapped_tiles(shell, tiles, tq, scale=h / tiles.height, anchor=0.2 * shell.tile_size)
+    m = _mapped_seed0(shell, tiles)
     folded = element_contacts(m.vertices, m.faces).folded
     assert folded.size == s.elements_folded + s.elements_reseated
 
@@ -369,12 +374,7 @@ def test_element_contacts_equal_the_full_exact_test_on_a_real_layout(monkeypatch
     from geotex.tiles.catalog import load_named as load_tiles
 
     shell, tiles = load_shell("spot"), load_tiles("studs")
-    pc = shell.polycube
-    colors = edge_colors(pc.layout.edge_axis, tiles.n_colors, seed=0)
-    tq = tiles_for_quads(tiles, pc.layout.quad_axes, pc.layout.quad_edge, colors,
-                         bare=pc.quad_folded)
-    h = texture_height(shell, tiles)
-    m = mapped_tiles(shell, tiles, tq, scale=h / tiles.height, anchor=0.2 * shell.tile_size)
+    m = _mapped_seed0(shell, tiles)
     X, G = m.vertices, m.faces
     # the old element_contacts: one exact test of all faces on the global grid
     _, label = face_components(G, X.shape[0])
