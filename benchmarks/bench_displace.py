@@ -467,7 +467,12 @@ def write_markdown(path, meta, rows):
               "geotex check is "
               "the full `check_mesh` (self-intersections and manifold3d included) on the file "
               "as read back.", ""]
-    Path(path).write_text("\n".join(lines))
+    out_md = Path(path)
+    kept = ""
+    if out_md.exists():           # sections headed "... (written by hand ...)" stay below
+        hand = re.search(r"^## [^\n]*\(written by hand", out_md.read_text(), flags=re.M)
+        kept = out_md.read_text()[hand.start():] if hand else ""
+    out_md.write_text("\n".join(lines) + ("\n" + kept if kept else ""))
 
 
 if __name__ == "__main__":

@@ -206,7 +206,12 @@ def main(argv=None) -> int:
     lines += ["", "## geotex demo", "",
               f"`geotex demo` (Spot at 80 mm, studs, STL + 3MF + picture + report): "
               f"**{demo[0]:.1f} s** wall, peak {demo[1]:.0f} MB, exit {demo[2]}.", ""]
-    Path(args.out).write_text("\n".join(lines) + "\n")
+    out_md = Path(args.out)
+    kept = ""
+    if out_md.exists():           # sections headed "... (written by hand ...)" stay below
+        hand = re.search(r"^## [^\n]*\(written by hand", out_md.read_text(), flags=re.M)
+        kept = out_md.read_text()[hand.start():] if hand else ""
+    out_md.write_text("\n".join(lines) + "\n" + ("\n" + kept if kept else ""))
     print(f"wrote {args.out}")
     return 0
 
