@@ -183,6 +183,8 @@ def test_cli_map_texture_and_errors(tmp_path, capsys, torus_shell, iso_studs):
     assert main(["texture", str(src), "--tiles", str(tiles), "--tile-size", "0.45", "-o",
                  str(out2), "--shell-out", str(tmp_path / "s2.npz")]) == 0
     assert out2.is_file() and (tmp_path / "s2.npz").is_file()
+    # the files written while the check ran took their names: no hidden leftovers
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
     capsys.readouterr()
     # errors: one line, exit 2, nothing written, inputs never overwritten
     cases = [

@@ -125,3 +125,72 @@ def test_judged_arrays_that_are_not_in_stored_form_are_judged_again(tmp_path):
     out = export_printable(tmp_path / "part.stl", V, F, report=rep)
     assert out.digest != rep.digest and out.printable
     assert out.digest == check_mesh(*written_form(tmp_path / "part.stl")).digest
+
+
+def _leftovers(tmp_path, out):
+    return sorted(p.name for p in tmp_path.iterdir() if p.name != out.name)
+
+
+@pytest.mark.parametrize("ext", [".stl", ".3mf"])
+def test_a_staged_write_is_renamed_once_its_arrays_are_judged_printable(tmp_path, ext,
+                                                                         monkeypatch):
+    import geotex.printing
+    from geotex.printing import StagedWrite
+
+    def no_second_write(*args):
+        raise AssertionError("written again although the staged file holds the arrays")
+
+    monkeypatch.setattr(geotex.printing, "_verified_write", no_second_write)
+    V, F = icosphere(2)
+    out = tmp_path / f"ball{ext}"
+    with StagedWrite(out, name="ball") as staged:
+        solid = printable_stored_solid(V * 10.0, F, precision=stored_precision(ext),
+                                       on_stored=staged)
+        assert not out.exists()                         # nothing under the name before the verdict
+        rep = export_printable(out, solid.vertices, solid.faces, report=solid.report,
+                               staged=staged)
+    assert rep is solid.report and rep.printable
+    assert written_form(out)[0].shape == solid.vertices.shape
+    assert np.array_equal(written_form(out)[1], solid.faces)
+    assert _leftovers(tmp_path, out) == []
+
+
+def test_a_staged_write_of_other_arrays_is_deleted_and_the_judged_ones_written(tmp_path):
+    from geotex.printing import StagedWrite
+
+    V, F = icosphere(2)
+    out = tmp_path / "ball.stl"
+    with StagedWrite(out) as staged:
+        staged(*stored_form(V * 20.0, F))              # staged: another solid
+        solid = printable_stored_solid(V * 10.0, F)
+        export_printable(out, solid.vertices, solid.faces, report=solid.report, staged=staged)
+    back = written_form(out)
+    assert np.array_equal(back[0], solid.vertices) and np.array_equal(back[1], solid.faces)
+    assert _leftovers(tmp_path, out) == []
+
+
+def test_a_staged_write_of_an_unprintable_solid_leaves_nothing(tmp_path):
+    from geotex.printing import StagedWrite
+
+    from geotex.mesh.topology import concatenated
+
+    V, F = concatenated([box((0, 0, 0), (2, 2, 2)), box((1, 1, 1), (3, 3, 3))])  # overlapping
+    out = tmp_path / "box.stl"
+    with StagedWrite(out) as staged:
+        solid = printable_stored_solid(V, F, on_stored=staged)
+        assert not solid.report.printable
+        with pytest.raises(NotPrintableError):
+            export_printable(out, solid.vertices, solid.faces, report=solid.report,
+                             staged=staged)
+    assert not out.exists() and _leftovers(tmp_path, out) == []
+
+
+def test_a_staged_write_left_unused_is_deleted(tmp_path):
+    from geotex.printing import StagedWrite
+
+    V, F = icosphere(1)
+    out = tmp_path / "ball.stl"
+    with StagedWrite(out) as staged:
+        staged(*stored_form(V, F))
+        staged(*stored_form(2.0 * V, F))               # replaces the first
+    assert not out.exists() and _leftovers(tmp_path, out) == []

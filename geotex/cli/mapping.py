@@ -112,45 +112,49 @@ def _finish(args, shell, tiles, out, extra, *, label: str, seconds=None) -> int:
     from geotex.errors import NotPrintableError
     from geotex.io.atomic import atomic_output
     from geotex.mapping import MAP_PROGRESS, textured_solid
-    from geotex.printing import export_printable
+    from geotex.printing import StagedWrite, export_printable
     from geotex.progress import stage_bar
 
     from geotex.errors import InputError
 
     height = _texture_height(args, shell, tiles)
     warn_print_size(float(np.ptp(shell.base_vertices, axis=0).max()))
-    try:
-        with stage_bar(len(MAP_PROGRESS), "map") as bar:
-            result = textured_solid(shell, tiles, height=height, seed=args.seed,
-                                    progress=bar)
-    except InputError as exc:
-        flags = {"height": "--height", "seed": "--seed"}
-        if hasattr(args, "tile_size"):                  # 'geotex texture' builds the shell
-            flags["tile size"] = "--tile-size"
-        raise flag_error(exc, flags) from None
-    V, F, rep = result.vertices, result.faces, result.report
-    s = result.stats
-    print(f"{label}: {s.quads} tiles of {shell.tile_size:.3g} mm ({s.bare_quads} bare), "
-          f"{s.elements} elements {s.height:.3g} mm high, {s.faces} faces")
-    if s.elements_floating or s.elements_folded:
-        print(f"  left out: {s.elements_folded} elements folded by the shell map, "
-              f"{s.elements_floating} that do not reach the base")
-    status = EXIT_OK
-    seconds = dict(seconds or {}, **s.seconds)
-    t = time.perf_counter()
-    try:
-        rep = export_printable(out, V, F, name=label, report=rep)
-        seconds["write"] = round(time.perf_counter() - t, 3)
-        print(f"wrote {out} (printable as written: checked on the file's own coordinates)")
-    except NotPrintableError as exc:
-        print(f"geotex: error: {out}: not written, not printable as stored "
-              f"({'; '.join(exc.report.reasons)})", file=sys.stderr)
-        status = EXIT_NOT_PRINTABLE
-        if not args.keep_failed:
-            return status
-        kept = out.with_name(f"{out.stem}.NOT-PRINTABLE{out.suffix}")
-        rep = export_printable(kept, V, F, name=label, report=exc.report, force=True)
-        print(f"wrote {kept} for inspection (NOT printable)")
+    # the STL is written (to a hidden sibling, read back, compared) while the
+    # check judges it; it takes its name only if the verdict says printable
+    with StagedWrite(out, name=label) as staged:
+        try:
+            with stage_bar(len(MAP_PROGRESS), "map") as bar:
+                result = textured_solid(shell, tiles, height=height, seed=args.seed,
+                                        progress=bar, on_stored=staged)
+        except InputError as exc:
+            flags = {"height": "--height", "seed": "--seed"}
+            if hasattr(args, "tile_size"):                  # 'geotex texture' builds the shell
+                flags["tile size"] = "--tile-size"
+            raise flag_error(exc, flags) from None
+        V, F, rep = result.vertices, result.faces, result.report
+        s = result.stats
+        print(f"{label}: {s.quads} tiles of {shell.tile_size:.3g} mm ({s.bare_quads} bare), "
+              f"{s.elements} elements {s.height:.3g} mm high, {s.faces} faces")
+        if s.elements_floating or s.elements_folded:
+            print(f"  left out: {s.elements_folded} elements folded by the shell map, "
+                  f"{s.elements_floating} that do not reach the base")
+        status = EXIT_OK
+        seconds = dict(seconds or {}, **s.seconds)
+        t = time.perf_counter()
+        try:
+            rep = export_printable(out, V, F, name=label, report=rep, staged=staged)
+            # the write overlaps the check: this is the time it took beyond it
+            seconds["write"] = round(time.perf_counter() - t, 3)
+            print(f"wrote {out} (printable as written: checked on the file's own coordinates)")
+        except NotPrintableError as exc:
+            print(f"geotex: error: {out}: not written, not printable as stored "
+                  f"({'; '.join(exc.report.reasons)})", file=sys.stderr)
+            status = EXIT_NOT_PRINTABLE
+            if not args.keep_failed:
+                return status
+            kept = out.with_name(f"{out.stem}.NOT-PRINTABLE{out.suffix}")
+            rep = export_printable(kept, V, F, name=label, report=exc.report, force=True)
+            print(f"wrote {kept} for inspection (NOT printable)")
     if "report" in extra:
         doc = {"unit": "mm", "stats": s.to_dict(), "seconds": seconds,
                "tile_size": shell.tile_size, "shell": shell.name,

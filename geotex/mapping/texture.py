@@ -202,7 +202,8 @@ def _elements_near(points, X, G, exclude=None) -> np.ndarray:
 
 
 def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = True,
-                   shaped: bool | None = None, progress=None) -> TexturedSolid:
+                   shaped: bool | None = None, progress=None, on_stored=None
+                   ) -> TexturedSolid:
     """Lay ``tiles`` over ``shell`` and unite them with its base.
 
     Parameters
@@ -234,6 +235,12 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
     progress : callable, optional
         Called with each stage and step of :data:`MAP_PROGRESS` (the times in
         ``stats.seconds`` are per stage of :data:`MAP_STAGES`).
+    on_stored : callable, optional
+        With ``check``: called with the float32-exact arrays ``(V, F)`` each
+        time the check is about to judge them (a retried union calls it
+        again); the result holds the arrays of the last call. The CLI passes
+        a :class:`geotex.printing.StagedWrite`, so the STL is written while
+        it is judged.
 
     Returns
     -------
@@ -291,7 +298,8 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
         # verdict, a subset of the check's, is not asked again
         report(progress, "float32")
         solid = printable_stored_solid(V, F, precision=np.float32, manifold3d=False,
-                                       max_examples=ALL_DEFECTS, progress=progress)
+                                       max_examples=ALL_DEFECTS, progress=progress,
+                                       on_stored=on_stored)
         # the boolean can leave needle faces where an element grazes the base
         # or a neighbour; leave the elements there out and unite again
         exclude = None
@@ -304,7 +312,8 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
                                            mapped.vertices, mapped.faces, exclude=exclude,
                                            contacts=contacts, moved=moved, progress=progress)
             solid = printable_stored_solid(V, F, precision=np.float32, manifold3d=False,
-                                           max_examples=ALL_DEFECTS, progress=progress)
+                                           max_examples=ALL_DEFECTS, progress=progress,
+                                           on_stored=on_stored)
             retried += 1
         V, F = solid.vertices, solid.faces
         rep = dataclasses.replace(solid.report, examples={

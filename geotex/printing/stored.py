@@ -113,7 +113,7 @@ class StoredSolid:
 
 def printable_stored_solid(V, F, *, precision=np.float32, rebuild: bool = False,
                            manifold3d: bool = True, max_examples: int = 5,
-                           progress=None) -> StoredSolid:
+                           progress=None, on_stored=None) -> StoredSolid:
     """Round a solid to a file's precision, repair what rounding broke, judge it.
 
     The solid is judged as stored (:func:`stored_form`); if that fails (or
@@ -143,6 +143,11 @@ def printable_stored_solid(V, F, *, precision=np.float32, rebuild: bool = False,
         Offending elements kept in the report's ``examples``.
     progress : callable, optional
         Passed to :func:`~geotex.check.report.check_mesh`.
+    on_stored : callable, optional
+        Called with the arrays ``(V, F)`` about to be judged, before each
+        check runs (a :class:`geotex.printing.StagedWrite` then writes them
+        while they are judged); the returned solid holds the arrays of the
+        last call.
 
     Returns
     -------
@@ -155,6 +160,8 @@ def printable_stored_solid(V, F, *, precision=np.float32, rebuild: bool = False,
         Malformed arrays or coordinates outside the float32 range.
     """
     def judged(Vx, Fx):
+        if on_stored is not None:
+            on_stored(Vx, Fx)
         return check_mesh(Vx, Fx, manifold3d=manifold3d, max_examples=max_examples,
                           progress=progress)
 
