@@ -26,6 +26,7 @@ import numpy as np
 from geotex.check.intersections import self_intersecting_pairs
 from geotex.mapping.shape import SPREAD, shaped_positions
 from geotex.mesh.topology import vertex_components
+from geotex.param.polycube_fit import SurfaceProjector
 from geotex.shells.locate import interpolated
 from geotex.tiles.tileset import TileSet
 
@@ -287,6 +288,7 @@ def reseated_elements(shell, mapped: "MappedTiles", label: np.ndarray, elements,
         return X, still
     order = np.argsort(label, kind="stable")
     starts = np.searchsorted(label[order], np.arange(int(label.max()) + 2))
+    projector = SurfaceProjector(shell.polycube.Y, shell.polycube.F)    # one for every size
     for f in factors:
         if still.size == 0:
             break
@@ -301,7 +303,8 @@ def reseated_elements(shell, mapped: "MappedTiles", label: np.ndarray, elements,
         Xe = shaped_positions(shell, mapped.quads[verts], mapped.tile_points[verts], vel,
                               scale=scale, depth_scale=depth_scale,
                               shrink=np.full(still.size, float(f)), similar=mapped.shaped,
-                              shift=None if mapped.shift is None else mapped.shift[verts])
+                              shift=None if mapped.shift is None else mapped.shift[verts],
+                              projector=projector)
         fstart = np.cumsum(counts) - counts
         left = []
         for j, e in enumerate(still):

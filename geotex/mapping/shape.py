@@ -125,7 +125,8 @@ def _group_mean(values: np.ndarray, group: np.ndarray, n: int) -> np.ndarray:
 def shaped_positions(shell, quads, uvw, element, *, scale: float,
                      depth_scale: float | None = None, evening: float = EVENING,
                      max_extent: float = MAX_EXTENT, shrink=None, similar: bool = True,
-                     spread: int = 0, shift=None, return_shift: bool = False):
+                     spread: int = 0, shift=None, return_shift: bool = False,
+                     projector=None):
     """Shell positions of tile points, every small element mapped as one similar shape.
 
     Parameters
@@ -165,6 +166,11 @@ def shaped_positions(shell, quads, uvw, element, *, scale: float,
         an earlier call with ``return_shift``).
     return_shift : bool, optional
         Also return the shift of every point's element.
+    projector : SurfaceProjector, optional
+        Closest points on the fitted surface ``(pc.Y, pc.F)``
+        (:class:`geotex.param.polycube_fit.SurfaceProjector`), for points
+        whose walk gets lost; built here when needed and not given (pass one
+        to calls on the same shell to build it once).
 
     Returns
     -------
@@ -261,7 +267,9 @@ def shaped_positions(shell, quads, uvw, element, *, scale: float,
         # the offset does
         fface, fb, lost = _walked_feet(pc, quads[idx], uvw[idx, :2], target)
         if lost.any():
-            foot, fface[lost] = SurfaceProjector(pc.Y, pc.F).project(target[lost], d[idx[lost]])
+            if projector is None:
+                projector = SurfaceProjector(pc.Y, pc.F)
+            foot, fface[lost] = projector.project(target[lost], d[idx[lost]])
             fb[lost] = clamped_barycentric(foot, *(pc.Y[pc.F[fface[lost], i]] for i in range(3)))
         y[idx] = interpolated(pc.Y, pc.F, fface, fb)
         d[idx] = _unit(interpolated(shell.D, pc.F, fface, fb))
