@@ -134,7 +134,8 @@ class MappedTiles:
 
 
 def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: float,
-                 anchor: float | None = None, shaped: bool = True) -> MappedTiles:
+                 anchor: float | None = None, shaped: bool = True,
+                 projector: SurfaceProjector | None = None) -> MappedTiles:
     """Map the chosen tiles of every quad into the shell and weld them.
 
     Parameters
@@ -158,6 +159,10 @@ def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: floa
         Shaped elements that would overlap are pushed apart along the surface
         (:func:`~geotex.mapping.shape.spread_centres`). False maps every point
         through the quad map (:func:`shell_positions`).
+    projector : SurfaceProjector, optional
+        Closest points on the shell's fitted surface, passed to
+        :func:`~geotex.mapping.shape.shaped_positions` (built there when
+        needed and not given).
 
     Returns
     -------
@@ -203,7 +208,7 @@ def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: floa
     if shaped:
         X, shift = shaped_positions(shell, quad_of_vertex[kept], uvw[kept], element,
                                     scale=scale, depth_scale=below, spread=SPREAD,
-                                    return_shift=True)
+                                    return_shift=True, projector=projector)
     else:
         X = shell_positions(shell, quad_of_vertex[kept], uvw[kept], scale=scale,
                             depth_scale=below)
@@ -250,7 +255,8 @@ def shell_positions(shell, quads: np.ndarray, uvw: np.ndarray, *, scale: float,
 
 
 def reseated_elements(shell, mapped: "MappedTiles", label: np.ndarray, elements, *,
-                      scale: float, depth_scale: float, factors=(0.75, 0.55, 0.4, 0.3)
+                      scale: float, depth_scale: float, factors=(0.75, 0.55, 0.4, 0.3),
+                      projector: SurfaceProjector | None = None
                       ) -> tuple[np.ndarray, np.ndarray]:
     """Shrink folded elements about their centre and map them again.
 
@@ -273,6 +279,10 @@ def reseated_elements(shell, mapped: "MappedTiles", label: np.ndarray, elements,
         As in :func:`shell_positions`.
     factors : sequence of float
         Shrink factors tried.
+    projector : SurfaceProjector, optional
+        Closest points on the shell's fitted surface (the one
+        :func:`mapped_tiles` used); built here, once for every size, if not
+        given.
 
     Returns
     -------
@@ -288,7 +298,8 @@ def reseated_elements(shell, mapped: "MappedTiles", label: np.ndarray, elements,
         return X, still
     order = np.argsort(label, kind="stable")
     starts = np.searchsorted(label[order], np.arange(int(label.max()) + 2))
-    projector = SurfaceProjector(shell.polycube.Y, shell.polycube.F)    # one for every size
+    if projector is None:                                   # one for every size
+        projector = SurfaceProjector(shell.polycube.Y, shell.polycube.F)
     for f in factors:
         if still.size == 0:
             break

@@ -21,6 +21,7 @@ from geotex.mapping.assign import edge_colors, tiles_for_quads
 from geotex.mapping.place import depth_scale, mapped_tiles, reseated_elements
 from geotex.mapping.union import UNION_STAGES, element_contacts, united_with_base
 from geotex.mesh.topology import face_components
+from geotex.param.polycube_fit import SurfaceProjector
 from geotex.printing.stored import printable_stored_solid
 from geotex.progress import report
 
@@ -270,8 +271,10 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
     report(progress, "map")
     t = time.perf_counter()
     scale = h / tiles.height
+    # closest points on the fitted surface: built once for the map and the re-seating
+    projector = SurfaceProjector(pc.Y, pc.F) if shaped else None
     mapped = mapped_tiles(shell, tiles, tile_of_quad, scale=scale,
-                          anchor=ANCHOR * shell.tile_size, shaped=shaped)
+                          anchor=ANCHOR * shell.tile_size, shaped=shaped, projector=projector)
     times["map"] = time.perf_counter() - t
     report(progress, "union")
     t = time.perf_counter()
@@ -279,7 +282,8 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
     contacts = element_contacts(mapped.vertices, mapped.faces)
     folded = contacts.folded
     X, still = reseated_elements(shell, mapped, contacts.label, folded, scale=scale,
-                                 depth_scale=depth_scale(tiles, scale, ANCHOR * shell.tile_size))
+                                 depth_scale=depth_scale(tiles, scale, ANCHOR * shell.tile_size),
+                                 projector=projector)
     mapped = dataclasses.replace(mapped, vertices=X)
     moved = np.setdiff1d(folded, still)
     V, F, union = united_with_base(shell.base_vertices, shell.base_faces, mapped.vertices,

@@ -24,7 +24,8 @@ from geotex.mesh.record import Mesh
 from geotex.printing.stored import (StoredSolid, printable_stored_solid, stored_form,
                                     stored_precision)
 
-__all__ = ["export_printable", "StagedWrite", "PRINT_FORMATS", "printable_stored_solid", "stored_form",
+__all__ = ["export_printable", "StagedWrite", "PRINT_FORMATS", "printable_stored_solid",
+           "stored_form",
            "stored_precision", "StoredSolid", "written_form"]
 
 #: Extensions accepted by :func:`export_printable`.
