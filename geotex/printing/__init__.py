@@ -25,8 +25,7 @@ from geotex.printing.stored import (StoredSolid, printable_stored_solid, stored_
                                     stored_precision)
 
 __all__ = ["export_printable", "StagedWrite", "PRINT_FORMATS", "printable_stored_solid",
-           "stored_form",
-           "stored_precision", "StoredSolid", "written_form"]
+           "stored_form", "stored_precision", "StoredSolid", "written_form"]
 
 #: Extensions accepted by :func:`export_printable`.
 PRINT_FORMATS = (".stl", ".3mf", ".obj", ".ply", ".off")
