@@ -194,3 +194,22 @@ def test_a_staged_write_left_unused_is_deleted(tmp_path):
         staged(*stored_form(V, F))
         staged(*stored_form(2.0 * V, F))               # replaces the first
     assert not out.exists() and _leftovers(tmp_path, out) == []
+
+
+@pytest.mark.parametrize("precision", [np.float32, np.float64])
+def test_stored_form_is_the_corner_weld_in_order_of_first_appearance(precision):
+    from geotex.io import weld_exact
+
+    rng = np.random.default_rng(5)
+    V = rng.normal(size=(300, 3))
+    V[::7] = V[3::7][: len(V[::7])]                       # repeated positions
+    V[10:20] += 1e-12                                     # equal once rounded to float32
+    V[5] = [-0.0, 0.0, 1.0]
+    V[6] = [0.0, -0.0, 1.0]                               # -0.0 welds with 0.0
+    F = rng.integers(0, 250, size=(400, 3))               # 250..299 unreferenced
+    Vs, Fs = stored_form(V, F, precision=precision)
+    unique, inverse = weld_exact(V.astype(precision)[F].reshape(-1, 3))
+    assert np.array_equal(Fs, inverse.reshape(-1, 3))
+    assert Vs.tobytes() == unique.astype(np.float64).tobytes()    # bit for bit (+0.0)
+    Ve, Fe = stored_form(np.zeros((4, 3)), np.zeros((0, 3), dtype=np.int64))
+    assert Ve.shape == (0, 3) and Fe.shape == (0, 3)

@@ -82,9 +82,18 @@ def stored_form(V, F, *, precision=np.float32) -> tuple[np.ndarray, np.ndarray]:
     if precision == np.float32 and V.size and np.abs(V).max() > np.finfo(np.float32).max:
         raise InputError("coordinates exceed the float32 range of the file format; "
                          "scale the model down or write a .3mf")
-    corners = V.astype(precision)[F].reshape(-1, 3)
-    unique, inverse = weld_exact(corners)
-    return unique.astype(np.float64), inverse.reshape(-1, 3)
+    # welding the vertices (not the 3m corners) and numbering the welded ones
+    # by first appearance in F gives the same arrays, bit for bit, at a third
+    # of the cost: equal corners are corners of equal vertices
+    unique, welded = weld_exact(V.astype(precision))
+    W = welded[F]
+    first = np.full(unique.shape[0], W.size, dtype=np.int64)
+    np.minimum.at(first, W.ravel(), np.arange(W.size))
+    used = np.flatnonzero(first < W.size)
+    order = used[np.argsort(first[used], kind="stable")]
+    rank = np.empty(unique.shape[0], dtype=np.int64)
+    rank[order] = np.arange(order.size)
+    return unique[order].astype(np.float64), rank[W]
 
 
 @dataclass(frozen=True)
