@@ -114,12 +114,14 @@ def _coverage(shell) -> float | None:
 def _textured(part, shell, tiles, out) -> dict:
     # lazy: `geotex --help` loads this table (module docstring)
     from geotex.mapping import texture_height, textured_solid
-    from geotex.printing import export_printable
+    from geotex.printing import StagedWrite, export_printable
 
     height = texture_height(shell, tiles, part.height)
-    result = textured_solid(shell, tiles, height=height, seed=part.seed)
-    rep = export_printable(out, result.vertices, result.faces, name=part.name,
-                           report=result.report)
+    with StagedWrite(out, name=part.name) as staged:     # written while it is checked
+        result = textured_solid(shell, tiles, height=height, seed=part.seed,
+                                on_stored=staged)
+        rep = export_printable(out, result.vertices, result.faces, name=part.name,
+                               report=result.report, staged=staged)
     return {"faces": int(rep.faces), "tile_size": round(float(shell.tile_size), 6),
             "coverage": _coverage(shell), "printable": bool(rep.printable)}
 
