@@ -211,35 +211,3 @@ def test_duplicate_faces_still_expand_their_crossing_pairs():
 
     assert r.duplicate_faces == 40
     assert r.examples["self_intersecting_pairs"] == self_intersecting_pairs(V, F).tolist()
-
-
-def test_the_self_intersection_thread_reports_its_error_and_is_waited_for(monkeypatch):
-    import threading
-    import time
-
-    import geotex.check.report as report_module
-
-    V, F = icosphere(2)
-
-    def broken(*args, **kwargs):
-        raise RuntimeError("crossing test failed")
-
-    monkeypatch.setattr(report_module, "self_intersecting_pairs", broken)
-    with pytest.raises(RuntimeError, match="crossing test failed"):
-        check_mesh(V, F)
-    # a failure in the topology part waits for the test running beside it
-    finished = threading.Event()
-
-    def slow(*args, **kwargs):
-        time.sleep(0.3)
-        finished.set()
-        return np.zeros((0, 2), dtype=np.int64)
-
-    def topology_fails(*args, **kwargs):
-        raise ValueError("topology failed")
-
-    monkeypatch.setattr(report_module, "self_intersecting_pairs", slow)
-    monkeypatch.setattr(report_module, "non_manifold_vertices", topology_fails)
-    with pytest.raises(ValueError, match="topology failed"):
-        check_mesh(V, F)
-    assert finished.is_set()

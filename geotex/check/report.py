@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import math
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
@@ -231,59 +230,41 @@ def check_mesh(V, F, *, self_intersections: bool = True, manifold3d: bool = True
     boundary = topo.boundary
     nm_edges = topo.non_manifold
     inconsistent = topo.inconsistent
+    nm_verts = non_manifold_vertices(F, n, topo)
+    degenerate = degenerate_faces(Vn, F)
     duplicates = duplicate_face_groups(F)
+    count, labels = face_components(F, n)
+
     # exact duplicate positions among referenced vertices (unwelded seams)
     dup_positions = repeated_positions(V[used]) if m else 0
 
-    # the self-intersection test (the most expensive part, itself on a thread
-    # pool) runs in a thread while the rest of the topology is measured here
-    # (numba and numpy release the GIL): serial set-up of one overlaps the other
-    crossing = None
-    if self_intersections and m:
-        def crossing_pairs():
-            if dup_positions:
-                return self_intersecting_pairs(V, position_welded_faces(V, F))
-            return self_intersecting_pairs(V, F, topology=topo,
-                                           distinct_faces=duplicates.size == 0)
+    # closedness per component
+    closed_comp = np.ones(count, dtype=bool)
+    if boundary.size or nm_edges.size:
+        ef = topo.edge_faces()
+        bad_edges = np.concatenate([boundary, nm_edges])
+        closed_comp[labels[ef[bad_edges, 0]]] = False
 
-        runner = ThreadPoolExecutor(max_workers=1, thread_name_prefix="geotex-check")
-        crossing = runner.submit(crossing_pairs)
-        runner.shutdown(wait=False)             # the thread ends with its one task
-    try:
-        nm_verts = non_manifold_vertices(F, n, topo)
-        degenerate = degenerate_faces(Vn, F)
-        count, labels = face_components(F, n)
+    norm_vol = component_volumes(Vn, F, labels, count) if m else np.zeros(0)
+    with np.errstate(over="ignore", invalid="ignore"):   # huge coordinates: inf, not NaN
+        unit_volume = float(norm_vol.sum()) if m else 0.0
+        total_volume = float(unit_volume * np.float64(scale) ** 3) if unit_volume else 0.0
 
-        # closedness per component
-        closed_comp = np.ones(count, dtype=bool)
-        if boundary.size or nm_edges.size:
-            ef = topo.edge_faces()
-            bad_edges = np.concatenate([boundary, nm_edges])
-            closed_comp[labels[ef[bad_edges, 0]]] = False
-
-        norm_vol = component_volumes(Vn, F, labels, count) if m else np.zeros(0)
-        with np.errstate(over="ignore", invalid="ignore"):   # huge coordinates: inf, not NaN
-            unit_volume = float(norm_vol.sum()) if m else 0.0
-            total_volume = float(unit_volume * np.float64(scale) ** 3) if unit_volume else 0.0
-
-        outward: bool | None = None
-        if m and inconsistent.size == 0 and closed_comp.all():
-            depth = component_nesting_depth(Vn, F, labels, count, closed_comp)
-            expected = np.where(depth % 2 == 0, 1.0, -1.0)
-            wrong = np.flatnonzero(np.sign(norm_vol) != expected)
-            outward = bool(wrong.size == 0 and norm_vol.sum() > 0)
-            if wrong.size:
-                examples["inward_components"] = _first(wrong, k)
-    except BaseException:
-        if crossing is not None:
-            crossing.cancel()
-            crossing.exception()                # wait: never leave work running behind
-        raise
+    outward: bool | None = None
+    if m and inconsistent.size == 0 and closed_comp.all():
+        depth = component_nesting_depth(Vn, F, labels, count, closed_comp)
+        expected = np.where(depth % 2 == 0, 1.0, -1.0)
+        wrong = np.flatnonzero(np.sign(norm_vol) != expected)
+        outward = bool(wrong.size == 0 and norm_vol.sum() > 0)
+        if wrong.size:
+            examples["inward_components"] = _first(wrong, k)
 
     pairs = None
     report(progress, "self-intersections")
-    if crossing is not None:
-        pairs = crossing.result()
+    if self_intersections and m:
+        pairs = (self_intersecting_pairs(V, position_welded_faces(V, F)) if dup_positions
+                 else self_intersecting_pairs(V, F, topology=topo,
+                                              distinct_faces=duplicates.size == 0))
     elif self_intersections:
         pairs = np.zeros((0, 2), dtype=np.int64)
 
