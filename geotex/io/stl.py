@@ -193,11 +193,11 @@ def write_stl(fh, mesh, *, path, binary: bool = True) -> None:
             raise MeshFileError(path, "coordinates exceed the float32 range of binary "
                                       "STL; write an ASCII STL instead")
         rec = np.zeros(F.shape[0], dtype=STL_DTYPE)
-        V32 = V.astype(np.float32).astype(np.float64)
+        V32 = V.astype(np.float32)
         # normals of the facets as stored (float32 corners), so a reader that
         # recomputes them (admesh) finds nothing to fix
-        rec["normal"] = face_normals(V32, F)
-        rec["vertices"] = V32[F]
+        rec["normal"] = face_normals(V32.astype(np.float64), F)
+        rec["vertices"] = V32[F]            # float32 corners: half the memory of float64 ones
         fh.write(_HEADER)
         fh.write(struct.pack("<I", F.shape[0]))
         fh.write(rec.tobytes())
