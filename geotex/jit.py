@@ -128,18 +128,14 @@ def _load_cached(dispatcher) -> int:
     """
     from numba.core.compiler_lock import global_compiler_lock
 
-    cache = getattr(dispatcher, "_cache", None)
-    try:
-        index = cache._cache_file._load_index()
-    except Exception:              # no usable index (a numba without it): load on first call
-        return 0
+    index = dispatcher._cache._cache_file._load_index()
     loaded = 0
     for key in index:
         sig = key[0]
         with global_compiler_lock:
             if dispatcher.overloads.get(tuple(sig)) is not None:
                 continue
-            cres = cache.load_overload(sig, dispatcher.targetctx)
+            cres = dispatcher._cache.load_overload(sig, dispatcher.targetctx)
             if cres is None:                     # another machine or source: compiled on call
                 continue
             if not cres.objectmode:
@@ -160,7 +156,9 @@ def preload(*packages: str) -> threading.Thread:
     parts in LLVM release the GIL; the rest competes with the main thread for
     it). A call that arrives before the loading is done waits for numba's
     compiler lock, then finds its code loaded. The code is the same the first
-    call would load: results do not change.
+    call would load: results do not change. The loading uses numba internals
+    (the cache index); should they change, it stops and the first calls load
+    their code as before.
 
     Parameters
     ----------
@@ -180,7 +178,10 @@ def preload(*packages: str) -> threading.Thread:
 
     def load():
         for c in calls:
-            _load_cached(c.dispatcher())
+            try:
+                _load_cached(c.dispatcher())
+            except Exception:       # numba internals changed: the first call loads it instead
+                return
 
     thread = threading.Thread(target=load, name="geotex-jit-preload", daemon=True)
     thread.start()
