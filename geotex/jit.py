@@ -29,7 +29,7 @@ import os
 import threading
 import types
 
-__all__ = ["compiled", "helper", "JIT_MIN_SIZE"]
+__all__ = ["compiled", "helper", "preload", "JIT_MIN_SIZE"]
 
 #: Inputs from this many items (half-edges, edges, candidate pairs) up take a
 #: compiled path where a numpy path exists too: below it, loading numba and the
@@ -58,6 +58,8 @@ def _min_size(default: int = 300_000) -> int:
 JIT_MIN_SIZE = _min_size()
 
 _LOCK = threading.Lock()
+#: Module name -> the compiled functions defined there (see :func:`preload`).
+_REGISTRY: dict[str, list] = {}
 
 
 def compiled(fn):
@@ -71,12 +73,12 @@ def compiled(fn):
     Returns
     -------
     callable
-        Calls the compiled function; ``.py_func`` is ``fn`` itself.
+        Calls the compiled function; ``.py_func`` is ``fn`` itself and
+        ``.dispatcher()`` returns the numba dispatcher (created on first use).
     """
     holder: list = []
 
-    @functools.wraps(fn)
-    def call(*args):
+    def dispatcher():
         if not holder:
             with _LOCK:
                 if not holder:
@@ -88,9 +90,15 @@ def compiled(fn):
                                 obj, "_geotex_helper", False):        # not compiled yet
                             namespace[name] = numba.njit(cache=True, nogil=True)(obj)
                     holder.append(numba.njit(cache=True, nogil=True, boundscheck=False)(fn))
-        return holder[0](*args)
+        return holder[0]
+
+    @functools.wraps(fn)
+    def call(*args):
+        return (holder[0] if holder else dispatcher())(*args)
 
     call.py_func = fn
+    call.dispatcher = dispatcher
+    _REGISTRY.setdefault(fn.__module__, []).append(call)
     return call
 
 
@@ -109,3 +117,72 @@ def helper(fn):
     """
     fn._geotex_helper = True
     return fn
+
+
+def _load_cached(dispatcher) -> int:
+    """Add every overload of ``dispatcher`` found in numba's disk cache; never compiles.
+
+    This is what :meth:`numba.core.dispatcher.Dispatcher.compile` does on a
+    cache hit, for each signature in the cache index (the signatures earlier
+    runs compiled). Returns how many were loaded.
+    """
+    from numba.core.compiler_lock import global_compiler_lock
+
+    index = dispatcher._cache._cache_file._load_index()
+    loaded = 0
+    for key in index:
+        sig = key[0]
+        with global_compiler_lock:
+            if dispatcher.overloads.get(tuple(sig)) is not None:
+                continue
+            cres = dispatcher._cache.load_overload(sig, dispatcher.targetctx)
+            if cres is None:                     # another machine or source: compiled on call
+                continue
+            if not cres.objectmode:
+                dispatcher.targetctx.insert_user_function(cres.entry_point, cres.fndesc,
+                                                          [cres.library])
+            dispatcher.add_overload(cres)
+            loaded += 1
+    return loaded
+
+
+def preload(*packages: str) -> threading.Thread:
+    """Start loading the cached machine code of compiled functions in a background thread.
+
+    The first call of a compiled function in a fresh process loads numba and
+    its cached code (~0.4 s, most of it initialising numba's compiler for the
+    first function). A command that knows it will call them calls this first,
+    and the loading runs while the command reads its input and builds (the
+    parts in LLVM release the GIL; the rest competes with the main thread for
+    it). A call that arrives before the loading is done waits for numba's
+    compiler lock, then finds its code loaded. The code is the same the first
+    call would load: results do not change. The loading uses numba internals
+    (the cache index); should they change, it stops and the first calls load
+    their code as before.
+
+    Parameters
+    ----------
+    *packages : str
+        Names of geotex modules or packages, in the order to load: the
+        compiled functions of every module imported so far that is one of
+        them or inside one. Importing the modules is left to the caller, so
+        that two threads never import the same modules.
+
+    Returns
+    -------
+    threading.Thread
+        The started daemon thread (join it to wait for the loading).
+    """
+    calls = [c for p in packages for mod, cs in list(_REGISTRY.items())
+             if mod == p or mod.startswith(p + ".") for c in cs]
+
+    def load():
+        for c in calls:
+            try:
+                _load_cached(c.dispatcher())
+            except Exception:       # numba internals changed: the first call loads it instead
+                return
+
+    thread = threading.Thread(target=load, name="geotex-jit-preload", daemon=True)
+    thread.start()
+    return thread

@@ -82,6 +82,19 @@ ALLOWED_LAZY_IMPORTS: dict[tuple[str, str], str] = {
     ("geotex/tiles/__init__.py", "geotex.tiles.catalog"):
         "module __getattr__: the catalog is imported on first use so that "
         "`python -m geotex.tiles.catalog` runs without a second copy of the module",
+    ("geotex/tiles/__init__.py", "geotex.tiles.build"):
+        "module __getattr__: building sets (quilting, exemplars, scipy.ndimage, ~0.12 s) "
+        "is imported on first use; using a set (the main job) needs none of it",
+    ("geotex/tiles/__init__.py", "geotex.tiles.verify"):
+        "module __getattr__: the seam check is imported on first use (as build_tileset)",
+    ("geotex/tiles/__init__.py", "geotex.tiles.tiling"):
+        "module __getattr__: planar tilings are imported on first use (as build_tileset)",
+    ("geotex/tiles/catalog.py", "geotex.exemplars"):
+        "only rebuilding a catalog set builds an exemplar; loading one (the main job) does not",
+    ("geotex/tiles/catalog.py", "geotex.tiles.build"):
+        "only rebuilding a catalog set builds tiles; loading one (the main job) does not",
+    ("geotex/tiles/catalog.py", "geotex.tiles.verify"):
+        "only rebuilding the catalog checks seams; loading a set (the main job) does not",
 }
 
 #: Third-party modules a function may import lazily (they are slow to import), with the
@@ -421,3 +434,20 @@ def test_startup_imports_no_heavy_module():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True, cwd=PACKAGE_DIR.parent)
     assert out.stdout.strip() == "[]", f"heavy modules imported at startup: {out.stdout}"
+
+
+#: Modules that using a catalog tile set over a shell (the main job's imports) may not load:
+#: they build tile sets (quilting, exemplars, image filters).
+NOT_IN_MAIN_JOB = ("geotex.tiles.build", "geotex.quilting", "geotex.exemplars", "scipy.ndimage",
+                   "scipy.signal")
+
+
+def test_main_job_imports_no_tile_building():
+    """The main job's imports (tile catalog, shells, mapping, printing) leave tile building out."""
+    code = ("import sys, geotex.cli; geotex.cli.build_parser(); "
+            "from geotex.tiles.catalog import load_named; load_named('studs'); "
+            "import geotex.shells, geotex.mapping, geotex.printing, geotex.tiles; "
+            f"print(sorted(m for m in {NOT_IN_MAIN_JOB!r} if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, cwd=PACKAGE_DIR.parent)
+    assert out.stdout.strip() == "[]", f"tile building imported by the main job: {out.stdout}"

@@ -339,3 +339,43 @@ def test_relief_vertex_normals_equal_numpy_path(monkeypatch):
     slow = core._vertex_normals(V, F, R, 30.0)
     assert fast.tobytes() == slow.tobytes()
     assert np.allclose(np.linalg.norm(fast, axis=1), 1.0)
+
+
+_PRELOAD_SCRIPT = """
+import numpy as np
+import geotex.check.intersections as ci
+from geotex.jit import preload
+from geotex.mesh.primitives import torus
+
+V, F = torus(1.0, 0.3, n_major=40, n_minor=17)
+V2 = np.vstack([V, V + [0.5, 0.1, 0.0]])
+F2 = np.vstack([F, F + len(V)])
+if {first}:                                # fills the disk cache (compiles on a fresh clone)
+    print(ci.self_intersecting_pairs(V2, F2).tolist())
+else:
+    funcs = [ci._pair_loops, ci._scatter_fan_terms, ci._sorted_by_high_bits_inplace]
+    preload("geotex.check").join()
+    loaded = [len(f.dispatcher().overloads) for f in funcs]
+    assert all(k >= 1 for k in loaded), loaded
+    pairs = ci.self_intersecting_pairs(V2, F2).tolist()
+    # the call found its code loaded: nothing compiled or loaded again
+    assert [len(f.dispatcher().overloads) for f in funcs] == loaded
+    assert not any(f.dispatcher().stats.cache_hits for f in funcs)
+    print(pairs)
+"""
+
+
+def test_preload_loads_the_cached_code_before_the_first_call():
+    """geotex.jit.preload (the main job's CLI commands) loads what the first call needs."""
+    import subprocess
+    import sys
+
+    def run(first):
+        proc = subprocess.run([sys.executable, "-c", _PRELOAD_SCRIPT.format(first=first)],
+                              capture_output=True, text=True, timeout=600)
+        assert proc.returncode == 0, proc.stderr[-2000:]
+        return proc.stdout
+
+    expected = run(True)
+    assert expected.strip() not in ("", "[]")
+    assert run(False) == expected

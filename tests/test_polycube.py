@@ -276,3 +276,44 @@ def test_automatic_tile_size_too_thin_fails_naming_the_place(monkeypatch):
     with pytest.raises(GeotexError, match=r"too thin.*genus 1.*3000 quads.*narrowest gap "
                                           r"0\.0[0-9]* near \(0"):
         polycube(V, F)
+
+
+def test_same_voxel_polycube_is_fitted_once(monkeypatch):
+    """A candidate equal to one fitted before reuses its fit: same answer, one fit less."""
+    import geotex.param.polycube as module
+
+    V, F = torus(n_major=48, n_minor=24)
+    plain = polycube(V, F, tile_size=0.25)
+    real_candidates, real_fit = module._candidates, module.fitted_surface
+    fits = []
+
+    def twice(*args, **kwargs):               # every candidate comes twice in a row
+        for c in real_candidates(*args, **kwargs):
+            yield c
+            yield {**c, "info": {**c["info"], "strategy": "again"}}
+
+    def counted(P, F, projector, **kwargs):
+        fits.append(P.shape[0])
+        return real_fit(P, F, projector, **kwargs)
+
+    monkeypatch.setattr(module, "_candidates", twice)
+    monkeypatch.setattr(module, "fitted_surface", counted)
+    # every fit reports bare quads, so the search goes on to the copy (the torus
+    # has no other candidate at this size)
+    real_bad = module._bad_quads
+    monkeypatch.setattr(module, "_bad_quads", lambda *a, **k: real_bad(*a, **k) | True)
+    polycube(V, F, tile_size=0.25)
+    assert len(fits) == 1                     # the copy reused, not fitted again
+    monkeypatch.setattr(module, "_bad_quads", real_bad)
+    fits.clear()
+    again = polycube(V, F, tile_size=0.25)
+    assert len(fits) == 1
+    np.testing.assert_array_equal(again.Y, plain.Y)
+    assert module._same_polycube({"origin": np.zeros(3), "corners": np.ones((2, 4)),
+                                  "labels": np.arange(2)},
+                                 {"origin": np.zeros(3), "corners": np.ones((2, 4)),
+                                  "labels": np.arange(2)})
+    assert not module._same_polycube({"origin": np.zeros(3), "corners": np.ones((2, 4)),
+                                      "labels": np.arange(2)},
+                                     {"origin": np.ones(3), "corners": np.ones((2, 4)),
+                                      "labels": np.arange(2)})

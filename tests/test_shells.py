@@ -238,3 +238,42 @@ def test_cli_automatic_tile_size_and_too_large_error(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and not out2.exists()
     assert "--tile-size" in err and "genus 3" in err and "resolves it" in err
+
+
+def test_offset_pairs_searched_again_only_where_directions_moved(torus_shell, monkeypatch):
+    """The incremental search of the pinch test gives the full search's answer."""
+    import geotex.shells.build as build
+
+    s = torus_shell
+    Y, F = s.polycube.Y, s.polycube.F
+    n = Y.shape[0]
+    h = 3.0 * s.max_height                        # tall enough to cross somewhere
+
+    def full(D, h):
+        return self_intersecting_pairs(np.vstack([Y, Y + h * D]),
+                                       np.vstack([F, F[:, ::-1] + n]))
+
+    calls = []
+    touching = build.self_intersecting_pairs_touching
+    monkeypatch.setattr(build, "self_intersecting_pairs_touching",
+                        lambda *a: calls.append(a[2].size) or touching(*a))
+    first = build._offset_pairs(Y, F, s.D, h)
+    assert first[1].shape[0] > 0
+    # some interior directions turned: the kept pairs plus a local search
+    D = s.D.copy()
+    rows = np.random.default_rng(3).choice(n, 40, replace=False)
+    D[rows] = np.roll(D[rows], 1, axis=1)
+    again = build._offset_pairs(Y, F, D, h, first)
+    assert len(calls) == 1 and 0 < calls[0] < F.shape[0]
+    expected = full(D, h)
+    assert not np.array_equal(expected, first[1])          # the turn changed the answer
+    np.testing.assert_array_equal(again[1], expected)
+    # nothing moved: the previous answer as it is
+    np.testing.assert_array_equal(build._offset_pairs(Y, F, D, h, again)[1], expected)
+    # a direction that grows the box of the mesh: the full search again
+    far = D.copy()
+    far[int(np.argmax(Y[:, 0]))] = [1.0, 0.0, 0.0]
+    assert not np.array_equal(far, D)
+    grown = build._offset_pairs(Y, F, far, h, again)
+    assert len(calls) == 1
+    np.testing.assert_array_equal(grown[1], full(far, h))

@@ -24,7 +24,7 @@ from geotex import __version__
 from geotex.cli import (batch, check, convert, demo, displace, exemplar, field, heighttilt,
                         hpm, lapped, mapping, material, pgp, quilt, render, repair, shell,
                         tile_image, tiles, view)
-from geotex.cli._common import EXIT_INTERNAL, EXIT_USAGE, Parser, fail
+from geotex.cli._common import EXIT_INTERNAL, EXIT_USAGE, PRELOADS, Parser, fail
 from geotex.errors import GeotexError
 from geotex.malloc import keep_freed_memory
 
@@ -66,6 +66,9 @@ def main(argv=None) -> int:
             raise
         return fail(f"internal error: {type(exc).__name__}: {exc} "
                     "(set GEOTEX_DEBUG=1 for the traceback)", EXIT_INTERNAL)
+    finally:
+        while PRELOADS:               # never exit while a thread is inside numba / LLVM
+            PRELOADS.pop().join()
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -97,3 +97,23 @@ def guard_output(output, *inputs) -> Path:
     if not out.parent.exists():
         raise UsageError(f"{out}: folder {out.parent} does not exist")
     return out
+
+
+#: Background loads started by :func:`preload_compiled`; ``main`` waits for them before it returns.
+PRELOADS: list = []
+
+
+def preload_compiled() -> None:
+    """Start loading the compiled loops of the main job (:func:`geotex.jit.preload`).
+
+    The self-intersection test (input check, shell, union, final check), edge
+    topology, degenerate faces, volumes, needle heights and the weld: a fresh
+    process otherwise pays for numba (~0.4 s) at the input check, in the main
+    thread.
+    """
+    import geotex.check.intersections
+    import geotex.io
+    import geotex.mesh.needles
+    from geotex.jit import preload
+
+    PRELOADS.append(preload("geotex.check", "geotex.mesh", "geotex.io"))

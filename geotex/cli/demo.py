@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from geotex.cli._common import EXIT_NOT_PRINTABLE, EXIT_OK, UsageError
+from geotex.cli._common import EXIT_NOT_PRINTABLE, EXIT_OK, UsageError, preload_compiled
 
 HELP = "texture a bundled model with a bundled tile set and write a printable solid"
 
@@ -60,6 +60,7 @@ def run(args) -> int:
         raise UsageError(f"--size-mm {args.size_mm}: choose a size between 10 and 1000 mm")
     if args.seed < 0:
         raise UsageError(f"--seed {args.seed}: give a non-negative integer")
+    preload_compiled()
     tiles = load_named(args.tiles)
     out.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()

@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from geotex.cli._common import (EXIT_NOT_PRINTABLE, EXIT_OK, UsageError, flag_error,
-                                guard_output)
+                                guard_output, preload_compiled)
 
 HELP_MAP = "lay a tile set over a shell and write the printable textured solid"
 HELP_TEXTURE = "one shot: build the shell of a base mesh and lay a tile set over it"
@@ -182,6 +182,7 @@ def run_map(args) -> int:
 
     tiles_file, shell_file = tileset_path(args.tiles), shell_path(args.shell)
     out, extra = _check_outputs(args, tiles_file, shell_file)
+    preload_compiled()
     tiles, shell = load_tiles(args.tiles), load_shell(args.shell)
     if args.size_mm is not None:
         from geotex.shells import scaled_shell
@@ -200,6 +201,7 @@ def run_texture(args) -> int:
 
     tiles_file = tileset_path(args.tiles)
     out, extra = _check_outputs(args, args.base, tiles_file)
+    preload_compiled()
     tiles = load_tiles(args.tiles)
     name = Path(args.base).stem
     t = time.perf_counter()

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from geotex.cli._common import EXIT_OK, UsageError, flag_error, guard_output
+from geotex.cli._common import EXIT_OK, UsageError, flag_error, guard_output, preload_compiled
 
 HELP = "build, list and show shells (base mesh + polycube parameterization)"
 
@@ -104,6 +104,7 @@ def run_build(args) -> int:
     out = guard_output(args.output, args.base)
     if not str(out).lower().endswith(".npz"):
         raise UsageError(f"{out}: shell files are .npz; use a .npz name for -o")
+    preload_compiled()
     shell = shell_of_file(args.base, args.tile_size, name=args.name or Path(args.base).stem)
     save_shell(out, shell)
     print(f"{args.base}: {_describe(shell)}")

@@ -266,6 +266,7 @@ def _attempt(V, F, *, lo, ts, chi, k, r, iterations, max_quads=None, progress=No
     Vt = (V - lo) / ts
     out = {"ts": ts, "Vt": Vt, "seen": [], "best": None, "fitted": 0, "too_large": False}
     projector = None
+    done = []                 # (candidate, fit, bad, cov) of the candidates fitted so far
     for c in _candidates(Vt, F, cell=float(k), k=k, res=r, chi=chi, max_quads=max_quads):
         out["seen"].append((c["chi"], c["parts"]))
         if c["too_large"]:
@@ -277,9 +278,17 @@ def _attempt(V, F, *, lo, ts, chi, k, r, iterations, max_quads=None, progress=No
             report(progress, "fit")
             projector = SurfaceProjector(Vt, F)
         out["fitted"] += 1
-        fit = fitted_surface(c["origin"] + c["P"], c["F"], projector, iterations=iterations)
-        bad = _bad_quads(fit, c["F"], c["labels"].size, r)
-        cov = _coverage(Vt, F, fit.Y, c["F"])
+        # two repair strategies often give the same voxel solid: the same polycube
+        # fits the same way, so its fit is reused (it counts as a fitted candidate,
+        # and its equal key never replaces the first)
+        same = next((d for d in done if _same_polycube(d[0], c)), None)
+        if same is not None:
+            _, fit, bad, cov = same
+        else:
+            fit = fitted_surface(c["origin"] + c["P"], c["F"], projector, iterations=iterations)
+            bad = _bad_quads(fit, c["F"], c["labels"].size, r)
+            cov = _coverage(Vt, F, fit.Y, c["F"])
+            done.append((c, fit, bad, cov))
         # a candidate that covers the base beats one that does not, then fewer bare quads
         key = (cov["within_tile"] < MIN_COVERAGE, int(bad.sum()), -cov["within_tile"])
         if out["best"] is None or key < out["key"]:
@@ -287,6 +296,11 @@ def _attempt(V, F, *, lo, ts, chi, k, r, iterations, max_quads=None, progress=No
         if key[:2] == (False, 0) or out["fitted"] == 3:
             break
     return out
+
+
+def _same_polycube(a: dict, b: dict) -> bool:
+    """Whether two voxel candidates are the same polycube (origin, quad corners, labels)."""
+    return all(np.array_equal(a[key], b[key]) for key in ("origin", "corners", "labels"))
 
 
 def _resolves(V, F, *, lo, ts, chi, k):

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from geotex.check.intersections import self_intersecting_pairs
+from geotex.check.intersections import self_intersecting_pairs, self_intersecting_pairs_touching
 from geotex.errors import InputError
 from geotex.mesh.arrays import as_mesh_arrays
 from geotex.mesh.geometry import face_cross, vertex_normals
@@ -176,14 +176,54 @@ PINCH_PROBE = 0.125
 """Height, in tiles, that every textured quad's offset must reach (see :func:`build_shell`)."""
 
 
-def _pinched_faces(Y, F, D, h) -> np.ndarray:
-    """Faces of ``(Y, F)`` whose offset by ``h`` along ``D`` flips or crosses the surface."""
+def _offset_pairs(Y, F, D, h, previous=None) -> tuple[np.ndarray, np.ndarray]:
+    """Intersecting face pairs of ``(Y, F)`` together with its offset ``Y + h D``.
+
+    The offset faces are ``F[:, ::-1] + len(Y)`` (reversed). Returns the stacked
+    vertices and :func:`~geotex.check.intersections.self_intersecting_pairs` of
+    the stacked mesh. ``previous`` is such a return value for the same ``Y``,
+    ``F`` and ``h`` and other directions: then only the pairs touching an offset
+    face with a moved corner are searched again
+    (:func:`~geotex.check.intersections.self_intersecting_pairs_touching`) and
+    the other pairs are kept, which is the same answer (the predicates of a
+    pair see only its two faces, in coordinates normalised by the box of the
+    mesh, so this is done only when that box did not change).
+    """
+    n = Y.shape[0]
+    V = np.vstack([Y, Y + h * D])
+    FF = np.vstack([F, F[:, ::-1] + n])
+    if previous is not None:
+        V0, pairs0 = previous
+        used = np.zeros(V.shape[0], dtype=bool)
+        used[FF.ravel()] = True
+        moved = (V != V0).any(axis=1) & used
+        U, U0 = V[used], V0[used]
+        if not moved.any():
+            return V, pairs0
+        if (np.array_equal(U.min(axis=0), U0.min(axis=0))
+                and np.array_equal(U.max(axis=0), U0.max(axis=0))):
+            changed = moved[FF].any(axis=1)
+            keep = pairs0[~(changed[pairs0[:, 0]] | changed[pairs0[:, 1]])]
+            new = self_intersecting_pairs_touching(V, FF, np.flatnonzero(changed))
+            pairs = np.concatenate([keep, new])
+            pairs = pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
+            return V, pairs
+    return V, self_intersecting_pairs(V, FF)
+
+
+def _pinched_faces(Y, F, D, h, previous=None) -> tuple[np.ndarray, tuple]:
+    """Faces of ``(Y, F)`` whose offset by ``h`` along ``D`` flips or crosses the surface.
+
+    Also returns the state to pass back as ``previous`` (see :func:`_offset_pairs`)
+    when only some directions change.
+    """
     Vo = Y + h * D
     flipped = np.einsum("ij,ij->i", face_cross(Vo, F), face_cross(Y, F)) <= 0
-    m, n = F.shape[0], Y.shape[0]
-    pairs = self_intersecting_pairs(np.vstack([Y, Vo]), np.vstack([F, F[:, ::-1] + n]))
+    m = F.shape[0]
+    state = _offset_pairs(Y, F, D, h, previous)
+    pairs = state[1]
     pairs = pairs[(pairs < m).any(axis=1)]     # the offset crossing only itself: a crease
-    return np.unique(np.concatenate([np.flatnonzero(flipped), pairs.ravel() % m]))
+    return np.unique(np.concatenate([np.flatnonzero(flipped), pairs.ravel() % m])), state
 
 
 def _unpinched(pc: PolyCube, D: np.ndarray, *, rounds: int = 4) -> tuple[np.ndarray, np.ndarray]:
@@ -211,7 +251,7 @@ def _unpinched(pc: PolyCube, D: np.ndarray, *, rounds: int = 4) -> tuple[np.ndar
     n = pc.Y.shape[0]
     M = neighbour_mean(pc.F, n)
     ring = (M != 0).astype(np.float64)
-    bad = _pinched_faces(pc.Y, F, D, h)
+    bad, state = _pinched_faces(pc.Y, F, D, h)
     best = (bad, D)
     for rnd in range(rounds):
         if bad.size == 0:
@@ -224,7 +264,7 @@ def _unpinched(pc: PolyCube, D: np.ndarray, *, rounds: int = 4) -> tuple[np.ndar
         for _ in range(4 * pc.res):
             Ds = 0.5 * D[sel] + 0.5 * (M @ D)[sel]
             D[sel] = Ds / np.maximum(np.linalg.norm(Ds, axis=1, keepdims=True), 1e-300)
-        bad = _pinched_faces(pc.Y, F, D, h)
+        bad, state = _pinched_faces(pc.Y, F, D, h, state)
         if bad.size < best[0].size:
             best = (bad, D)
     bad, D = best

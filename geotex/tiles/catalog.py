@@ -13,10 +13,7 @@ import sys
 from pathlib import Path
 
 from geotex.catalogs import Catalog
-from geotex.exemplars import exemplar
-from geotex.tiles.build import build_tileset
 from geotex.tiles.tileset import load_tileset, save_tileset
-from geotex.tiles.verify import check_seams
 
 __all__ = ["CATALOG_DIR", "MAX_BYTES", "recipes", "tileset_path", "list_tilesets",
            "rebuild", "load_named", "main"]
@@ -81,6 +78,9 @@ def rebuild(name: str, *, progress=None, table: dict | None = None, map_tiles=No
     InputError
         Unknown name.
     """
+    from geotex.exemplars import exemplar
+    from geotex.tiles.build import build_tileset
+
     r = CATALOG.recipe(name, table)
     ex = exemplar(r["exemplar"]["name"], **r["exemplar"].get("params", {}))
     return build_tileset(ex, colors=r["colors"], planar=r.get("planar", False),
@@ -97,6 +97,8 @@ def main(argv=None) -> int:
     :data:`MAX_BYTES`. Returns 0 when every set passed, 1 otherwise.
     """
     import time
+
+    from geotex.tiles.verify import check_seams
 
     names = list(argv if argv is not None else sys.argv[1:]) or sorted(recipes())
     status = 0
