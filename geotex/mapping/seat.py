@@ -1,0 +1,437 @@
+"""Elements re-seated instead of dropped: floating pieces lowered, folds smoothed.
+
+Two kinds of mapped elements used to be left out of the union
+(:mod:`geotex.mapping.union`):
+
+* **floating** pieces, which neither cross the base nor lie inside it, so the
+  union would leave them as loose parts. On the catalog shells they are
+  chain-mail ring pieces at polycube corners where three quads meet: the four
+  quadrants of a corner ring become three, which weld into a small triangular
+  loop at the top and a low piece inside the base. :func:`floating_elements`
+  finds them (winding numbers against the base, then the exact test for the
+  elements wholly outside) and :func:`lowered_elements` moves each down its
+  offset directions (its tile ``w`` lowered, mapped again) by the smallest of
+  a few steps at which it crosses the base and meets no other element (exact
+  tests), so linked rings are not cut.
+* **folded** elements, whose own faces cross where the map bends them at an
+  irregular polycube corner (a weave strand loop folded in 4-9 faces of
+  30k was left out whole). :func:`smoothed_folds` smooths the element's
+  vertices in a few rings around the crossing faces (umbrella steps, the
+  region's rim fixed) until the element no longer crosses itself or any
+  other element (exact tests).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from geotex.check.intersections import self_intersecting_pairs
+from geotex.mapping.shape import shaped_positions
+from geotex.mesh.topology import compacted, concatenated, edge_topology
+
+__all__ = ["floating_elements", "lowered_elements", "propped_elements", "smoothed_folds",
+           "LOWER_STEPS", "POST_SIDES"]
+
+#: Drops tried by :func:`lowered_elements`, as fractions of the way from the
+#: element's lowest tile point down to the tile set's anchor depth.
+LOWER_STEPS = (0.35, 0.7, 1.0, 1.4)
+
+#: Sides of the prism :func:`propped_elements` stands an element on.
+POST_SIDES = 8
+
+
+def _element_boxes(X, G, label, n_el):
+    """Bounding box ``(lo, hi)`` of every element, ``(n_el, 3)`` each."""
+    lo = np.full((n_el, 3), np.inf)
+    hi = np.full((n_el, 3), -np.inf)
+    lab = np.repeat(label, 3)
+    P = X[G.ravel()]
+    for d in range(3):
+        np.minimum.at(lo[:, d], lab, P[:, d])
+        np.maximum.at(hi[:, d], lab, P[:, d])
+    return lo, hi
+
+
+def _overlapping(lo, hi, box_lo, box_hi) -> np.ndarray:
+    """Rows of ``(lo, hi)`` whose boxes overlap the box ``(box_lo, box_hi)``."""
+    return np.all((lo <= box_hi) & (hi >= box_lo), axis=1)
+
+
+def _crossing_parts(parts_mesh, probe: int) -> tuple[np.ndarray, np.ndarray]:
+    """Exact crossings of part ``probe`` of ``[(V, F), ...]``: with itself, with others.
+
+    Returns the sorted other parts met and whether the probe crosses itself.
+    """
+    parts_mesh = [compacted(V, F) if len(F) else (V[:0], F) for V, F in parts_mesh]
+    V, F = concatenated(parts_mesh)
+    part = np.repeat(np.arange(len(parts_mesh)), [len(f) for _, f in parts_mesh])
+    pairs = self_intersecting_pairs(V, F, parts=part)
+    a, b = part[pairs[:, 0]], part[pairs[:, 1]]
+    mine = (a == probe) | (b == probe)
+    other = np.where(a == probe, b, a)[mine]
+    return np.unique(other[other != probe]), bool(np.any(other == probe))
+
+
+def floating_elements(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray, *,
+                      label: np.ndarray, touching: np.ndarray, usable=None) -> np.ndarray:
+    """Elements that would float: neither crossing the base nor inside it.
+
+    An element whose vertices lie both inside and outside the base (generalized
+    winding number, libigl) crosses it; one with every vertex inside is
+    absorbed by the union; for one with every vertex outside the exact test
+    decides whether its faces still cross the base's. Elements joined through
+    ``touching`` count as one piece: it floats if none of them crosses the base.
+
+    Parameters
+    ----------
+    V : numpy.ndarray, (n, 3) float64
+    F : numpy.ndarray, (m, 3) int64
+        The base solid.
+    X : numpy.ndarray, (k, 3) float64
+    G : numpy.ndarray, (l, 3) int64
+        The mapped elements.
+    label : numpy.ndarray, (l,) int64
+        Element of every face (:class:`~geotex.mapping.union.ElementContacts`).
+    touching : numpy.ndarray, (p, 2) int64
+        Pairs of elements that meet.
+    usable : numpy.ndarray, (e,) bool, optional
+        Elements that go into the union (default all).
+
+    Returns
+    -------
+    numpy.ndarray, (f,) int64
+        Sorted floating elements (usable ones only).
+    """
+    # lazy: igl and scipy.sparse.csgraph are slow to import
+    import igl
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components
+
+    n_el = int(label.max()) + 1 if label.size else 0
+    if n_el == 0:
+        return np.zeros(0, dtype=np.int64)
+    use = np.ones(n_el, dtype=bool) if usable is None else np.asarray(usable, dtype=bool)
+    vlab = np.full(X.shape[0], -1, dtype=np.int64)
+    vlab[G[:, 0]], vlab[G[:, 1]], vlab[G[:, 2]] = label, label, label
+    used = np.flatnonzero(vlab >= 0)
+    wn = np.asarray(igl.fast_winding_number(np.ascontiguousarray(V, dtype=np.float64),
+                                            np.ascontiguousarray(F, dtype=np.int64),
+                                            np.ascontiguousarray(X[used])))
+    inside = wn > 0.5
+    n_in = np.bincount(vlab[used], weights=inside, minlength=n_el)
+    n_all = np.bincount(vlab[used], minlength=n_el)
+    attached = (n_in > 0) & (n_in < n_all)
+    outside = (n_in == 0) & use
+    cand = np.flatnonzero(outside)
+    if cand.size:
+        # wholly outside: their faces may still cross the base's (exact test)
+        lo, hi = _element_boxes(X, G, label, n_el)
+        pad = 1e-9 * float(np.linalg.norm(np.ptp(V, axis=0)))
+        fl, fh = V[F].min(axis=1), V[F].max(axis=1)
+        near = np.zeros(len(F), dtype=bool)
+        for e in cand:
+            near |= np.all((fl <= hi[e] + pad) & (fh >= lo[e] - pad), axis=1)
+        if near.any():
+            sel = np.isin(label, cand)
+            XX, GG = concatenated([compacted(V, F[near]), compacted(X, G[sel])])
+            part = np.concatenate([np.full(int(near.sum()), -1), label[sel]]) + 1
+            pairs = self_intersecting_pairs(XX, GG, parts=part)
+            a, b = part[pairs[:, 0]], part[pairs[:, 1]]
+            hit = np.concatenate([b[a == 0], a[b == 0]]) - 1
+            attached[hit[hit >= 0]] = True
+    tp = np.asarray(touching, dtype=np.int64).reshape(-1, 2)
+    tp = tp[use[tp].all(axis=1)]
+    graph = sp.coo_matrix((np.ones(len(tp)), (tp[:, 0], tp[:, 1])), shape=(n_el, n_el))
+    _, comp = connected_components(graph, directed=False)
+    comp_attached = np.zeros(int(comp.max()) + 1, dtype=bool)
+    comp_attached[comp[attached & use]] = True
+    return np.flatnonzero(outside & ~comp_attached[comp])
+
+
+def lowered_elements(shell, mapped, label: np.ndarray, elements, *, scale: float,
+                     depth_scale: float, depth: float, steps=LOWER_STEPS
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """Lower floating elements along the shell's offset directions onto the base.
+
+    Every element's tile points are lowered by ``s (w_min + depth)`` tile
+    units (``w_min`` its lowest tile point, so ``s = 1`` brings that to
+    ``-depth``, where its neighbours are anchored) for each ``s`` of
+    ``steps`` in turn, mapped again as :func:`~geotex.mapping.place.mapped_tiles`
+    mapped them, and kept at the first step where the element crosses the
+    base and crosses neither itself nor any other element (exact tests
+    against the base faces and the elements whose boxes overlap it).
+
+    Parameters
+    ----------
+    shell : Shell
+    mapped : MappedTiles
+    label : numpy.ndarray, (M,) int64
+        Element of every face of ``mapped.faces``.
+    elements : array_like of int
+        The floating elements (:func:`floating_elements`).
+    scale, depth_scale : float
+        As in :func:`~geotex.mapping.place.shell_positions`.
+    depth : float
+        Depth of the tile set below ``w = 0`` (``tiles.depth``), tile units.
+    steps : sequence of float
+        Fractions tried, in order.
+
+    Returns
+    -------
+    X : numpy.ndarray, (N, 3) float64
+        Mapped positions with the lowered elements moved.
+    still_floating : numpy.ndarray, (k,) int64
+        Elements no step seated cleanly (left where they were).
+    """
+    X = mapped.vertices.copy()
+    G = mapped.faces
+    todo = np.unique(np.asarray(elements, dtype=np.int64))
+    if todo.size == 0:
+        return X, todo
+    n_el = int(label.max()) + 1
+    V0, F0 = shell.base_vertices, shell.base_faces
+    lo, hi = _element_boxes(X, G, label, n_el)
+    fl, fh = V0[F0].min(axis=1), V0[F0].max(axis=1)
+    order = np.argsort(label, kind="stable")
+    starts = np.searchsorted(label[order], np.arange(n_el + 1))
+    left = []
+    for e in todo:
+        faces = G[order[starts[e]:starts[e + 1]]]
+        verts, local = np.unique(faces, return_inverse=True)
+        local = local.reshape(-1, 3)
+        uvw = mapped.tile_points[verts]
+        wmin = float(uvw[:, 2].min())
+        drop = wmin + float(depth)
+        seated = False
+        for s in steps:
+            low = uvw.copy()
+            low[:, 2] -= float(s) * drop
+            Xe = shaped_positions(shell, mapped.quads[verts], low,
+                                  np.zeros(verts.size, dtype=np.int64), scale=scale,
+                                  depth_scale=depth_scale, similar=mapped.shaped,
+                                  shift=None if mapped.shift is None else mapped.shift[verts])
+            blo, bhi = Xe.min(axis=0), Xe.max(axis=0)
+            others = np.flatnonzero(_overlapping(lo, hi, blo, bhi))
+            others = others[others != e]
+            parts = [(Xe, local), (V0, F0[_overlapping(fl, fh, blo, bhi)])]
+            parts += [(X, G[order[starts[o]:starts[o + 1]]]) for o in others]
+            met, folded = _crossing_parts(parts, 0)
+            if not folded and met.size == 1 and met[0] == 1:
+                X[verts] = Xe
+                lo[e], hi[e] = blo, bhi
+                seated = True
+                break
+        if not seated:
+            left.append(e)
+    return X, np.asarray(left, dtype=np.int64)
+
+
+def smoothed_folds(X: np.ndarray, G: np.ndarray, label: np.ndarray, folded, *,
+                   rings=(2, 4, 8), iterations=(4, 12, 30)) -> tuple[np.ndarray, np.ndarray]:
+    """Smooth the folded stretch of each folded element until it crosses nothing.
+
+    The faces of a folded element that cross each other (exact test) and
+    every vertex within ``r`` edges of them form the region; its inner
+    vertices take ``k`` umbrella steps (each moves a vertex half way to the
+    mean of its neighbours) with the region's rim fixed, for each pair
+    ``(r, k)`` of ``zip(rings, iterations)`` in turn, and the first result that
+    crosses neither itself nor any other element whose box overlaps it is kept.
+
+    Parameters
+    ----------
+    X : numpy.ndarray, (N, 3) float64
+    G : numpy.ndarray, (M, 3) int64
+    label : numpy.ndarray, (M,) int64
+        Element of every face.
+    folded : array_like of int
+        Elements whose own faces cross.
+    rings, iterations : sequence of int
+        Region sizes and smoothing steps tried together, in order.
+
+    Returns
+    -------
+    X : numpy.ndarray, (N, 3) float64
+        Positions with the smoothed elements moved.
+    still_folded : numpy.ndarray, (k,) int64
+    """
+    import scipy.sparse as sp
+
+    X = np.array(X, dtype=np.float64, copy=True)
+    todo = np.unique(np.asarray(folded, dtype=np.int64))
+    if todo.size == 0:
+        return X, todo
+    n_el = int(label.max()) + 1
+    lo, hi = _element_boxes(X, G, label, n_el)
+    order = np.argsort(label, kind="stable")
+    starts = np.searchsorted(label[order], np.arange(n_el + 1))
+    left = []
+    for e in todo:
+        faces = G[order[starts[e]:starts[e + 1]]]
+        verts, local = np.unique(faces, return_inverse=True)
+        local = local.reshape(-1, 3)
+        n = verts.size
+        Xe0 = X[verts]
+        pairs = self_intersecting_pairs(Xe0, local)
+        seed = np.zeros(n, dtype=bool)
+        seed[local[pairs.ravel()].ravel()] = True
+        E = edge_topology(local, n).edges
+        adj = sp.csr_matrix((np.ones(2 * len(E)), (np.concatenate([E[:, 0], E[:, 1]]),
+                                                    np.concatenate([E[:, 1], E[:, 0]]))),
+                            shape=(n, n))
+        deg = np.asarray(adj.sum(axis=1)).ravel()
+        done = False
+        for r, k in zip(rings, iterations):
+            region = seed.copy()
+            for _ in range(int(r)):
+                region |= (adj @ region.astype(np.float64)) > 0
+            rim = region & ((adj @ (~region).astype(np.float64)) > 0)
+            inner = region & ~rim
+            Xe = Xe0.copy()
+            for _ in range(int(k)):
+                mean = (adj @ Xe) / np.maximum(deg, 1)[:, None]
+                Xe[inner] = 0.5 * (Xe[inner] + mean[inner])
+            if self_intersecting_pairs(Xe, local, max_pairs=1).size:
+                continue
+            blo, bhi = np.minimum(Xe.min(axis=0), lo[e]), np.maximum(Xe.max(axis=0), hi[e])
+            others = np.flatnonzero(_overlapping(lo, hi, blo, bhi))
+            others = others[others != e]
+            met = np.zeros(0, dtype=np.int64)
+            if others.size:
+                parts = [(Xe, local)] + [(X, G[order[starts[o]:starts[o + 1]]])
+                                         for o in others]
+                met, _ = _crossing_parts(parts, 0)
+            if met.size == 0:
+                X[verts] = Xe
+                lo[e], hi[e] = Xe.min(axis=0), Xe.max(axis=0)
+                done = True
+                break
+        if not done:
+            left.append(e)
+    return X, np.asarray(left, dtype=np.int64)
+
+
+def _post(centre: np.ndarray, radius: float, top: float, bottom: float, sides: int,
+          layers: int) -> tuple[np.ndarray, np.ndarray]:
+    """A closed prism in tile coordinates: axis along ``w``, outward faces."""
+    a = 2.0 * np.pi * np.arange(sides) / sides
+    ring = centre[None, :] + radius * np.stack([np.cos(a), np.sin(a)], axis=1)
+    w = np.linspace(bottom, top, layers + 1)
+    P = np.concatenate([np.column_stack([ring, np.full(sides, z)]) for z in w]
+                       + [np.array([[centre[0], centre[1], bottom], [centre[0], centre[1], top]])])
+    i = np.arange(sides)
+    j = (i + 1) % sides
+    faces = []
+    for k in range(layers):
+        lo_, hi_ = k * sides, (k + 1) * sides
+        faces += [np.stack([lo_ + i, lo_ + j, hi_ + j], axis=1),
+                  np.stack([lo_ + i, hi_ + j, hi_ + i], axis=1)]
+    nb, nt = len(P) - 2, len(P) - 1
+    faces += [np.stack([np.full(sides, nb), j, i], axis=1),
+              np.stack([np.full(sides, nt), layers * sides + i, layers * sides + j], axis=1)]
+    return P, np.vstack(faces).astype(np.int64)
+
+
+def propped_elements(shell, mapped, X: np.ndarray, label: np.ndarray, elements, *,
+                     scale: float, depth_scale: float, depth: float, sides: int = POST_SIDES,
+                     candidates: int = 12) -> tuple[np.ndarray, np.ndarray, np.ndarray,
+                                                    np.ndarray]:
+    """Stand floating elements on the base with a thin post each.
+
+    A floating piece held between linked neighbours (a chain-mail ring piece
+    at a polycube corner where three quads meet, whose neighbours pass
+    through it) cannot be lowered without cutting them. A prism of
+    ``sides`` sides, radius half the wire's (the spread of the element's
+    points within ``1.5`` wire radii of the chosen point, in the tile), is
+    stood in the tile frame of one quad from inside the element's wire at a
+    point of it down to ``-depth``, mapped as the elements are, and kept if
+    it crosses the base and no element but its own (exact tests). Points are
+    tried lowest first among ``candidates`` spread over the element.
+
+    Parameters
+    ----------
+    shell : Shell
+    mapped : MappedTiles
+        Tile points and quads of every vertex (``mapped.vertices`` is not used).
+    X : numpy.ndarray, (N, 3) float64
+        Current positions of the mapped vertices.
+    label : numpy.ndarray, (M,) int64
+        Element of every face of ``mapped.faces``.
+    elements : array_like of int
+        Floating elements.
+    scale, depth_scale, depth : float
+        As in :func:`lowered_elements`.
+    sides : int
+        Sides of every post.
+    candidates : int
+        Points of an element tried.
+
+    Returns
+    -------
+    posts_vertices : numpy.ndarray, (a, 3) float64
+    posts_faces : numpy.ndarray, (b, 3) int64
+        The posts, each a closed solid (vertex numbers from 0).
+    propped : numpy.ndarray, (p,) int64
+        The element every post props, in post order.
+    still_floating : numpy.ndarray, (k,) int64
+    """
+    G = mapped.faces
+    todo = np.unique(np.asarray(elements, dtype=np.int64))
+    PV, PF, propped, left = [], [], [], []
+    if todo.size == 0:
+        return np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64), todo, todo
+    n_el = int(label.max()) + 1
+    V0, F0 = shell.base_vertices, shell.base_faces
+    lo, hi = _element_boxes(X, G, label, n_el)
+    fl, fh = V0[F0].min(axis=1), V0[F0].max(axis=1)
+    order = np.argsort(label, kind="stable")
+    starts = np.searchsorted(label[order], np.arange(n_el + 1))
+    n_post = 0
+    for e in todo:
+        verts = np.unique(G[order[starts[e]:starts[e + 1]]])
+        uvw, quads = mapped.tile_points[verts], mapped.quads[verts]
+        # candidate points: the lowest ones, spread along the element
+        by_height = np.argsort(uvw[:, 2], kind="stable")
+        picks = by_height[np.linspace(0, verts.size - 1, 4 * candidates).astype(np.int64)]
+        done = False
+        tried = 0
+        for p in picks:
+            if tried >= candidates:
+                break
+            q = quads[p]
+            same = quads == q
+            d = np.linalg.norm(uvw[same] - uvw[p], axis=1)
+            # the wire around the point: the nearby points of its quad
+            near = uvw[same][d <= 2.0 * np.median(np.sort(d)[1:8])]
+            c = near.mean(axis=0)
+            r = 0.5 * float(np.sqrt(((near - c) ** 2).sum(axis=1).mean()))
+            if not (r > 0 and r <= c[0] <= 1 - r and r <= c[1] <= 1 - r):
+                continue
+            tried += 1
+            P, Fp = _post(c[:2], r, float(c[2]), -float(depth), sides, 4)
+            Xp = shaped_positions(shell, np.full(len(P), q, dtype=np.int64), P,
+                                  np.zeros(len(P), dtype=np.int64), scale=scale,
+                                  depth_scale=depth_scale, similar=False)
+            blo, bhi = Xp.min(axis=0), Xp.max(axis=0)
+            others = np.flatnonzero(_overlapping(lo, hi, blo, bhi))
+            others = others[others != e]
+            parts = [(Xp, Fp), (V0, F0[_overlapping(fl, fh, blo, bhi)])]
+            parts += [(X, G[order[starts[o]:starts[o + 1]]]) for o in others]
+            met, folded = _crossing_parts(parts, 0)
+            if folded or not (met.size == 1 and met[0] == 1):
+                continue
+            own, _ = _crossing_parts([(Xp, Fp), (X, G[order[starts[e]:starts[e + 1]]])], 0)
+            if own.size == 0:
+                continue
+            PV.append(Xp)
+            PF.append(Fp + n_post)
+            n_post += len(Xp)
+            propped.append(e)
+            done = True
+            break
+        if not done:
+            left.append(e)
+    if not PV:
+        return (np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64),
+                np.zeros(0, dtype=np.int64), np.asarray(left, dtype=np.int64))
+    return (np.vstack(PV), np.vstack(PF), np.asarray(propped, dtype=np.int64),
+            np.asarray(left, dtype=np.int64))
