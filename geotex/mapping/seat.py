@@ -28,13 +28,21 @@ import numpy as np
 from geotex.check.intersections import self_intersecting_pairs
 from geotex.mapping.shape import shaped_positions
 from geotex.mesh.topology import compacted, concatenated, edge_topology
+from geotex.shells.locate import interpolated
 
 __all__ = ["floating_elements", "lowered_elements", "propped_elements", "smoothed_folds",
-           "LOWER_STEPS", "POST_SIDES"]
+           "remapped_folds", "LOWER_STEPS", "POST_SIDES", "REMAP_RADII",
+           "REMAP_HEIGHTS"]
 
 #: Drops tried by :func:`lowered_elements`, as fractions of the way from the
 #: element's lowest tile point down to the tile set's anchor depth.
 LOWER_STEPS = (0.35, 0.7, 1.0, 1.4)
+
+#: Disc radii (tile units) of the smoothed map tried by :func:`remapped_folds`.
+REMAP_RADII = (0.08, 0.15, 0.25)
+
+#: Height factors :func:`remapped_folds` tries over its largest disc.
+REMAP_HEIGHTS = (0.8, 0.6, 0.45)
 
 #: Sides of the prism :func:`propped_elements` stands an element on.
 POST_SIDES = 8
@@ -435,3 +443,133 @@ def propped_elements(shell, mapped, X: np.ndarray, label: np.ndarray, elements, 
                 np.zeros(0, dtype=np.int64), np.asarray(left, dtype=np.int64))
     return (np.vstack(PV), np.vstack(PF), np.asarray(propped, dtype=np.int64),
             np.asarray(left, dtype=np.int64))
+
+
+def _blurred_map(shell, quads: np.ndarray, uv: np.ndarray, radius: float, rings: int = 2
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """Base point and unit offset direction averaged over a disc of the tile.
+
+    The disc (centre, then ``rings`` rings of 6, 12, ... points) of ``radius``
+    tile units about every point is clamped into its quad, located on the
+    fitted surface, and the base points and offset directions are averaged.
+    """
+    pc = shell.polycube
+    offs = [np.zeros((1, 2))]
+    for k in range(1, rings + 1):
+        a = 2.0 * np.pi * np.arange(6 * k) / (6 * k)
+        offs.append((k / rings) * np.stack([np.cos(a), np.sin(a)], axis=1))
+    offs = radius * np.vstack(offs)
+    n, s = len(uv), len(offs)
+    pts = np.clip((uv[:, None, :] + offs[None, :, :]).reshape(-1, 2), 0.0, 1.0)
+    face, bary = pc.locate(np.repeat(quads, s), pts)
+    YD = interpolated(np.hstack([pc.Y, shell.D]), pc.F, face, bary).reshape(n, s, 6).mean(axis=1)
+    d = YD[:, 3:]
+    d /= np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-300)
+    return YD[:, :3], d
+
+
+def remapped_folds(shell, mapped, X: np.ndarray, label: np.ndarray, folded, *, scale: float,
+                   depth_scale: float, radii=REMAP_RADII, heights=REMAP_HEIGHTS
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """Lay the folded stretch of each folded element back on a smoothed map.
+
+    Where the fitted surface itself folds (its sub-grid triangles turn over
+    at an irregular polycube corner), a strand or ring lying on it folds too,
+    and smoothing the element cannot undo that. Here every mapped point (of
+    any element) in the quad of a folded element's crossing faces is mapped
+    again through the map averaged over a disc of radius ``r`` tile units
+    (``x = mean y + w mean d``), blended in over ``2 r`` about the crossing
+    faces (weight 1 within ``r``, smooth to 0 at ``2 r``), for each ``r`` of
+    ``radii`` in turn; the neighbours move with the folded element, so linked
+    rings stay apart. The first result in which no moved element crosses
+    itself or any element (exact tests) is kept. If none is, the largest
+    disc is tried again with the height there lowered by each factor of
+    ``heights`` (where the offset directions converge over a concave region
+    a ring folds near its top, not on the surface).
+
+    Parameters
+    ----------
+    shell : Shell
+    mapped : MappedTiles
+        Tile points, quads and elements of every vertex.
+    X : numpy.ndarray, (N, 3) float64
+        Current positions.
+    label : numpy.ndarray, (M,) int64
+        Element of every face of ``mapped.faces``.
+    folded : array_like of int
+    scale, depth_scale : float
+        As in :func:`~geotex.mapping.place.shell_positions`.
+    radii : sequence of float
+        Disc radii tried, tile units.
+    heights : sequence of float
+        Height factors tried with the largest disc.
+
+    Returns
+    -------
+    X : numpy.ndarray, (N, 3) float64
+    still_folded : numpy.ndarray, (k,) int64
+    """
+    X = np.array(X, dtype=np.float64, copy=True)
+    G = mapped.faces
+    todo = np.unique(np.asarray(folded, dtype=np.int64))
+    if todo.size == 0:
+        return X, todo
+    n_el = int(label.max()) + 1
+    lo, hi = _element_boxes(X, G, label, n_el)
+    order = np.argsort(label, kind="stable")
+    starts = np.searchsorted(label[order], np.arange(n_el + 1))
+    vel = mapped.element
+    uvw_all, quad_all = mapped.tile_points, mapped.quads
+    w_all = np.where(uvw_all[:, 2] < 0, uvw_all[:, 2] * float(depth_scale),
+                     uvw_all[:, 2] * float(scale))
+    trials = [(float(r), 1.0) for r in radii] + [(float(radii[-1]), float(f)) for f in heights]
+    left = []
+    for e in todo:
+        faces = G[order[starts[e]:starts[e + 1]]]
+        verts, local = np.unique(faces, return_inverse=True)
+        local = local.reshape(-1, 3)
+        pairs = self_intersecting_pairs(X[verts], local)
+        seed = verts[np.unique(local[pairs.ravel()].ravel())]
+        seed_quads = np.unique(quad_all[seed])
+        region = np.flatnonzero(np.isin(quad_all, seed_quads))
+        # distance (tile units, same quad only) to the nearest crossing point
+        dist = np.full(region.size, np.inf)
+        for q in seed_quads:
+            sq = seed[quad_all[seed] == q]
+            inq = np.flatnonzero(quad_all[region] == q)
+            diff = uvw_all[region[inq], None, :2] - uvw_all[None, sq, :2]
+            dist[inq] = np.sqrt((diff ** 2).sum(axis=2)).min(axis=1)
+        done = False
+        for r, f in trials:
+            t = np.clip((2.0 * r - dist) / r, 0.0, 1.0)
+            t = t * t * (3.0 - 2.0 * t)
+            mv = region[t > 0]
+            tm = t[t > 0]
+            y, d = _blurred_map(shell, quad_all[mv], uvw_all[mv, :2], r)
+            # the height lowered by f where the map is laid back (1: kept)
+            wl = w_all[mv] * (1.0 - tm * (1.0 - f))
+            Xn = X[mv] + tm[:, None] * (y + wl[:, None] * d - X[mv])
+            moved = np.unique(vel[mv])
+            # the moved elements with their new positions, then their neighbours
+            Xt = X.copy()
+            Xt[mv] = Xn
+            mlo, mhi = _element_boxes(Xt, G[np.isin(label, moved)], label[np.isin(label, moved)],
+                                      n_el)
+            blo, bhi = mlo[moved].min(axis=0), mhi[moved].max(axis=0)
+            others = np.flatnonzero(_overlapping(lo, hi, blo, bhi))
+            others = np.setdiff1d(others, moved)
+            parts = [(Xt, G[order[starts[o]:starts[o + 1]]]) for o in moved]
+            parts += [(X, G[order[starts[o]:starts[o + 1]]]) for o in others]
+            PV, PF = concatenated([compacted(V, F) for V, F in parts])
+            part = np.repeat(np.arange(len(parts)), [len(F) for _, F in parts])
+            hit = self_intersecting_pairs(PV, PF, parts=part)
+            pa, pb = part[hit[:, 0]], part[hit[:, 1]]
+            if np.any((pa < moved.size) | (pb < moved.size)):
+                continue
+            X = Xt
+            lo[moved], hi[moved] = mlo[moved], mhi[moved]
+            done = True
+            break
+        if not done:
+            left.append(e)
+    return X, np.asarray(left, dtype=np.int64)

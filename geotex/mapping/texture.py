@@ -20,7 +20,7 @@ from geotex.errors import GeotexError, InputError
 from geotex.mapping.assign import edge_colors, tiles_for_quads
 from geotex.mapping.place import depth_scale, mapped_tiles, reseated_elements
 from geotex.mapping.seat import (floating_elements, lowered_elements, propped_elements,
-                                 smoothed_folds)
+                                 remapped_folds, smoothed_folds)
 from geotex.mapping.union import (UNION_STAGES, ElementContacts, element_contacts,
                                   united_with_base)
 from geotex.mesh.topology import face_components
@@ -278,12 +278,15 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
     report(progress, "union")
     t = time.perf_counter()
     # elements the map folds onto themselves are shrunk in place where that
-    # helps, else smoothed over the folded stretch (strands, rings)
+    # helps, else laid back on a locally smoothed map with their neighbours,
+    # else smoothed over the folded stretch (strands, rings)
     contacts = element_contacts(mapped.vertices, mapped.faces)
     folded = contacts.folded
     below = depth_scale(tiles, scale, ANCHOR * shell.tile_size)
     X, still = reseated_elements(shell, mapped, contacts.label, folded, scale=scale,
                                  depth_scale=below)
+    X, still = remapped_folds(shell, mapped, X, contacts.label, still, scale=scale,
+                              depth_scale=below)
     X, still = smoothed_folds(X, mapped.faces, contacts.label, still)
     mapped = dataclasses.replace(mapped, vertices=X)
     moved = np.setdiff1d(folded, still)
