@@ -80,6 +80,25 @@ def _crossing_parts(parts_mesh, probe: int) -> tuple[np.ndarray, np.ndarray]:
     return np.unique(other[other != probe]), bool(np.any(other == probe))
 
 
+def _clean_move(X: np.ndarray, G: np.ndarray, moved: np.ndarray, fbox) -> bool:
+    """Whether no face at a ``moved`` vertex crosses any face (exact test, local).
+
+    ``fbox`` is ``(lo, hi)`` of every face of ``G`` at its current positions
+    except the moved ones; only faces whose boxes overlap the moved faces' box
+    are tested, so the test costs what the neighbourhood of the move costs.
+    """
+    at = np.zeros(X.shape[0], dtype=bool)
+    at[moved] = True
+    changed = at[G].any(axis=1)
+    P = X[G[changed]]
+    blo, bhi = P.min(axis=(0, 1)), P.max(axis=(0, 1))
+    cand = _overlapping(fbox[0], fbox[1], blo, bhi) | changed
+    rows = np.flatnonzero(cand)
+    V2, F2 = compacted(X, G[rows])
+    pairs = self_intersecting_pairs(V2, F2)
+    return not changed[rows[pairs.ravel()]].any()
+
+
 def floating_elements(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray, *,
                       label: np.ndarray, touching: np.ndarray, usable=None) -> np.ndarray:
     """Elements that would float: neither crossing the base nor inside it.
@@ -269,9 +288,10 @@ def smoothed_folds(X: np.ndarray, G: np.ndarray, label: np.ndarray, folded, *,
     if todo.size == 0:
         return X, todo
     n_el = int(label.max()) + 1
-    lo, hi = _element_boxes(X, G, label, n_el)
     order = np.argsort(label, kind="stable")
     starts = np.searchsorted(label[order], np.arange(n_el + 1))
+    P = X[G]
+    fbox = [P.min(axis=1), P.max(axis=1)]
     left = []
     for e in todo:
         faces = G[order[starts[e]:starts[e + 1]]]
@@ -298,19 +318,17 @@ def smoothed_folds(X: np.ndarray, G: np.ndarray, label: np.ndarray, folded, *,
             for _ in range(int(k)):
                 mean = (adj @ Xe) / np.maximum(deg, 1)[:, None]
                 Xe[inner] = 0.5 * (Xe[inner] + mean[inner])
-            if self_intersecting_pairs(Xe, local, max_pairs=1).size:
+            if not inner.any():
                 continue
-            blo, bhi = np.minimum(Xe.min(axis=0), lo[e]), np.maximum(Xe.max(axis=0), hi[e])
-            others = np.flatnonzero(_overlapping(lo, hi, blo, bhi))
-            others = others[others != e]
-            met = np.zeros(0, dtype=np.int64)
-            if others.size:
-                parts = [(Xe, local)] + [(X, G[order[starts[o]:starts[o + 1]]])
-                                         for o in others]
-                met, _ = _crossing_parts(parts, 0)
-            if met.size == 0:
-                X[verts] = Xe
-                lo[e], hi[e] = Xe.min(axis=0), Xe.max(axis=0)
+            Xt = X.copy()
+            Xt[verts] = Xe
+            # the fold itself counts: its faces are at moved vertices or next to them
+            if self_intersecting_pairs(Xe, local, max_pairs=1).size == 0 and _clean_move(
+                    Xt, G, verts[inner], fbox):
+                X = Xt
+                Pm = X[faces]
+                fbox[0][order[starts[e]:starts[e + 1]]] = Pm.min(axis=1)
+                fbox[1][order[starts[e]:starts[e + 1]]] = Pm.max(axis=1)
                 done = True
                 break
         if not done:
@@ -480,9 +498,10 @@ def remapped_folds(shell, mapped, X: np.ndarray, label: np.ndarray, folded, *, s
     again through the map averaged over a disc of radius ``r`` tile units
     (``x = mean y + w mean d``), blended in over ``2 r`` about the crossing
     faces (weight 1 within ``r``, smooth to 0 at ``2 r``), for each ``r`` of
-    ``radii`` in turn; the neighbours move with the folded element, so linked
-    rings stay apart. The first result in which no moved element crosses
-    itself or any element (exact tests) is kept. If none is, the largest
+    ``radii`` in turn: the folded element's points alone first, then all of
+    them, so that linked neighbours move with it and stay apart. The first
+    result in which no moved face crosses any face (exact test, local) is
+    kept. If none is, the largest
     disc is tried again with the height there lowered by each factor of
     ``heights`` (where the offset directions converge over a concave region
     a ring folds near its top, not on the surface).
@@ -515,13 +534,14 @@ def remapped_folds(shell, mapped, X: np.ndarray, label: np.ndarray, folded, *, s
     if todo.size == 0:
         return X, todo
     n_el = int(label.max()) + 1
-    lo, hi = _element_boxes(X, G, label, n_el)
     order = np.argsort(label, kind="stable")
     starts = np.searchsorted(label[order], np.arange(n_el + 1))
     vel = mapped.element
     uvw_all, quad_all = mapped.tile_points, mapped.quads
     w_all = np.where(uvw_all[:, 2] < 0, uvw_all[:, 2] * float(depth_scale),
                      uvw_all[:, 2] * float(scale))
+    P = X[G]
+    fbox = [P.min(axis=1), P.max(axis=1)]
     trials = [(float(r), 1.0) for r in radii] + [(float(radii[-1]), float(f)) for f in heights]
     left = []
     for e in todo:
@@ -540,36 +560,30 @@ def remapped_folds(shell, mapped, X: np.ndarray, label: np.ndarray, folded, *, s
             diff = uvw_all[region[inq], None, :2] - uvw_all[None, sq, :2]
             dist[inq] = np.sqrt((diff ** 2).sum(axis=2)).min(axis=1)
         done = False
-        for r, f in trials:
-            t = np.clip((2.0 * r - dist) / r, 0.0, 1.0)
-            t = t * t * (3.0 - 2.0 * t)
-            mv = region[t > 0]
-            tm = t[t > 0]
-            y, d = _blurred_map(shell, quad_all[mv], uvw_all[mv, :2], r)
-            # the height lowered by f where the map is laid back (1: kept)
-            wl = w_all[mv] * (1.0 - tm * (1.0 - f))
-            Xn = X[mv] + tm[:, None] * (y + wl[:, None] * d - X[mv])
-            moved = np.unique(vel[mv])
-            # the moved elements with their new positions, then their neighbours
-            Xt = X.copy()
-            Xt[mv] = Xn
-            mlo, mhi = _element_boxes(Xt, G[np.isin(label, moved)], label[np.isin(label, moved)],
-                                      n_el)
-            blo, bhi = mlo[moved].min(axis=0), mhi[moved].max(axis=0)
-            others = np.flatnonzero(_overlapping(lo, hi, blo, bhi))
-            others = np.setdiff1d(others, moved)
-            parts = [(Xt, G[order[starts[o]:starts[o + 1]]]) for o in moved]
-            parts += [(X, G[order[starts[o]:starts[o + 1]]]) for o in others]
-            PV, PF = concatenated([compacted(V, F) for V, F in parts])
-            part = np.repeat(np.arange(len(parts)), [len(F) for _, F in parts])
-            hit = self_intersecting_pairs(PV, PF, parts=part)
-            pa, pb = part[hit[:, 0]], part[hit[:, 1]]
-            if np.any((pa < moved.size) | (pb < moved.size)):
-                continue
-            X = Xt
-            lo[moved], hi[moved] = mlo[moved], mhi[moved]
-            done = True
-            break
+        # the folded element alone first, then with its neighbours in the quad
+        for alone in (True, False):
+            for r, f in trials:
+                t = np.clip((2.0 * r - dist) / r, 0.0, 1.0)
+                t = t * t * (3.0 - 2.0 * t)
+                keep = (t > 0) & ((vel[region] == e) if alone else True)
+                mv, tm = region[keep], t[keep]
+                y, d = _blurred_map(shell, quad_all[mv], uvw_all[mv, :2], r)
+                # the height lowered by f where the map is laid back (1: kept)
+                wl = w_all[mv] * (1.0 - tm * (1.0 - f))
+                Xt = X.copy()
+                Xt[mv] += tm[:, None] * (y + wl[:, None] * d - X[mv])
+                if not _clean_move(Xt, G, mv, fbox):
+                    continue
+                X = Xt
+                at = np.zeros(X.shape[0], dtype=bool)
+                at[mv] = True
+                changed = np.flatnonzero(at[G].any(axis=1))
+                Pm = X[G[changed]]
+                fbox[0][changed], fbox[1][changed] = Pm.min(axis=1), Pm.max(axis=1)
+                done = True
+                break
+            if done:
+                break
         if not done:
             left.append(e)
     return X, np.asarray(left, dtype=np.int64)
