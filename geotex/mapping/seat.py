@@ -23,7 +23,10 @@ Two kinds of mapped elements used to be left out of the union
 
 from __future__ import annotations
 
+import igl
 import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
 
 from geotex.check.intersections import self_intersecting_pairs
 from geotex.mapping.shape import shaped_positions
@@ -129,11 +132,6 @@ def floating_elements(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray
     numpy.ndarray, (f,) int64
         Sorted floating elements (usable ones only).
     """
-    # lazy: igl and scipy.sparse.csgraph are slow to import
-    import igl
-    import scipy.sparse as sp
-    from scipy.sparse.csgraph import connected_components
-
     n_el = int(label.max()) + 1 if label.size else 0
     if n_el == 0:
         return np.zeros(0, dtype=np.int64)
@@ -281,8 +279,6 @@ def smoothed_folds(X: np.ndarray, G: np.ndarray, label: np.ndarray, folded, *,
         Positions with the smoothed elements moved.
     still_folded : numpy.ndarray, (k,) int64
     """
-    import scipy.sparse as sp
-
     X = np.array(X, dtype=np.float64, copy=True)
     todo = np.unique(np.asarray(folded, dtype=np.int64))
     if todo.size == 0:
