@@ -83,23 +83,34 @@ def _crossing_parts(parts_mesh, probe: int) -> tuple[np.ndarray, np.ndarray]:
     return np.unique(other[other != probe]), bool(np.any(other == probe))
 
 
-def _clean_move(X: np.ndarray, G: np.ndarray, moved: np.ndarray, fbox) -> bool:
+def _clean_move(X: np.ndarray, G: np.ndarray, moved: np.ndarray, fbox, pool: np.ndarray
+                ) -> bool:
     """Whether no face at a ``moved`` vertex crosses any face (exact test, local).
 
     ``fbox`` is ``(lo, hi)`` of every face of ``G`` at its current positions
-    except the moved ones; only faces whose boxes overlap the moved faces' box
-    are tested, so the test costs what the neighbourhood of the move costs.
+    except the moved ones; ``pool`` holds every face that may be at a moved
+    vertex or near one. Only faces of the pool whose boxes overlap the moved
+    faces' box are tested, so the test costs what the neighbourhood of the
+    move costs.
     """
     at = np.zeros(X.shape[0], dtype=bool)
     at[moved] = True
-    changed = at[G].any(axis=1)
-    P = X[G[changed]]
+    Gp = G[pool]
+    changed = at[Gp].any(axis=1)
+    P = X[Gp[changed]]
     blo, bhi = P.min(axis=(0, 1)), P.max(axis=(0, 1))
-    cand = _overlapping(fbox[0], fbox[1], blo, bhi) | changed
-    rows = np.flatnonzero(cand)
-    V2, F2 = compacted(X, G[rows])
+    rows = np.flatnonzero(_overlapping(fbox[0][pool], fbox[1][pool], blo, bhi) | changed)
+    V2, F2 = compacted(X, Gp[rows])
     pairs = self_intersecting_pairs(V2, F2)
     return not changed[rows[pairs.ravel()]].any()
+
+
+def _pool(X: np.ndarray, G: np.ndarray, fbox, points: np.ndarray, margin: float) -> np.ndarray:
+    """Faces at ``points`` or whose boxes come within ``margin`` of their box."""
+    at = np.zeros(X.shape[0], dtype=bool)
+    at[points] = True
+    lo, hi = X[points].min(axis=0) - margin, X[points].max(axis=0) + margin
+    return np.flatnonzero(_overlapping(fbox[0], fbox[1], lo, hi) | at[G].any(axis=1))
 
 
 def floating_elements(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray, *,
@@ -316,17 +327,18 @@ def smoothed_folds(X: np.ndarray, G: np.ndarray, label: np.ndarray, folded, *,
                 Xe[inner] = 0.5 * (Xe[inner] + mean[inner])
             if not inner.any():
                 continue
-            Xt = X.copy()
-            Xt[verts] = Xe
-            # the fold itself counts: its faces are at moved vertices or next to them
-            if self_intersecting_pairs(Xe, local, max_pairs=1).size == 0 and _clean_move(
-                    Xt, G, verts[inner], fbox):
-                X = Xt
+            if self_intersecting_pairs(Xe, local, max_pairs=1).size:
+                continue
+            # tried in place, put back if the move crosses anything
+            X[verts] = Xe
+            pool = _pool(X, G, fbox, verts[region], float(np.ptp(Xe0[region], axis=0).max()))
+            if _clean_move(X, G, verts[inner], fbox, pool):
                 Pm = X[faces]
                 fbox[0][order[starts[e]:starts[e + 1]]] = Pm.min(axis=1)
                 fbox[1][order[starts[e]:starts[e + 1]]] = Pm.max(axis=1)
                 done = True
                 break
+            X[verts] = Xe0
         if not done:
             left.append(e)
     return X, np.asarray(left, dtype=np.int64)
@@ -555,6 +567,8 @@ def remapped_folds(shell, mapped, X: np.ndarray, label: np.ndarray, folded, *, s
             inq = np.flatnonzero(quad_all[region] == q)
             diff = uvw_all[region[inq], None, :2] - uvw_all[None, sq, :2]
             dist[inq] = np.sqrt((diff ** 2).sum(axis=2)).min(axis=1)
+        # every face a move can reach: the quads' points move by less than a tile
+        pool = _pool(X, G, fbox, region, 2.0 * float(shell.tile_size))
         done = False
         # the folded element alone first, then with its neighbours in the quad
         for alone in (True, False):
@@ -566,11 +580,12 @@ def remapped_folds(shell, mapped, X: np.ndarray, label: np.ndarray, folded, *, s
                 y, d = _blurred_map(shell, quad_all[mv], uvw_all[mv, :2], r)
                 # the height lowered by f where the map is laid back (1: kept)
                 wl = w_all[mv] * (1.0 - tm * (1.0 - f))
-                Xt = X.copy()
-                Xt[mv] += tm[:, None] * (y + wl[:, None] * d - X[mv])
-                if not _clean_move(Xt, G, mv, fbox):
+                # tried in place, put back if the move crosses anything
+                before = X[mv]
+                X[mv] = before + tm[:, None] * (y + wl[:, None] * d - before)
+                if not _clean_move(X, G, mv, fbox, pool):
+                    X[mv] = before
                     continue
-                X = Xt
                 at = np.zeros(X.shape[0], dtype=bool)
                 at[mv] = True
                 changed = np.flatnonzero(at[G].any(axis=1))
