@@ -76,6 +76,9 @@ class TextureStats:
     elements_lowered, elements_propped : int
         Floating elements lowered onto the base, or stood on it with a post
         (:mod:`~geotex.mapping.seat`).
+    cavities_filled : int
+        Closed voids between elements and the base that the union's result
+        enclosed, filled (not counted as floating elements).
     union_retries : int
         Unions redone without the elements next to defects.
     float32_collapsed_faces, elements_left_out_at_defects : int or None
@@ -103,6 +106,7 @@ class TextureStats:
     union_retries: int
     elements_lowered: int = 0
     elements_propped: int = 0
+    cavities_filled: int = 0
     float32_collapsed_faces: int | None = None
     elements_left_out_at_defects: int | None = None
     vertices: int
@@ -360,7 +364,8 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
         elements=union.elements, union_operands=union.groups,
         elements_floating=union.floating, elements_folded=union.folded,
         elements_reseated=int(folded.size - still.size), union_retries=retried,
-        elements_lowered=int(lowered.size), elements_propped=int(propped.size), **cleanup,
+        elements_lowered=int(lowered.size), elements_propped=int(propped.size),
+        cavities_filled=union.cavities, **cleanup,
         vertices=int(V.shape[0]), faces=int(F.shape[0]),
         seconds={k: round(v, 3) for k, v in times.items()})
     return TexturedSolid(V, F, tile_of_quad, rep, stats)
