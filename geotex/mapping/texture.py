@@ -289,11 +289,17 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
     below = depth_scale(tiles, scale, ANCHOR * shell.tile_size)
     X, still = reseated_elements(shell, mapped, contacts.label, folded, scale=scale,
                                  depth_scale=below)
+    # shrunk elements may now meet others: the union judges them by their boxes
+    moved = np.setdiff1d(folded, still)
     X, still = remapped_folds(shell, mapped, X, contacts.label, still, scale=scale,
                               depth_scale=below)
     X, still = smoothed_folds(X, mapped.faces, contacts.label, still)
     mapped = dataclasses.replace(mapped, vertices=X)
-    moved = np.setdiff1d(folded, still)
+    # the remapped and smoothed ones (and the neighbours moved with them) were
+    # kept only where the exact test found them crossing nothing: no contacts
+    # to add, and a strand loop's box, overlapping most elements, would split
+    # the union into many operands
+    contacts = contacts._replace(folded=np.union1d(moved, still))
     # elements that would float are lowered onto the base, or stood on it
     n_el = int(contacts.label.max()) + 1 if contacts.label.size else 0
     usable = np.ones(n_el, dtype=bool)
@@ -306,8 +312,8 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
     lowered = np.setdiff1d(floating, unseated)
     PV, PF, propped, _ = propped_elements(shell, mapped, X, contacts.label, unseated,
                                           scale=scale, depth_scale=below, depth=tiles.depth)
+    # (lowered elements and posts were kept only where they cross nothing else)
     mapped = dataclasses.replace(mapped, vertices=X)
-    moved = np.union1d(moved, lowered)
     G = mapped.faces
     if propped.size:
         # every post is an element of its own that meets the one it props
