@@ -1,24 +1,27 @@
-"""Elements re-seated instead of dropped: floating pieces lowered, folds smoothed.
+"""Elements re-seated instead of dropped: folds laid back, floating pieces seated.
 
 Two kinds of mapped elements used to be left out of the union
 (:mod:`geotex.mapping.union`):
 
+* **folded** elements, whose own faces cross where the map bends them at an
+  irregular polycube corner (a weave strand loop folded in 4-9 faces of
+  16k-31k was left out whole). :func:`remapped_folds` maps the points about
+  the crossing faces again through the map averaged over a disc (the fitted
+  surface itself folds there), the element alone first, then with its
+  neighbours, then with the height lowered there; :func:`smoothed_folds`
+  takes umbrella steps over a few rings about the crossing faces as a last
+  try. A result is kept only if no moved face crosses any face (exact test).
 * **floating** pieces, which neither cross the base nor lie inside it, so the
   union would leave them as loose parts. On the catalog shells they are
   chain-mail ring pieces at polycube corners where three quads meet: the four
   quadrants of a corner ring become three, which weld into a small triangular
   loop at the top and a low piece inside the base. :func:`floating_elements`
   finds them (winding numbers against the base, then the exact test for the
-  elements wholly outside) and :func:`lowered_elements` moves each down its
+  elements wholly outside); :func:`lowered_elements` moves each down its
   offset directions (its tile ``w`` lowered, mapped again) by the smallest of
-  a few steps at which it crosses the base and meets no other element (exact
-  tests), so linked rings are not cut.
-* **folded** elements, whose own faces cross where the map bends them at an
-  irregular polycube corner (a weave strand loop folded in 4-9 faces of
-  30k was left out whole). :func:`smoothed_folds` smooths the element's
-  vertices in a few rings around the crossing faces (umbrella steps, the
-  region's rim fixed) until the element no longer crosses itself or any
-  other element (exact tests).
+  a few steps at which it crosses the base and meets no other element; a
+  piece that cannot drop without cutting the rings linked through it is
+  stood on the base with a thin post by :func:`propped_elements`.
 """
 
 from __future__ import annotations
