@@ -135,6 +135,9 @@ def _finish(args, shell, tiles, out, extra, *, label: str, seconds=None) -> int:
         s = result.stats
         print(f"{label}: {s.quads} tiles of {shell.tile_size:.3g} mm ({s.bare_quads} bare), "
               f"{s.elements} elements {s.height:.3g} mm high, {s.faces} faces")
+        if s.elements_lowered or s.elements_propped:
+            print(f"  re-seated: {s.elements_lowered} floating elements lowered onto the base, "
+                  f"{s.elements_propped} stood on it with a post")
         if s.elements_floating or s.elements_folded:
             print(f"  left out: {s.elements_folded} elements folded by the shell map, "
                   f"{s.elements_floating} that do not reach the base")

@@ -19,7 +19,10 @@ from geotex.check.report import CHECK_STAGES, CheckReport
 from geotex.errors import GeotexError, InputError
 from geotex.mapping.assign import edge_colors, tiles_for_quads
 from geotex.mapping.place import depth_scale, mapped_tiles, reseated_elements
-from geotex.mapping.union import UNION_STAGES, element_contacts, united_with_base
+from geotex.mapping.seat import (floating_elements, lowered_elements, propped_elements,
+                                 remapped_folds, smoothed_folds)
+from geotex.mapping.union import (UNION_STAGES, ElementContacts, element_contacts,
+                                  united_with_base)
 from geotex.mesh.topology import face_components
 from geotex.param.polycube_fit import SurfaceProjector
 from geotex.printing.stored import printable_stored_solid
@@ -69,7 +72,14 @@ class TextureStats:
     elements_floating, elements_folded : int
         Elements left out: not reaching the base, folded by the shell map.
     elements_reseated : int
-        Folded elements shrunk in place that then fit.
+        Folded elements shrunk in place, or smoothed over the folded stretch,
+        that then fit.
+    elements_lowered, elements_propped : int
+        Floating elements lowered onto the base, or stood on it with a post
+        (:mod:`~geotex.mapping.seat`).
+    cavities_filled : int
+        Closed voids between elements and the base that the union's result
+        enclosed, filled (not counted as floating elements).
     union_retries : int
         Unions redone without the elements next to defects.
     float32_collapsed_faces, elements_left_out_at_defects : int or None
@@ -95,6 +105,9 @@ class TextureStats:
     elements_folded: int
     elements_reseated: int
     union_retries: int
+    elements_lowered: int = 0
+    elements_propped: int = 0
+    cavities_filled: int = 0
     float32_collapsed_faces: int | None = None
     elements_left_out_at_defects: int | None = None
     vertices: int
@@ -278,17 +291,53 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
     times["map"] = time.perf_counter() - t
     report(progress, "union")
     t = time.perf_counter()
-    # elements the map folds onto themselves are shrunk in place where that helps
+    # elements the map folds onto themselves are shrunk in place where that
+    # helps, else laid back on a locally smoothed map with their neighbours,
+    # else smoothed over the folded stretch (strands, rings)
     contacts = element_contacts(mapped.vertices, mapped.faces)
     folded = contacts.folded
+    below = depth_scale(tiles, scale, ANCHOR * shell.tile_size)
     X, still = reseated_elements(shell, mapped, contacts.label, folded, scale=scale,
-                                 depth_scale=depth_scale(tiles, scale, ANCHOR * shell.tile_size),
-                                 projector=projector)
-    mapped = dataclasses.replace(mapped, vertices=X)
+                                 depth_scale=below, projector=projector)
+    # shrunk elements may now meet others: the union judges them by their boxes
     moved = np.setdiff1d(folded, still)
-    V, F, union = united_with_base(shell.base_vertices, shell.base_faces, mapped.vertices,
-                                   mapped.faces, contacts=contacts, moved=moved,
-                                   progress=progress)
+    X, still = remapped_folds(shell, mapped, X, contacts.label, still, scale=scale,
+                              depth_scale=below)
+    X, still = smoothed_folds(X, mapped.faces, contacts.label, still)
+    mapped = dataclasses.replace(mapped, vertices=X)
+    # the remapped and smoothed ones (and the neighbours moved with them) were
+    # kept only where the exact test found them crossing nothing: no contacts
+    # to add, and a strand loop's box, overlapping most elements, would split
+    # the union into many operands
+    contacts = contacts._replace(folded=np.union1d(moved, still))
+    # elements that would float are lowered onto the base, or stood on it
+    n_el = int(contacts.label.max()) + 1 if contacts.label.size else 0
+    usable = np.ones(n_el, dtype=bool)
+    usable[still] = False
+    floating = floating_elements(shell.base_vertices, shell.base_faces, X, mapped.faces,
+                                 label=contacts.label, touching=contacts.touching,
+                                 usable=usable, heights=mapped.tile_points[:, 2])
+    X, unseated = lowered_elements(shell, mapped, contacts.label, floating, scale=scale,
+                                   depth_scale=below, depth=tiles.depth)
+    lowered = np.setdiff1d(floating, unseated)
+    PV, PF, propped, _ = propped_elements(shell, mapped, X, contacts.label, unseated,
+                                          scale=scale, depth_scale=below, depth=tiles.depth)
+    # (lowered elements and posts were kept only where they cross nothing else)
+    mapped = dataclasses.replace(mapped, vertices=X)
+    G = mapped.faces
+    if propped.size:
+        # every post is an element of its own that meets the one it props
+        n_post = propped.size
+        post_label = n_el + np.repeat(np.arange(n_post), len(PF) // n_post)
+        X = np.vstack([X, PV])
+        G = np.vstack([G, PF + len(mapped.vertices)])
+        touching = np.vstack([contacts.touching,
+                              np.stack([propped, n_el + np.arange(n_post)], axis=1)])
+        order = np.lexsort((touching[:, 1], touching[:, 0]))
+        contacts = ElementContacts(np.concatenate([contacts.label, post_label]),
+                                   contacts.folded, touching[order])
+    V, F, union = united_with_base(shell.base_vertices, shell.base_faces, X, G,
+                                   contacts=contacts, moved=moved, progress=progress)
     times["union"] = time.perf_counter() - t
     rep = None
     retried = 0
@@ -311,9 +360,9 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
             points = _defect_points(solid.vertices, solid.faces, solid.report)
             if len(points) == 0:
                 break
-            exclude = _elements_near(points, mapped.vertices, mapped.faces, exclude)
+            exclude = _elements_near(points, X, G, exclude)
             V, F, union = united_with_base(shell.base_vertices, shell.base_faces,
-                                           mapped.vertices, mapped.faces, exclude=exclude,
+                                           X, G, exclude=exclude,
                                            contacts=contacts, moved=moved, progress=progress)
             solid = printable_stored_solid(V, F, precision=np.float32, manifold3d=False,
                                            max_examples=ALL_DEFECTS, progress=progress,
@@ -328,11 +377,13 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
         times["validate"] = time.perf_counter() - t
     stats = TextureStats(
         quads=pc.layout.n_quads, bare_quads=int((tile_of_quad < 0).sum()), height=h, seed=int(seed),
-        mapped_vertices=int(mapped.vertices.shape[0]), mapped_faces=int(mapped.faces.shape[0]),
+        mapped_vertices=int(X.shape[0]), mapped_faces=int(G.shape[0]),
         welded=mapped.welded, open_faces_dropped=mapped.dropped_faces,
         elements=union.elements, union_operands=union.groups,
         elements_floating=union.floating, elements_folded=union.folded,
-        elements_reseated=int(folded.size - still.size), union_retries=retried, **cleanup,
+        elements_reseated=int(folded.size - still.size), union_retries=retried,
+        elements_lowered=int(lowered.size), elements_propped=int(propped.size),
+        cavities_filled=union.cavities, **cleanup,
         vertices=int(V.shape[0]), faces=int(F.shape[0]),
         seconds={k: round(v, 3) for k, v in times.items()})
     return TexturedSolid(V, F, tile_of_quad, rep, stats)

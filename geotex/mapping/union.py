@@ -29,6 +29,7 @@ import numpy as np
 
 from geotex.check.intersections import self_intersecting_pairs
 from geotex.errors import GeotexError
+from geotex.mesh.geometry import component_volumes
 from geotex.mesh.needles import SLIVER_TOLERANCE, needle_free
 from geotex.mesh.solid import arrays_of_manifold, manifold_of
 from geotex.mesh.topology import compacted, concatenated, face_components, greedy_colouring
@@ -57,6 +58,9 @@ class UnionStats:
         themselves before the base is added).
     floating : int
         Pieces that did not reach the base and were left out.
+    cavities : int
+        Closed voids (inward-facing parts) between elements and the base,
+        filled.
     folded : int
         Elements left out because the map folds them onto themselves.
     """
@@ -65,6 +69,7 @@ class UnionStats:
     groups: int
     floating: int = 0
     folded: int = 0
+    cavities: int = 0
 
 
 class ElementContacts(NamedTuple):
@@ -300,11 +305,14 @@ def united_with_base(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray,
     V2, F2, _ = needle_free(*arrays_of_manifold(solid), tolerance=SLIVER_TOLERANCE * diag)
     # elements that do not reach the base (where the fitted surface lies above a
     # concave base) would print as loose pieces: keep the body they are part of
+    # (a closed void between an element and the base is a part too, facing
+    # inward: dropping it fills the void, it is no element left out)
     parts, label = face_components(F2, V2.shape[0])
-    floating = 0
+    floating = cavities = 0
     if parts > 1:
         body = np.argmax(np.bincount(label))
-        floating = parts - 1
+        cavities = int((component_volumes(V2, F2, label, parts) < 0).sum())
+        floating = parts - 1 - cavities
         V2, F2 = compacted(V2, F2[label == body])
     return V2, F2, UnionStats(int((group >= 0).sum()) - floating, int(group.max()) + 1,
-                              floating, int(folded.size))
+                              floating, int(folded.size), cavities)

@@ -1,0 +1,625 @@
+"""Elements re-seated instead of dropped: folds laid back, floating pieces seated.
+
+Two kinds of mapped elements used to be left out of the union
+(:mod:`geotex.mapping.union`):
+
+* **folded** elements, whose own faces cross where the map bends them at an
+  irregular polycube corner (a weave strand loop folded in 4-9 faces of
+  16k-31k was left out whole). :func:`remapped_folds` maps the points about
+  the crossing faces again through the map averaged over a disc (the fitted
+  surface itself folds there), the element alone first, then with its
+  neighbours, then with the height lowered there; :func:`smoothed_folds`
+  takes umbrella steps over a few rings about the crossing faces as a last
+  try. A result is kept only if no moved face crosses any face (exact test).
+* **floating** pieces, which neither cross the base nor lie inside it, so the
+  union would leave them as loose parts. On the catalog shells they are
+  chain-mail ring pieces at polycube corners where three quads meet: the four
+  quadrants of a corner ring become three, which weld into a small triangular
+  loop at the top and a low piece inside the base. :func:`floating_elements`
+  finds them (winding numbers against the base, then the exact test for the
+  elements wholly outside); :func:`lowered_elements` moves each down its
+  offset directions (its tile ``w`` lowered, mapped again) by the smallest of
+  a few steps at which it crosses the base and meets no other element; a
+  piece that cannot drop without cutting the rings linked through it is
+  stood on the base with a thin post by :func:`propped_elements`.
+"""
+
+from __future__ import annotations
+
+import igl
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
+
+from geotex.check.intersections import self_intersecting_pairs
+from geotex.mapping.shape import shaped_positions
+from geotex.mesh.topology import compacted, concatenated, edge_topology
+from geotex.shells.locate import interpolated
+
+__all__ = ["floating_elements", "lowered_elements", "propped_elements", "smoothed_folds",
+           "remapped_folds", "LOWER_STEPS", "POST_SIDES", "REMAP_RADII",
+           "REMAP_HEIGHTS"]
+
+#: Drops tried by :func:`lowered_elements`, as fractions of the way from the
+#: element's lowest tile point down to the tile set's anchor depth.
+LOWER_STEPS = (0.35, 0.7, 1.0, 1.4)
+
+#: Disc radii (tile units) of the smoothed map tried by :func:`remapped_folds`.
+REMAP_RADII = (0.08, 0.15, 0.25)
+
+#: Height factors :func:`remapped_folds` tries over its largest disc.
+REMAP_HEIGHTS = (0.8, 0.6, 0.45)
+
+#: Sides of the prism :func:`propped_elements` stands an element on.
+POST_SIDES = 8
+
+
+def _element_boxes(X, G, label, n_el):
+    """Bounding box ``(lo, hi)`` of every element, ``(n_el, 3)`` each."""
+    lo = np.full((n_el, 3), np.inf)
+    hi = np.full((n_el, 3), -np.inf)
+    lab = np.repeat(label, 3)
+    P = X[G.ravel()]
+    for d in range(3):
+        np.minimum.at(lo[:, d], lab, P[:, d])
+        np.maximum.at(hi[:, d], lab, P[:, d])
+    return lo, hi
+
+
+def _overlapping(lo, hi, box_lo, box_hi) -> np.ndarray:
+    """Rows of ``(lo, hi)`` whose boxes overlap the box ``(box_lo, box_hi)``."""
+    return np.all((lo <= box_hi) & (hi >= box_lo), axis=1)
+
+
+def _crossing_parts(parts_mesh, probe: int) -> tuple[np.ndarray, np.ndarray]:
+    """Exact crossings of part ``probe`` of ``[(V, F), ...]``: with itself, with others.
+
+    Returns the sorted other parts met and whether the probe crosses itself.
+    """
+    parts_mesh = [compacted(V, F) if len(F) else (V[:0], F) for V, F in parts_mesh]
+    V, F = concatenated(parts_mesh)
+    part = np.repeat(np.arange(len(parts_mesh)), [len(f) for _, f in parts_mesh])
+    pairs = self_intersecting_pairs(V, F, parts=part)
+    a, b = part[pairs[:, 0]], part[pairs[:, 1]]
+    mine = (a == probe) | (b == probe)
+    other = np.where(a == probe, b, a)[mine]
+    return np.unique(other[other != probe]), bool(np.any(other == probe))
+
+
+def _clean_move(X: np.ndarray, G: np.ndarray, moved: np.ndarray, fbox, pool: np.ndarray
+                ) -> bool:
+    """Whether no face at a ``moved`` vertex crosses any face (exact test, local).
+
+    ``fbox`` is ``(lo, hi)`` of every face of ``G`` at its current positions
+    except the moved ones; ``pool`` holds every face that may be at a moved
+    vertex or near one. Only faces of the pool whose boxes overlap the moved
+    faces' box are tested, so the test costs what the neighbourhood of the
+    move costs.
+    """
+    at = np.zeros(X.shape[0], dtype=bool)
+    at[moved] = True
+    Gp = G[pool]
+    changed = at[Gp].any(axis=1)
+    P = X[Gp[changed]]
+    blo, bhi = P.min(axis=(0, 1)), P.max(axis=(0, 1))
+    rows = np.flatnonzero(_overlapping(fbox[0][pool], fbox[1][pool], blo, bhi) | changed)
+    V2, F2 = compacted(X, Gp[rows])
+    pairs = self_intersecting_pairs(V2, F2)
+    return not changed[rows[pairs.ravel()]].any()
+
+
+def _pool(X: np.ndarray, G: np.ndarray, fbox, points: np.ndarray, margin: float) -> np.ndarray:
+    """Faces at ``points`` or whose boxes come within ``margin`` of their box."""
+    at = np.zeros(X.shape[0], dtype=bool)
+    at[points] = True
+    lo, hi = X[points].min(axis=0) - margin, X[points].max(axis=0) + margin
+    return np.flatnonzero(_overlapping(fbox[0], fbox[1], lo, hi) | at[G].any(axis=1))
+
+
+def floating_elements(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray, *,
+                      label: np.ndarray, touching: np.ndarray, usable=None,
+                      heights=None) -> np.ndarray:
+    """Elements that would float: neither crossing the base nor inside it.
+
+    An element whose vertices lie both inside and outside the base (generalized
+    winding number, libigl) crosses it; one with every vertex inside is
+    absorbed by the union; for one with every vertex outside the exact test
+    decides whether its faces still cross the base's. Elements joined through
+    ``touching`` count as one piece: it floats if none of them crosses the base.
+
+    Parameters
+    ----------
+    V : numpy.ndarray, (n, 3) float64
+    F : numpy.ndarray, (m, 3) int64
+        The base solid.
+    X : numpy.ndarray, (k, 3) float64
+    G : numpy.ndarray, (l, 3) int64
+        The mapped elements.
+    label : numpy.ndarray, (l,) int64
+        Element of every face (:class:`~geotex.mapping.union.ElementContacts`).
+    touching : numpy.ndarray, (p, 2) int64
+        Pairs of elements that meet.
+    usable : numpy.ndarray, (e,) bool, optional
+        Elements that go into the union (default all).
+    heights : numpy.ndarray, (k,) float64, optional
+        Height of every vertex above the surface (the tile frame's ``w``).
+        With it, the winding number is first taken at each element's lowest
+        and highest vertex only: lowest inside and highest outside means the
+        element crosses the base, and only the other elements are tested
+        vertex by vertex (same answer; on elements standing in the base, as
+        studs do, about 2 points per element instead of all).
+
+    Returns
+    -------
+    numpy.ndarray, (f,) int64
+        Sorted floating elements (usable ones only).
+    """
+    n_el = int(label.max()) + 1 if label.size else 0
+    if n_el == 0:
+        return np.zeros(0, dtype=np.int64)
+    use = np.ones(n_el, dtype=bool) if usable is None else np.asarray(usable, dtype=bool)
+    vlab = np.full(X.shape[0], -1, dtype=np.int64)
+    vlab[G[:, 0]], vlab[G[:, 1]], vlab[G[:, 2]] = label, label, label
+    used = np.flatnonzero(vlab >= 0)
+    Vc = np.ascontiguousarray(V, dtype=np.float64)
+    Fc = np.ascontiguousarray(F, dtype=np.int64)
+
+    def inside(points):
+        return np.asarray(igl.fast_winding_number(Vc, Fc, np.ascontiguousarray(points))) > 0.5
+
+    crossing = np.zeros(n_el, dtype=bool)
+    if heights is not None and used.size:
+        lab = vlab[used]
+        order = used[np.lexsort((np.asarray(heights)[used], lab))]
+        ls = vlab[order]
+        new = np.r_[True, ls[1:] != ls[:-1]]
+        low, high = order[new], order[np.r_[new[1:], True]]
+        probe = inside(X[np.concatenate([low, high])])
+        crossing[ls[new]] = probe[:low.size] & ~probe[low.size:]
+        used = used[~crossing[vlab[used]]]
+    inside_v = inside(X[used]) if used.size else np.zeros(0, dtype=bool)
+    n_in = np.bincount(vlab[used], weights=inside_v, minlength=n_el)
+    n_all = np.bincount(vlab[used], minlength=n_el)
+    attached = crossing | ((n_in > 0) & (n_in < n_all))
+    n_in[crossing] = 1                  # (some vertex inside: not wholly outside)
+    outside = (n_in == 0) & use
+    cand = np.flatnonzero(outside)
+    if cand.size:
+        # wholly outside: their faces may still cross the base's (exact test)
+        lo, hi = _element_boxes(X, G, label, n_el)
+        pad = 1e-9 * float(np.linalg.norm(np.ptp(V, axis=0)))
+        fl, fh = V[F].min(axis=1), V[F].max(axis=1)
+        near = np.zeros(len(F), dtype=bool)
+        for e in cand:
+            near |= np.all((fl <= hi[e] + pad) & (fh >= lo[e] - pad), axis=1)
+        if near.any():
+            sel = np.isin(label, cand)
+            XX, GG = concatenated([compacted(V, F[near]), compacted(X, G[sel])])
+            part = np.concatenate([np.full(int(near.sum()), -1), label[sel]]) + 1
+            pairs = self_intersecting_pairs(XX, GG, parts=part)
+            a, b = part[pairs[:, 0]], part[pairs[:, 1]]
+            hit = np.concatenate([b[a == 0], a[b == 0]]) - 1
+            attached[hit[hit >= 0]] = True
+    tp = np.asarray(touching, dtype=np.int64).reshape(-1, 2)
+    tp = tp[use[tp].all(axis=1)]
+    graph = sp.coo_matrix((np.ones(len(tp)), (tp[:, 0], tp[:, 1])), shape=(n_el, n_el))
+    _, comp = connected_components(graph, directed=False)
+    comp_attached = np.zeros(int(comp.max()) + 1, dtype=bool)
+    comp_attached[comp[attached & use]] = True
+    return np.flatnonzero(outside & ~comp_attached[comp])
+
+
+def lowered_elements(shell, mapped, label: np.ndarray, elements, *, scale: float,
+                     depth_scale: float, depth: float, steps=LOWER_STEPS
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """Lower floating elements along the shell's offset directions onto the base.
+
+    Every element's tile points are lowered by ``s (w_min + depth)`` tile
+    units (``w_min`` its lowest tile point, so ``s = 1`` brings that to
+    ``-depth``, where its neighbours are anchored) for each ``s`` of
+    ``steps`` in turn, mapped again as :func:`~geotex.mapping.place.mapped_tiles`
+    mapped them, and kept at the first step where the element crosses the
+    base and crosses neither itself nor any other element (exact tests
+    against the base faces and the elements whose boxes overlap it).
+
+    Parameters
+    ----------
+    shell : Shell
+    mapped : MappedTiles
+    label : numpy.ndarray, (M,) int64
+        Element of every face of ``mapped.faces``.
+    elements : array_like of int
+        The floating elements (:func:`floating_elements`).
+    scale, depth_scale : float
+        As in :func:`~geotex.mapping.place.shell_positions`.
+    depth : float
+        Depth of the tile set below ``w = 0`` (``tiles.depth``), tile units.
+    steps : sequence of float
+        Fractions tried, in order.
+
+    Returns
+    -------
+    X : numpy.ndarray, (N, 3) float64
+        Mapped positions with the lowered elements moved.
+    still_floating : numpy.ndarray, (k,) int64
+        Elements no step seated cleanly (left where they were).
+    """
+    X = mapped.vertices.copy()
+    G = mapped.faces
+    todo = np.unique(np.asarray(elements, dtype=np.int64))
+    if todo.size == 0:
+        return X, todo
+    n_el = int(label.max()) + 1
+    V0, F0 = shell.base_vertices, shell.base_faces
+    lo, hi = _element_boxes(X, G, label, n_el)
+    fl, fh = V0[F0].min(axis=1), V0[F0].max(axis=1)
+    order = np.argsort(label, kind="stable")
+    starts = np.searchsorted(label[order], np.arange(n_el + 1))
+    left = []
+    for e in todo:
+        faces = G[order[starts[e]:starts[e + 1]]]
+        verts, local = np.unique(faces, return_inverse=True)
+        local = local.reshape(-1, 3)
+        uvw = mapped.tile_points[verts]
+        wmin = float(uvw[:, 2].min())
+        drop = wmin + float(depth)
+        seated = False
+        for s in steps:
+            low = uvw.copy()
+            low[:, 2] -= float(s) * drop
+            Xe = shaped_positions(shell, mapped.quads[verts], low,
+                                  np.zeros(verts.size, dtype=np.int64), scale=scale,
+                                  depth_scale=depth_scale, similar=mapped.shaped,
+                                  shift=None if mapped.shift is None else mapped.shift[verts])
+            blo, bhi = Xe.min(axis=0), Xe.max(axis=0)
+            others = np.flatnonzero(_overlapping(lo, hi, blo, bhi))
+            others = others[others != e]
+            parts = [(Xe, local), (V0, F0[_overlapping(fl, fh, blo, bhi)])]
+            parts += [(X, G[order[starts[o]:starts[o + 1]]]) for o in others]
+            met, folded = _crossing_parts(parts, 0)
+            if not folded and met.size == 1 and met[0] == 1:
+                X[verts] = Xe
+                lo[e], hi[e] = blo, bhi
+                seated = True
+                break
+        if not seated:
+            left.append(e)
+    return X, np.asarray(left, dtype=np.int64)
+
+
+def smoothed_folds(X: np.ndarray, G: np.ndarray, label: np.ndarray, folded, *,
+                   rings=(2, 4, 8), iterations=(4, 12, 30)) -> tuple[np.ndarray, np.ndarray]:
+    """Smooth the folded stretch of each folded element until it crosses nothing.
+
+    The faces of a folded element that cross each other (exact test) and
+    every vertex within ``r`` edges of them form the region; its inner
+    vertices take ``k`` umbrella steps (each moves a vertex half way to the
+    mean of its neighbours) with the region's rim fixed, for each pair
+    ``(r, k)`` of ``zip(rings, iterations)`` in turn, and the first result that
+    crosses neither itself nor any other element whose box overlaps it is kept.
+
+    Parameters
+    ----------
+    X : numpy.ndarray, (N, 3) float64
+    G : numpy.ndarray, (M, 3) int64
+    label : numpy.ndarray, (M,) int64
+        Element of every face.
+    folded : array_like of int
+        Elements whose own faces cross.
+    rings, iterations : sequence of int
+        Region sizes and smoothing steps tried together, in order.
+
+    Returns
+    -------
+    X : numpy.ndarray, (N, 3) float64
+        Positions with the smoothed elements moved.
+    still_folded : numpy.ndarray, (k,) int64
+    """
+    X = np.array(X, dtype=np.float64, copy=True)
+    todo = np.unique(np.asarray(folded, dtype=np.int64))
+    if todo.size == 0:
+        return X, todo
+    n_el = int(label.max()) + 1
+    order = np.argsort(label, kind="stable")
+    starts = np.searchsorted(label[order], np.arange(n_el + 1))
+    P = X[G]
+    fbox = [P.min(axis=1), P.max(axis=1)]
+    left = []
+    for e in todo:
+        faces = G[order[starts[e]:starts[e + 1]]]
+        verts, local = np.unique(faces, return_inverse=True)
+        local = local.reshape(-1, 3)
+        n = verts.size
+        Xe0 = X[verts]
+        pairs = self_intersecting_pairs(Xe0, local)
+        seed = np.zeros(n, dtype=bool)
+        seed[local[pairs.ravel()].ravel()] = True
+        E = edge_topology(local, n).edges
+        adj = sp.csr_matrix((np.ones(2 * len(E)), (np.concatenate([E[:, 0], E[:, 1]]),
+                                                    np.concatenate([E[:, 1], E[:, 0]]))),
+                            shape=(n, n))
+        deg = np.asarray(adj.sum(axis=1)).ravel()
+        done = False
+        for r, k in zip(rings, iterations):
+            region = seed.copy()
+            for _ in range(int(r)):
+                region |= (adj @ region.astype(np.float64)) > 0
+            rim = region & ((adj @ (~region).astype(np.float64)) > 0)
+            inner = region & ~rim
+            Xe = Xe0.copy()
+            for _ in range(int(k)):
+                mean = (adj @ Xe) / np.maximum(deg, 1)[:, None]
+                Xe[inner] = 0.5 * (Xe[inner] + mean[inner])
+            if not inner.any():
+                continue
+            if self_intersecting_pairs(Xe, local, max_pairs=1).size:
+                continue
+            # tried in place, put back if the move crosses anything
+            X[verts] = Xe
+            pool = _pool(X, G, fbox, verts[region], float(np.ptp(Xe0[region], axis=0).max()))
+            if _clean_move(X, G, verts[inner], fbox, pool):
+                Pm = X[faces]
+                fbox[0][order[starts[e]:starts[e + 1]]] = Pm.min(axis=1)
+                fbox[1][order[starts[e]:starts[e + 1]]] = Pm.max(axis=1)
+                done = True
+                break
+            X[verts] = Xe0
+        if not done:
+            left.append(e)
+    return X, np.asarray(left, dtype=np.int64)
+
+
+def _post(centre: np.ndarray, radius: float, top: float, bottom: float, sides: int,
+          layers: int) -> tuple[np.ndarray, np.ndarray]:
+    """A closed prism in tile coordinates: axis along ``w``, outward faces."""
+    a = 2.0 * np.pi * np.arange(sides) / sides
+    ring = centre[None, :] + radius * np.stack([np.cos(a), np.sin(a)], axis=1)
+    w = np.linspace(bottom, top, layers + 1)
+    P = np.concatenate([np.column_stack([ring, np.full(sides, z)]) for z in w]
+                       + [np.array([[centre[0], centre[1], bottom], [centre[0], centre[1], top]])])
+    i = np.arange(sides)
+    j = (i + 1) % sides
+    faces = []
+    for k in range(layers):
+        lo_, hi_ = k * sides, (k + 1) * sides
+        faces += [np.stack([lo_ + i, lo_ + j, hi_ + j], axis=1),
+                  np.stack([lo_ + i, hi_ + j, hi_ + i], axis=1)]
+    nb, nt = len(P) - 2, len(P) - 1
+    faces += [np.stack([np.full(sides, nb), j, i], axis=1),
+              np.stack([np.full(sides, nt), layers * sides + i, layers * sides + j], axis=1)]
+    return P, np.vstack(faces).astype(np.int64)
+
+
+def propped_elements(shell, mapped, X: np.ndarray, label: np.ndarray, elements, *,
+                     scale: float, depth_scale: float, depth: float, sides: int = POST_SIDES,
+                     candidates: int = 12) -> tuple[np.ndarray, np.ndarray, np.ndarray,
+                                                    np.ndarray]:
+    """Stand floating elements on the base with a thin post each.
+
+    A floating piece held between linked neighbours (a chain-mail ring piece
+    at a polycube corner where three quads meet, whose neighbours pass
+    through it) cannot be lowered without cutting them. A prism of
+    ``sides`` sides, radius half the wire's (the spread of the element's
+    points within ``1.5`` wire radii of the chosen point, in the tile), is
+    stood in the tile frame of one quad from inside the element's wire at a
+    point of it down to ``-depth``, mapped as the elements are, and kept if
+    it crosses the base and no element but its own (exact tests). Points are
+    tried lowest first among ``candidates`` spread over the element.
+
+    Parameters
+    ----------
+    shell : Shell
+    mapped : MappedTiles
+        Tile points and quads of every vertex (``mapped.vertices`` is not used).
+    X : numpy.ndarray, (N, 3) float64
+        Current positions of the mapped vertices.
+    label : numpy.ndarray, (M,) int64
+        Element of every face of ``mapped.faces``.
+    elements : array_like of int
+        Floating elements.
+    scale, depth_scale, depth : float
+        As in :func:`lowered_elements`.
+    sides : int
+        Sides of every post.
+    candidates : int
+        Points of an element tried.
+
+    Returns
+    -------
+    posts_vertices : numpy.ndarray, (a, 3) float64
+    posts_faces : numpy.ndarray, (b, 3) int64
+        The posts, each a closed solid (vertex numbers from 0).
+    propped : numpy.ndarray, (p,) int64
+        The element every post props, in post order.
+    still_floating : numpy.ndarray, (k,) int64
+    """
+    G = mapped.faces
+    todo = np.unique(np.asarray(elements, dtype=np.int64))
+    PV, PF, propped, left = [], [], [], []
+    if todo.size == 0:
+        return np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64), todo, todo
+    n_el = int(label.max()) + 1
+    V0, F0 = shell.base_vertices, shell.base_faces
+    lo, hi = _element_boxes(X, G, label, n_el)
+    fl, fh = V0[F0].min(axis=1), V0[F0].max(axis=1)
+    order = np.argsort(label, kind="stable")
+    starts = np.searchsorted(label[order], np.arange(n_el + 1))
+    n_post = 0
+    for e in todo:
+        verts = np.unique(G[order[starts[e]:starts[e + 1]]])
+        uvw, quads = mapped.tile_points[verts], mapped.quads[verts]
+        # candidate points: the lowest ones, spread along the element
+        by_height = np.argsort(uvw[:, 2], kind="stable")
+        picks = by_height[np.linspace(0, verts.size - 1, 4 * candidates).astype(np.int64)]
+        done = False
+        tried = 0
+        for p in picks:
+            if tried >= candidates:
+                break
+            q = quads[p]
+            same = quads == q
+            d = np.linalg.norm(uvw[same] - uvw[p], axis=1)
+            # the wire around the point: the nearby points of its quad
+            near = uvw[same][d <= 2.0 * np.median(np.sort(d)[1:8])]
+            c = near.mean(axis=0)
+            r = 0.5 * float(np.sqrt(((near - c) ** 2).sum(axis=1).mean()))
+            if not (r > 0 and r <= c[0] <= 1 - r and r <= c[1] <= 1 - r):
+                continue
+            tried += 1
+            P, Fp = _post(c[:2], r, float(c[2]), -float(depth), sides, 4)
+            Xp = shaped_positions(shell, np.full(len(P), q, dtype=np.int64), P,
+                                  np.zeros(len(P), dtype=np.int64), scale=scale,
+                                  depth_scale=depth_scale, similar=False)
+            blo, bhi = Xp.min(axis=0), Xp.max(axis=0)
+            others = np.flatnonzero(_overlapping(lo, hi, blo, bhi))
+            others = others[others != e]
+            parts = [(Xp, Fp), (V0, F0[_overlapping(fl, fh, blo, bhi)])]
+            parts += [(X, G[order[starts[o]:starts[o + 1]]]) for o in others]
+            met, folded = _crossing_parts(parts, 0)
+            if folded or not (met.size == 1 and met[0] == 1):
+                continue
+            own, _ = _crossing_parts([(Xp, Fp), (X, G[order[starts[e]:starts[e + 1]]])], 0)
+            if own.size == 0:
+                continue
+            PV.append(Xp)
+            PF.append(Fp + n_post)
+            n_post += len(Xp)
+            propped.append(e)
+            done = True
+            break
+        if not done:
+            left.append(e)
+    if not PV:
+        return (np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64),
+                np.zeros(0, dtype=np.int64), np.asarray(left, dtype=np.int64))
+    return (np.vstack(PV), np.vstack(PF), np.asarray(propped, dtype=np.int64),
+            np.asarray(left, dtype=np.int64))
+
+
+def _blurred_map(shell, quads: np.ndarray, uv: np.ndarray, radius: float, rings: int = 2
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """Base point and unit offset direction averaged over a disc of the tile.
+
+    The disc (centre, then ``rings`` rings of 6, 12, ... points) of ``radius``
+    tile units about every point is clamped into its quad, located on the
+    fitted surface, and the base points and offset directions are averaged.
+    """
+    pc = shell.polycube
+    offs = [np.zeros((1, 2))]
+    for k in range(1, rings + 1):
+        a = 2.0 * np.pi * np.arange(6 * k) / (6 * k)
+        offs.append((k / rings) * np.stack([np.cos(a), np.sin(a)], axis=1))
+    offs = radius * np.vstack(offs)
+    n, s = len(uv), len(offs)
+    pts = np.clip((uv[:, None, :] + offs[None, :, :]).reshape(-1, 2), 0.0, 1.0)
+    face, bary = pc.locate(np.repeat(quads, s), pts)
+    YD = interpolated(np.hstack([pc.Y, shell.D]), pc.F, face, bary).reshape(n, s, 6).mean(axis=1)
+    d = YD[:, 3:]
+    d /= np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-300)
+    return YD[:, :3], d
+
+
+def remapped_folds(shell, mapped, X: np.ndarray, label: np.ndarray, folded, *, scale: float,
+                   depth_scale: float, radii=REMAP_RADII, heights=REMAP_HEIGHTS
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """Lay the folded stretch of each folded element back on a smoothed map.
+
+    Where the fitted surface itself folds (its sub-grid triangles turn over
+    at an irregular polycube corner), a strand or ring lying on it folds too,
+    and smoothing the element cannot undo that. Here every mapped point (of
+    any element) in the quad of a folded element's crossing faces is mapped
+    again through the map averaged over a disc of radius ``r`` tile units
+    (``x = mean y + w mean d``), blended in over ``2 r`` about the crossing
+    faces (weight 1 within ``r``, smooth to 0 at ``2 r``), for each ``r`` of
+    ``radii`` in turn: the folded element's points alone first, then all of
+    them, so that linked neighbours move with it and stay apart. The first
+    result in which no moved face crosses any face (exact test, local) is
+    kept. If none is, the largest
+    disc is tried again with the height there lowered by each factor of
+    ``heights`` (where the offset directions converge over a concave region
+    a ring folds near its top, not on the surface).
+
+    Parameters
+    ----------
+    shell : Shell
+    mapped : MappedTiles
+        Tile points, quads and elements of every vertex.
+    X : numpy.ndarray, (N, 3) float64
+        Current positions.
+    label : numpy.ndarray, (M,) int64
+        Element of every face of ``mapped.faces``.
+    folded : array_like of int
+    scale, depth_scale : float
+        As in :func:`~geotex.mapping.place.shell_positions`.
+    radii : sequence of float
+        Disc radii tried, tile units.
+    heights : sequence of float
+        Height factors tried with the largest disc.
+
+    Returns
+    -------
+    X : numpy.ndarray, (N, 3) float64
+    still_folded : numpy.ndarray, (k,) int64
+    """
+    X = np.array(X, dtype=np.float64, copy=True)
+    G = mapped.faces
+    todo = np.unique(np.asarray(folded, dtype=np.int64))
+    if todo.size == 0:
+        return X, todo
+    n_el = int(label.max()) + 1
+    order = np.argsort(label, kind="stable")
+    starts = np.searchsorted(label[order], np.arange(n_el + 1))
+    vel = mapped.element
+    uvw_all, quad_all = mapped.tile_points, mapped.quads
+    w_all = np.where(uvw_all[:, 2] < 0, uvw_all[:, 2] * float(depth_scale),
+                     uvw_all[:, 2] * float(scale))
+    P = X[G]
+    fbox = [P.min(axis=1), P.max(axis=1)]
+    trials = [(float(r), 1.0) for r in radii] + [(float(radii[-1]), float(f)) for f in heights]
+    left = []
+    for e in todo:
+        faces = G[order[starts[e]:starts[e + 1]]]
+        verts, local = np.unique(faces, return_inverse=True)
+        local = local.reshape(-1, 3)
+        pairs = self_intersecting_pairs(X[verts], local)
+        seed = verts[np.unique(local[pairs.ravel()].ravel())]
+        seed_quads = np.unique(quad_all[seed])
+        region = np.flatnonzero(np.isin(quad_all, seed_quads))
+        # distance (tile units, same quad only) to the nearest crossing point
+        dist = np.full(region.size, np.inf)
+        for q in seed_quads:
+            sq = seed[quad_all[seed] == q]
+            inq = np.flatnonzero(quad_all[region] == q)
+            diff = uvw_all[region[inq], None, :2] - uvw_all[None, sq, :2]
+            dist[inq] = np.sqrt((diff ** 2).sum(axis=2)).min(axis=1)
+        # every face a move can reach: the quads' points move by less than a tile
+        pool = _pool(X, G, fbox, region, 2.0 * float(shell.tile_size))
+        done = False
+        # the folded element alone first, then with its neighbours in the quad
+        for alone in (True, False):
+            for r, f in trials:
+                t = np.clip((2.0 * r - dist) / r, 0.0, 1.0)
+                t = t * t * (3.0 - 2.0 * t)
+                keep = (t > 0) & ((vel[region] == e) if alone else True)
+                mv, tm = region[keep], t[keep]
+                y, d = _blurred_map(shell, quad_all[mv], uvw_all[mv, :2], r)
+                # the height lowered by f where the map is laid back (1: kept)
+                wl = w_all[mv] * (1.0 - tm * (1.0 - f))
+                # tried in place, put back if the move crosses anything
+                before = X[mv]
+                X[mv] = before + tm[:, None] * (y + wl[:, None] * d - before)
+                if not _clean_move(X, G, mv, fbox, pool):
+                    X[mv] = before
+                    continue
+                at = np.zeros(X.shape[0], dtype=bool)
+                at[mv] = True
+                changed = np.flatnonzero(at[G].any(axis=1))
+                Pm = X[G[changed]]
+                fbox[0][changed], fbox[1][changed] = Pm.min(axis=1), Pm.max(axis=1)
+                done = True
+                break
+            if done:
+                break
+        if not done:
+            left.append(e)
+    return X, np.asarray(left, dtype=np.int64)

@@ -1,0 +1,143 @@
+"""Elements re-seated instead of dropped (geotex.mapping.seat)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from geotex.check.intersections import self_intersecting_pairs
+from geotex.mapping import element_contacts, mapped_tiles, texture_height, tiles_for_quads
+from geotex.mapping.assign import edge_colors
+from geotex.mapping.place import depth_scale
+from geotex.mapping.seat import (floating_elements, lowered_elements, propped_elements,
+                                 remapped_folds, smoothed_folds)
+from geotex.mesh.geometry import signed_volume
+from geotex.mesh.primitives import box, icosphere
+from geotex.mesh.topology import concatenated, edge_topology, face_components
+
+
+def _boxes(*corners):
+    return concatenated([box(lo, hi) for lo, hi in corners])
+
+
+def test_floating_elements_are_those_neither_crossing_nor_inside_the_base():
+    V, F = box((0, 0, 0), (4, 4, 1))
+    X, G = _boxes(((0.5, 0.5, 0.8), (1.0, 1.0, 1.3)),     # 0: crosses the top
+                  ((2.0, 2.0, 1.5), (2.5, 2.5, 2.0)),     # 1: floats
+                  ((1.0, 2.0, 0.2), (1.5, 2.5, 0.6)),     # 2: inside the base
+                  ((0.9, 0.6, 1.1), (1.4, 0.9, 1.6)),     # 3: meets 0 only
+                  ((3.0, 0.5, 1.2), (3.5, 1.0, 1.7)))     # 4: floats, unusable
+    _, label = face_components(G, len(X))
+    c = element_contacts(X, G)
+    assert c.touching.tolist() == [[0, 3]]
+    usable = np.array([True, True, True, True, False])
+    got = floating_elements(V, F, X, G, label=c.label, touching=c.touching, usable=usable)
+    assert got.tolist() == [1]
+    # without the contact element 3 floats too
+    got = floating_elements(V, F, X, G, label=c.label, touching=np.zeros((0, 2), np.int64))
+    assert got.tolist() == [1, 3, 4]
+    # probing each element's lowest and highest vertex first gives the same answer
+    # (element 0 is settled by its probes; the others are tested vertex by vertex)
+    for touching in (c.touching, np.zeros((0, 2), np.int64)):
+        for use in (usable, None):
+            want = floating_elements(V, F, X, G, label=c.label, touching=touching, usable=use)
+            got = floating_elements(V, F, X, G, label=c.label, touching=touching, usable=use,
+                                    heights=X[:, 2])
+            assert got.tolist() == want.tolist()
+    # heights that put the wrong vertex lowest cannot make an element cross
+    got = floating_elements(V, F, X, G, label=c.label, touching=c.touching, usable=usable,
+                            heights=-X[:, 2])
+    assert got.tolist() == [1]
+
+
+def test_smoothing_unfolds_a_poked_sphere_near_the_fold_only():
+    V, F = icosphere(3)
+    X = V.copy()
+    top = int(np.argmax(V[:, 2]))
+    X[top] = [0.0, 0.0, -1.3]                  # pushed through the far side: faces cross
+    assert self_intersecting_pairs(X, F).size
+    label = np.zeros(len(F), dtype=np.int64)
+    before = X.copy()
+    Y, still = smoothed_folds(X, F, label, [0])
+    assert still.size == 0
+    assert np.array_equal(X, before)                      # input not modified
+    assert self_intersecting_pairs(Y, F).size == 0
+    moved = np.linalg.norm(Y - X, axis=1) > 0
+    assert moved[top] and 0 < moved.sum() < 0.25 * len(X)
+    # without smoothing steps the fold stays: reported, positions kept
+    Z, still = smoothed_folds(X, F, label, [0], rings=(3,), iterations=(0,))
+    assert still.tolist() == [0] and np.array_equal(Z, X)
+
+
+@pytest.fixture(scope="module")
+def chainmail_on_torus():
+    from geotex.shells import load_named as load_shell
+    from geotex.tiles.catalog import load_named as load_tiles
+
+    shell, tiles = load_shell("torus"), load_tiles("chainmail")
+    pc = shell.polycube
+    colors = edge_colors(pc.layout.edge_axis, tiles.n_colors, seed=0)
+    tq = tiles_for_quads(tiles, pc.layout.quad_axes, pc.layout.quad_edge, colors,
+                         bare=pc.quad_folded)
+    scale = texture_height(shell, tiles) / tiles.height
+    m = mapped_tiles(shell, tiles, tq, scale=scale, anchor=0.2 * shell.tile_size, shaped=False)
+    return shell, tiles, m, scale, element_contacts(m.vertices, m.faces)
+
+
+@pytest.mark.slow
+def test_floating_rings_are_lowered_or_propped_and_cut_nothing(chainmail_on_torus):
+    shell, tiles, m, scale, c = chainmail_on_torus
+    V0, F0 = shell.base_vertices, shell.base_faces
+    below = depth_scale(tiles, scale, 0.2 * shell.tile_size)
+    fl = floating_elements(V0, F0, m.vertices, m.faces, label=c.label, touching=c.touching)
+    # ring pieces at the torus's three-quad polycube corners (the union left 9 out)
+    assert fl.size == 9
+    probed = floating_elements(V0, F0, m.vertices, m.faces, label=c.label, touching=c.touching,
+                               heights=m.tile_points[:, 2])
+    assert np.array_equal(probed, fl)
+    X, left = lowered_elements(shell, m, c.label, fl, scale=scale, depth_scale=below,
+                               depth=tiles.depth)
+    PV, PF, propped, still = propped_elements(shell, m, X, c.label, left, scale=scale,
+                                              depth_scale=below, depth=tiles.depth)
+    assert still.size == 0 and np.array_equal(np.union1d(np.setdiff1d(fl, left), propped), fl)
+    # every post is closed and outward
+    topo = edge_topology(PF, len(PV))
+    assert np.all(topo.face_count == 2)
+    n_el = int(c.label.max()) + 1
+    XX, GG = concatenated([(X, m.faces), (PV, PF)])
+    post_label = n_el + np.repeat(np.arange(propped.size), len(PF) // propped.size)
+    label = np.concatenate([c.label, post_label])
+    assert signed_volume(PV, PF) > 0
+    # nothing meets anything but a post its own ring: no linked ring was cut
+    c2 = element_contacts(XX, GG)
+    assert c2.folded.size == c.folded.size
+    assert sorted(map(tuple, c2.touching.tolist())) == sorted(
+        zip(propped.tolist(), (n_el + np.arange(propped.size)).tolist()))
+    # and now nothing floats
+    again = floating_elements(V0, F0, XX, GG, label=label, touching=c2.touching)
+    assert again.size == 0
+
+
+@pytest.mark.slow
+def test_remapping_unfolds_strands_where_the_fitted_surface_folds():
+    from geotex.shells import load_named as load_shell
+    from geotex.tiles.catalog import load_named as load_tiles
+
+    shell, tiles = load_shell("torus"), load_tiles("weave")
+    pc = shell.polycube
+    colors = edge_colors(pc.layout.edge_axis, tiles.n_colors, seed=0)
+    tq = tiles_for_quads(tiles, pc.layout.quad_axes, pc.layout.quad_edge, colors,
+                         bare=pc.quad_folded)
+    scale = texture_height(shell, tiles) / tiles.height
+    below = depth_scale(tiles, scale, 0.2 * shell.tile_size)
+    m = mapped_tiles(shell, tiles, tq, scale=scale, anchor=0.2 * shell.tile_size, shaped=False)
+    c = element_contacts(m.vertices, m.faces)
+    assert c.folded.size == 1                              # one strand loop folds
+    X, still = remapped_folds(shell, m, m.vertices, c.label, c.folded, scale=scale,
+                              depth_scale=below)
+    assert still.size == 0
+    c2 = element_contacts(X, m.faces)
+    assert c2.folded.size == 0 and c2.touching.size == 0
+    # only points near the fold moved, by less than a tile
+    d = np.linalg.norm(X - m.vertices, axis=1)
+    assert 0 < (d > 0).sum() < 0.05 * len(X) and d.max() < shell.tile_size
