@@ -407,3 +407,25 @@ def test_edge_splits_fall_back_where_base_faces_share_all_corners(monkeypatch):
     for F in (pillow, repeated):
         fast, slow = _refined_both(monkeypatch, V, F, 0.5, corner_bary=True)
         assert _same_refinement(fast, slow)
+
+
+def test_binary_stl_writer_in_chunks_equals_numpy_path(monkeypatch):
+    import io
+
+    import geotex.io.stl as stl
+    from geotex.mesh.record import Mesh
+
+    V, F = torus(1.0, 0.3, n_major=40, n_minor=13)
+    V = V * 37.0 + np.random.default_rng(2).normal(size=V.shape)
+    F = np.vstack([F, [[0, 0, 1]], [[0, 1, 1]], [[5, 6, 7]]])     # degenerate faces: zero normals
+    V[7] = V[5] + 0.5 * (V[6] - V[5])                               # a collinear face
+    monkeypatch.setattr(stl, "WRITE_CHUNK", 257)                    # several chunks, a short last one
+    out = []
+    for size in (0, 10 ** 12):
+        monkeypatch.setattr(stl, "JIT_MIN_SIZE", size)
+        buf = io.BytesIO()
+        stl.write_stl(buf, Mesh(V, F), path="t.stl")
+        out.append(buf.getvalue())
+    assert out[0] == out[1] and len(out[0]) == 84 + 50 * F.shape[0]
+    back = stl.read_stl("t.stl", out[0])
+    assert back.faces.shape == F.shape
