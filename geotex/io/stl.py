@@ -101,9 +101,9 @@ def read_stl(path, data: bytes):
 
 def _weld_corners(path, P: np.ndarray, fmt_meta: dict):
     """Check corner coordinates, weld them, and build the mesh."""
-    ok = np.isfinite(P).all(axis=1)
-    if not ok.all():
-        bad = int(np.flatnonzero(~ok)[0])
+    finite = np.isfinite(P)
+    if not finite.all():        # (a reduction along rows of 3 costs 20x the flat one)
+        bad = int(np.flatnonzero(~finite.all(axis=1))[0])
         raise MeshFileError(
             path, f"non-finite coordinates at vertex {bad} (facet {bad // 3}, corner "
                   f"{bad % 3}): {P[bad].tolist()} (NaN or infinity; the file is corrupt)")
