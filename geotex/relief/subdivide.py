@@ -129,7 +129,7 @@ def refined_by_edge_splits(V, F, max_edge: float, *, max_faces: int = 8_000_000,
         grow = int((3 * (cnt == 3) + 2 * (cnt == 2) + (cnt == 1)).sum())
         total = sum(x.shape[0] for x in done_F) + F.shape[0] + grow
         if total > max_faces:
-            raise _too_many(L, max_faces)
+            raise InputError(_too_many(L, max_faces))
         # one midpoint per split edge: number the split sides' edges uniquely
         fi, k = np.nonzero(split)
         a = F[fi, k]
@@ -226,10 +226,9 @@ def refined_by_edge_splits(V, F, max_edge: float, *, max_faces: int = 8_000_000,
     return RefinedMesh(np.ascontiguousarray(Vall[order]), Fout, Pout, Bout, rounds)
 
 
-def _too_many(L: float, max_faces: int) -> InputError:
-    return InputError(f"refining to edges of {L:.4g} needs more than {max_faces} "
-                      "faces; use a longer edge length (coarser resolution) or "
-                      "raise the face cap")
+def _too_many(L: float, max_faces: int) -> str:
+    return (f"refining to edges of {L:.4g} needs more than {max_faces} faces; use a "
+            "longer edge length (coarser resolution) or raise the face cap")
 
 
 def _estimated_faces(V, F, L2: float) -> float:
@@ -265,7 +264,7 @@ def _refined_compiled(V, F, L2: float, L: float, max_faces: int,
     Fo, Po, Bo, Vo, nf, nv, rounds, failed = _refined_per_face(
         V, F, side_edge, float(L2), int(max_faces), MAX_ROUNDS, bool(corner_bary), cap)
     if failed:
-        raise _too_many(L, max_faces)
+        raise InputError(_too_many(L, max_faces))
     # exact sizes (the loops grow their arrays by doubling)
     Fo = Fo[:nf].copy() if nf < Fo.shape[0] else Fo
     Po = Po[:nf].copy() if nf < Po.shape[0] else Po
