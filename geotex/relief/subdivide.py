@@ -260,7 +260,7 @@ def _refined_compiled(V, F, L2: float, L: float, max_faces: int,
                              return_inverse=True)
     side_edge = np.ascontiguousarray(side_edge.reshape(-1, 3), dtype=np.int64)
     est = _estimated_faces(V, F, L2)
-    cap = int(min(max(0.6 * est, 1024.0), float(max_faces) + 1.0))     # grown if short
+    cap = int(min(max(est, 1024.0), float(max_faces) + 1.0))   # grown if short (cylinders: 1.0x)
     Fo, Po, Bo, Vo, nf, nv, rounds, failed = _refined_per_face(
         V, F, side_edge, float(L2), int(max_faces), MAX_ROUNDS, bool(corner_bary), cap)
     if failed:
@@ -359,9 +359,16 @@ def _rows_1(a, need):
 
 @helper
 def _slot(k0, k1, mask):
-    h = (k0 * np.int64(-7046029254386353131)) ^ (k1 * np.int64(-4658895280553007687))
-    h ^= h >> np.int64(29)
-    return h & mask
+    """Hash slot of the key pair (both >= 0): splitmix64's finaliser of a
+    mix of the two, so keys with many trailing zero bits (dyadic positions)
+    still spread over the low bits."""
+    h = np.uint64(k0) * np.uint64(0x9E3779B97F4A7C15) + np.uint64(k1)
+    h ^= h >> np.uint64(30)
+    h *= np.uint64(0xBF58476D1CE4E5B9)
+    h ^= h >> np.uint64(27)
+    h *= np.uint64(0x94D049BB133111EB)
+    h ^= h >> np.uint64(31)
+    return np.int64(h & np.uint64(mask))
 
 
 @compiled
