@@ -265,13 +265,10 @@ def _refined_compiled(V, F, L2: float, L: float, max_faces: int,
         V, F, side_edge, float(L2), int(max_faces), MAX_ROUNDS, bool(corner_bary), cap)
     if failed:
         raise InputError(_too_many(L, max_faces))
-    # exact sizes (the loops grow their arrays by doubling)
-    Fo = Fo[:nf].copy() if nf < Fo.shape[0] else Fo
-    Po = Po[:nf].copy() if nf < Po.shape[0] else Po
-    Vo = Vo[:nv].copy() if nv < Vo.shape[0] else Vo
-    if corner_bary:
-        Bo = Bo[:nf].copy() if nf < Bo.shape[0] else Bo
-    return RefinedMesh(Vo, Fo, Po, Bo if corner_bary else None, int(rounds))
+    # the used rows, as views: the rows past them were never written, so they hold
+    # address space but no memory (copying would touch every page twice)
+    return RefinedMesh(Vo[:nv], Fo[:nf], Po[:nf], Bo[:nf] if corner_bary else None,
+                       int(rounds))
 
 
 # ---------------------------------------------------------------------------
