@@ -234,8 +234,9 @@ def _too_many(L: float, max_faces: int) -> str:
 def _estimated_faces(V, F, L2: float) -> float:
     """About how many faces the refinement makes (``area / (0.14 L²)``, see
     :func:`geotex.relief.core.edge_length_for_faces`)."""
-    area = 0.5 * np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]),
-                                axis=1).sum()
+    with np.errstate(over="ignore", invalid="ignore"):        # huge parts: inf, fine here
+        area = 0.5 * np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]),
+                                    axis=1).sum()
     return float(area) / (0.14 * L2) + F.shape[0]
 
 
