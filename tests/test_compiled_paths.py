@@ -11,6 +11,7 @@ import geotex.heighttilt._kernels as kernels
 import geotex.mesh.topology as topology
 from geotex.heighttilt import apply_texture, extract_texture, spiky_sphere
 from geotex.heighttilt.validation import base_geometry
+from geotex.errors import InputError
 from geotex.mesh.primitives import grid_plane, torus
 
 TOPOLOGY_FIELDS = ("edges", "half_to_edge", "face_count", "forward_count", "half_order")
@@ -379,3 +380,92 @@ def test_preload_loads_the_cached_code_before_the_first_call():
     expected = run(True)
     assert expected.strip() not in ("", "[]")
     assert run(False) == expected
+
+
+def _refined_both(monkeypatch, V, F, L, **kw):
+    import geotex.relief.subdivide as subdivide
+
+    monkeypatch.setattr(subdivide, "JIT_MIN_SIZE", 0)
+    fast = subdivide.refined_by_edge_splits(V, F, L, **kw)
+    monkeypatch.setattr(subdivide, "JIT_MIN_SIZE", 10 ** 12)
+    slow = subdivide.refined_by_edge_splits(V, F, L, **kw)
+    return fast, slow
+
+
+def _same_refinement(a, b):
+    return (a.vertices.tobytes() == b.vertices.tobytes() and np.array_equal(a.faces, b.faces)
+            and np.array_equal(a.parent, b.parent) and a.rounds == b.rounds
+            and ((a.corner_bary is None and b.corner_bary is None)
+                 or a.corner_bary.tobytes() == b.corner_bary.tobytes()))
+
+
+@pytest.mark.parametrize("length", [0.3, 0.9, 2.5])
+def test_edge_splits_per_face_equal_numpy_rounds(monkeypatch, length):
+    # the compiled refinement (one base face at a time, vertices on base edges shared
+    # through a table) gives the numpy rounds' arrays bit for bit: faces grouped by
+    # base face in the rounds' order, midpoints numbered by first use, float32
+    # barycentrics by the same sums
+    from geotex.mesh.primitives import closed_cylinder
+
+    V, F = closed_cylinder(10.0, 20.0, n_theta=24, n_height=6, n_cap_rings=3)
+    V = V + np.random.default_rng(5).normal(size=V.shape) * 0.05      # uneven sides
+    fast, slow = _refined_both(monkeypatch, V, F, length, corner_bary=True)
+    assert fast.rounds >= 1 and fast.faces.shape[0] > F.shape[0]
+    assert _same_refinement(fast, slow)
+    fast, slow = _refined_both(monkeypatch, V, F, length)
+    assert fast.corner_bary is None and _same_refinement(fast, slow)
+
+
+def test_edge_splits_per_face_on_a_soup_and_the_cap(monkeypatch):
+    import geotex.relief.subdivide as subdivide
+
+    rng = np.random.default_rng(11)
+    V = rng.normal(size=(60, 3)) * np.array([4.0, 1.0, 0.2])
+    F = np.array([rng.choice(60, 3, replace=False) for _ in range(90)])  # edges of any kind
+    monkeypatch.setattr(subdivide, "JIT_MIN_SIZE", 0)
+    assert subdivide._per_face_ok(V, F, 0.16)                  # the compiled path is taken
+    fast, slow = _refined_both(monkeypatch, V, F, 0.4, corner_bary=True)
+    assert _same_refinement(fast, slow)
+    # the cap: the same error on both paths, and nothing made past it
+    monkeypatch.setattr(subdivide, "JIT_MIN_SIZE", 0)
+    with pytest.raises(InputError, match="face cap"):
+        subdivide.refined_by_edge_splits(V, F, 0.4, max_faces=fast.faces.shape[0] - 1)
+    assert subdivide.refined_by_edge_splits(
+        V, F, 0.4, max_faces=fast.faces.shape[0]).faces.shape == fast.faces.shape
+
+
+def test_edge_splits_fall_back_where_base_faces_share_all_corners(monkeypatch):
+    import geotex.relief.subdivide as subdivide
+
+    V = np.array([[0.0, 0, 0], [3, 0, 0], [0, 3, 0], [0, 0, 3]])
+    pillow = np.array([[0, 1, 2], [0, 2, 1]])                 # two faces on one vertex set
+    repeated = np.array([[0, 1, 2], [0, 1, 1], [0, 3, 1]])    # a face repeating a vertex
+    monkeypatch.setattr(subdivide, "JIT_MIN_SIZE", 0)
+    assert not subdivide._per_face_ok(V, pillow, 0.25)
+    assert not subdivide._per_face_ok(V, repeated, 0.25)
+    assert subdivide._per_face_ok(V, np.array([[0, 1, 2], [0, 3, 1]]), 0.25)
+    for F in (pillow, repeated):
+        fast, slow = _refined_both(monkeypatch, V, F, 0.5, corner_bary=True)
+        assert _same_refinement(fast, slow)
+
+
+def test_binary_stl_writer_in_chunks_equals_numpy_path(monkeypatch):
+    import io
+
+    import geotex.io.stl as stl
+    from geotex.mesh.record import Mesh
+
+    V, F = torus(1.0, 0.3, n_major=40, n_minor=13)
+    V = V * 37.0 + np.random.default_rng(2).normal(size=V.shape)
+    F = np.vstack([F, [[0, 0, 1]], [[0, 1, 1]], [[5, 6, 7]]])     # degenerate faces: zero normals
+    V[7] = V[5] + 0.5 * (V[6] - V[5])                               # a collinear face
+    monkeypatch.setattr(stl, "WRITE_CHUNK", 257)                    # several chunks, a short last one
+    out = []
+    for size in (0, 10 ** 12):
+        monkeypatch.setattr(stl, "JIT_MIN_SIZE", size)
+        buf = io.BytesIO()
+        stl.write_stl(buf, Mesh(V, F), path="t.stl")
+        out.append(buf.getvalue())
+    assert out[0] == out[1] and len(out[0]) == 84 + 50 * F.shape[0]
+    back = stl.read_stl("t.stl", out[0])
+    assert back.faces.shape == F.shape

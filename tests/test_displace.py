@@ -371,3 +371,20 @@ def test_lowered_relief_is_rejudged_locally_and_exactly(monkeypatch):
     assert r.report == full and r.report.printable
     Vs, Fs = stored_form(r.vertices, r.faces, precision=np.float32)
     assert np.array_equal(Vs, r.vertices) and np.array_equal(Fs, r.faces)
+
+
+@pytest.mark.parametrize("shape,sigma", [((64, 80), 0.31), ((64, 80), 2.7), ((6, 90), 9.0),
+                                          ((33, 33), 16.5)])
+def test_height_map_blur_equals_scipy_gaussian_filter(shape, sigma):
+    # the periodic blur is scipy.ndimage.gaussian_filter(mode="wrap") bit for bit, without
+    # importing scipy.ndimage (a radius beyond the image wraps more than once)
+    from scipy.ndimage import gaussian_filter
+
+    from geotex.displace.heightmap import filtered_height_map
+
+    H = np.random.default_rng(4).random(shape).astype(np.float32)
+    want = gaussian_filter(H, sigma=min(sigma, 0.5 * max(shape)), mode="wrap")
+    got = filtered_height_map(H, sigma_pixels=sigma)
+    assert got.dtype == np.float32 and got.tobytes() == want.tobytes()
+    assert np.array_equal(filtered_height_map(H, sigma_pixels=sigma, invert=True), 1.0 - want)
+    assert filtered_height_map(H, sigma_pixels=0.2).tobytes() == H.tobytes()      # no blur

@@ -89,6 +89,12 @@ def load_height_map(source) -> np.ndarray:
 def filtered_height_map(H, *, sigma_pixels: float = 0.0, invert: bool = False) -> np.ndarray:
     """Blur (periodic Gaussian) and optionally invert a height map.
 
+    The blur is :func:`scipy.ndimage.gaussian_filter` with ``mode="wrap"``
+    and its default truncation (4 standard deviations), computed here in
+    numpy with the same weights, sums and roundings (equal bit for bit,
+    tested): importing ``scipy.ndimage`` costs ~0.15-0.2 s, more than the
+    blur of a 1000 x 1000 map.
+
     Parameters
     ----------
     H : array_like, (h, w) float
@@ -100,16 +106,46 @@ def filtered_height_map(H, *, sigma_pixels: float = 0.0, invert: bool = False) -
     Returns
     -------
     numpy.ndarray, (h, w) float32
-    """
-    from scipy.ndimage import gaussian_filter
 
+    Raises
+    ------
+    InputError
+        On a negative or non-finite ``sigma_pixels``.
+    """
     H = np.asarray(H, dtype=np.float32)
     s = float(sigma_pixels)
     if not (math.isfinite(s) and s >= 0):
         raise InputError(f"blur must be a number >= 0, got {sigma_pixels!r}")
     if s > 0.3:
-        H = gaussian_filter(H, sigma=min(s, 0.5 * max(H.shape)), mode="wrap")
+        H = _periodic_gaussian(H, min(s, 0.5 * max(H.shape)))
     return (1.0 - H) if invert else H.copy()
+
+
+def _periodic_gaussian(H: np.ndarray, sigma: float) -> np.ndarray:
+    """``scipy.ndimage.gaussian_filter(H, sigma, mode="wrap")`` of a float32 image.
+
+    As scipy does it: a kernel of radius ``int(4 sigma + 0.5)``, axis 0 then
+    axis 1, each pass summing in float64 ``H[i] w[0] + sum over j from the
+    radius down to 1 of (H[i - j] + H[i + j]) w[j]`` (its symmetric-kernel
+    loop) and rounding to float32.
+    """
+    r = int(4.0 * sigma + 0.5)
+    x = np.arange(-r, r + 1)
+    w = np.exp(-0.5 / (sigma * sigma) * x ** 2)
+    w = (w / w.sum())[::-1]
+    out = H
+    for axis in (0, 1):
+        a = np.moveaxis(out, axis, 0)
+        n = a.shape[0]
+        p = np.pad(a.astype(np.float64), [(r, r), (0, 0)], mode="wrap")
+        acc = p[r:r + n] * w[r]
+        tmp = np.empty_like(acc)
+        for j in range(r, 0, -1):
+            np.add(p[r - j:r - j + n], p[r + j:r + j + n], out=tmp)
+            tmp *= w[r - j]
+            acc += tmp
+        out = np.ascontiguousarray(np.moveaxis(acc.astype(np.float32), 0, axis))
+    return out
 
 
 def sample_periodic(H, u, v) -> np.ndarray:

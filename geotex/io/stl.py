@@ -15,7 +15,9 @@ Reading
 Writing
     Binary (default): float32 little endian, unit normals computed from the
     geometry (zero for degenerate triangles), an 80-byte header that does not
-    start with ``solid``.  ASCII (``binary=False``): coordinates written with
+    start with ``solid``.  Large meshes are written by a compiled loop in
+    chunks of ``WRITE_CHUNK`` facets (the same bytes as the numpy path: the
+    same float64 cross products and norms, no ``(m, 3, 3)`` temporaries).  ASCII (``binary=False``): coordinates written with
     ``repr`` (the shortest text that reads back to the same float64), so an
     ASCII round trip is exact.
 """
@@ -29,12 +31,16 @@ import numpy as np
 
 from geotex.errors import MeshFileError
 from geotex.io._common import build_mesh, first_bad_number, format_rows, weld_exact
+from geotex.jit import JIT_MIN_SIZE, compiled
 from geotex.mesh.geometry import face_normals
 
 __all__ = ["read_stl", "write_stl", "STL_DTYPE"]
 
 STL_DTYPE = np.dtype([("normal", "<f4", (3,)), ("vertices", "<f4", (3, 3)),
                       ("attribute", "<u2")])
+
+#: Facets per chunk of the compiled binary writer.
+WRITE_CHUNK = 1 << 16
 
 _HEADER = b"geotex binary STL (float32, little endian)".ljust(80, b" ")
 
@@ -95,9 +101,9 @@ def read_stl(path, data: bytes):
 
 def _weld_corners(path, P: np.ndarray, fmt_meta: dict):
     """Check corner coordinates, weld them, and build the mesh."""
-    ok = np.isfinite(P).all(axis=1)
-    if not ok.all():
-        bad = int(np.flatnonzero(~ok)[0])
+    finite = np.isfinite(P)
+    if not finite.all():        # (a reduction along rows of 3 costs 20x the flat one)
+        bad = int(np.flatnonzero(~finite.all(axis=1))[0])
         raise MeshFileError(
             path, f"non-finite coordinates at vertex {bad} (facet {bad // 3}, corner "
                   f"{bad % 3}): {P[bad].tolist()} (NaN or infinity; the file is corrupt)")
@@ -192,6 +198,9 @@ def write_stl(fh, mesh, *, path, binary: bool = True) -> None:
         if V.size and np.abs(V).max() > np.finfo(np.float32).max:
             raise MeshFileError(path, "coordinates exceed the float32 range of binary "
                                       "STL; write an ASCII STL instead")
+        if F.size >= JIT_MIN_SIZE:
+            _write_binary_chunks(fh, V, F)
+            return
         rec = np.zeros(F.shape[0], dtype=STL_DTYPE)
         V32 = V.astype(np.float32)
         # normals of the facets as stored (float32 corners), so a reader that
@@ -212,3 +221,51 @@ def write_stl(fh, mesh, *, path, binary: bool = True) -> None:
            " endloop\nendfacet\n")
     body = (row * F.shape[0]) % tuple(cells.ravel().tolist()) if F.shape[0] else ""
     fh.write(f"solid {name}\n{body}endsolid {name}\n".encode("utf-8"))
+
+
+def _write_binary_chunks(fh, V, F) -> None:
+    """The binary body of :func:`write_stl` by :func:`_facet_rows`, chunk by chunk."""
+    m = F.shape[0]
+    V32 = V.astype(np.float32).astype(np.float64)
+    F = np.ascontiguousarray(F, dtype=np.int64)
+    fh.write(_HEADER)
+    fh.write(struct.pack("<I", m))
+    rows = np.empty((min(m, WRITE_CHUNK), 12), dtype="<f4")
+    buf = np.zeros((rows.shape[0], STL_DTYPE.itemsize), dtype=np.uint8)   # attribute bytes 0
+    for s in range(0, m, WRITE_CHUNK):
+        k = min(WRITE_CHUNK, m - s)
+        _facet_rows(V32, F[s:s + k], rows)
+        buf[:k, :48] = rows[:k].view(np.uint8)
+        fh.write(buf[:k].data)
+
+
+@compiled
+def _facet_rows(V, F, rows):
+    """Normal and corners of each facet as float32 rows: the normal is
+    :func:`geotex.mesh.geometry.face_normals`' (float64 cross product of the
+    corners as given, divided by its norm ``sqrt((x² + y²) + z²)``, zero when
+    degenerate), then rounded."""
+    for f in range(F.shape[0]):
+        i, j, k = F[f, 0], F[f, 1], F[f, 2]
+        a0 = V[j, 0] - V[i, 0]
+        a1 = V[j, 1] - V[i, 1]
+        a2 = V[j, 2] - V[i, 2]
+        b0 = V[k, 0] - V[i, 0]
+        b1 = V[k, 1] - V[i, 1]
+        b2 = V[k, 2] - V[i, 2]
+        c0 = a1 * b2 - a2 * b1
+        c1 = a2 * b0 - a0 * b2
+        c2 = a0 * b1 - a1 * b0
+        n = np.sqrt((c0 * c0 + c1 * c1) + c2 * c2)
+        if n > 0:
+            rows[f, 0] = c0 / n
+            rows[f, 1] = c1 / n
+            rows[f, 2] = c2 / n
+        else:
+            rows[f, 0] = 0.0
+            rows[f, 1] = 0.0
+            rows[f, 2] = 0.0
+        for c in range(3):
+            v = F[f, c]
+            for x in range(3):
+                rows[f, 3 + 3 * c + x] = V[v, x]
