@@ -287,6 +287,39 @@ def test_pattern_scale_of_a_checker_and_of_stripes(cell):
     assert min(ps.orientation, np.pi - ps.orientation) < 0.05
 
 
+def dot_lattice_image(u, v, n=128, sigma=2.5, seed=0):
+    """Grey Gaussian dots at the lattice points ``i u + j v`` with a little noise, uint8."""
+    rng = np.random.default_rng(seed)
+    yy, xx = np.mgrid[0:n, 0:n].astype(np.float64)
+    img = np.zeros((n, n))
+    u, v = np.asarray(u, float), np.asarray(v, float)
+    for i in range(-20, 21):
+        for j in range(-8, 9):
+            c = 5.0 + i * u + j * v
+            if -10 <= c[0] <= n + 10 and -10 <= c[1] <= n + 10:
+                img += np.exp(-((xx - c[0]) ** 2 + (yy - c[1]) ** 2) / (2 * sigma ** 2))
+    img = 40 + 180 * img / img.max() + rng.normal(0.0, 4.0, img.shape)
+    return np.repeat(np.clip(img, 0, 255).astype(np.uint8)[:, :, None], 3, axis=2)
+
+
+def test_pattern_scale_finds_a_repeat_longer_than_a_quarter_of_the_image():
+    # rows of dots 14 px apart along (14, 3), rows repeating along (-3, 40): the second
+    # repeat is beyond a quarter of the 128 px image (32 px), where it cannot be confirmed
+    # at twice its length; it is accepted because the lattice holds at v + u or v - u
+    u, v = np.array([14.0, 3.0]), np.array([-3.0, 40.0])
+    ps = pattern_scale(dot_lattice_image(u, v))
+    assert ps.periodic and ps.periods.shape == (2, 2)
+    basis = np.array([u, v])
+    coef = np.linalg.solve(basis.T, ps.periods.T).T       # the repeats in the true basis
+    assert np.allclose(coef, np.rint(coef), atol=0.1)
+    assert abs(np.linalg.det(ps.periods)) == pytest.approx(abs(np.linalg.det(basis)), rel=0.05)
+    assert ps.period == pytest.approx(np.linalg.norm(v), abs=1.5)
+    # the stripes of the test above keep a single repeat (ridges are not lattice peaks)
+    yy = np.arange(128)[:, None] * np.ones((1, 128))
+    ps = pattern_scale((127 + 100 * np.sin(2 * np.pi * yy / 15)).astype(np.uint8))
+    assert ps.periods.shape == (1, 2)
+
+
 def test_pattern_scale_of_noise_is_its_correlation_length():
     # smooth noise (features of about 8 px): no repeat, a short correlation length
     for seed in range(3):
