@@ -820,7 +820,13 @@ def test_cli_hpm_structure_flags(tmp_path, capsys):
         assert main(["hpm", str(base), "--image", str(img), "--scale", "2", "-o", str(out),
                      "--report", str(rep)] + flags) == 0
         reps[" ".join(flags)] = json.loads(rep.read_text())
-    assert "periodic image, 8 px period" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "periodic image, 8 px period" in out and "patches span a median" in out
+    span = reps[""]["pattern"]["patch_periods"]
+    assert np.isfinite(span) and span > 0
+    # larger patches span more periods: the paper's minimal patch size, --min-patch 2
+    assert reps["--min-patch 2"]["pattern"]["patch_periods"] > span
+    assert reps["--structure off"]["pattern"].get("patch_periods") is None
     forced = {k: sum(lv["forced"] for lv in r["levels"]) for k, r in reps.items()}
     assert forced["--min-patch 2"] > forced[""] >= 0
     assert forced["--structure off"] == 0 and forced["--min-patch 0"] == 0

@@ -177,6 +177,11 @@ def run(args) -> int:
              "threshold" if rep["pattern"].get("periodic") else "")
           + "), "
           f"{result.uv.shape[0]} texture coordinates")
+    span = rep["pattern"].get("patch_periods")
+    if span is not None:
+        print(f"patches span a median {span:.2f} pattern periods"
+              + ("; below 1 the pattern's structure is lost at their borders: a smaller "
+                 "--scale keeps it" if span < 1.0 else ""))
     print("wrote " + " and ".join(str(p) for p in written))
     return EXIT_OK
 
