@@ -180,8 +180,9 @@ def run(args) -> int:
     span = rep["pattern"].get("patch_periods")
     if span is not None:
         print(f"patches span a median {span:.2f} pattern periods"
-              + ("; below 1 the pattern's structure is lost at their borders: a smaller "
-                 "--scale keeps it" if span < 1.0 else ""))
+              + ("; the patches are smaller than the pattern, whose structure may break "
+                 "at their borders: a smaller --scale gives larger patches in periods"
+                 if span < 1.0 else ""))
     print("wrote " + " and ".join(str(p) for p in written))
     return EXIT_OK
 

@@ -247,10 +247,11 @@ class HPMResult:
         (surface units) and, for a periodic sample, ``patch_periods``: the
         area-weighted median equivalent-disc diameter of the placements, in
         pattern periods (below 1 the patches are smaller than the pattern,
-        whose structure is then lost, paper §5.2: Fertility with the rope
-        net 0.93 at 0.3 x its diagonal, where the net is broken, 1.27 at
-        0.15, where it reads as a net; Bob with the basket weave 1.11 at
-        0.35, 1.37 at 0.2).
+        whose structure may then break at their borders, paper §5.2:
+        Fertility with the rope net 0.93 at 0.3 x its diagonal, where the
+        net is broken, 1.27 at 0.15, where it reads as a net; Bob with the
+        basket weave 1.11 at 0.35, 1.37 at 0.2; Spot (23k faces) with
+        bricks 0.87 at 0.35, where the rows still read as rows).
     """
 
     uv: np.ndarray
