@@ -287,6 +287,39 @@ def test_pattern_scale_of_a_checker_and_of_stripes(cell):
     assert min(ps.orientation, np.pi - ps.orientation) < 0.05
 
 
+def dot_lattice_image(u, v, n=128, sigma=2.5, seed=0):
+    """Grey Gaussian dots at the lattice points ``i u + j v`` with a little noise, uint8."""
+    rng = np.random.default_rng(seed)
+    yy, xx = np.mgrid[0:n, 0:n].astype(np.float64)
+    img = np.zeros((n, n))
+    u, v = np.asarray(u, float), np.asarray(v, float)
+    for i in range(-20, 21):
+        for j in range(-8, 9):
+            c = 5.0 + i * u + j * v
+            if -10 <= c[0] <= n + 10 and -10 <= c[1] <= n + 10:
+                img += np.exp(-((xx - c[0]) ** 2 + (yy - c[1]) ** 2) / (2 * sigma ** 2))
+    img = 40 + 180 * img / img.max() + rng.normal(0.0, 4.0, img.shape)
+    return np.repeat(np.clip(img, 0, 255).astype(np.uint8)[:, :, None], 3, axis=2)
+
+
+def test_pattern_scale_finds_a_repeat_longer_than_a_quarter_of_the_image():
+    # rows of dots 14 px apart along (14, 3), rows repeating along (-3, 40): the second
+    # repeat is beyond a quarter of the 128 px image (32 px), where it cannot be confirmed
+    # at twice its length; it is accepted because the lattice holds at v + u or v - u
+    u, v = np.array([14.0, 3.0]), np.array([-3.0, 40.0])
+    ps = pattern_scale(dot_lattice_image(u, v))
+    assert ps.periodic and ps.periods.shape == (2, 2)
+    basis = np.array([u, v])
+    coef = np.linalg.solve(basis.T, ps.periods.T).T       # the repeats in the true basis
+    assert np.allclose(coef, np.rint(coef), atol=0.1)
+    assert abs(np.linalg.det(ps.periods)) == pytest.approx(abs(np.linalg.det(basis)), rel=0.05)
+    assert ps.period == pytest.approx(np.linalg.norm(v), abs=1.5)
+    # the stripes of the test above keep a single repeat (ridges are not lattice peaks)
+    yy = np.arange(128)[:, None] * np.ones((1, 128))
+    ps = pattern_scale((127 + 100 * np.sin(2 * np.pi * yy / 15)).astype(np.uint8))
+    assert ps.periods.shape == (1, 2)
+
+
 def test_pattern_scale_of_noise_is_its_correlation_length():
     # smooth noise (features of about 8 px): no repeat, a short correlation length
     for seed in range(3):
@@ -448,6 +481,49 @@ def test_hpm_periodic_stripes_keep_their_orientation():
     r_on, r_off = border_rotation(V, F, on), border_rotation(V, F, off)
     assert np.median(r_on) < 0.7 * np.median(r_off)
     assert np.quantile(r_on, 0.75) < np.quantile(r_off, 0.75)
+
+
+def lattice_residual(F, r, img, periods):
+    """Per vertex with several uv: distance (pixels) of the uv difference to the lattice.
+
+    With one repeat (stripes), only the part across the stripes counts.
+    """
+    P = np.column_stack([r.uv[:, 0] * img.shape[1], (1 - r.uv[:, 1]) * img.shape[0]])
+    key = np.unique(np.column_stack([F.ravel(), r.uv_faces.ravel()]), axis=0)
+    s = np.flatnonzero(np.diff(key[:, 0]) == 0)
+    d = P[key[s + 1, 1]] - P[key[s, 1]]
+    per = np.asarray(periods, float)
+    if per.shape[0] == 1:
+        t = d @ per[0] / (per[0] @ per[0])
+        return np.abs(t - np.rint(t)) * np.linalg.norm(per[0])
+    c = np.linalg.solve(per.T, d.T).T
+    return np.linalg.norm((c - np.rint(c)) @ per, axis=1)
+
+
+@pytest.mark.parametrize("image", ["checker", "stripes"])
+def test_hpm_lattice_snapping_keeps_the_phase_across_borders(image, monkeypatch):
+    # a periodic sample: border vertices near a copy of the neighbour's texture position
+    # moved by whole periods take that copy, so where the map jumps it jumps by a lattice
+    # vector (across the stripes only, for stripes)
+    import geotex.image.hpm as hpm
+    V, F = torus(1.0, 0.4, n_major=64, n_minor=20)
+    img = checker_image(8, 64) if image == "checker" else stripe_image()
+    per = pattern_scale(img).periods
+    on = hpm_texture(V, F, img, scale=2.0, seed=1)
+    assert sum(lv["lattice_snapped"] for lv in on.report()["levels"]) > 0
+    monkeypatch.setattr(hpm, "LATTICE_SNAP", 0.0)
+    off = hpm_texture(V, F, img, scale=2.0, seed=1)
+    assert sum(lv["lattice_snapped"] for lv in off.report()["levels"]) == 0
+    r_on, r_off = lattice_residual(F, on, img, per), lattice_residual(F, off, img, per)
+    assert r_on.size and r_off.size
+    # share of the map's jumps that keep the phase (within 0.05 of the shortest period):
+    # checker 0.18 -> 0.37, stripes (8 px: the tolerance is one pixel) 0.29 -> 0.34 here
+    tol = 0.05 * np.linalg.norm(per, axis=1).min()
+    assert np.mean(r_on < tol) > np.mean(r_off < tol) + (0.1 if image == "checker" else 0.02)
+    t = on.uv[on.uv_faces]
+    a = (t[:, 1, 0] - t[:, 0, 0]) * (t[:, 2, 1] - t[:, 0, 1]) \
+        - (t[:, 1, 1] - t[:, 0, 1]) * (t[:, 2, 0] - t[:, 0, 0])
+    assert np.count_nonzero(a <= 0) == 0
 
 
 def test_hpm_structure_leaves_a_stochastic_sample_alone(mapped):
@@ -744,7 +820,13 @@ def test_cli_hpm_structure_flags(tmp_path, capsys):
         assert main(["hpm", str(base), "--image", str(img), "--scale", "2", "-o", str(out),
                      "--report", str(rep)] + flags) == 0
         reps[" ".join(flags)] = json.loads(rep.read_text())
-    assert "periodic image, 8 px period" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "periodic image, 8 px period" in out and "patches span a median" in out
+    span = reps[""]["pattern"]["patch_periods"]
+    assert np.isfinite(span) and span > 0
+    # larger patches span more periods: the paper's minimal patch size, --min-patch 2
+    assert reps["--min-patch 2"]["pattern"]["patch_periods"] > span
+    assert reps["--structure off"]["pattern"].get("patch_periods") is None
     forced = {k: sum(lv["forced"] for lv in r["levels"]) for k, r in reps.items()}
     assert forced["--min-patch 2"] > forced[""] >= 0
     assert forced["--structure off"] == 0 and forced["--min-patch 0"] == 0

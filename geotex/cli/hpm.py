@@ -177,6 +177,12 @@ def run(args) -> int:
              "threshold" if rep["pattern"].get("periodic") else "")
           + "), "
           f"{result.uv.shape[0]} texture coordinates")
+    span = rep["pattern"].get("patch_periods")
+    if span is not None:
+        print(f"patches span a median {span:.2f} pattern periods"
+              + ("; the patches are smaller than the pattern, whose structure may break "
+                 "at their borders: a smaller --scale gives larger patches in periods"
+                 if span < 1.0 else ""))
     print("wrote " + " and ".join(str(p) for p in written))
     return EXIT_OK
 

@@ -49,6 +49,9 @@ __all__ = ["opponent_colors", "TextureSpectra", "texture_spectra", "match_energy
 #: An autocorrelation peak counts as a repeat of the pattern when it and the value at twice
 #: its lag both reach this (see :func:`pattern_scale`).
 PERIOD_PEAK = 0.15
+#: A second repeat found beyond a quarter of the image must exceed the correlation on a ring
+#: a quarter period around it by this much (a peak of the lattice, not a point of a ridge).
+LONG_REPEAT_MARGIN = 0.05
 
 _WEIGHTS = np.array([[0.299, 0.587, 0.114],
                      [0.25, -0.25, 0.0],
@@ -313,7 +316,8 @@ def pattern_scale(image) -> PatternScale:
     repeats at twice its period, a blob-like stochastic sample does not.
     On the quilting samples the repeats found are rope net 37 / 42 px
     (peaks 0.50-0.53), slate tiles 15 / 21, bricks 20 / 22 (0.15-0.22),
-    basket weave 34 (0.16-0.17); the stochastic ones give none: gravel (no
+    basket weave 34 (0.16-0.17, and 61 px by the longer search below); the
+    stochastic ones give none: gravel (no
     peak), peppers (0.19 at 14 px but 0.07 at twice it), water (0.14).  The
     threshold 0.15 sits between water's 0.14 and the weave's 0.16; it is
     the least robust constant here.  The first repeat is the nearest; the
@@ -325,6 +329,16 @@ def pattern_scale(image) -> PatternScale:
     cell must hold both).  The search stops at a quarter of the
     image so that ``2 p`` stays within the half-image of reliable lags:
     a pattern larger than a quarter of the sample is not seen repeating.
+    When only one repeat ``u`` is found there, a second one ``v`` is looked
+    for further (up to half the image) among the same candidates: at more
+    than 30 degrees from ``u``, not on a ridge of stripes, with ``rho``
+    reaching ``PERIOD_PEAK`` at ``v + u`` or ``v - u`` as well (the lattice
+    holds) and ``rho(v)`` standing ``LONG_REPEAT_MARGIN`` above a ring of
+    radius ``|u| / 4`` around it (a peak, not a point of a ridge).  The
+    basket weave's cell is found so, (33, 7) and (-2, 61) (before: (33, 7)
+    only, and its perpendicular taken as the second lattice vector); the
+    slate tiles keep their single repeat (stripes), the stochastic samples
+    none.
 
     Anisotropy: the structure tensor (products of Sobel gradients of the
     luminance) summed over the image; ``coherence`` is the normalised
@@ -418,6 +432,50 @@ def pattern_scale(image) -> PatternScale:
         found.append(v)
         strength.append(min(float(rho[py[i], px[i]]), r2))
         if len(found) == 2:
+            break
+    if len(found) == 1:
+        # a second repeat longer than a quarter of the image (the basket weave's cell is
+        # 33 x 61 px in a 192 px sample): its double is out of the reliable lags, so it is
+        # checked against the lattice instead - rho reaches PERIOD_PEAK at v + u or v - u
+        # too, and v is a peak standing LONG_REPEAT_MARGIN above its surroundings
+        u = found[0]
+
+        def at(p):
+            qy, qx = int(round(p[1])) + cy, int(round(p[0])) + cx
+            inside = 0 <= qy < rho.shape[0] and 0 <= qx < rho.shape[1]
+            return float(near[qy, qx]) if inside else -np.inf
+
+        far = ((rho == ndi.maximum_filter(rho, size=5)) & ~lobe & (rho >= PERIOD_PEAK)
+               & (R > min(h, w) / 4.0) & (yy >= 0))
+        fy, fx = np.nonzero(far)
+        for i in np.lexsort((fx, fy, R[fy, fx])):
+            v = np.array([xx[fy[i], fx[i]], yy[fy[i], fx[i]]], dtype=np.float64)
+            if v[1] == 0 and v[0] < 0:
+                continue
+            cosang = abs(float(u @ v)) / (np.linalg.norm(u) * np.linalg.norm(v))
+            if cosang > np.cos(np.radians(30.0)):
+                continue
+            if any(lobe[int(d[1]) + cy, int(d[0]) + cx] for d in (v - k * u for k in
+                                                                   (-3, -2, -1, 1, 2, 3))
+                   if 0 <= int(d[1]) + cy < rho.shape[0] and 0 <= int(d[0]) + cx < rho.shape[1]):
+                continue
+            r1 = float(rho[fy[i], fx[i]])
+            r2 = max(at(v + u), at(v - u))
+            if r2 < PERIOD_PEAK:
+                continue
+            # a peak of the lattice stands above a ring a quarter period around it; on a
+            # ridge of stripes (or its slow decay) the ring meets values as high as rho(v)
+            ring = max(rho[int(round(v[1] + rr * np.sin(a))) + cy,
+                           int(round(v[0] + rr * np.cos(a))) + cx]
+                       if 0 <= int(round(v[1] + rr * np.sin(a))) + cy < rho.shape[0]
+                       and 0 <= int(round(v[0] + rr * np.cos(a))) + cx < rho.shape[1]
+                       else -np.inf
+                       for rr in [max(3.0, 0.25 * float(np.linalg.norm(u)))]
+                       for a in np.linspace(0.0, 2 * np.pi, 16, endpoint=False))
+            if ring > r1 - LONG_REPEAT_MARGIN:
+                continue
+            found.append(v)
+            strength.append(min(r1, r2))
             break
     if not found:
         return PatternScale(False, 0.0, empty, corr, 0.0, coherence, orientation)

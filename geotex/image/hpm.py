@@ -99,6 +99,22 @@ above the threshold); an anisotropic one (coherence > 0.3) a band
 ``1 + coherence`` wider, as the paper advises.  Stochastic samples are not
 affected.  See :func:`hpm_texture` for the measured effect of each.
 
+Lattice snapping (periodic samples, part of the border cracks of 4): after
+the exact snapping, a shared border vertex whose position lies within
+``LATTICE_SNAP`` (0.12) of the shortest period of a copy of the
+neighbour's position moved by whole periods (for stripes: whose phase
+across the stripes differs by less than that) takes that copy, unless it
+folds a face; the moves are spread inside the cluster by the recursive
+mapping like the relaxation's, and the relaxation then works on the other
+border vertices.  The map still jumps there (by a lattice vector), but the
+pattern keeps its phase and orientation across the border: where two
+chains of continuations meet, the mismatch of a third of a cell that
+remained is removed where it is small (on Bob with the basket weave the
+distance of the jumps to the lattice, quartiles in periods, went from
+0.03 / 0.14 / 0.31 to 0.01 / 0.11 / 0.28: most of the mismatch is too
+large to snap without folding faces).  See :func:`hpm_texture`
+(``structure``) for what it changed.
+
 Sub-pixel refinement (``subpixel``, off by default): the FFT minimum lies
 on whole matching pixels and on the orientation grid; with ``subpixel`` it
 is refined by parabolas of the continuous mask error (bilinear samples) in
@@ -161,6 +177,10 @@ PATTERN_BAND = 0.5
 #: Lattice moves of a neighbour's continuation tried per fit (periodic samples).
 LATTICE_CANDIDATES = 24
 
+#: A border vertex of a periodic sample within this fraction of the shortest period of a
+#: lattice copy of its neighbour's texture position takes that copy (see :func:`hpm_texture`).
+LATTICE_SNAP = 0.12
+
 #: Largest relaxation move, as a fraction of the shortest edge at the vertex (texture space).
 RELAX_EDGE_FRACTION = 0.2
 
@@ -184,6 +204,7 @@ class HPMLevel:
     free_border: int = 0
     matched_faces: int = 0
     forced: int = 0
+    lattice_snapped: int = 0
 
     @property
     def mean_error(self) -> float:
@@ -198,7 +219,7 @@ class HPMLevel:
                 "filled_faces": self.filled_faces, "continued": self.continued,
                 "refused": dict(sorted(self.refused.items())), "projected": self.projected,
                 "free_border": self.free_border, "matched_faces": self.matched_faces,
-                "forced": self.forced}
+                "forced": self.forced, "lattice_snapped": self.lattice_snapped}
 
 
 @dataclass(frozen=True, eq=False)
@@ -222,8 +243,15 @@ class HPMResult:
         The sample's pattern estimate and what was derived from it
         (:func:`geotex.image.fftmatch.pattern_scale`): ``periodic``,
         ``period_px``, ``correlation_length_px``, ``coherence``,
-        ``min_patch`` (surface units, 0 when not used) and ``band_width``
-        (surface units).
+        ``min_patch`` (surface units, 0 when not used), ``band_width``
+        (surface units) and, for a periodic sample, ``patch_periods``: the
+        area-weighted median equivalent-disc diameter of the placements, in
+        pattern periods (below 1 the patches are smaller than the pattern,
+        whose structure may then break at their borders, paper §5.2:
+        Fertility with the rope net 0.93 at 0.3 x its diagonal, where the
+        net is broken, 1.27 at 0.15, where it reads as a net; Bob with the
+        basket weave 1.11 at 0.35, 1.37 at 0.2; Spot (23k faces) with
+        bricks 0.87 at 0.35, where the rows still read as rows).
     """
 
     uv: np.ndarray
@@ -445,7 +473,13 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         non-toroidal image after a few patches, a move by a lattice vector
         keeps the pattern's phase and orientation; such a continuation is
         kept whenever its error is below ``max_error``, not only when it
-        beats the FFT minimum), and the minimal patch size below.  Stochastic
+        beats the FFT minimum), the minimal patch size below, and the
+        lattice snapping of border vertices (module docstring; measured on
+        Spot 10k, Bob and Fertility with basket weave, bricks and rope net,
+        seeds 0-1: rotation across patch borders, median 4.5-10.8 -> 0.9-4.7
+        degrees, the colour jump where the map is discontinuous 0.00-0.14
+        higher, patch-border contrast and stretch within +-0.05, CPU time
+        not higher; benchmarks/results/hpm.md section 6).  Stochastic
         samples (no repeat, coherence <= 0.3: gravel, water, peppers) are
         mapped exactly as with ``False``.
     min_patch : float, optional
@@ -558,8 +592,9 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         if ps.coherence > ANISOTROPIC_COHERENCE:
             band_w *= 1.0 + ps.coherence
         if ps.periodic:
-            band_w = max(band_w, PATTERN_BAND * ps.period / ppm)
-            min_patch = patch_factor * ps.period / ppm
+            size = _pattern_size(ps, img.shape)
+            band_w = max(band_w, PATTERN_BAND * size / ppm)
+            min_patch = patch_factor * size / ppm
     lattice = None                       # whole-period moves of a periodic sample (pixels)
     if structure and ps.periodic:
         p1 = ps.periods[0]
@@ -571,6 +606,9 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         lattice = k1.reshape(-1, 1) * p1 + k2.reshape(-1, 1) * q
         lattice = lattice[np.argsort(np.hypot(lattice[:, 0], lattice[:, 1]), kind="stable")]
         lattice = lattice[1:]                # without the zero move
+        basis = np.array([p1, q], dtype=np.float64)          # rows: the two lattice vectors
+        stripes = ps.periods.shape[0] == 1
+        snap_tol = LATTICE_SNAP * min(np.linalg.norm(p1), np.linalg.norm(q))
     pattern_info = {"periodic": bool(ps.periodic), "period_px": ps.period,
                     "correlation_length_px": ps.correlation_length,
                     "coherence": ps.coherence, "min_patch": min_patch, "band_width": band_w}
@@ -997,27 +1035,62 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         nb_uv = vertex_uv_of_done(verts)
         has = np.isfinite(nb_uv[:, 0])
         if has.any():
+            tri = np.searchsorted(verts, F[faces])
             close = has & (np.linalg.norm(P - np.nan_to_num(nb_uv), axis=1) <= snap)
-            close = _snap(P, nb_uv, close, np.searchsorted(verts, F[faces]))
+            close = _snap(P, nb_uv, close, tri)
+
+            def spread_moves(moved, keep):
+                """Spread the moves of border vertices inside the cluster through the
+                recursive mapping (the moved vertices imposed at every level), as in the
+                paper; ``keep`` rows stay where they are.  Returns the new positions, or
+                None if that folds a face."""
+                nonlocal fixed, fixed_mask
+                mm = np.flatnonzero(np.any(moved != P, axis=1))
+                if mm.size == 0:
+                    return None
+                if proj:
+                    ok_ = not folded(verts, np.column_stack([moved[:, 0], -moved[:, 1]]),
+                                     faces)
+                    return moved if ok_ else None
+                if fixed is None:
+                    fixed = np.zeros((V.shape[0], 2))
+                    fixed_mask = np.zeros(V.shape[0], bool)
+                fx0, fm0 = fixed.copy(), fixed_mask.copy()
+                fixed[verts[mm]] = from_image(moved[mm], R_, t_)
+                fixed_mask[verts[mm]] = True
+                _, v2, loc2, f2 = flatten(li, c, fixed, fixed_mask)
+                P2 = to_image(loc2, R_, t_)
+                P2[keep] = moved[keep]
+                if folded(verts, np.column_stack([P2[:, 0], -P2[:, 1]]), faces):
+                    fixed, fixed_mask = fx0, fm0
+                    return None
+                return P2
+
+            if lattice is not None and (has & ~close).any():
+                # periodic sample: a border vertex within ``snap_tol`` of a copy of the
+                # neighbour's position moved by whole periods takes that copy (the map
+                # jumps by a lattice vector there: same phase, no visible seam)
+                d = P - np.nan_to_num(nb_uv)
+                if stripes:            # one repeat: only the phase across the stripes
+                    s_ = d @ basis[0] / (basis[0] @ basis[0])
+                    target = P - (s_ - np.rint(s_))[:, None] * basis[0]
+                else:
+                    k = np.rint(np.linalg.solve(basis.T, d.T).T)
+                    target = np.nan_to_num(nb_uv) + k @ basis
+                near_ = has & ~close & (np.linalg.norm(P - target, axis=1) <= snap_tol)
+                if near_.any():
+                    moved = P.copy()
+                    got = _snap(moved, target, near_, tri)
+                    P2 = spread_moves(moved, close | got)
+                    if P2 is not None:
+                        P = P2
+                        close = close | got
+                        levels[li].lattice_snapped += int(got.sum())
             if relax and (has & ~close).any():
                 moved = _relax(P, verts, faces, has & ~close, F, st, full, rng, f)
-                # spread the moves inside the cluster through the recursive mapping
-                # (the moved vertices imposed at every level), as in the paper
-                mm = np.flatnonzero(np.any(moved != P, axis=1))
-                if mm.size and proj:
-                    if not folded(verts, np.column_stack([moved[:, 0], -moved[:, 1]]), faces):
-                        P = moved
-                elif mm.size:
-                    if fixed is None:
-                        fixed = np.zeros((V.shape[0], 2))
-                        fixed_mask = np.zeros(V.shape[0], bool)
-                    fixed[verts[mm]] = from_image(moved[mm], R_, t_)
-                    fixed_mask[verts[mm]] = True
-                    _, v2, loc2, f2 = flatten(li, c, fixed, fixed_mask)
-                    P2 = to_image(loc2, R_, t_)
-                    P2[close] = P[close]
-                    if not folded(verts, np.column_stack([P2[:, 0], -P2[:, 1]]), faces):
-                        P = P2
+                P2 = spread_moves(moved, close)
+                if P2 is not None:
+                    P = P2
         vpos = np.zeros((V.shape[0], 2))
         vpos[verts] = P
         st.mark(F, faces, vpos[F[faces]], st.n_patch, li)
@@ -1144,9 +1217,41 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
     rank[order] = np.arange(order.size)
     uv_out = uv[first[order]]
     uv_faces = rank[inv.ravel()].reshape(m, 3).astype(np.int64)
+    if min_patch > 0.0 or (structure and ps.periodic):
+        # how many pattern periods the patches span (area-weighted median over the faces of
+        # the equivalent-disc diameter of the placement that textured them): below 1 the
+        # patches are smaller than the pattern, whose structure is then lost (paper §5.2)
+        placed_ = st.patch >= 0
+        if placed_.any():
+            pa = np.bincount(st.patch[placed_], weights=A[placed_])
+            dia = 2.0 * np.sqrt(pa[st.patch[placed_]] / np.pi)
+            o = np.argsort(dia, kind="stable")
+            cw = np.cumsum(A[placed_][o])
+            med = float(dia[o][np.searchsorted(cw, 0.5 * cw[-1])])
+            pattern_info["patch_periods"] = med * ppm / _pattern_size(ps, img.shape)
     fl = np.where(st.face_level < 0, L - 1, st.face_level)
     return HPMResult(uv=np.ascontiguousarray(uv_out), uv_faces=uv_faces, patch=st.patch,
                      face_level=fl, levels=levels, pattern=pattern_info)
+
+
+def _pattern_size(ps, shape) -> float:
+    """Pattern size (pixels) behind the band width and the minimal patch size.
+
+    The longest repeat of ``ps`` within a quarter of the image (the repeats
+    confirmed at twice their length, see
+    :func:`geotex.image.fftmatch.pattern_scale`): a second repeat found
+    further (the basket weave's 61 px beside its 34 px) only enters the
+    lattice (continuations moved by whole periods, lattice snapping).  With it as the pattern
+    size, the wider band and the larger forced clusters made the seams and
+    the rotation across borders worse on Spot 10k (basket weave, seed 0:
+    where the map jumps 1.52 -> 1.81 times the jump within patches,
+    rotation median 7 -> 10 degrees); with the shorter repeat instead
+    (bricks 20 px instead of 35) bricks took 14 s CPU on Spot 10k, over the
+    10 s budget.
+    """
+    n = np.linalg.norm(ps.periods, axis=1)
+    n_in = n[n <= min(shape[:2]) / 4.0]
+    return float(n_in.max() if n_in.size else n.min())
 
 
 def _refine_placement(img, R, t, q, target, angle_step):
