@@ -171,3 +171,35 @@ def test_directional_argument_errors():
         build_tileset(_small_scales(), colors=(1, 2, 1), directional=True)
     with pytest.raises(InputError, match="periodic"):
         build_tileset(_small_scales(), colors=1, directional=True, interior="periodic")
+
+
+@pytest.mark.parametrize("shell_name", ["spot", "bob", "torus"])
+def test_catalog_scales_cover_the_catalog_shells(shell_name):
+    from geotex.shells import load_named as load_shell
+    from geotex.tiles import load_named
+
+    ts = load_named("scales")
+    assert ts.kind == "directional" and len(ts) == 81 and ts.n_colors == (2, 2, 0)
+    lay = load_shell(shell_name).polycube.layout
+    for up in (1, 2):
+        turned_set = oriented_tileset(ts, up=up)
+        colors = edge_colors(lay.edge_axis, turned_set.n_colors, seed=0)
+        tile = tiles_for_quads(turned_set, lay.quad_axes, lay.quad_edge, colors)
+        assert (tile >= 0).all()
+        ridge = ridge_edges(lay.quad_axes, lay.quad_edge, len(colors), up=up)
+        # the two quads of every edge read the same strip there
+        qa, qb = lay.edge_quads[:, 0], lay.edge_quads[:, 1]
+        sa, sb = lay.edge_sides[:, 0], lay.edge_sides[:, 1]
+        side = turned_set.colors[tile]
+        assert np.array_equal(side[qa, sa], side[qb, sb])
+        assert 0 < ridge.mean() < 0.3
+
+
+def test_directional_base_set_maps_to_one_printable_body(base, torus_shell):
+    from geotex.mapping import textured_solid
+
+    res = textured_solid(torus_shell, base, seed=2)
+    assert res.report.printable and res.report.components == 1
+    assert res.stats.bare_quads == 0 and (res.tile_of_quad >= 0).all()
+    # tiles of every group were used, i.e. turned to the flow
+    assert len(np.unique(res.tile_of_quad // len(base))) == 6
