@@ -2,8 +2,9 @@
 Gallery of the main job: every catalog tile set on catalog shells
 =================================================================
 
-For every tile set of the catalog that can cover a closed shape (complete or
-isotropic sets; planar sets only tile the plane) and each of the shells
+For every tile set of the catalog that can cover a closed shape (complete,
+isotropic or directional sets; planar sets only tile the plane; a directional
+set is turned to the shell's up axis) and each of the shells
 Spot, Bob and the torus: lay the tiles over the shell, unite them with the
 base, check the solid, and draw it. One picture per tile set
 (``texture_gallery_<set>.png``, a row of three shells and a close-up of the
@@ -36,6 +37,7 @@ from geotex.printing import export_printable
 from geotex.render import Panel, render_panels, view_direction
 from geotex.shells import load_named as load_shell
 from geotex.tiles.catalog import list_tilesets, load_named as load_tiles
+from geotex.tiles.directional import oriented_tileset
 from geotex.viewpage import mesh_turned_y_up
 
 SHELLS = {"spot": "y", "bob": "z", "torus": "z"}   # name -> up axis (y-up is turned z-up)
@@ -59,7 +61,9 @@ def main(out: Path) -> None:
         for shell_name, up in shells.items():
             shell = load_shell(shell_name)
             t = time.perf_counter()
-            res = textured_solid(shell, tiles, seed=0)
+            # a directional set (scales) follows the shell's up axis (hangs down)
+            res = textured_solid(shell, oriented_tileset(tiles, up="xyz".index(up))
+                                 if tiles.directional else tiles, seed=0)
             dt = time.perf_counter() - t
             s = res.stats
             print(f"{name} on {shell_name}: {s.quads} tiles, {s.elements} elements, "

@@ -27,7 +27,8 @@ def test_catalog_set_matches_its_recipe_and_is_seamless(name):
     r = recipes()[name]
     ts = load_named(name)
     assert ts.name == name and len(ts) == r["tiles"]
-    assert ts.kind == ("isotropic" if r["isotropic"] else
+    assert ts.kind == ("directional" if r.get("directional") else
+                       "isotropic" if r["isotropic"] else
                        "planar" if r["planar"] else "complete")
     assert ts.isotropic == r["isotropic"]
     assert ts.metadata["recipe"]["seed"] == r["seed"]

@@ -28,7 +28,9 @@ def _output_options(p):
                    "NAME.NOT-PRINTABLE.EXT (exit status 1)")
     p.add_argument("--picture", default=None, help="also write a picture (.png)")
     p.add_argument("--up", choices=("x", "y", "z"), default="z",
-                   help="up axis of the picture (default z; the bundled samples are y-up)")
+                   help="up axis of the picture, and of the flow of a directional tile set "
+                        "(scales hang toward -up on the sides; default z; the bundled "
+                        "samples are y-up)")
     p.add_argument("--report", default=None, help="also write the statistics (.json)")
 
 
@@ -118,6 +120,9 @@ def _finish(args, shell, tiles, out, extra, *, label: str, seconds=None) -> int:
     from geotex.errors import InputError
 
     height = _texture_height(args, shell, tiles)
+    if tiles.directional:                   # turned to the flow of --up
+        from geotex.tiles.directional import oriented_tileset
+        tiles = oriented_tileset(tiles, up="xyz".index(args.up))
     warn_print_size(float(np.ptp(shell.base_vertices, axis=0).max()))
     # the STL is written (to a hidden sibling, read back, compared) while the
     # check judges it; it takes its name only if the verdict says printable

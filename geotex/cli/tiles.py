@@ -25,6 +25,11 @@ def register(sub):
     b.add_argument("--isotropic", action="store_true",
                    help="one colour class for all axes: N^4 tiles that cover a closed "
                    "polycube when their group is ignored (use one N in --colors)")
+    b.add_argument("--directional", action="store_true",
+                   help="a directional set for textures pointing +v (scales): (N+1)^4 "
+                   "planar base tiles whose extra colour per class is an empty 'ridge' "
+                   "strip; 'geotex map' turns them to follow the polycube axes (down on "
+                   "the sides, see --up) and puts ridges where the flow turns")
     b.add_argument("--interior", choices=("quilt", "paste", "periodic"), default="quilt",
                    help="tile interiors: constrained mesh quilting (default), whole "
                    "exemplar elements pasted between the frame's (fast), or periodic: "
@@ -121,13 +126,15 @@ def run_build(args) -> int:
         raise UsageError(f"{out}: tile sets are written as .npz files")
     map_tiles = _tile_mapper(args.workers, args.scheduler)
     ex = _exemplar(args.exemplar, args.seed)
-    n_colors = parse_colors(args.colors, planar=args.planar)
-    n = tile_count(n_colors, planar=args.planar, isotropic=args.isotropic)
+    n_colors = parse_colors(args.colors, planar=args.planar or args.directional)
+    n = ((n_colors[0] + 1) ** 2 * (n_colors[1] + 1) ** 2 if args.directional else
+         tile_count(n_colors, planar=args.planar, isotropic=args.isotropic))
     start = time.perf_counter()
     with stage_bar(1 + n, f"tiles ({n})") as bar:
         tiles = build_tileset(ex, colors=args.colors, planar=args.planar,
                               isotropic=args.isotropic, lattice=args.lattice,
-                              interior=args.interior, seed=args.seed, name=args.name,
+                              interior=args.interior, directional=args.directional,
+                              seed=args.seed, name=args.name,
                               progress=bar, map_tiles=map_tiles)
     elapsed = time.perf_counter() - start
     save_tileset(out, tiles)

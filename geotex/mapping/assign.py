@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from geotex.errors import InputError
+from geotex.tiles.directional import ridge_edges
 from geotex.tiles.tileset import TileSet
 
 __all__ = ["edge_colors", "tiles_for_quads"]
@@ -48,9 +49,11 @@ def tiles_for_quads(tiles: TileSet, quad_axes: np.ndarray, quad_edge: np.ndarray
     Parameters
     ----------
     tiles : TileSet
-        A complete set (one group per quad frame), or an isotropic set
+        A complete set (one group per quad frame), an isotropic set
         (``tiles.isotropic``: one colour class shared by all axes, so the
-        group is ignored).
+        group is ignored), or an oriented directional set
+        (:func:`geotex.tiles.directional.oriented_tileset`: edges where the
+        flow does not run on across take its ridge colour instead of theirs).
     quad_axes : numpy.ndarray, (q, 2) int64
         In-plane axes ``(a1, a2)`` of each quad's frame (its tile group).
     quad_edge : numpy.ndarray, (q, 4) int64
@@ -69,6 +72,14 @@ def tiles_for_quads(tiles: TileSet, quad_axes: np.ndarray, quad_edge: np.ndarray
     InputError
         The set lacks a needed tile (e.g. a planar set on a closed shape).
     """
+    info = tiles.metadata.get("directional") or {}
+    if info:
+        if not info.get("oriented"):
+            raise InputError(f"tile set {tiles.name!r} is a directional base set; turn it to "
+                             "the flow first (geotex.tiles.directional.oriented_tileset)")
+        ridge = ridge_edges(quad_axes, quad_edge, len(colors), up=info.get("up", 2),
+                            bare=bare)
+        colors = np.where(ridge, int(info["ridge"]), colors)
     side = colors[quad_edge]                                    # (q, 4)
     if getattr(tiles, "isotropic", False):
         keys, table = side, tiles.colors

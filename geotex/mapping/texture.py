@@ -27,6 +27,7 @@ from geotex.mesh.topology import face_components
 from geotex.param.polycube_fit import SurfaceProjector
 from geotex.printing.stored import printable_stored_solid
 from geotex.progress import report
+from geotex.tiles.directional import oriented_tileset
 
 __all__ = ["TexturedSolid", "TextureStats", "textured_solid", "MAP_STAGES", "MAP_PROGRESS",
            "texture_height"]
@@ -270,6 +271,8 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise InputError(f"seed must be a non-negative integer, got {seed!r}")
     h = texture_height(shell, tiles, height)
+    if tiles.directional:
+        tiles = oriented_tileset(tiles)     # a directional base set, turned to its flow
     if shaped is None:
         packed = any(tiles.metadata.get(k) is not None for k in ("lattice", "periodic"))
         shaped = tiles.metadata.get("shell_map", "plain" if packed else "shaped") != "plain"

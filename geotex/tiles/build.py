@@ -32,8 +32,8 @@ from geotex.tiles.colors import COMPLETE_GROUPS, PLANAR_GROUPS, parse_colors, ti
 from geotex.tiles.fill import ExemplarPixels, fill_corners, fill_gaps
 from geotex.tiles.frame import concatenated, frame_of
 from geotex.tiles.periodic import periodic_tileset
-from geotex.tiles.strips import (GAP, element_boxes, largest_footprint, lattice_corner,
-                                 lattice_phase, pick_strips)
+from geotex.tiles.strips import (GAP, element_boxes, empty_strip, largest_footprint,
+                                 lattice_corner, lattice_phase, pick_strips)
 from geotex.tiles.tileset import TileSet, tile_rng
 from geotex.tiles.verify import side_boundaries
 
@@ -201,7 +201,9 @@ def interior_quilt(src: Source, frame, frame_boxes: np.ndarray, rng: np.random.G
 
     Vf = frame[0].astype(np.float32).astype(np.float64)
     want, _ = side_boundaries(Vf, frame[1])
-    frame_elements = [(e.V, e.F) for e in split_elements(Vf, frame[1])]
+    # (a directional set's tile with four ridge sides has an empty frame)
+    frame_elements = [(e.V, e.F) for e in split_elements(Vf, frame[1])] if len(frame[1]) \
+        else []
     max_foot = float((src.hi - src.lo)[:, :2].max())
     occupied = np.clip(np.asarray(frame_boxes, dtype=np.float64).reshape(-1, 4), 0.0, 1.0)
     problem = "no attempt"
@@ -446,7 +448,7 @@ class PlannedSet:
 
 def plan_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool = False,
                  lattice: bool = False, seed: int = 0, interior: str = "quilt",
-                 progress=None) -> PlannedSet:
+                 directional: bool = False, progress=None) -> PlannedSet:
     """Draw the strips of a set and place them into the frame of every tile.
 
     The first half of :func:`build_tileset` (same options, same random
@@ -470,8 +472,13 @@ def plan_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool = 
     if isotropic and planar:
         raise InputError("isotropic and planar exclude each other: an isotropic set is "
                          "already the n^4 tiles of the plane, usable on a closed polycube")
+    if directional and isotropic:
+        raise InputError("directional and isotropic exclude each other")
     src, height, depth, recipe = _exemplar_arrays(exemplar)
-    n_colors = parse_colors(colors, planar=planar)
+    n_colors = parse_colors(colors, planar=planar or directional)
+    if directional and n_colors[0] != n_colors[1]:
+        raise InputError(f"colors: a directional set has one colour count for both strip "
+                         f"classes, got {colors!r}")
     if isotropic and len(set(n_colors)) != 1:
         raise InputError(f"colors: an isotropic set has one colour count for all axes, got "
                          f"{colors!r}")
@@ -499,8 +506,13 @@ def plan_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool = 
                     strips[cls] += new
     if isotropic:
         strips[1] = strips[2] = strips[0]
-    groups, cols = tile_keys(n_colors, PLANAR_GROUPS if planar or isotropic
-                             else COMPLETE_GROUPS)
+    if directional:
+        # one more colour per class: the ridge, an empty strip (geotex.tiles.directional)
+        strips = {cls: strips[cls] + [empty_strip(STRIP_AXIS[cls])] for cls in (0, 1)}
+        groups, cols = tile_keys((n_colors[0] + 1, n_colors[1] + 1, 0), PLANAR_GROUPS)
+    else:
+        groups, cols = tile_keys(n_colors, PLANAR_GROUPS if planar or isotropic
+                                 else COMPLETE_GROUPS)
 
     frames = [frame_of((strips[a], strips[b]), c)
               for (a, b), c in zip(groups.tolist(), cols.tolist())]
@@ -512,7 +524,7 @@ def plan_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool = 
 
 def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool = False,
                   lattice: bool = False, seed: int = 0, interior: str = "quilt",
-                  name: str | None = None, progress=None, map_tiles=None) -> TileSet:
+                  directional: bool = False, name: str | None = None, progress=None, map_tiles=None) -> TileSet:
     """Build a planar, complete or isotropic geometric Wang tile set.
 
     Parameters
@@ -536,6 +548,15 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
         ``(N, N, N)`` and ``metadata["isotropic"]`` is True. Best for
         textures without a preferred direction (strips are turned a quarter
         on the west and east sides).
+    directional : bool
+        A directional base set (:mod:`geotex.tiles.directional`) for
+        textures pointing ``+v`` (scales): the planar group (0, 1) of
+        ``(N + 1)^4`` tiles whose extra colour ``N`` per class is the *ridge*
+        (an empty strip: no element crosses such a side); ``n_colors`` is
+        ``(N, N, 0)`` and ``metadata["directional"]`` holds the ridge colour
+        and the default up axis (2). Mapped on a closed polycube it is first
+        turned to follow the flow
+        (:func:`geotex.tiles.directional.oriented_tileset`).
     lattice : bool
         For exemplars laid out on a lattice of period ``params["pitch"]``
         (``1 / pitch`` a whole number): strips and quilting windows start
@@ -609,8 +630,11 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
             exemplar = make(exemplar)
         return periodic_tileset(exemplar, n_colors=parse_colors(colors, planar=False),
                                 seed=seed, name=name, progress=progress)
+    if directional and interior == "periodic":
+        raise InputError("a directional set is built with interior 'quilt' or 'paste'")
     planned = plan_tileset(exemplar, colors=colors, planar=planar, isotropic=isotropic,
-                           lattice=lattice, seed=seed, interior=interior, progress=progress)
+                           lattice=lattice, seed=seed, interior=interior,
+                           directional=directional, progress=progress)
     plan, groups, cols = planned.plan, planned.groups, planned.cols
     n_colors, grid, recipe = planned.n_colors, plan.lattice, planned.recipe
     frames = plan.frames
@@ -636,6 +660,7 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
         "recipe": {"exemplar": recipe, "colors": list(n_colors), "planar": bool(planar),
                    "isotropic": bool(isotropic), "lattice": bool(lattice), "seed": int(seed),
                    "interior": interior},
+        **({"directional": {"ridge": int(n_colors[0]), "up": 2}} if directional else {}),
         "isotropic": bool(isotropic),
         "corner_clearance": CLEAR,
         "lattice": None if grid is None else [round(float(g), 9) for g in grid],
@@ -651,6 +676,8 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
                         seam_normal_jump_mean=round(float(np.nansum(S[:, 0] * S[:, 2])
                                                           / S[:, 0].sum()), 3),
                         seam_normal_jump_max=round(float(np.nanmax(S[:, 3])), 3))
+    if directional:
+        meta["recipe"]["directional"] = True
     return TileSet.from_tiles(tiles, groups, cols, n_colors=n_colors, height=planned.height,
                               depth=planned.depth, name=name or recipe["name"] or "tileset",
                               metadata=meta)

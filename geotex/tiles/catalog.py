@@ -36,13 +36,19 @@ def load_named(name_or_path):
 
 
 def _kind(recipe: dict) -> str:
+    if recipe.get("directional"):
+        return "directional"
     if recipe.get("isotropic"):
         return "isotropic"
     return "planar" if recipe.get("planar") else "complete"
 
 
 def list_tilesets() -> list[dict]:
-    """Catalog entries: name, kind, file, size in bytes, tiles, colours, exemplar, description."""
+    """Catalog entries: name, kind, file, size in bytes, tiles, colours, exemplar, description.
+
+    ``kind`` is ``"planar"``, ``"complete"``, ``"isotropic"`` or ``"directional"``
+    (:mod:`geotex.tiles.directional`: planar base tiles turned to a flow when mapped).
+    """
     out = []
     for e in CATALOG.entries():
         recipe = e["recipe"]
@@ -50,6 +56,7 @@ def list_tilesets() -> list[dict]:
                     "bytes": e["bytes"], "tiles": recipe.get("tiles"),
                     "colors": recipe.get("colors"), "planar": recipe.get("planar", False),
                     "isotropic": recipe.get("isotropic", False),
+                    "directional": recipe.get("directional", False),
                     "exemplar": recipe.get("exemplar", {}).get("name"),
                     "description": recipe.get("description", "")})
     return out
@@ -85,6 +92,7 @@ def rebuild(name: str, *, progress=None, table: dict | None = None, map_tiles=No
     ex = exemplar(r["exemplar"]["name"], **r["exemplar"].get("params", {}))
     return build_tileset(ex, colors=r["colors"], planar=r.get("planar", False),
                          isotropic=r.get("isotropic", False), lattice=r.get("lattice", False),
+                         directional=r.get("directional", False),
                          seed=r["seed"], interior=r.get("interior", "paste"), name=name,
                          progress=progress, map_tiles=map_tiles)
 

@@ -141,9 +141,11 @@ def render_tiles(tiles: TileSet, path, *, size=None) -> Path:
     """
     n = len(tiles)
     size = size or ((1800, 1250) if n > 16 else (1400, 1100))
-    kinds = {"planar": "planar", "complete": "complete polycube", "isotropic": "isotropic"}
+    kinds = {"planar": "planar", "complete": "complete polycube", "isotropic": "isotropic",
+             "directional": "directional base"}
     legend = ("bars: side colour (one family for all axes)" if tiles.isotropic else
-              "bars: side colour (X red, Y blue, Z green)")
+              "bars: across strips red, along strips blue; darkest shade: the empty ridge"
+              if tiles.directional else "bars: side colour (X red, Y blue, Z green)")
     title = (f"{tiles.name}: {kinds[tiles.kind]} set, {n} tile{'s' * (n != 1)}, colours "
              f"{','.join(str(c) for c in tiles.n_colors)}\n{legend}")
     if n > 16 and n % 16 == 0:

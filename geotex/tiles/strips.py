@@ -41,7 +41,7 @@ from geotex.mesh.topology import face_components
 from geotex.tiles.clip import split_by_plane
 from geotex.tiles.fill import GAP, PIXEL, footprint_pixels, grown_heights, pixel_heights
 
-__all__ = ["Strip", "element_boxes", "pick_strips", "largest_footprint", "lattice_phase",
+__all__ = ["Strip", "empty_strip", "element_boxes", "pick_strips", "largest_footprint", "lattice_phase",
            "lattice_corner", "corner_footprints", "corner_conflicts"]
 
 CLEAR = 0.5 * GAP   # clearance of strip elements from the perpendicular tile sides
@@ -75,6 +75,24 @@ class Strip:
     along: int
     boxes: np.ndarray
     corners: dict
+
+
+def empty_strip(along: int) -> Strip:
+    """A strip with no element: its sides are crossed by nothing (a directional set's ridge).
+
+    Parameters
+    ----------
+    along : int
+        Exemplar axis it stands for (0 = x, 1 = y); recorded only.
+
+    Returns
+    -------
+    Strip
+    """
+    none = (np.zeros((0, 3), dtype=np.float64), np.zeros((0, 3), dtype=np.int64))
+    corners = corner_footprints(none[0], none[1], np.zeros(0, dtype=np.int64), 0)
+    return Strip(none, none, (float("nan"), float("nan")), int(along),
+                 np.zeros((0, 4), dtype=np.float64), corners)
 
 
 def element_boxes(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from geotex.errors import MeshFileError
+from geotex.errors import InputError, MeshFileError
 from geotex.io.records import read_record, write_record
 
 __all__ = ["TileSet", "save_tileset", "load_tileset", "tile_rng", "FORMAT_VERSION"]
@@ -85,8 +85,20 @@ class TileSet:
         return bool(self.metadata.get("isotropic", False))
 
     @property
+    def directional(self) -> bool:
+        """True for a directional set (:mod:`geotex.tiles.directional`), base or oriented.
+
+        A base set is group (0, 1) with side colours ``0..n`` (``n``, the
+        *ridge*, has empty sides) and ``n_colors`` ``(n, n, 0)``; its oriented
+        form holds the six groups, turned to follow a flow on a closed polycube.
+        """
+        return bool(self.metadata.get("directional"))
+
+    @property
     def kind(self) -> str:
-        """``"planar"``, ``"complete"`` or ``"isotropic"``."""
+        """``"planar"``, ``"complete"``, ``"isotropic"`` or ``"directional"``."""
+        if self.directional:
+            return "directional"
         return "isotropic" if self.isotropic else "planar" if self.planar else "complete"
 
     def tile(self, i: int) -> tuple[np.ndarray, np.ndarray]:
@@ -133,7 +145,15 @@ def save_tileset(path, tiles: TileSet) -> None:
     path : str or os.PathLike
         Output path; ``.npz`` is the only format.
     tiles : TileSet
+
+    Raises
+    ------
+    InputError
+        An oriented directional set (only its base set is stored).
     """
+    if tiles.metadata.get("directional", {}).get("oriented"):
+        raise InputError("save_tileset: save the directional base set, not its oriented "
+                         "form (geotex.tiles.directional.oriented_tileset makes it on load)")
     meta = dict(tiles.metadata)
     meta.update(format="geotex-tileset", format_version=FORMAT_VERSION, name=tiles.name,
                 n_colors=list(tiles.n_colors), height=tiles.height, depth=tiles.depth)
@@ -176,7 +196,9 @@ def load_tileset(path) -> TileSet:
     if len(n_colors) != 3 or (groups.min() < 0 or groups.max() > 2):
         raise MeshFileError(path, "tile set groups or colour counts are corrupted")
     side_class = groups[:, [0, 1, 0, 1]]
-    if colors.min() < 0 or np.any(colors >= np.asarray(n_colors)[side_class]):
+    # a directional set has one more colour per class than it draws: the ridge
+    extra = 1 if meta.get("directional") else 0
+    if colors.min() < 0 or np.any(colors >= np.asarray(n_colors)[side_class] + extra):
         raise MeshFileError(path, "tile set side colours exceed the colour counts")
     for k in ("format", "format_version"):
         meta.pop(k, None)

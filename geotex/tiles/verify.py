@@ -18,7 +18,7 @@ import numpy as np
 
 from geotex.errors import InputError
 from geotex.mesh.topology import edge_topology
-from geotex.tiles.colors import side_classes
+from geotex.tiles.directional import oriented_tileset, side_kinds
 from geotex.tiles.fill import footprint_pixels
 from geotex.tiles.tileset import TileSet
 
@@ -83,6 +83,12 @@ def check_seams(tiles: TileSet) -> SeamReport:
     compared too. Every tile must also be open only along its sides and be
     edge-manifold; an isotropic set must hold group (0, 1) only.
 
+    A directional set (:mod:`geotex.tiles.directional`) is checked twice: its
+    base tiles as a planar set (the ridge colour is one more colour per class),
+    and its oriented form (six groups, turned), whose sides are grouped by
+    ``(kind, colour)`` (the strip as both quads of an edge read it), all ridge
+    sides in one group whatever their kind (they must all be empty).
+
     Parameters
     ----------
     tiles : TileSet
@@ -91,12 +97,38 @@ def check_seams(tiles: TileSet) -> SeamReport:
     -------
     SeamReport
     """
+    info = tiles.metadata.get("directional") or {}
+    if info and not info.get("oriented"):
+        base = _check(tiles, _class_keys(tiles))
+        oriented = oriented_tileset(tiles)
+        turned = _check(oriented, _kind_keys(oriented))
+        return SeamReport(base.ok and turned.ok, base.pairs_checked + turned.pairs_checked,
+                          base.problems + [f"oriented: {p}" for p in turned.problems])
+    return _check(tiles, _kind_keys(tiles) if info else _class_keys(tiles))
+
+
+def _class_keys(tiles: TileSet) -> np.ndarray:
+    """(T, 4, 2) grouping keys: (axis class or 0 when isotropic, colour)."""
+    classes = tiles.groups[:, [0, 1, 0, 1]]
+    if tiles.isotropic:
+        classes = np.zeros_like(classes)
+    return np.stack([classes, tiles.colors], -1)
+
+
+def _kind_keys(tiles: TileSet) -> np.ndarray:
+    """(T, 4, 2) grouping keys of an oriented directional set: (kind, colour), ridge (4, 0)."""
+    info = tiles.metadata["directional"]
+    kinds = side_kinds(tiles.groups, up=info.get("up", 2))
+    ridge = tiles.colors == int(info["ridge"])
+    return np.stack([np.where(ridge, 4, kinds), np.where(ridge, 0, tiles.colors)], -1)
+
+
+def _check(tiles: TileSet, keys_of: np.ndarray) -> SeamReport:
     problems = []
     iso = tiles.isotropic
     if iso and np.any(tiles.groups != [0, 1]):
         problems.append("isotropic set holds tiles outside group (0, 1)")
-    first = {}                      # (class, colour) -> (digest, tile, side)
-    keys = []
+    first = {}                      # key -> (digest, tile, side)
     for i in range(len(tiles)):
         V, F = tiles.tile(i)
         sides, stray = side_boundaries(V, F)
@@ -105,22 +137,26 @@ def check_seams(tiles: TileSet) -> SeamReport:
             problems.append(f"tile {i}: {stray} open boundary edges away from its sides")
         if topo.non_manifold.any():
             problems.append(f"tile {i}: {int(topo.non_manifold.sum())} non-manifold edges")
-        classes = side_classes(tiles.groups[i])
         for s in range(4):
-            key = (0 if iso else int(classes[s]), int(tiles.colors[i, s]))
+            key = tuple(int(k) for k in keys_of[i, s])
             digest = hashlib.sha1(np.ascontiguousarray(sides[s]).tobytes()).hexdigest()
-            keys.append(key)
             if key not in first:
                 first[key] = (digest, i, s)
             elif first[key][0] != digest:
                 d0, i0, s0 = first[key]
-                shared = f"colour {key[1]}" if iso else \
-                    f"axis class {'XYZ'[key[0]]} colour {key[1]}"
                 problems.append(f"tiles {i0} ({_SIDE_NAMES[s0]}) and {i} ({_SIDE_NAMES[s]}) "
-                                f"share {shared} but their boundaries differ")
-    _, counts = np.unique(np.array(keys).reshape(-1, 2), axis=0, return_counts=True)
+                                f"share {_shared(tiles, key)} but their boundaries differ")
+    _, counts = np.unique(keys_of.reshape(-1, 2), axis=0, return_counts=True)
     pairs = int((counts * (counts - 1)).sum())
     return SeamReport(not problems, pairs, problems)
+
+
+def _shared(tiles: TileSet, key) -> str:
+    if tiles.metadata.get("directional"):
+        return "the ridge" if key[0] == 4 else \
+            f"strip kind {('+t', '+s', '-t', '-s')[key[0]]} colour {key[1]}"
+    return f"colour {key[1]}" if tiles.isotropic else \
+        f"axis class {'XYZ'[key[0]]} colour {key[1]}"
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,205 @@
+"""Directional tile sets (scales on closed objects): flow, turning, ridges, seams, mapping."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+
+from geotex.errors import InputError
+from geotex.exemplars import exemplar
+from geotex.mapping import edge_colors, tiles_for_quads
+from geotex.mesh.primitives import torus
+from geotex.mesh.topology import edge_topology
+from geotex.shells import build_shell, quad_points_to_shell
+from geotex.tiles import build_tileset, check_seams, load_tileset, save_tileset
+from geotex.tiles.colors import COMPLETE_GROUPS, SOUTH, EAST, NORTH, WEST
+from geotex.tiles.directional import (flow_of_group, group_turn, oriented_tileset, ridge_edges,
+                                      side_kinds, turned)
+from geotex.tiles.verify import side_boundaries
+
+# flow in tile coordinates (du, dv) of a base tile turned r quarter turns
+_FLOW = ((0, 1), (-1, 0), (0, -1), (1, 0))
+
+
+def _small_scales():
+    return exemplar("scales", size=(3.0, 3.0), pitch=0.25, length=0.3, row_spacing=0.17,
+                    resolution=8, seed=0)
+
+
+@pytest.fixture(scope="module")
+def base():
+    return build_tileset(_small_scales(), colors=1, directional=True, seed=0,
+                         interior="paste", name="scales-test")
+
+
+@pytest.fixture(scope="module")
+def torus_shell():
+    V, F = torus(1.0, 0.4, n_major=48, n_minor=24)
+    return build_shell(V, F, tile_size=0.4, name="torus")
+
+
+@pytest.mark.parametrize("up", [0, 1, 2])
+def test_turned_base_flow_follows_the_polycube_axes(up):
+    for a, b in COMPLETE_GROUPS:
+        du, dv = _FLOW[group_turn((a, b), up=up)]
+        world = np.zeros(3)
+        world[a] += du
+        world[b] += dv
+        axis, sign = flow_of_group((a, b), up=up)
+        assert world[axis] == sign and np.abs(world).sum() == 1
+        normal = 3 - a - b
+        if normal != up:                    # sides: down
+            assert (axis, sign) == (up, -1)
+        else:                               # top and bottom: along +T
+            assert (axis, sign) == ((up + 2) % 3, +1)
+    with pytest.raises(InputError, match="up"):
+        flow_of_group((0, 1), up=3)
+
+
+def test_turning_is_exact_and_side_kinds_match_the_turn():
+    V = np.array([[0.0, 0.25, 0.1], [1.0, 0.5, 0.0], [0.3, 1.0, 0.2], [0.0, 0.0, 0.0]])
+    assert np.array_equal(turned(V, 0), V)
+    assert np.array_equal(turned(V, 1)[:, :2], np.c_[1 - V[:, 1], V[:, 0]])
+    # points on a side land exactly on the turned side (S -> E -> N -> W)
+    for r in range(4):
+        T = turned(V, r)
+        assert np.array_equal(T[:, 2], V[:, 2])
+        on = {0: T[:, 1] == 0, 1: T[:, 0] == 1, 2: T[:, 1] == 1, 3: T[:, 0] == 0}
+        assert np.array_equal(on[r], V[:, 1] == 0)
+    kinds = side_kinds(np.array(COMPLETE_GROUPS))
+    for g, k in zip(COMPLETE_GROUPS, kinds):
+        r = group_turn(g)
+        # S/N read the flow as (t, s) = (u, v), W/E as (v, -u); codes +t +s -t -s
+        du, dv = _FLOW[r]
+        code = {(1, 0): 0, (0, 1): 1, (-1, 0): 2, (0, -1): 3}
+        assert k[SOUTH] == k[NORTH] == code[(du, dv)]
+        assert k[EAST] == k[WEST] == code[(dv, -du)]
+
+
+def test_base_set_has_ridge_colours_with_empty_sides(base, tmp_path):
+    n = 1
+    assert base.kind == "directional" and base.directional and not base.isotropic
+    assert len(base) == (n + 1) ** 4 and base.n_colors == (n, n, 0)
+    assert base.metadata["directional"] == {"ridge": n, "up": 2}
+    assert {tuple(c) for c in base.colors.tolist()} == set(
+        itertools.product(range(n + 1), repeat=4))
+    empty = full = 0
+    for i in range(len(base)):
+        sides, stray = side_boundaries(*base.tile(i))
+        assert stray == 0
+        for s in range(4):
+            if base.colors[i, s] == n:
+                assert len(sides[s]) == 0       # nothing crosses a ridge side
+                empty += 1
+            else:
+                full += len(sides[s]) > 0
+    assert empty == 4 * 8 and full == 4 * 8     # the real strips are not empty
+    rep = check_seams(base)
+    assert rep.ok, rep.problems[:3]
+    # file round trip of the base set, byte for byte; the oriented form is not saved
+    a, b = tmp_path / "a.npz", tmp_path / "b.npz"
+    save_tileset(a, base)
+    back = load_tileset(a)
+    save_tileset(b, back)
+    assert a.read_bytes() == b.read_bytes() and back.kind == "directional"
+    with pytest.raises(InputError, match="base set"):
+        save_tileset(tmp_path / "c.npz", oriented_tileset(base))
+
+
+def test_oriented_set_is_seamless_per_strip_kind_and_a_broken_turn_is_caught(base):
+    ts = oriented_tileset(base)
+    assert len(ts) == 6 * len(base) and ts.n_colors == (1, 1, 1)
+    assert oriented_tileset(ts) is ts
+    rep = check_seams(ts)
+    assert rep.ok, rep.problems[:3]
+    # the same tiles with every group left unturned read their strips the wrong way
+    flat = ts.__class__.from_tiles([base.tile(i) for i in range(len(base))] * 6, ts.groups,
+                                   np.tile(base.colors, (6, 1)), n_colors=ts.n_colors,
+                                   height=ts.height, depth=ts.depth, metadata=ts.metadata)
+    bad = check_seams(flat)
+    assert not bad.ok and "strip kind" in bad.problems[0]
+
+
+def test_covers_a_closed_polycube_with_ridges_only_where_the_flow_turns(base, torus_shell):
+    ts = oriented_tileset(base)
+    pc = torus_shell.polycube
+    lay = pc.layout
+    colors = edge_colors(lay.edge_axis, ts.n_colors, seed=1)
+    tile = tiles_for_quads(ts, lay.quad_axes, lay.quad_edge, colors)
+    assert (tile >= 0).all()
+    ridge = ridge_edges(lay.quad_axes, lay.quad_edge, len(colors))
+    kinds = side_kinds(lay.quad_axes)
+    qa, qb = lay.edge_quads[:, 0], lay.edge_quads[:, 1]
+    sa, sb = lay.edge_sides[:, 0], lay.edge_sides[:, 1]
+    # the two quads of every edge read the same colour there; off the ridges, the
+    # same strip kind as well
+    side = ts.colors[tile]
+    assert np.array_equal(side[qa, sa], side[qb, sb])
+    same = kinds[qa, sa] == kinds[qb, sb]
+    assert np.array_equal(~same, ridge)
+    assert np.all(side[qa, sa][ridge] == 1)
+    # ridges lie only where a top or bottom chart meets another chart
+    normal = 3 - lay.quad_axes.sum(axis=1)
+    topish = (normal[qa] == 2) | (normal[qb] == 2)
+    assert ridge.any() and not (ridge & ~topish).any()
+    assert (~ridge).sum() > 0.7 * len(ridge)      # 212 of 272 on this coarse torus
+
+
+def test_scales_point_down_on_the_sides_and_along_y_on_top(base, torus_shell):
+    lay = torus_shell.polycube.layout
+    normal = 3 - lay.quad_axes.sum(axis=1)
+    ups, tops = [], []
+    for q in range(lay.n_quads):
+        du, dv = _FLOW[group_turn(tuple(lay.quad_axes[q]))]
+        uvw = np.array([[0.5 - 0.2 * du, 0.5 - 0.2 * dv, 0.0], [0.5 + 0.2 * du, 0.5 + 0.2 * dv, 0.0]])
+        P = quad_points_to_shell(torus_shell, np.full(2, q), uvw,
+                                 height=0.5 * torus_shell.max_height)
+        d = P[1] - P[0]
+        d /= np.linalg.norm(d)
+        (tops if normal[q] == 2 else ups).append(d[1] if normal[q] == 2 else d[2])
+    ups, tops = np.array(ups), np.array(tops)
+    assert (ups < 0).mean() > 0.95 and np.median(ups) < -0.5
+    assert (tops > 0).mean() > 0.95 and np.median(tops) > 0.5
+
+
+def test_directional_argument_errors():
+    with pytest.raises(InputError, match="exclude"):
+        build_tileset(_small_scales(), colors=1, directional=True, isotropic=True)
+    with pytest.raises(InputError, match="one colour count"):
+        build_tileset(_small_scales(), colors=(1, 2, 1), directional=True)
+    with pytest.raises(InputError, match="periodic"):
+        build_tileset(_small_scales(), colors=1, directional=True, interior="periodic")
+
+
+@pytest.mark.parametrize("shell_name", ["spot", "bob", "torus"])
+def test_catalog_scales_cover_the_catalog_shells(shell_name):
+    from geotex.shells import load_named as load_shell
+    from geotex.tiles import load_named
+
+    ts = load_named("scales")
+    assert ts.kind == "directional" and len(ts) == 81 and ts.n_colors == (2, 2, 0)
+    lay = load_shell(shell_name).polycube.layout
+    for up in (1, 2):
+        turned_set = oriented_tileset(ts, up=up)
+        colors = edge_colors(lay.edge_axis, turned_set.n_colors, seed=0)
+        tile = tiles_for_quads(turned_set, lay.quad_axes, lay.quad_edge, colors)
+        assert (tile >= 0).all()
+        ridge = ridge_edges(lay.quad_axes, lay.quad_edge, len(colors), up=up)
+        # the two quads of every edge read the same strip there
+        qa, qb = lay.edge_quads[:, 0], lay.edge_quads[:, 1]
+        sa, sb = lay.edge_sides[:, 0], lay.edge_sides[:, 1]
+        side = turned_set.colors[tile]
+        assert np.array_equal(side[qa, sa], side[qb, sb])
+        assert 0 < ridge.mean() < 0.3
+
+
+def test_directional_base_set_maps_to_one_printable_body(base, torus_shell):
+    from geotex.mapping import textured_solid
+
+    res = textured_solid(torus_shell, base, seed=2)
+    assert res.report.printable and res.report.components == 1
+    assert res.stats.bare_quads == 0 and (res.tile_of_quad >= 0).all()
+    # tiles of every group were used, i.e. turned to the flow
+    assert len(np.unique(res.tile_of_quad // len(base))) == 6
