@@ -92,8 +92,7 @@ def flow_of_group(group, *, up: int = 2) -> tuple[int, int]:
 def group_turn(group, *, up: int = 2) -> int:
     """Quarter turns (counter-clockwise) of the base tiles on quads of ``group``."""
     axis, sign = flow_of_group(group, up=up)
-    a, b = int(group[0]), int(group[1])
-    return _TURN_OF_FLOW[(0 if axis == a else 1, sign)]
+    return _TURN_OF_FLOW[(0 if axis == int(group[0]) else 1, sign)]
 
 
 def side_kinds(groups: np.ndarray, *, up: int = 2) -> np.ndarray:
