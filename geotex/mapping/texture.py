@@ -304,9 +304,15 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
                                  depth_scale=below, projector=projector)
     # shrunk elements may now meet others: the union judges them by their boxes
     moved = np.setdiff1d(folded, still)
-    X, still = remapped_folds(shell, mapped, X, contacts.label, still, scale=scale,
-                              depth_scale=below)
-    X, still = smoothed_folds(X, mapped.faces, contacts.label, still)
+    # strands and rings follow the point-by-point map (periodic and lattice sets):
+    # they are re-seated rather than dropped. Shaped elements (studs) keep their
+    # one shape and size: one still folded after shrinking, or floating, is left
+    # out as before (re-seating them laid studs on posts and cost 1-2 s at ~400k)
+    reseat = not mapped.shaped
+    if reseat:
+        X, still = remapped_folds(shell, mapped, X, contacts.label, still, scale=scale,
+                                  depth_scale=below)
+        X, still = smoothed_folds(X, mapped.faces, contacts.label, still)
     mapped = dataclasses.replace(mapped, vertices=X)
     # the remapped and smoothed ones (and the neighbours moved with them) were
     # kept only where the exact test found them crossing nothing: no contacts
@@ -317,9 +323,10 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
     n_el = int(contacts.label.max()) + 1 if contacts.label.size else 0
     usable = np.ones(n_el, dtype=bool)
     usable[still] = False
-    floating = floating_elements(shell.base_vertices, shell.base_faces, X, mapped.faces,
-                                 label=contacts.label, touching=contacts.touching,
-                                 usable=usable, heights=mapped.tile_points[:, 2])
+    floating = (floating_elements(shell.base_vertices, shell.base_faces, X, mapped.faces,
+                                  label=contacts.label, touching=contacts.touching,
+                                  usable=usable, heights=mapped.tile_points[:, 2])
+                if reseat else np.zeros(0, dtype=np.int64))
     X, unseated = lowered_elements(shell, mapped, contacts.label, floating, scale=scale,
                                    depth_scale=below, depth=tiles.depth)
     lowered = np.setdiff1d(floating, unseated)
