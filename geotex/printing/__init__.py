@@ -100,10 +100,16 @@ class StagedWrite:
 
     Examples
     --------
-    >>> with StagedWrite("part.stl") as staged:                  # doctest: +SKIP
+    >>> import pathlib, tempfile
+    >>> from geotex.mesh.primitives import box
+    >>> V, F = box((0, 0, 0), (10, 10, 10))
+    >>> out = pathlib.Path(tempfile.mkdtemp()) / "part.stl"
+    >>> with StagedWrite(out) as staged:
     ...     solid = printable_stored_solid(V, F, on_stored=staged)
-    ...     export_printable("part.stl", solid.vertices, solid.faces,
-    ...                      report=solid.report, staged=staged)
+    ...     rep = export_printable(out, solid.vertices, solid.faces,
+    ...                            report=solid.report, staged=staged)
+    >>> out.exists(), rep.printable, sorted(p.name for p in out.parent.iterdir())
+    (True, True, ['part.stl'])
     """
 
     def __init__(self, path, *, name: str = "geotex"):
