@@ -66,6 +66,21 @@ def _element_boxes(X, G, label, n_el):
     return lo, hi
 
 
+def _seating_boxes(shell, X: np.ndarray, G: np.ndarray, label: np.ndarray):
+    """Boxes of the elements and of the base faces, and the faces of each element.
+
+    Returns ``(lo, hi)`` of every element, ``(fl, fh)`` of every base face,
+    and ``order, starts``: the faces of element ``e`` are
+    ``order[starts[e]:starts[e + 1]]``.
+    """
+    n_el = int(label.max()) + 1
+    V0, F0 = shell.base_vertices, shell.base_faces
+    lo, hi = _element_boxes(X, G, label, n_el)
+    order = np.argsort(label, kind="stable")
+    starts = np.searchsorted(label[order], np.arange(n_el + 1))
+    return lo, hi, V0[F0].min(axis=1), V0[F0].max(axis=1), order, starts
+
+
 def _overlapping(lo, hi, box_lo, box_hi) -> np.ndarray:
     """Rows of ``(lo, hi)`` whose boxes overlap the box ``(box_lo, box_hi)``."""
     return np.all((lo <= box_hi) & (hi >= box_lo), axis=1)
@@ -249,12 +264,8 @@ def lowered_elements(shell, mapped, label: np.ndarray, elements, *, scale: float
     todo = np.unique(np.asarray(elements, dtype=np.int64))
     if todo.size == 0:
         return X, todo
-    n_el = int(label.max()) + 1
+    lo, hi, fl, fh, order, starts = _seating_boxes(shell, X, G, label)
     V0, F0 = shell.base_vertices, shell.base_faces
-    lo, hi = _element_boxes(X, G, label, n_el)
-    fl, fh = V0[F0].min(axis=1), V0[F0].max(axis=1)
-    order = np.argsort(label, kind="stable")
-    starts = np.searchsorted(label[order], np.arange(n_el + 1))
     left = []
     for e in todo:
         faces = G[order[starts[e]:starts[e + 1]]]
@@ -438,12 +449,8 @@ def propped_elements(shell, mapped, X: np.ndarray, label: np.ndarray, elements, 
     PV, PF, propped, left = [], [], [], []
     if todo.size == 0:
         return np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64), todo, todo
-    n_el = int(label.max()) + 1
+    lo, hi, fl, fh, order, starts = _seating_boxes(shell, X, G, label)
     V0, F0 = shell.base_vertices, shell.base_faces
-    lo, hi = _element_boxes(X, G, label, n_el)
-    fl, fh = V0[F0].min(axis=1), V0[F0].max(axis=1)
-    order = np.argsort(label, kind="stable")
-    starts = np.searchsorted(label[order], np.arange(n_el + 1))
     n_post = 0
     for e in todo:
         verts = np.unique(G[order[starts[e]:starts[e + 1]]])
