@@ -81,6 +81,22 @@ def _seating_boxes(shell, X: np.ndarray, G: np.ndarray, label: np.ndarray):
     return lo, hi, V0[F0].min(axis=1), V0[F0].max(axis=1), order, starts
 
 
+def _crossings_near(Xc, Fc, e: int, X, G, boxes, V0, F0) -> tuple[np.ndarray, bool]:
+    """Exact crossings of a candidate ``(Xc, Fc)`` for element ``e``.
+
+    It is tested against the base faces and the other elements whose boxes
+    overlap its box (``boxes`` from :func:`_seating_boxes`). Returns the parts
+    met (1 is the base, ``2 ..`` those elements) and whether it crosses itself.
+    """
+    lo, hi, fl, fh, order, starts = boxes
+    blo, bhi = Xc.min(axis=0), Xc.max(axis=0)
+    others = np.flatnonzero(_overlapping(lo, hi, blo, bhi))
+    others = others[others != e]
+    parts = [(Xc, Fc), (V0, F0[_overlapping(fl, fh, blo, bhi)])]
+    parts += [(X, G[order[starts[o]:starts[o + 1]]]) for o in others]
+    return _crossing_parts(parts, 0)
+
+
 def _overlapping(lo, hi, box_lo, box_hi) -> np.ndarray:
     """Rows of ``(lo, hi)`` whose boxes overlap the box ``(box_lo, box_hi)``."""
     return np.all((lo <= box_hi) & (hi >= box_lo), axis=1)
@@ -264,7 +280,8 @@ def lowered_elements(shell, mapped, label: np.ndarray, elements, *, scale: float
     todo = np.unique(np.asarray(elements, dtype=np.int64))
     if todo.size == 0:
         return X, todo
-    lo, hi, fl, fh, order, starts = _seating_boxes(shell, X, G, label)
+    boxes = _seating_boxes(shell, X, G, label)
+    lo, hi, fl, fh, order, starts = boxes
     V0, F0 = shell.base_vertices, shell.base_faces
     left = []
     for e in todo:
@@ -282,15 +299,10 @@ def lowered_elements(shell, mapped, label: np.ndarray, elements, *, scale: float
                                   np.zeros(verts.size, dtype=np.int64), scale=scale,
                                   depth_scale=depth_scale, similar=mapped.shaped,
                                   shift=None if mapped.shift is None else mapped.shift[verts])
-            blo, bhi = Xe.min(axis=0), Xe.max(axis=0)
-            others = np.flatnonzero(_overlapping(lo, hi, blo, bhi))
-            others = others[others != e]
-            parts = [(Xe, local), (V0, F0[_overlapping(fl, fh, blo, bhi)])]
-            parts += [(X, G[order[starts[o]:starts[o + 1]]]) for o in others]
-            met, folded = _crossing_parts(parts, 0)
+            met, folded = _crossings_near(Xe, local, e, X, G, boxes, V0, F0)
             if not folded and met.size == 1 and met[0] == 1:
                 X[verts] = Xe
-                lo[e], hi[e] = blo, bhi
+                lo[e], hi[e] = Xe.min(axis=0), Xe.max(axis=0)
                 seated = True
                 break
         if not seated:
@@ -449,7 +461,8 @@ def propped_elements(shell, mapped, X: np.ndarray, label: np.ndarray, elements, 
     PV, PF, propped, left = [], [], [], []
     if todo.size == 0:
         return np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64), todo, todo
-    lo, hi, fl, fh, order, starts = _seating_boxes(shell, X, G, label)
+    boxes = _seating_boxes(shell, X, G, label)
+    lo, hi, fl, fh, order, starts = boxes
     V0, F0 = shell.base_vertices, shell.base_faces
     n_post = 0
     for e in todo:
@@ -477,12 +490,7 @@ def propped_elements(shell, mapped, X: np.ndarray, label: np.ndarray, elements, 
             Xp = shaped_positions(shell, np.full(len(P), q, dtype=np.int64), P,
                                   np.zeros(len(P), dtype=np.int64), scale=scale,
                                   depth_scale=depth_scale, similar=False)
-            blo, bhi = Xp.min(axis=0), Xp.max(axis=0)
-            others = np.flatnonzero(_overlapping(lo, hi, blo, bhi))
-            others = others[others != e]
-            parts = [(Xp, Fp), (V0, F0[_overlapping(fl, fh, blo, bhi)])]
-            parts += [(X, G[order[starts[o]:starts[o + 1]]]) for o in others]
-            met, folded = _crossing_parts(parts, 0)
+            met, folded = _crossings_near(Xp, Fp, e, X, G, boxes, V0, F0)
             if folded or not (met.size == 1 and met[0] == 1):
                 continue
             own, _ = _crossing_parts([(Xp, Fp), (X, G[order[starts[e]:starts[e + 1]]])], 0)
