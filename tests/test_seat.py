@@ -141,3 +141,15 @@ def test_remapping_unfolds_strands_where_the_fitted_surface_folds():
     # only points near the fold moved, by less than a tile
     d = np.linalg.norm(X - m.vertices, axis=1)
     assert 0 < (d > 0).sum() < 0.05 * len(X) and d.max() < shell.tile_size
+
+
+@pytest.mark.slow
+def test_remap_leaves_an_element_that_crosses_nothing_of_its_own(chainmail_on_torus):
+    # an element handed over as folded whose own faces cross nothing (the corpus
+    # met one on a bust with knurl) is returned as still folded, nothing moved
+    shell, tiles, m, scale, c = chainmail_on_torus
+    assert 0 not in c.folded
+    below = depth_scale(tiles, scale, 0.2 * shell.tile_size)
+    X, still = remapped_folds(shell, m, m.vertices, c.label, [0], scale=scale,
+                              depth_scale=below)
+    assert still.tolist() == [0] and np.array_equal(X, m.vertices)

@@ -598,6 +598,12 @@ def remapped_folds(shell, mapped, X: np.ndarray, label: np.ndarray, folded, *, s
         local = local.reshape(-1, 3)
         pairs = self_intersecting_pairs(X[verts], local)
         seed = verts[np.unique(local[pairs.ravel()].ravel())]
+        if seed.size == 0:
+            # it crosses nothing of its own (the contact test counted it folded on
+            # the whole layout, e.g. by a face it shares with no other element's
+            # numbering): nothing to lay back here, it stays as it was judged
+            left.append(e)
+            continue
         seed_quads = np.unique(quad_all[seed])
         region = np.flatnonzero(np.isin(quad_all, seed_quads))
         # distance (tile units, same quad only) to the nearest crossing point
