@@ -27,13 +27,19 @@ Reading
     with :mod:`xml.etree.ElementTree`, which also checks it is well formed.
     Mesh blocks the fast path does not understand fully (attributes in
     another order, comments...) are left in and parsed with ElementTree.
+    In large blocks whose separators between values are all the same text
+    (checked by a compiled loop, then the regular expressions once), the
+    numbers are read by compiled, correctly rounded loops
+    (:mod:`geotex.io.numtext`; the same values as ``float``; other tokens go
+    to numpy as before).
 
 Writing
     ``[Content_Types].xml``, ``_rels/.rels`` and ``3D/3dmodel.model`` with
     ``unit="millimeter"``, the core 2015/02 namespace, one object of type
     ``model`` and one build item.  Coordinates are written with ``repr``
     (the shortest decimal that reads back to the same float64; 17 significant
-    digits at most), so a round trip is exact.  Zip entries carry a fixed
+    digits at most), so a round trip is exact; large meshes are formatted by
+    compiled loops giving the same bytes (:mod:`geotex.io.numtext`).  Zip entries carry a fixed
     timestamp: the same mesh always gives the same bytes.
 """
 
@@ -49,8 +55,10 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 
 from geotex.errors import MeshFileError
-from geotex.io._common import build_mesh, first_bad_number, format_rows
+from geotex.io._common import build_mesh, first_bad_number
 from geotex.io.limits import RefusedInput, inflate_member
+from geotex.jit import JIT_MIN_SIZE
+from geotex.io.numtext import format_rows, parse_floats, parse_ints, quoted_spans
 
 __all__ = ["read_3mf", "write_3mf", "UNITS_TO_MM", "CORE_NAMESPACE"]
 
@@ -94,14 +102,28 @@ def _split_on_quotes(body: bytes, kind: bytes):
 
     The body is split on its quote character; the text between values must
     then be, exactly, the tag syntax (checked once per distinct separator).
+    Returns the values as a list of bytes, or as ``(starts, ends)`` positions
+    in ``body`` when every separator of a kind is the same text (the usual
+    case, found without splitting the body).
     """
     quote_at = min((i for i in (body.find(b'"'), body.find(b"'")) if i >= 0), default=-1)
     if quote_at < 0:
         return None
-    pieces = body.split(body[quote_at:quote_at + 1])
-    if (len(pieces) - 1) % 6:
-        return None
+    quote = body[quote_at:quote_at + 1]
     head, mids, join, tail = _QUOTED[kind]
+    seps = None
+    if body.count(quote) >= JIT_MIN_SIZE:
+        quotes, seps = quoted_spans(body, quote, 3)
+        if quotes.shape[0] % 6:
+            return None
+    if seps is not None:
+        if not (head.fullmatch(body, 0, int(quotes[0]))
+                and tail.fullmatch(body, int(quotes[-1]) + 1)
+                and mids[0].fullmatch(seps[0]) and mids[1].fullmatch(seps[1])
+                and join.fullmatch(seps[2])):
+            return None
+        return quotes[0::2] + 1, quotes[1::2]
+    pieces = body.split(quote)
     if not head.fullmatch(pieces[0]) or not tail.fullmatch(pieces[-1]):
         return None
     for j, mid in enumerate(mids, 1):
@@ -110,6 +132,25 @@ def _split_on_quotes(body: bytes, kind: bytes):
     if not all(join.fullmatch(p) for p in set(pieces[6:-1:6])):
         return None
     return pieces[1::2]
+
+
+def _span_values(body: bytes, spans, kind: bytes) -> np.ndarray:
+    """Numbers of the quoted tokens at ``spans``: compiled, numpy for the rest.
+
+    Raises ValueError / OverflowError as ``numpy.array`` does on a bad token.
+    """
+    starts, ends = spans
+    if kind == b"vertices":
+        values, handled = parse_floats(body, starts, ends)
+        dtype = np.float64
+    else:
+        values, handled = parse_ints(body, starts, ends)
+        dtype = np.int64
+    rest = np.flatnonzero(~handled)
+    if rest.size:
+        values[rest] = np.array([body[starts[i]:ends[i]] for i in rest.tolist()],
+                                dtype=dtype)
+    return values.reshape(-1, 3)
 
 
 def _local(tag: str) -> str:
@@ -254,7 +295,7 @@ class _Reader:
     def fast_block(self, body: bytes, kind: bytes, name: str):
         """``(n, 3)`` values of a block, or None to leave it to ElementTree."""
         empty = np.zeros((0, 3), dtype=np.float64 if kind == b"vertices" else np.int64)
-        if not body.strip():
+        if not body or body.isspace():
             return empty
         values = _split_on_quotes(body, kind)
         if values is None:
@@ -265,10 +306,14 @@ class _Reader:
             del pieces[0::4]                 # keep the three values of each tag
             values = pieces
         try:
+            if isinstance(values, tuple):
+                return _span_values(body, values, kind)
             if kind == b"vertices":
                 return np.array(values, dtype=np.float64).reshape(-1, 3)
             return np.array(values, dtype=np.int64).reshape(-1, 3)
         except (ValueError, OverflowError):
+            if isinstance(values, tuple):
+                values = [body[a:b] for a, b in zip(*values)]
             if kind == b"vertices":
                 self.fail(f"{name}: bad vertex coordinate {first_bad_number(values)!r}")
             self.fail(f"{name}: bad triangle index {first_bad_number(values, int)!r}")
@@ -457,9 +502,10 @@ def model_xml(mesh) -> bytes:
             '  <item objectid="1"/>\n'
             ' </build>\n'
             '</model>\n')
-    vertices = format_rows('     <vertex x="%r" y="%r" z="%r"/>\n', mesh.vertices)
-    triangles = format_rows('     <triangle v1="%d" v2="%d" v3="%d"/>\n', mesh.faces)
-    return (head + vertices + middle + triangles + tail).encode("utf-8")
+    vertices = format_rows(('     <vertex x="', '" y="', '" z="', '"/>\n'), mesh.vertices)
+    triangles = format_rows(('     <triangle v1="', '" v2="', '" v3="', '"/>\n'), mesh.faces)
+    return b"".join((head.encode("utf-8"), vertices, middle.encode("ascii"), triangles,
+                     tail.encode("ascii")))
 
 
 def _entry(name: str) -> zipfile.ZipInfo:
