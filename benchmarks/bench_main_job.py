@@ -6,7 +6,9 @@ Runs, each in its own process (``/usr/bin/time -v`` for the peak memory):
   (read, shell, map, union, float32 check, verified STL write) on ~15k-face
   bases at two tile sizes (~300k and ~1M output faces);
 * ``geotex map --tiles studs --shell NAME -o OUT.stl --size-mm 80`` with the
-  catalog shells;
+  catalog shells, and ``geotex map --tiles studs --shell SHELL.npz -o OUT.stl``
+  with the shells the default-size ``geotex texture`` runs saved
+  (``--shell-out``: ~15k-face bases at print size, ~370k output faces);
 * ``geotex demo``.
 
 Peer in the same run: manifold3d's plain batch union of the same base and
@@ -37,16 +39,23 @@ HERE = Path(__file__).resolve().parent
 GEOTEX = [sys.executable, "-m", "geotex"]
 
 
-def _timed(argv, cwd) -> tuple[float, float, int, str]:
-    """Run ``argv``; return (wall s, peak MB, exit code, stderr tail)."""
+def _timed(argv, cwd) -> tuple[float, float, int, str, float, float]:
+    """Run ``argv``; return (wall s, peak MB, exit code, stderr tail, CPU s, 1-min load).
+
+    CPU is user + system time of the process and its children (``/usr/bin/time
+    -v``); the load is the 1-minute load average just before the run.
+    """
+    load = os.getloadavg()[0]
     t = time.perf_counter()
     proc = subprocess.run(["/usr/bin/time", "-v", *argv], cwd=cwd, capture_output=True,
                           text=True)
     wall = time.perf_counter() - t
     m = re.search(r"Maximum resident set size \(kbytes\): (\d+)", proc.stderr)
     peak = int(m.group(1)) / 1024 if m else float("nan")
+    cpu = sum(float(x) for x in re.findall(r"(?:User|System) time \(seconds\): ([\d.]+)",
+                                            proc.stderr))
     err = [ln for ln in proc.stderr.splitlines() if ln.startswith("geotex:")]
-    return wall, peak, proc.returncode, (err[-1] if err else "")
+    return wall, peak, proc.returncode, (err[-1] if err else ""), cpu, load
 
 
 def _decimated(src: Path, target: int, out: Path) -> Path:
@@ -127,11 +136,13 @@ def main(argv=None) -> int:
                 # about 3.3x the quads of the automatic size: ~1M output faces
                 prev = json.loads((work / f"{src.stem}_None.json").read_text())
                 extra = ["--tile-size", f"{prev['tile_size'] / 1.8:.4g}"]
-            wall, peak, code, err = _timed(GEOTEX + ["texture", str(base), "--tiles", "studs",
-                                                     "-o", str(out), "--size-mm", "80",
-                                                     "--report", str(rep)] + extra, work)
+            if tile is None:              # the shell, for the ~370k-face 'geotex map' rows
+                extra = ["--shell-out", str(work / f"{src.stem}_shell.npz")]
+            wall, peak, code, err, cpu, load = _timed(
+                GEOTEX + ["texture", str(base), "--tiles", "studs", "-o", str(out),
+                          "--size-mm", "80", "--report", str(rep)] + extra, work)
             row = {"base": label, "faces_in": 15000, "wall": wall, "peak": peak,
-                   "code": code, "err": err}
+                   "code": code, "err": err, "cpu": cpu, "load": load}
             if code == 0:
                 doc = json.loads(rep.read_text())
                 row.update(tile=doc["tile_size"], quads=doc["stats"]["quads"],
@@ -142,13 +153,19 @@ def main(argv=None) -> int:
                 row["check"] = "yes" if verdict.returncode == 0 else "NO"
             rows_texture.append(row)
             print(row, flush=True)
-    for shell in (["spot"] if args.quick else ["spot", "bob", "torus"]):
-        out = work / f"map_{shell}.stl"
-        rep = work / f"map_{shell}.json"
-        wall, peak, code, err = _timed(GEOTEX + ["map", "--tiles", "studs", "--shell", shell,
-                                                 "-o", str(out), "--size-mm", "80",
-                                                 "--report", str(rep)], work)
-        row = {"shell": shell, "wall": wall, "peak": peak, "code": code, "err": err}
+    shells = [(s, s, ["--size-mm", "80"]) for s in
+              (["spot"] if args.quick else ["spot", "bob", "torus"])]
+    shells += [(f"{label} 15k (saved by texture)", str(work / f"{src.stem}_shell.npz"), [])
+               for label, src in bases if (work / f"{src.stem}_shell.npz").exists()]
+    for shell, source, size in shells:
+        stem = Path(source).stem
+        out = work / f"map_{stem}.stl"
+        rep = work / f"map_{stem}.json"
+        wall, peak, code, err, cpu, load = _timed(
+            GEOTEX + ["map", "--tiles", "studs", "--shell", source, "-o", str(out),
+                      "--report", str(rep)] + size, work)
+        row = {"shell": shell, "wall": wall, "peak": peak, "code": code, "err": err,
+               "cpu": cpu, "load": load}
         if code == 0:
             doc = json.loads(rep.read_text())
             row.update(faces=doc["stats"]["faces"], seconds=doc["seconds"],
@@ -175,37 +192,44 @@ def main(argv=None) -> int:
         "full check) / write (STL written, read back, compared). Peer: manifold3d's plain "
         "batch union of the same base and elements (same operands, no fold test, no check).",
         "",
-        "| base | tile mm | quads | output faces | wall s | peak MB | stages s | retries | "
-        "peer union s | check on file |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+        "| base | tile mm | quads | output faces | wall s | CPU s | load | peak MB | stages s | "
+        "retries | peer union s | check on file |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows_texture:
         if r["code"]:
-            lines.append(f"| {r['base']} | | | | {r['wall']:.1f} | {r['peak']:.0f} | failed "
+            lines.append(f"| {r['base']} | | | | {r['wall']:.1f} | {r['cpu']:.1f} | "
+                         f"{r['load']:.1f} | {r['peak']:.0f} | failed "
                          f"(exit {r['code']}): {r['err']} | | | |")
             continue
         s = r["seconds"]
         st = " / ".join(f"{s.get(k, 0):.2f}" for k in ("read+shell", "assign", "map", "union",
                                                         "validate", "write"))
         lines.append(f"| {r['base']} | {r['tile']:.3g} | {r['quads']} | {r['faces']:,} | "
-                     f"**{r['wall']:.1f}** | {r['peak']:.0f} | {st} | {r['retries']} | "
+                     f"**{r['wall']:.1f}** | {r['cpu']:.1f} | {r['load']:.1f} | "
+                     f"{r['peak']:.0f} | {st} | {r['retries']} | "
                      f"{r['peer_union']:.2f} | {r['check']} |")
-    lines += ["", "## geotex map (catalog shell, no shell building)", "",
-              "| shell | output faces | wall s | peak MB | stages s (assign / map / union / "
-              "validate / write) | retries |", "|---|---|---|---|---|---|"]
+    lines += ["", "## geotex map (a ready shell, no shell building)", "",
+              "Catalog shells at 80 mm, and the shells of the ~15k-face bases above at their "
+              "default tile size (saved by `geotex texture --shell-out`, at print size).", "",
+              "| shell | output faces | wall s | CPU s | load | peak MB | stages s (assign / map / "
+              "union / validate / write) | retries |", "|---|---|---|---|---|---|---|---|"]
     for r in rows_map:
         if r["code"]:
-            lines.append(f"| {r['shell']} | | {r['wall']:.1f} | {r['peak']:.0f} | failed "
+            lines.append(f"| {r['shell']} | | {r['wall']:.1f} | {r['cpu']:.1f} | "
+                         f"{r['load']:.1f} | {r['peak']:.0f} | failed "
                          f"(exit {r['code']}): {r['err']} | |")
             continue
         s = r["seconds"]
         st = " / ".join(f"{s.get(k, 0):.2f}" for k in ("assign", "map", "union", "validate",
                                                         "write"))
         lines.append(f"| {r['shell']} | {r['faces']:,} | **{r['wall']:.1f}** | "
-                     f"{r['peak']:.0f} | {st} | {r['retries']} |")
+                     f"{r['cpu']:.1f} | {r['load']:.1f} | {r['peak']:.0f} | {st} | "
+                     f"{r['retries']} |")
     lines += ["", "## geotex demo", "",
               f"`geotex demo` (Spot at 80 mm, studs, STL + 3MF + picture + report): "
-              f"**{demo[0]:.1f} s** wall, peak {demo[1]:.0f} MB, exit {demo[2]}.", ""]
+              f"**{demo[0]:.1f} s** wall, {demo[4]:.1f} s CPU (1-min load {demo[5]:.1f} "
+              f"before it), peak {demo[1]:.0f} MB, exit {demo[2]}.", ""]
     out_md = Path(args.out)
     kept = ""
     if out_md.exists():           # sections headed "... (written by hand ...)" stay below

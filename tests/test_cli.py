@@ -94,6 +94,11 @@ def test_demo_writes_real_files(capsys, tmp_path):
     assert report["check"]["printable"] and report["map"]["elements"] > 100
     solid = read_mesh(out / "spot_studs.3mf")
     assert check_mesh(solid.vertices, solid.faces).printable
+    # the STL (staged during the check) holds the same solid; no hidden file is left
+    stl = read_mesh(out / "spot_studs.stl")
+    assert np.array_equal(stl.vertices, solid.vertices) and np.array_equal(stl.faces, solid.faces)
+    assert sorted(p.name for p in out.iterdir()) == [
+        "report.json", "spot_studs.3mf", "spot_studs.png", "spot_studs.stl"]
     size = solid.vertices.max(axis=0) - solid.vertices.min(axis=0)
     # the body is 80 mm long; the studs stand out by at most their height
     assert 80.0 < size.max() < 80.0 + 2 * report["map"]["height"] + 1e-9

@@ -9,6 +9,7 @@ checked and written as STL and 3MF, with a picture and a JSON report.
 from __future__ import annotations
 
 import json
+import os
 import sys
 import time
 from pathlib import Path
@@ -74,7 +75,7 @@ def _run(args, out, tiles, start, painter) -> int:
     from geotex.io import read_mesh
     from geotex.io.atomic import atomic_output
     from geotex.mapping import MAP_PROGRESS, textured_solid
-    from geotex.printing import export_printable
+    from geotex.printing import StagedWrite, export_printable
     from geotex.progress import stage_bar
     from geotex.render import Panel, render_panels
     from geotex.shells import SHELL_STAGES, build_shell
@@ -82,36 +83,60 @@ def _run(args, out, tiles, start, painter) -> int:
     base = read_mesh(sample_path(DEMO_BASE))
     V = print_ready(base.vertices, size_mm=args.size_mm, y_up=True)
     tile_mm = args.size_mm / DEMO_TILES_ACROSS
+    name = f"{DEMO_BASE}_{tiles.name}"
+    picture_path = out / f"{name}.png"
+    pictures = []                       # (future, hidden file) of each solid drawn
     with stage_bar(len(SHELL_STAGES) + len(MAP_PROGRESS), "geotex demo") as bar:
         shell = build_shell(V, base.faces, tile_size=tile_mm, name=DEMO_BASE,
                             source=f"sample:{DEMO_BASE}", progress=bar)
-        result = textured_solid(shell, tiles, seed=args.seed, progress=bar)
-    rep, s = result.report, result.stats
-    name = f"{DEMO_BASE}_{tiles.name}"
-    # the picture is drawn in the worker process while the files are written here,
-    picture = painter.submit(render_panels, [
-        Panel(V, base.faces, color="#d9c7a3", title=f"{DEMO_BASE}: {base.n_faces} faces, "
-              f"{args.size_mm:g} mm"),
-        Panel(shell.polycube.Y, shell.polycube.F, scalars=shell.polycube.layout.quad_label[
-            shell.polycube.layout.face_quad], cmap="Set2",
-            title=f"polycube map: {shell.n_quads} tiles of {tile_mm:.3g} mm"),
-        Panel(result.vertices, result.faces, color="#c9b38f",
-              title=f"{tiles.name}: {s.elements} elements, printable"),
-    ], out / f"{name}.png", size=(700, 700))
-    # and then the STL (written, read back, compared) while the 3MF, the longer
-    # of the two, is written here
-    stl = painter.submit(export_printable, out / f"{name}.stl", result.vertices,
-                         result.faces, name=name, report=rep)
-    try:
-        export_printable(out / f"{name}.3mf", result.vertices, result.faces, name=name,
-                         report=rep)
-        stl.result()
-    except NotPrintableError as exc:
-        picture.cancel()
-        stl.cancel()
-        print(f"geotex: error: {exc}", file=sys.stderr)
-        return EXIT_NOT_PRINTABLE
-    picture.result()
+        panels = [
+            Panel(V, base.faces, color="#d9c7a3", title=f"{DEMO_BASE}: {base.n_faces} "
+                  f"faces, {args.size_mm:g} mm"),
+            Panel(shell.polycube.Y, shell.polycube.F, scalars=shell.polycube.layout.quad_label[
+                shell.polycube.layout.face_quad], cmap="Set2",
+                title=f"polycube map: {shell.n_quads} tiles of {tile_mm:.3g} mm")]
+
+        def draw(Vs, Fs):
+            # the solid about to be judged is drawn in the worker process while
+            # the check runs here (a retried union draws its new solid); the
+            # picture takes its name only once the solid is printable
+            for future, _ in pictures:
+                future.cancel()
+            hidden = out / f".{name}.{os.getpid()}.{len(pictures)}.png"
+            pictures.append((painter.submit(render_panels, panels + [
+                Panel(Vs, Fs, color="#c9b38f", title=f"{tiles.name}: {Fs.shape[0]} faces, "
+                      "printable")], hidden, size=(700, 700)), hidden))
+
+        with StagedWrite(out / f"{name}.stl", name=name) as staged:
+            def judged(Vs, Fs):
+                staged(Vs, Fs)          # the STL too is written while it is judged
+                draw(Vs, Fs)
+
+            try:
+                result = textured_solid(shell, tiles, seed=args.seed, progress=bar,
+                                        on_stored=judged)
+                rep, s = result.report, result.stats
+                if not pictures:
+                    draw(result.vertices, result.faces)
+                # the 3MF (formatted, written, read back, compared) here; the
+                # STL was staged during the check and is renamed if it matches
+                export_printable(out / f"{name}.3mf", result.vertices, result.faces,
+                                 name=name, report=rep)
+                export_printable(out / f"{name}.stl", result.vertices, result.faces,
+                                 name=name, report=rep, staged=staged)
+                pictures[-1][0].result()
+                os.replace(pictures[-1][1], picture_path)
+            except NotPrintableError as exc:
+                print(f"geotex: error: {exc}", file=sys.stderr)
+                return EXIT_NOT_PRINTABLE
+            finally:
+                for future, hidden in pictures:
+                    if not future.cancel():
+                        try:
+                            future.result()
+                        except Exception:       # its error, if any, was raised above
+                            pass
+                    hidden.unlink(missing_ok=True)
     files = [f"{name}.stl", f"{name}.3mf", f"{name}.png"]
     elapsed = time.perf_counter() - start
     summary = {"base": DEMO_BASE, "tiles": tiles.name, "size_mm": args.size_mm,
