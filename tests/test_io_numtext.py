@@ -191,3 +191,21 @@ def test_3mf_huge_index_is_refused(path):
         b"9" * 40)
     with pytest.raises(MeshFileError):
         read_3mf("big.3mf", _package(_model(verts, tris)))
+
+
+def test_3mf_written_in_pieces_is_the_one_piece_package(path):
+    # large meshes are formatted piece by piece in a thread while the pieces
+    # before are compressed: the package is byte for byte the one-shot one
+    mesh = _mesh(seed=3, n=70000)                     # 210k rows: several pieces
+    buf = io.BytesIO()
+    threemf.write_3mf(buf, mesh)
+    ref = io.BytesIO()
+    with zipfile.ZipFile(ref, "w", compression=zipfile.ZIP_DEFLATED, compresslevel=1) as z:
+        for name, text in (("[Content_Types].xml", threemf._CONTENT_TYPES),
+                           ("_rels/.rels", threemf._RELS),
+                           ("3D/3dmodel.model", model_xml(mesh))):
+            z.writestr(threemf._entry(name), text, compresslevel=1)
+    assert buf.getvalue() == ref.getvalue()
+    back = read_3mf("p.3mf", buf.getvalue())
+    assert back.vertices.tobytes() == mesh.vertices.tobytes()
+    assert np.array_equal(back.faces, mesh.faces)

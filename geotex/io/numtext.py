@@ -303,7 +303,8 @@ def _assemble(slots, lengths, k, template, cuts, out):
     return at
 
 
-def format_rows(pieces: tuple[str, ...], values: np.ndarray) -> bytes:
+def format_rows(pieces: tuple[str, ...], values: np.ndarray, *,
+                compiled: bool | None = None) -> bytes:
     """Rows ``pieces[0] v0 pieces[1] v1 ... pieces[k]`` for each row of ``values``.
 
     Parameters
@@ -312,6 +313,9 @@ def format_rows(pieces: tuple[str, ...], values: np.ndarray) -> bytes:
         ``k + 1`` ASCII texts around the ``k`` numbers of a row.
     values : numpy.ndarray, (n, k) float64 or integer
         Floats are written as ``repr`` writes them, integers as ``%d``.
+    compiled : bool, optional
+        Use the compiled loops (True) or Python's ``%`` (False); by default
+        the compiled loops from :data:`geotex.jit.JIT_MIN_SIZE` values up.
 
     Returns
     -------
@@ -338,7 +342,7 @@ def format_rows(pieces: tuple[str, ...], values: np.ndarray) -> bytes:
     if n == 0:
         return b""
     is_float = np.issubdtype(values.dtype, np.floating)
-    if values.size < JIT_MIN_SIZE:
+    if not (values.size >= JIT_MIN_SIZE if compiled is None else compiled):
         code = "%r" if is_float else "%d"
         row = code.join(p.replace("%", "%%") for p in pieces)
         flat = values.astype(np.float64 if is_float else np.int64).ravel().tolist()

@@ -112,7 +112,7 @@ def _split_on_quotes(body: bytes, kind: bytes):
     quote = body[quote_at:quote_at + 1]
     head, mids, join, tail = _QUOTED[kind]
     seps = None
-    if body.count(quote) >= JIT_MIN_SIZE:
+    if len(body) >= 16 * JIT_MIN_SIZE:           # about as many values or more
         quotes, seps = quoted_spans(body, quote, 3)
         if quotes.shape[0] % 6:
             return None
@@ -482,8 +482,15 @@ _RELS = (
     '</Relationships>\n')
 
 
-def model_xml(mesh) -> bytes:
-    """The ``3D/3dmodel.model`` document for ``mesh`` (millimetres)."""
+#: Rows per piece of the model text when it is written piece by piece.
+_ROWS_PER_PIECE = 1 << 16
+
+
+def _model_pieces(mesh, rows: int | None = None):
+    """The ``3D/3dmodel.model`` document in pieces (bytes), in order.
+
+    ``rows`` rows of vertices or triangles per piece (all in one when None).
+    """
     name = " ".join((mesh.name or "geotex").split()) or "geotex"
     head = (
         '<?xml version="1.0" encoding="UTF-8"?>\n'
@@ -502,10 +509,67 @@ def model_xml(mesh) -> bytes:
             '  <item objectid="1"/>\n'
             ' </build>\n'
             '</model>\n')
-    vertices = format_rows(('     <vertex x="', '" y="', '" z="', '"/>\n'), mesh.vertices)
-    triangles = format_rows(('     <triangle v1="', '" v2="', '" v3="', '"/>\n'), mesh.faces)
-    return b"".join((head.encode("utf-8"), vertices, middle.encode("ascii"), triangles,
-                     tail.encode("ascii")))
+    V, F = mesh.vertices, mesh.faces
+    # one decision for the whole mesh (compiled or Python), whatever the pieces
+    compiled = 3 * (V.shape[0] + F.shape[0]) >= JIT_MIN_SIZE
+    yield head.encode("utf-8")
+    step = max(V.shape[0], 1) if rows is None else rows
+    for a in range(0, V.shape[0], step):
+        yield format_rows(('     <vertex x="', '" y="', '" z="', '"/>\n'), V[a:a + step],
+                          compiled=compiled)
+    yield middle.encode("ascii")
+    step = max(F.shape[0], 1) if rows is None else rows
+    for a in range(0, F.shape[0], step):
+        yield format_rows(('     <triangle v1="', '" v2="', '" v3="', '"/>\n'), F[a:a + step],
+                          compiled=compiled)
+    yield tail.encode("ascii")
+
+
+def model_xml(mesh) -> bytes:
+    """The ``3D/3dmodel.model`` document for ``mesh`` (millimetres)."""
+    return b"".join(_model_pieces(mesh))
+
+
+def _ahead(pieces):
+    """Iterate ``pieces`` with the next one made in a thread meanwhile.
+
+    Formatting (compiled, without the GIL) then overlaps the caller's
+    compression of the previous piece (zlib also releases the GIL).
+    """
+    import queue
+    import threading
+
+    box: queue.Queue = queue.Queue(maxsize=2)
+    stop = threading.Event()
+
+    def make():
+        try:
+            for piece in pieces:
+                if stop.is_set():
+                    return
+                box.put((piece, None))
+            box.put((None, None))
+        except BaseException as exc:            # re-raised in the caller's thread
+            box.put((None, exc))
+
+    thread = threading.Thread(target=make, name="geotex-3mf-text", daemon=True)
+    thread.start()
+    try:
+        while True:
+            piece, exc = box.get()
+            if exc is not None:
+                raise exc
+            if piece is None:
+                return
+            yield piece
+    finally:
+        stop.set()
+        while thread.is_alive():                # unblock a producer waiting on a full box
+            try:
+                box.get(timeout=0.05)
+            except queue.Empty:
+                pass
+        thread.join()
 
 
 def _entry(name: str) -> zipfile.ZipInfo:
@@ -516,12 +580,24 @@ def _entry(name: str) -> zipfile.ZipInfo:
 
 
 def write_3mf(fh, mesh, *, path=None, binary: bool = True) -> None:
-    """Write ``mesh`` (millimetres) as a 3MF package to the open binary file ``fh``."""
+    """Write ``mesh`` (millimetres) as a 3MF package to the open binary file ``fh``.
+
+    The model part is formatted piece by piece in a thread while the pieces
+    before are compressed; the bytes are those of compressing the whole
+    document at once (deflate's output does not depend on how its input is
+    split).
+    """
     # deflate level 1: a quarter of the default level's time for a 20% larger file
     # (a 59 MB model: 0.43 s instead of 1.87 s, 14.9 MB instead of 12.2 MB)
     # (zipfile takes the level of an entry given as a ZipInfo from writestr's own
-    # argument, not from the archive's)
+    # argument or, for open(), from the entry itself, not from the archive's)
     with zipfile.ZipFile(fh, "w", compression=zipfile.ZIP_DEFLATED, compresslevel=1) as archive:
-        for entry, text in (("[Content_Types].xml", _CONTENT_TYPES), ("_rels/.rels", _RELS),
-                            (_DEFAULT_PART, model_xml(mesh))):
+        for entry, text in (("[Content_Types].xml", _CONTENT_TYPES), ("_rels/.rels", _RELS)):
             archive.writestr(_entry(entry), text, compresslevel=1)
+        info = _entry(_DEFAULT_PART)
+        info._compresslevel = 1                 # what writestr(..., compresslevel=1) sets
+        big = mesh.vertices.shape[0] + mesh.faces.shape[0] > 2 * _ROWS_PER_PIECE
+        pieces = _model_pieces(mesh, _ROWS_PER_PIECE if big else None)
+        with archive.open(info, "w") as part:
+            for piece in (_ahead(pieces) if big else pieces):
+                part.write(piece)
