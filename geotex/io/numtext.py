@@ -38,9 +38,6 @@ from geotex.jit import JIT_MIN_SIZE, compiled, helper
 
 __all__ = ["format_rows", "parse_floats", "parse_ints", "quoted_spans"]
 
-_U = np.uint64
-_M32 = np.uint64(0xFFFFFFFF)
-_HIDDEN = np.uint64(1 << 52)
 _POW5 = np.array([5 ** i for i in range(28)], dtype=np.uint64)
 _POW10U = np.array([10 ** i for i in range(20)], dtype=np.uint64)
 _POW10F = np.array([10.0 ** i for i in range(23)], dtype=np.float64)

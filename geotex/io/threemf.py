@@ -39,8 +39,9 @@ Writing
     ``model`` and one build item.  Coordinates are written with ``repr``
     (the shortest decimal that reads back to the same float64; 17 significant
     digits at most), so a round trip is exact; large meshes are formatted by
-    compiled loops giving the same bytes (:mod:`geotex.io.numtext`).  Zip entries carry a fixed
-    timestamp: the same mesh always gives the same bytes.
+    compiled loops giving the same bytes (:mod:`geotex.io.numtext`), piece by
+    piece in a thread while the pieces before are compressed.  Zip entries
+    carry a fixed timestamp: the same mesh always gives the same bytes.
 """
 
 from __future__ import annotations
@@ -57,8 +58,8 @@ import numpy as np
 from geotex.errors import MeshFileError
 from geotex.io._common import build_mesh, first_bad_number
 from geotex.io.limits import RefusedInput, inflate_member
-from geotex.jit import JIT_MIN_SIZE
 from geotex.io.numtext import format_rows, parse_floats, parse_ints, quoted_spans
+from geotex.jit import JIT_MIN_SIZE
 
 __all__ = ["read_3mf", "write_3mf", "UNITS_TO_MM", "CORE_NAMESPACE"]
 
@@ -124,6 +125,8 @@ def _split_on_quotes(body: bytes, kind: bytes):
             return None
         return quotes[0::2] + 1, quotes[1::2]
     pieces = body.split(quote)
+    if (len(pieces) - 1) % 6:
+        return None
     if not head.fullmatch(pieces[0]) or not tail.fullmatch(pieces[-1]):
         return None
     for j, mid in enumerate(mids, 1):
