@@ -395,3 +395,40 @@ def test_element_contacts_equal_the_full_exact_test_on_a_real_layout(monkeypatch
     assert np.array_equal(c.folded, np.unique(a[same]))
     assert np.array_equal(c.touching, touching.reshape(-1, 2))
     assert c.touching.size                    # studs meet there (none is folded)
+    # the map's own element numbering is face_components' (textured_solid hands it over)
+    assert np.array_equal(m.element[G[:, 0]], label)
+    c2 = element_contacts(X, G, label=m.element[G[:, 0]])
+    assert all(np.array_equal(x, y) for x, y in zip(c, c2))
+
+
+def test_element_contacts_rejects_labels_that_are_not_one_per_face():
+    from geotex.errors import InputError
+    from geotex.mapping.union import element_contacts
+    from geotex.mesh.primitives import icosphere
+
+    X, G = icosphere(1)
+    with pytest.raises(InputError, match="one integer per face"):
+        element_contacts(X, G, label=np.zeros(len(G) - 1, dtype=np.int64))
+    with pytest.raises(InputError, match="one integer per face"):
+        element_contacts(X, G, label=np.zeros(len(G)))
+    assert element_contacts(X, G, label=np.zeros(len(G), dtype=np.int32)).folded.size == 0
+
+
+def test_manifold_of_builds_the_solid_the_plain_constructor_builds():
+    """manifold_of ingests through an ExecutionContext (GIL released): the same
+    solid as manifold3d.Manifold(Mesh64), and the same error on an open mesh."""
+    import manifold3d
+
+    from geotex.mesh.primitives import icosphere
+    from geotex.mesh.solid import arrays_of_manifold, manifold_of
+    from geotex.mesh.topology import concatenated
+
+    Vs, Fs = icosphere(2)
+    V, F = concatenated([(Vs * 0.3 + (0.5 * k, 0.1 * k, 0.0), Fs) for k in range(5)])
+    plain = manifold3d.Manifold(manifold3d.Mesh64(vert_properties=V,
+                                                  tri_verts=F.astype(np.uint64)))
+    got = manifold_of(V, F)
+    assert got.status() == plain.status() == manifold3d.Error.NoError
+    a, b = arrays_of_manifold(got), arrays_of_manifold(plain)
+    assert np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])
+    assert manifold_of(V, F[:-1]).status() == manifold3d.Error.NotManifold
