@@ -413,22 +413,3 @@ def test_element_contacts_rejects_labels_that_are_not_one_per_face():
         element_contacts(X, G, label=np.zeros(len(G)))
     assert element_contacts(X, G, label=np.zeros(len(G), dtype=np.int32)).folded.size == 0
 
-
-def test_manifold_of_builds_the_solid_the_plain_constructor_builds():
-    """manifold_of ingests through an ExecutionContext (GIL released): the same
-    solid as manifold3d.Manifold(Mesh64), and the same error on an open mesh."""
-    import manifold3d
-
-    from geotex.mesh.primitives import icosphere
-    from geotex.mesh.solid import arrays_of_manifold, manifold_of
-    from geotex.mesh.topology import concatenated
-
-    Vs, Fs = icosphere(2)
-    V, F = concatenated([(Vs * 0.3 + (0.5 * k, 0.1 * k, 0.0), Fs) for k in range(5)])
-    plain = manifold3d.Manifold(manifold3d.Mesh64(vert_properties=V,
-                                                  tri_verts=F.astype(np.uint64)))
-    got = manifold_of(V, F)
-    assert got.status() == plain.status() == manifold3d.Error.NoError
-    a, b = arrays_of_manifold(got), arrays_of_manifold(plain)
-    assert np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])
-    assert manifold_of(V, F[:-1]).status() == manifold3d.Error.NotManifold

@@ -9,31 +9,13 @@ __all__ = ["manifold_of", "arrays_of_manifold", "manifold_status"]
 
 
 def manifold_of(V: np.ndarray, F: np.ndarray) -> manifold3d.Manifold:
-    """Return a manifold3d solid built from ``(V, F)`` (check ``.status()``).
-
-    The solid is built through an :class:`manifold3d.ExecutionContext`,
-    which releases the GIL while manifold3d ingests the mesh (the plain
-    ``Manifold(mesh)`` constructor holds it throughout: 0.2-0.3 s at 280k
-    faces during which no other Python thread runs). The result is the same
-    solid, vertex for vertex and face for face.
-
-    Parameters
-    ----------
-    V : numpy.ndarray, (n, 3) float64
-    F : numpy.ndarray, (m, 3) int64
-
-    Returns
-    -------
-    manifold3d.Manifold
-        Empty, with an error ``.status()``, when ``(V, F)`` is not a closed
-        oriented 2-manifold.
-    """
+    """Return a manifold3d solid built from ``(V, F)`` (check ``.status()``)."""
     V = np.ascontiguousarray(V, dtype=np.float64)
     if not V.flags.writeable:
         V = V.copy()
     mesh = manifold3d.Mesh64(vert_properties=V,
                              tri_verts=np.ascontiguousarray(F, dtype=np.uint64))
-    return manifold3d.ExecutionContext().from_mesh(mesh)
+    return manifold3d.Manifold(mesh)
 
 
 def arrays_of_manifold(solid: manifold3d.Manifold) -> tuple[np.ndarray, np.ndarray]:
