@@ -469,3 +469,45 @@ def test_binary_stl_writer_in_chunks_equals_numpy_path(monkeypatch):
     assert out[0] == out[1] and len(out[0]) == 84 + 50 * F.shape[0]
     back = stl.read_stl("t.stl", out[0])
     assert back.faces.shape == F.shape
+
+
+def test_needle_free_region_and_splice_equal_numpy_path(monkeypatch):
+    """The compiled region and splice of needle_free give the numpy path's arrays
+    (darts at many edges, a stray unreferenced vertex that must drop out)."""
+    import geotex.mesh.needles as needles
+    from geotex.mesh.primitives import icosphere
+
+    V, F = icosphere(3)
+    E = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
+    E = np.unique(E, axis=0)
+    rng = np.random.default_rng(3)
+    used = np.zeros(len(V), dtype=bool)
+    for a, b in E[rng.permutation(len(E))]:
+        if used[a] or used[b] or used.sum() > 120:
+            continue
+        fa = np.flatnonzero(np.isin(F, [a, b]).sum(axis=1) == 2)
+        if fa.size != 2 or used[F[fa].ravel()].any():
+            continue
+        used[F[fa].ravel()] = True
+        p = len(V)
+        V = np.vstack([V, V[a] + 1e-7 * (V[b] - V[a])])
+        new = []
+        for f in F[fa]:
+            i = list(f).index(a)
+            if f[(i + 1) % 3] == b:              # (a, b, c) -> (a, p, c), (p, b, c)
+                c = f[(i + 2) % 3]
+                new += [[a, p, c], [p, b, c]]
+            else:                                # (b, a, d) -> (b, p, d), (p, a, d)
+                d = f[(i + 1) % 3]
+                new += [[b, p, d], [p, a, d]]
+        F = np.vstack([np.delete(F, fa, axis=0), new])
+    V = np.vstack([V[:5], [[9.0, 9.0, 9.0]], V[5:]])     # unreferenced vertex 5
+    F = np.where(F >= 5, F + 1, F)
+    monkeypatch.setattr(needles, "JIT_MIN_SIZE", 0)
+    fast = needles.needle_free(V, F, tolerance=1e-5)
+    monkeypatch.setattr(needles, "JIT_MIN_SIZE", 10 ** 12)
+    slow = needles.needle_free(V, F, tolerance=1e-5)
+    assert fast[2] == slow[2] >= 10
+    assert np.array_equal(fast[0], slow[0]) and np.array_equal(fast[1], slow[1])
+    assert len(fast[0]) == len(V) - 1 - fast[2]          # the stray and the collapsed
+    assert not np.any((fast[0] == 9.0).all(axis=1))

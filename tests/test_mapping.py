@@ -395,3 +395,21 @@ def test_element_contacts_equal_the_full_exact_test_on_a_real_layout(monkeypatch
     assert np.array_equal(c.folded, np.unique(a[same]))
     assert np.array_equal(c.touching, touching.reshape(-1, 2))
     assert c.touching.size                    # studs meet there (none is folded)
+    # the map's own element numbering is face_components' (textured_solid hands it over)
+    assert np.array_equal(m.element[G[:, 0]], label)
+    c2 = element_contacts(X, G, label=m.element[G[:, 0]])
+    assert all(np.array_equal(x, y) for x, y in zip(c, c2))
+
+
+def test_element_contacts_rejects_labels_that_are_not_one_per_face():
+    from geotex.errors import InputError
+    from geotex.mapping.union import element_contacts
+    from geotex.mesh.primitives import icosphere
+
+    X, G = icosphere(1)
+    with pytest.raises(InputError, match="one integer per face"):
+        element_contacts(X, G, label=np.zeros(len(G) - 1, dtype=np.int64))
+    with pytest.raises(InputError, match="one integer per face"):
+        element_contacts(X, G, label=np.zeros(len(G)))
+    assert element_contacts(X, G, label=np.zeros(len(G), dtype=np.int32)).folded.size == 0
+

@@ -297,7 +297,9 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
     # elements the map folds onto themselves are shrunk in place where that
     # helps, else laid back on a locally smoothed map with their neighbours,
     # else smoothed over the folded stretch (strands, rings)
-    contacts = element_contacts(mapped.vertices, mapped.faces)
+    # (the map numbers its elements as face_components would: no second labelling)
+    contacts = element_contacts(mapped.vertices, mapped.faces,
+                                label=mapped.element[mapped.faces[:, 0]])
     folded = contacts.folded
     below = depth_scale(tiles, scale, ANCHOR * shell.tile_size)
     X, still = reseated_elements(shell, mapped, contacts.label, folded, scale=scale,

@@ -28,7 +28,7 @@ import manifold3d
 import numpy as np
 
 from geotex.check.intersections import self_intersecting_pairs
-from geotex.errors import GeotexError
+from geotex.errors import GeotexError, InputError
 from geotex.mesh.geometry import component_volumes
 from geotex.mesh.needles import SLIVER_TOLERANCE, needle_free
 from geotex.mesh.solid import arrays_of_manifold, manifold_of
@@ -91,7 +91,7 @@ class ElementContacts(NamedTuple):
     touching: np.ndarray
 
 
-def element_contacts(X: np.ndarray, G: np.ndarray) -> ElementContacts:
+def element_contacts(X: np.ndarray, G: np.ndarray, *, label=None) -> ElementContacts:
     """Elements the map folds, and pairs of elements that meet (one exact test).
 
     The exact test of all faces (:func:`~geotex.check.intersections.self_intersecting_pairs`)
@@ -103,12 +103,28 @@ def element_contacts(X: np.ndarray, G: np.ndarray) -> ElementContacts:
     ----------
     X : numpy.ndarray, (k, 3) float64
     G : numpy.ndarray, (l, 3) int64
+    label : numpy.ndarray, (l,) int64, optional
+        Element of every face when already known (the map numbers its
+        elements as :func:`geotex.mesh.topology.face_components` does:
+        ``MappedTiles.element[G[:, 0]]``); found here otherwise.
 
     Returns
     -------
     ElementContacts
+
+    Raises
+    ------
+    InputError
+        ``label`` is not one integer per face.
     """
-    _, label = face_components(G, X.shape[0])
+    if label is None:
+        _, label = face_components(G, X.shape[0])
+    else:
+        label = np.asarray(label)
+        if label.shape != (G.shape[0],) or not np.issubdtype(label.dtype, np.integer):
+            raise InputError(f"label must be one integer per face, shape ({G.shape[0]},), "
+                             f"got {label.dtype} {label.shape}")
+        label = label.astype(np.int64, copy=False)
     # elements are many small closed parts: the exact test sweeps each element
     # and each pair of elements whose boxes meet (same pairs, same predicates as
     # the test on its global grid, at about half the cost)
@@ -156,12 +172,17 @@ def element_pairs(X: np.ndarray, G: np.ndarray, *, touching=None, moved=None, la
         n_el = int(label.max()) + 1 if label.size else 0
     vlab = np.full(X.shape[0], -1, dtype=np.int64)
     vlab[G[:, 0]], vlab[G[:, 1]], vlab[G[:, 2]] = label, label, label
-    used = vlab >= 0
+    # each element's box: its vertices grouped by element, one reduceat per
+    # bound (6x faster than minimum.at / maximum.at, the same values)
+    order = np.argsort(vlab, kind="stable")
+    order = order[vlab[order] >= 0]
+    grouped = vlab[order]
+    first = np.flatnonzero(np.r_[True, grouped[1:] != grouped[:-1]]) if order.size else order
     lo = np.full((n_el, 3), np.inf)
     hi = np.full((n_el, 3), -np.inf)
-    for d in range(3):
-        np.minimum.at(lo[:, d], vlab[used], X[used, d])
-        np.maximum.at(hi[:, d], vlab[used], X[used, d])
+    if order.size:
+        lo[grouped[first]] = np.minimum.reduceat(X[order], first, axis=0)
+        hi[grouped[first]] = np.maximum.reduceat(X[order], first, axis=0)
     centre, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
     radius = 2.0 * float(np.linalg.norm(half, axis=1).max())
     cand = cKDTree(centre).query_pairs(radius, output_type="ndarray")

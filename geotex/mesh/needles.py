@@ -125,7 +125,8 @@ def needle_free(V: np.ndarray, F: np.ndarray, *, tolerance: float
     """
     V = np.array(V, dtype=np.float64)
     F = np.array(F, dtype=np.int64)
-    needles = needle_faces(V, F, tolerance=tolerance)
+    height = _heights(V, F)
+    needles = np.flatnonzero(height < tolerance)
     if needles.size == 0:
         return V, F, 0
     # every operation stays within one ring of a needle's corners, and a later
@@ -133,12 +134,9 @@ def needle_free(V: np.ndarray, F: np.ndarray, *, tolerance: float
     # two rings, and only around vertices whose whole fan lies in that region
     near = np.zeros(V.shape[0], dtype=bool)
     near[F[needles].ravel()] = True
-    near[F[near[F].any(axis=1)].ravel()] = True
-    region = np.flatnonzero(near[F].any(axis=1))
-    complete = (np.bincount(F[region].ravel(), minlength=V.shape[0])
-                == np.bincount(F.ravel(), minlength=V.shape[0]))
+    region, complete = _region(F, near)
     sub = F[region]
-    height = _heights(V, sub)
+    height = height[region]
     done = 0
     for _ in range(_MAX_ROUNDS):
         local = np.flatnonzero(height < tolerance)
@@ -163,10 +161,96 @@ def needle_free(V: np.ndarray, F: np.ndarray, *, tolerance: float
     sub = sub[sub[:, 0] >= 0]
     if done == 0:
         return V, F, 0
-    keep = np.ones(F.shape[0], dtype=bool)
-    keep[region] = False
-    V2, F2 = compacted(V, np.concatenate([F[keep], sub]))
+    # the faces outside the region in order, then the region's: the mesh
+    # compacted in one pass (only collapsed vertices drop out)
+    V2, F2 = _spliced(V, F, region, sub)
     return V2, F2, done
+
+
+def _region(F: np.ndarray, near: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Faces within one ring of the vertices ``near``, and the vertices whose
+    every face is among them (``(k,)`` int64 faces in order, ``(n,)`` bool)."""
+    if F.size < JIT_MIN_SIZE:
+        near = near.copy()
+        near[F[near[F].any(axis=1)].ravel()] = True
+        region = np.flatnonzero(near[F].any(axis=1))
+        complete = (np.bincount(F[region].ravel(), minlength=near.size)
+                    == np.bincount(F.ravel(), minlength=near.size))
+        return region, complete
+    region = np.empty(F.shape[0], dtype=np.int64)
+    complete = np.empty(near.size, dtype=np.bool_)
+    k = _region_loops(np.ascontiguousarray(F), near, region, complete)
+    return region[:k], complete
+
+
+@compiled
+def _region_loops(F, near, region, complete):
+    """:func:`_region` in two passes over ``F``; returns the region's size."""
+    ring = near.copy()
+    for f in range(F.shape[0]):
+        if near[F[f, 0]] or near[F[f, 1]] or near[F[f, 2]]:
+            ring[F[f, 0]] = True
+            ring[F[f, 1]] = True
+            ring[F[f, 2]] = True
+    complete[:] = True
+    k = 0
+    for f in range(F.shape[0]):
+        if ring[F[f, 0]] or ring[F[f, 1]] or ring[F[f, 2]]:
+            region[k] = f
+            k += 1
+        else:
+            complete[F[f, 0]] = False
+            complete[F[f, 1]] = False
+            complete[F[f, 2]] = False
+    return k
+
+
+def _spliced(V, F, region, sub) -> tuple[np.ndarray, np.ndarray]:
+    """``compacted(V, [F without the faces region; sub])`` (same arrays)."""
+    if F.size < JIT_MIN_SIZE:
+        keep = np.ones(F.shape[0], dtype=bool)
+        keep[region] = False
+        return compacted(V, np.concatenate([F[keep], sub]))
+    out = np.empty((F.shape[0] - region.size + sub.shape[0], 3), dtype=np.int64)
+    kept = np.empty(V.shape[0], dtype=np.int64)
+    p = _spliced_loops(np.ascontiguousarray(F), region, np.ascontiguousarray(sub), out, kept)
+    return V[kept[:p]], out
+
+
+@compiled
+def _spliced_loops(F, region, sub, out, kept):
+    """:func:`_spliced`: ``out`` gets the faces, ``kept[:p]`` the used vertices
+    in order; returns ``p``."""
+    n = kept.shape[0]
+    inside = np.zeros(F.shape[0], dtype=np.bool_)
+    for i in range(region.shape[0]):
+        inside[region[i]] = True
+    used = np.zeros(n, dtype=np.bool_)
+    for f in range(F.shape[0]):
+        if not inside[f]:
+            for c in range(3):
+                used[F[f, c]] = True
+    for f in range(sub.shape[0]):
+        for c in range(3):
+            used[sub[f, c]] = True
+    index = np.empty(n, dtype=np.int64)
+    p = 0
+    for v in range(n):
+        if used[v]:
+            index[v] = p
+            kept[p] = v
+            p += 1
+    k = 0
+    for f in range(F.shape[0]):
+        if not inside[f]:
+            for c in range(3):
+                out[k, c] = index[F[f, c]]
+            k += 1
+    for f in range(sub.shape[0]):
+        for c in range(3):
+            out[k, c] = index[sub[f, c]]
+        k += 1
+    return p
 
 
 def _one_round(V, F, needles, tolerance, complete) -> tuple[int, np.ndarray]:
