@@ -99,6 +99,9 @@ _FAN_SAFETY = 8.0
 _PART_MAX_FACES = 4096
 # Bits of the packed sort key (cell, level flag, face, corner flags).
 _KEY_BITS = 62
+# Largest grid whose occupied cells the compiled grid marks in a bit array (32 MB);
+# larger grids look cells up by binary search.
+_OCC_CELLS = 1 << 28
 
 
 def self_intersecting_pairs(V, F, *, max_pairs=None, topology=None,
@@ -974,7 +977,7 @@ def _level_tasks(faces, box, cell, cur, low):
         # compiled: the entries, their sort and the pair counts in loops (the
         # numpy path below spends most of its time in temporaries)
         ok, first, face, counts, cuts = _level_grid(faces.box32, act, cur, low, cell, row_bits,
-                                                    _KEY_BITS, _PAIR_CHUNK)
+                                                    _KEY_BITS, _PAIR_CHUNK, _OCC_CELLS)
         if ok:
             level = (counts, first, face)
             for k in range(cuts.size - 1):
@@ -1684,7 +1687,7 @@ def _emit_entries(box32, act, rows, cell, cmin, cmax, size, clip, flag, shift, o
 
 
 @compiled
-def _level_grid(box32, act, cur, low, cell, row_bits, key_bits, chunk):
+def _level_grid(box32, act, cur, low, cell, row_bits, key_bits, chunk, occ_cells):
     """One level's grid of :func:`_level_tasks` in loops.
 
     The same entries as the numpy path (packed keys sorted by cell, the
@@ -1723,10 +1726,10 @@ def _level_grid(box32, act, cur, low, cell, row_bits, key_bits, chunk):
     keys = _radix_by_high_bits(keys, shift, cell_bits)
     if low.shape[0]:
         # smaller faces: clipped to the level's cells, kept in cells holding a
-        # current-level entry (a bit per cell when that takes at most 32 MB)
+        # current-level entry (a bit per cell for at most ``occ_cells`` cells)
         ncells = size[0] * size[1] * size[2]
         occ = no_occ
-        if ncells <= (1 << 28):
+        if ncells <= occ_cells:
             occ = np.zeros((ncells + 63) >> 6, np.uint64)
             for r in range(total):
                 c = keys[r] >> (shift + 1)
