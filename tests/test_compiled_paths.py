@@ -351,10 +351,11 @@ from geotex.mesh.primitives import torus
 V, F = torus(1.0, 0.3, n_major=40, n_minor=17)
 V2 = np.vstack([V, V + [0.5, 0.1, 0.0]])
 F2 = np.vstack([F, F + len(V)])
+ci.JIT_MIN_SIZE = 0                        # the compiled path at this small size
 if {first}:                                # fills the disk cache (compiles on a fresh clone)
     print(ci.self_intersecting_pairs(V2, F2).tolist())
 else:
-    funcs = [ci._pair_loops, ci._scatter_fan_terms, ci._sorted_by_high_bits_inplace]
+    funcs = [ci._entry_pair_loops, ci._fan_term_loops, ci._level_grid, ci._face_loops]
     preload("geotex.check").join()
     loaded = [len(f.dispatcher().overloads) for f in funcs]
     assert all(k >= 1 for k in loaded), loaded

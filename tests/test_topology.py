@@ -232,3 +232,41 @@ def test_packed_key_sort_matches_the_general_path_and_a_reference():
         assert np.array_equal(packed.half_to_edge, inv.ravel())
         assert np.array_equal(packed.face_count, counts)
         assert np.array_equal(packed.half_order, np.argsort(inv.ravel(), kind="stable"))
+
+
+def _with_pillow(V, F):
+    """``(V, F)`` plus a detached face and its reverse (two faces, one vertex set)."""
+    n = len(V)
+    V = np.vstack([V, [[5.0, 0, 0], [6.0, 0, 0], [5.0, 1.0, 0]]])
+    return V, np.vstack([F, [[n, n + 1, n + 2]], [[n, n + 2, n + 1]]])
+
+
+def test_has_twin_faces_finds_faces_with_one_vertex_set():
+    from geotex.mesh.topology import edge_topology, has_twin_faces
+
+    V, F = torus(1.0, 0.3, n_major=12, n_minor=7)
+    assert not has_twin_faces(edge_topology(F, len(V)))
+    V2, F2 = _with_pillow(V, F)
+    assert has_twin_faces(edge_topology(F2, len(V2)))
+    # one face across two edges only (a fan of two faces sharing an edge) is no twin
+    F3 = np.array([[0, 1, 2], [0, 2, 3]])
+    assert not has_twin_faces(edge_topology(F3, 4))
+    with pytest.raises(InputError):
+        has_twin_faces(edge_topology(np.vstack([F, F[:1]]), len(V)))
+
+
+@pytest.mark.parametrize("jit", [True, False])
+def test_duplicate_faces_with_topology_equal_sorting(monkeypatch, jit):
+    import geotex.mesh.topology as topology
+
+    monkeypatch.setattr(topology, "JIT_MIN_SIZE", 0 if jit else 10 ** 12)
+    V, F = torus(1.0, 0.3, n_major=12, n_minor=7)
+    cases = [F, _with_pillow(V, F)[1], np.vstack([F, F[5:6, ::-1]]),      # an edge of 3+ faces
+             np.vstack([F, [[0, 0, 1]], [[0, 1, 0]]])]                      # repeated indices
+    for G in cases:
+        n = int(G.max()) + 1
+        ref = duplicate_face_groups(G)
+        got = duplicate_face_groups(G, topology.edge_topology(G, n))
+        assert got.dtype == np.int64 and np.array_equal(got, ref)
+    assert duplicate_face_groups(cases[1]).tolist() == [len(F) + 1]
+    assert duplicate_face_groups(cases[2]).tolist() == [len(F)]

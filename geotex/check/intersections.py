@@ -47,6 +47,12 @@ Pipeline
 Chunks of candidate pairs (generation, filtering and narrow phase) run on a
 small thread pool (numpy releases the GIL); results are gathered in a fixed
 order, so the output does not depend on the scheduling.
+
+From ``JIT_MIN_SIZE`` corner entries, steps 2-5 run as compiled loops
+(:mod:`geotex.jit`, no GIL): the per-face data in blocks on the pool, the fan
+terms with the vertices split between two threads, each level's grid
+(:func:`_level_grid`: entries, radix sort, pair counts, no stored cell
+ranges) and the pair tasks over its entries; the same pairs as the numpy path.
 """
 
 from __future__ import annotations
@@ -62,7 +68,7 @@ import numpy as np
 from geotex.errors import InputError
 from geotex.jit import JIT_MIN_SIZE, compiled, helper
 from geotex.mesh.arrays import as_mesh_arrays
-from geotex.mesh.topology import edge_topology
+from geotex.mesh.topology import edge_topology, has_twin_faces
 
 __all__ = ["self_intersecting_pairs", "self_intersecting_pairs_touching", "REL_TOL", "ABS_TOL"]
 
@@ -93,6 +99,9 @@ _FAN_SAFETY = 8.0
 _PART_MAX_FACES = 4096
 # Bits of the packed sort key (cell, level flag, face, corner flags).
 _KEY_BITS = 62
+# Largest grid whose occupied cells the compiled grid marks in a bit array (32 MB);
+# larger grids look cells up by binary search.
+_OCC_CELLS = 1 << 28
 
 
 def self_intersecting_pairs(V, F, *, max_pairs=None, topology=None,
@@ -361,6 +370,8 @@ def _distinct_pairs(V, F, max_pairs, *, topo=None, parts=None):
             return empty
         faces.separated = _separated_fans(faces, mapper=pool.map, topo=topo)
         faces.mask_unseparated()
+        faces.corner_columns = None             # not read again: 12 bytes per face less
+        del topo
         found = []
         count = 0
         swept = None if parts is None else _part_sweep(faces, parts, mapper=pool.map)
@@ -427,12 +438,16 @@ def _duplicate_classes(F: np.ndarray, topo=None):
     """
     if (topo is not None and not (topo.face_count > 2).any()
             and not ((F[:, 0] == F[:, 1]) | (F[:, 1] == F[:, 2]) | (F[:, 2] == F[:, 0])).any()):
-        ef = topo.edge_faces()[topo.half_to_edge]            # (3m, 2)
-        own = np.repeat(np.arange(F.shape[0]), 3)
-        other = np.where(ef[:, 0] == own, ef[:, 1], ef[:, 0]).reshape(-1, 3)
-        if not ((other[:, 0] >= 0) & (other[:, 0] == other[:, 1])
-                & (other[:, 1] == other[:, 2])).any():
-            return None
+        if F.size >= JIT_MIN_SIZE and topo.half_order is not None:
+            if not has_twin_faces(topo):
+                return None
+        else:
+            ef = topo.edge_faces()[topo.half_to_edge]            # (3m, 2)
+            own = np.repeat(np.arange(F.shape[0]), 3)
+            other = np.where(ef[:, 0] == own, ef[:, 1], ef[:, 0]).reshape(-1, 3)
+            if not ((other[:, 0] >= 0) & (other[:, 0] == other[:, 1])
+                    & (other[:, 1] == other[:, 2])).any():
+                return None
     lo = F.min(axis=1)
     hi = F.max(axis=1)
     mid = F.sum(axis=1) - lo - hi
@@ -561,14 +576,25 @@ class _FaceData:
         self.box32 = np.empty((m, 6), dtype=np.float32)
         bad = np.empty(m, dtype=bool)
         blocks = range(0, m, _FACE_BLOCK)
-        for _ in mapper(lambda s: self._fill(bad, s, min(s + _FACE_BLOCK, m)), blocks):
-            pass
+        if F.size >= JIT_MIN_SIZE:
+            fill = partial(_face_loops, Vn, self.F, self.plane, self.tol, self.E, self.box32, bad)
+            for _ in mapper(lambda s: fill(s, min(s + _FACE_BLOCK, m)), blocks):
+                pass
+        else:
+            for _ in mapper(lambda s: self._fill(bad, s, min(s + _FACE_BLOCK, m)), blocks):
+                pass
         self.active = np.flatnonzero(~bad)
         self.separated = None
         dtype = np.int32 if Vn.shape[0] < 2 ** 31 else np.int64
         self.corner_columns = [F[:, k].astype(dtype) for k in range(3)]
         self.masked = False
         self.masked_rows = np.empty((0, 3), dtype=np.int32)
+
+    def active_mask(self) -> np.ndarray:
+        """Boolean over the faces: non-degenerate (``active`` as a mask)."""
+        mask = np.zeros(self.F.shape[0], dtype=bool)
+        mask[self.active] = True
+        return mask
 
     def mask_unseparated(self):
         """Set ``masked_rows``: vertex ids, those of unseparated fans negative.
@@ -703,7 +729,6 @@ def _separated_fans(faces: _FaceData, *, mapper=map, topo=None) -> np.ndarray:
     with np.errstate(divide="ignore", invalid="ignore"):
         norm = np.sqrt(N[0] * N[0] + N[1] * N[1] + N[2] * N[2])
         N = [x / norm for x in N]
-    vcols = [np.ascontiguousarray(V[:, i]) for i in range(3)]
     cos_min = np.full(n, np.inf)
     total = np.zeros(n)
     spread = np.full(n, np.inf)
@@ -713,7 +738,19 @@ def _separated_fans(faces: _FaceData, *, mapper=map, topo=None) -> np.ndarray:
     rho = np.zeros(n)
     longest = np.zeros(n)
     t = np.zeros(n)
-    starts = range(0, m, _FACE_BLOCK)
+    acc = (cos_min, total, spread, shortest, sin_min, q_min, rho, longest, t)
+    if F.size >= JIT_MIN_SIZE:
+        # compiled: terms and scatter in one loop, vertices split between two
+        # threads (each vertex gets its terms in the numpy path's order)
+        Nv = np.ascontiguousarray(np.stack(N, axis=1))
+        cuts = [0, n // 2, n]
+        for _ in mapper(lambda k: _fan_term_loops(V, F, faces.plane, faces.tol, faces.active_mask(),
+                                                  Nv, cuts[k], cuts[k + 1], _FACE_BLOCK, *acc),
+                        range(2)):
+            pass
+        del Nv
+    starts = range(0, m, _FACE_BLOCK) if F.size < JIT_MIN_SIZE else range(0)
+    vcols = [np.ascontiguousarray(V[:, i]) for i in range(3)] if starts else None
     parts = mapper(
         lambda s: _corner_terms(faces, vcols, N, unit, s, min(s + _FACE_BLOCK, m)), starts)
     with np.errstate(invalid="ignore", over="ignore"):       # NaN: degenerate faces
@@ -936,6 +973,16 @@ def _level_tasks(faces, box, cell, cur, low):
     act = faces.active
     row_bits = max(1, int(act.size - 1).bit_length())
     shift = row_bits + 3
+    if 3 * act.size >= JIT_MIN_SIZE and act.size < 2 ** 31:
+        # compiled: the entries, their sort and the pair counts in loops (the
+        # numpy path below spends most of its time in temporaries)
+        ok, first, face, counts, cuts = _level_grid(faces.box32, act, cur, low, cell, row_bits,
+                                                    _KEY_BITS, _PAIR_CHUNK, _OCC_CELLS)
+        if ok:
+            level = (counts, first, face)
+            for k in range(cuts.size - 1):
+                yield partial(_pair_task, faces, level, int(cuts[k]), int(cuts[k + 1]))
+            return
     lo, hi = _cell_bounds(box, cur, cell)
     cmin = [int(x.min()) for x in lo]
     cmax = [int(x.max()) for x in hi]
@@ -1052,7 +1099,17 @@ def _level_tasks(faces, box, cell, cur, low):
 
 
 def _pair_task(faces, level, s, e):
-    """Generate candidate pairs ``s .. e - 1`` of a level, filter, test them."""
+    """Generate candidate pairs ``s .. e - 1`` of a level, filter, test them.
+
+    ``level`` from the compiled grid (:func:`_level_grid`, three arrays):
+    ``s .. e - 1`` are entries, every pair they start is examined.
+    """
+    if len(level) == 3:
+        counts, first, face = level
+        out = np.empty(int(counts[s:e].sum(dtype=np.int64)), dtype=np.int64)
+        found = _entry_pair_loops(counts, first, face, faces.box32, faces.masked_rows, s, e,
+                                  faces.F, faces.V, faces.plane, faces.tol, faces.E, out)
+        return out[:found]
     cum, counts, first, face, ebox = level
     if ebox is None:
         out = np.empty(e - s, dtype=np.int64)
@@ -1484,6 +1541,262 @@ def _pair_loops(cum, counts, first, face, box, mrows, s, e, F, V, plane, tol, E,
 
 
 @compiled
+def _face_loops(V, F, plane, tol, E, box32, bad, s, e):
+    """:meth:`_FaceData._fill` as a loop over faces ``s .. e - 1`` (the same
+    expressions in the same order: bit for bit the same arrays)."""
+    for f in range(s, e):
+        i0, i1, i2 = F[f, 0], F[f, 1], F[f, 2]
+        x0, y0, z0 = V[i0, 0], V[i0, 1], V[i0, 2]
+        x1, y1, z1 = V[i1, 0], V[i1, 1], V[i1, 2]
+        x2, y2, z2 = V[i2, 0], V[i2, 1], V[i2, 2]
+        e0x, e0y, e0z = x1 - x0, y1 - y0, z1 - z0
+        e1x, e1y, e1z = x2 - x1, y2 - y1, z2 - z1
+        e2x, e2y, e2z = x0 - x2, y0 - y2, z0 - z2
+        nx = e0z * e2y - e0y * e2z
+        ny = e0x * e2z - e0z * e2x
+        nz = e0y * e2x - e0x * e2y
+        double_area = np.sqrt(nx * nx + ny * ny + nz * nz)
+        l0 = e0x * e0x + e0y * e0y + e0z * e0z
+        l1 = e1x * e1x + e1y * e1y + e1z * e1z
+        l2 = e2x * e2x + e2y * e2y + e2z * e2z
+        longest2 = max(max(l0, l1), l2)
+        degenerate = (not (double_area > _DEGENERATE_REL_TOL * longest2)
+                      or i0 == i1 or i1 == i2 or i2 == i0)
+        bad[f] = degenerate
+        inv = 0.0 if degenerate else 1.0 / double_area
+        ux, uy, uz = nx * inv, ny * inv, nz * inv
+        plane[f, 0] = ux
+        plane[f, 1] = uy
+        plane[f, 2] = uz
+        plane[f, 3] = ux * x0 + uy * y0 + uz * z0
+        t = REL_TOL * np.sqrt(longest2) + ABS_TOL
+        tol[f] = t
+        for k in range(3):
+            if k == 0:
+                ex, ey, ez, lk, px, py, pz = e0x, e0y, e0z, l0, x0, y0, z0
+            elif k == 1:
+                ex, ey, ez, lk, px, py, pz = e1x, e1y, e1z, l1, x1, y1, z1
+            else:
+                ex, ey, ez, lk, px, py, pz = e2x, e2y, e2z, l2, x2, y2, z2
+            inv_len = 0.0 if degenerate else 1.0 / np.sqrt(lk)
+            wx = (uy * ez - uz * ey) * inv_len
+            wy = (uz * ex - ux * ez) * inv_len
+            wz = (ux * ey - uy * ex) * inv_len
+            E[f, 4 * k] = wx
+            E[f, 4 * k + 1] = wy
+            E[f, 4 * k + 2] = wz
+            E[f, 4 * k + 3] = wx * px + wy * py + wz * pz
+        pad = 2.0 * t + _BOX32_PAD
+        box32[f, 0] = np.float32(min(min(x0, x1), x2) - pad)
+        box32[f, 1] = np.float32(min(min(y0, y1), y2) - pad)
+        box32[f, 2] = np.float32(min(min(z0, z1), z2) - pad)
+        box32[f, 3] = np.float32(max(max(x0, x1), x2) + pad)
+        box32[f, 4] = np.float32(max(max(y0, y1), y2) + pad)
+        box32[f, 5] = np.float32(max(max(z0, z1), z2) + pad)
+
+
+@compiled
+def _entry_pair_loops(counts, first, face, box, mrows, s, e, F, V, plane, tol, E, out):
+    """:func:`_pair_loops` over the entries ``s .. e - 1`` of a compiled grid
+    (:func:`_level_grid`): entry ``p`` is paired with the ``counts[p]``
+    entries after it.  Returns the number of hits written to ``out``."""
+    m = F.shape[0]
+    masked = mrows.shape[0] > 0
+    found = 0
+    for p in range(s, e):
+        c = counts[p]
+        if c == 0:
+            continue
+        fp = first[p]
+        fa = face[p]
+        a0, a1, a2 = box[fa, 0], box[fa, 1], box[fa, 2]
+        a3, a4, a5 = box[fa, 3], box[fa, 4], box[fa, 5]
+        for q in range(p + 1, p + 1 + c):
+            if (fp | first[q]) != 7:
+                continue
+            fb = face[q]
+            if (a0 > box[fb, 3] or box[fb, 0] > a3 or a1 > box[fb, 4] or box[fb, 1] > a4
+                    or a2 > box[fb, 5] or box[fb, 2] > a5):
+                continue
+            if masked:
+                x0, x1, x2 = mrows[fa, 0], mrows[fa, 1], mrows[fa, 2]
+                y0, y1, y2 = mrows[fb, 0], mrows[fb, 1], mrows[fb, 2]
+                if (x0 == y0 or x0 == y1 or x0 == y2 or x1 == y0 or x1 == y1 or x1 == y2
+                        or x2 == y0 or x2 == y1 or x2 == y2):
+                    continue
+            i = min(fa, fb)
+            j = max(fa, fb)
+            if _pair_hits(i, j, F, V, plane, tol, E):
+                out[found] = i * m + j
+                found += 1
+    return found
+
+
+@helper
+def _cell_of(x, cell):
+    """The grid cell of coordinate ``x`` (a float32 box bound), as :func:`_cell_bounds`."""
+    return np.int64(np.floor(np.float64(x) / cell))
+
+
+@helper
+def _cell_range(box32, f, cell, cmin, cmax, clip):
+    """Cells ``lo .. hi`` (3 each) covered by face ``f``'s box and its corner
+    bits: on which axes ``lo`` is the box's true lowest cell; with ``clip``
+    the range is clipped to ``cmin .. cmax`` (empty: some ``lo > hi``)."""
+    lo = np.empty(3, np.int64)
+    hi = np.empty(3, np.int64)
+    bits = 7
+    for a in range(3):
+        x = _cell_of(box32[f, a], cell)
+        y = _cell_of(box32[f, 3 + a], cell)
+        if clip:
+            if x < cmin[a]:
+                bits &= ~(1 << a)
+                x = cmin[a]
+            y = min(y, cmax[a])
+        lo[a] = x
+        hi[a] = y
+    return lo, hi, bits
+
+
+@helper
+def _emit_entries(box32, act, rows, cell, cmin, cmax, size, clip, flag, shift, occ, keys):
+    """Packed keys ``(cell, flag, row, corner bits)`` of the entries of the
+    boxes of ``rows`` (face by face, cells in x, y, z order), written to
+    ``keys`` when it has room (else only counted); with ``clip``, clipped to
+    the grid; kept only in cells the bit array ``occ`` marks when it has
+    words.  Returns the number of entries."""
+    w = 0
+    write = keys.shape[0] > 0
+    use_occ = occ.shape[0] > 0
+    for r in range(rows.shape[0]):
+        lo, hi, bits = _cell_range(box32, act[rows[r]], cell, cmin, cmax, clip)
+        for x in range(lo[0], hi[0] + 1):
+            for y in range(lo[1], hi[1] + 1):
+                for z in range(lo[2], hi[2] + 1):
+                    c = ((x - cmin[0]) * size[1] + (y - cmin[1])) * size[2] + (z - cmin[2])
+                    if use_occ and not occ[c >> 6] & (np.uint64(1) << np.uint64(c & 63)):
+                        continue
+                    if write:
+                        corner = ((1 if x == lo[0] else 0) | (2 if y == lo[1] else 0)
+                                  | (4 if z == lo[2] else 0))
+                        keys[w] = (((c * 2 + flag) << shift) | (np.int64(rows[r]) << 3)
+                                   | (bits & corner))
+                    w += 1
+    return w
+
+
+@compiled
+def _level_grid(box32, act, cur, low, cell, row_bits, key_bits, chunk, occ_cells):
+    """One level's grid of :func:`_level_tasks` in loops.
+
+    The same entries as the numpy path (packed keys sorted by cell, the
+    current level's entries first; smaller faces only in cells holding a
+    current-level face; within a cell in row order, where the numpy path
+    keeps the order of its cell offsets: the same pairs), returned as
+    ``(ok, first, face, counts, cuts)``: per entry its corner bits, its face
+    (int32) and how many entries after it it is paired with (0 for a smaller
+    face's entry); ``cuts`` splits the entries into tasks of about ``chunk``
+    pairs.  ``ok`` is false (and the arrays empty) when the cell keys do not
+    fit ``key_bits`` bits (the caller takes the numpy path).  The cell ranges
+    are recomputed from the boxes where needed, never stored.
+    """
+    shift = row_bits + 3
+    n = cur.shape[0]
+    cmin = np.full(3, np.iinfo(np.int64).max, np.int64)
+    cmax = np.full(3, np.iinfo(np.int64).min, np.int64)
+    for r in range(n):
+        lo, hi, _ = _cell_range(box32, act[cur[r]], cell, cmin, cmax, False)
+        for a in range(3):
+            cmin[a] = min(cmin[a], lo[a])
+            cmax[a] = max(cmax[a], hi[a])
+    size = cmax - cmin + 1
+    if not (float(size[0]) * size[1] * size[2] * 2 < 2.0 ** (key_bits - shift)):
+        return False, np.empty(0, np.uint8), np.empty(0, np.int32), np.empty(0, np.int32), \
+            np.empty(0, np.int64)
+    none = np.empty(0, np.int64)
+    no_occ = np.empty(0, np.uint64)
+    total = _emit_entries(box32, act, cur, cell, cmin, cmax, size, False, 0, shift, no_occ, none)
+    keys = np.empty(total, np.int64)
+    _emit_entries(box32, act, cur, cell, cmin, cmax, size, False, 0, shift, no_occ, keys)
+    cell_bits = 0
+    top = (size[0] * size[1] * size[2]) * 2
+    while (np.int64(1) << cell_bits) < top:
+        cell_bits += 1
+    keys = _radix_by_high_bits(keys, shift, cell_bits)
+    if low.shape[0]:
+        # smaller faces: clipped to the level's cells, kept in cells holding a
+        # current-level entry (a bit per cell for at most ``occ_cells`` cells)
+        ncells = size[0] * size[1] * size[2]
+        occ = no_occ
+        if ncells <= occ_cells:
+            occ = np.zeros((ncells + 63) >> 6, np.uint64)
+            for r in range(total):
+                c = keys[r] >> (shift + 1)
+                occ[c >> 6] |= np.uint64(1) << np.uint64(c & 63)
+        lt = _emit_entries(box32, act, low, cell, cmin, cmax, size, True, 1, shift, occ, none)
+        lkeys = np.empty(lt, np.int64)
+        if lt:
+            _emit_entries(box32, act, low, cell, cmin, cmax, size, True, 1, shift, occ, lkeys)
+        w = lt
+        if occ.shape[0] == 0:
+            w = 0
+            for r in range(lt):
+                c = lkeys[r] >> (shift + 1)
+                a, z = 0, total
+                while a < z:                     # first current key of cell >= c
+                    mid = (a + z) >> 1
+                    if (keys[mid] >> (shift + 1)) < c:
+                        a = mid + 1
+                    else:
+                        z = mid
+                if a < total and (keys[a] >> (shift + 1)) == c:
+                    lkeys[w] = lkeys[r]
+                    w += 1
+        lkeys = _radix_by_high_bits(lkeys[:w].copy(), shift, cell_bits)
+        merged = np.empty(total + w, np.int64)   # stable merge: current entries first
+        i, j, o = 0, 0, 0
+        while i < total or j < w:
+            if j >= w or (i < total and (keys[i] >> shift) <= (lkeys[j] >> shift)):
+                merged[o] = keys[i]
+                i += 1
+            else:
+                merged[o] = lkeys[j]
+                j += 1
+            o += 1
+        keys = merged
+        total += w
+    first = np.empty(total, np.uint8)
+    face = np.empty(total, np.int32)
+    counts = np.zeros(total, np.int32)
+    mask = (np.int64(1) << row_bits) - 1
+    start = 0
+    for p in range(total):
+        key = keys[p]
+        first[p] = key & 7
+        face[p] = act[(key >> 3) & mask]
+        if p == total - 1 or (keys[p + 1] >> (shift + 1)) != (key >> (shift + 1)):
+            for q in range(start, p + 1):        # the cell ends at p
+                if ((keys[q] >> shift) & 1) == 0:
+                    counts[q] = p - q
+            start = p + 1
+    cuts = np.empty(total + 2, np.int64)
+    cuts[0] = 0
+    nc = 1
+    acc = 0
+    for p in range(total):
+        acc += counts[p]
+        if acc >= chunk:
+            cuts[nc] = p + 1
+            nc += 1
+            acc = 0
+    if cuts[nc - 1] != total:
+        cuts[nc] = total
+        nc += 1
+    return True, first, face, counts, cuts[:nc].copy()
+
+
+@compiled
 def _sorted_by_high_bits(keys, shift, bits):
     """Keys stably sorted by ``keys >> shift`` (``bits`` bits; keys >= 0).
 
@@ -1526,6 +1839,63 @@ def _radix_by_high_bits(src, shift, bits):
         src, dst = dst, src
         done += 11
     return src
+
+
+@compiled
+def _fan_term_loops(V, F, plane, tol, active, N, v0, v1, block, cos_min, total, spread, shortest,
+                    sin_min, q_min, rho, longest, t):
+    """:func:`_corner_terms` and their scatter in one loop, for the corners at
+    vertices ``v0 .. v1 - 1`` of the active faces, in the numpy path's order
+    (blocks of ``block`` faces, corner by corner within a block): the same
+    per-vertex values wherever the vertex has no degenerate face (the others
+    are not separated anyway).  ``N``: the unit vertex normals, ``(n, 3)``."""
+    m = F.shape[0]
+    for s in range(0, m, block):
+        e = min(s + block, m)
+        for k in range(3):
+            for f in range(s, e):
+                p = F[f, k]
+                if p < v0 or p >= v1 or not active[f]:
+                    continue
+                i0, i1, i2 = F[f, 0], F[f, 1], F[f, 2]
+                # edge j from corner j to corner j + 1
+                ax, ay, az = V[i1, 0] - V[i0, 0], V[i1, 1] - V[i0, 1], V[i1, 2] - V[i0, 2]
+                bx, by, bz = V[i2, 0] - V[i1, 0], V[i2, 1] - V[i1, 1], V[i2, 2] - V[i1, 2]
+                cx, cy, cz = V[i0, 0] - V[i2, 0], V[i0, 1] - V[i2, 1], V[i0, 2] - V[i2, 2]
+                l0 = np.sqrt(ax * ax + ay * ay + az * az)
+                l1 = np.sqrt(bx * bx + by * by + bz * bz)
+                l2 = np.sqrt(cx * cx + cy * cy + cz * cz)
+                big = max(max(l0, l1), l2)
+                nf0, nf1, nf2 = plane[f, 0], plane[f, 1], plane[f, 2]
+                wx, wy, wz = ay * cz - az * cy, az * cx - ax * cz, ax * cy - ay * cx
+                double_area = abs(wx * nf0 + wy * nf1 + wz * nf2)
+                if k == 0:
+                    A0, A1, A2, B0, B1, B2, la, lb, lo = ax, ay, az, cx, cy, cz, l0, l2, l1
+                elif k == 1:
+                    A0, A1, A2, B0, B1, B2, la, lb, lo = bx, by, bz, ax, ay, az, l1, l0, l2
+                else:
+                    A0, A1, A2, B0, B1, B2, la, lb, lo = cx, cy, cz, bx, by, bz, l2, l1, l0
+                if double_area == 0.0 or la * lb == 0.0 or lo * big == 0.0:
+                    cos_min[p] = np.nan          # (rounding) no bound: not separated
+                    continue
+                n0, n1, n2 = N[p, 0], N[p, 1], N[p, 2]
+                cos_n = n0 * nf0 + n1 * nf1 + n2 * nf2
+                AB = -(A0 * B0 + A1 * B1 + A2 * B2)
+                NA = n0 * A0 + n1 * A1 + n2 * A2
+                NB = -(n0 * B0 + n1 * B1 + n2 * B2)
+                sector = np.arctan2(double_area * cos_n, AB - NA * NB)
+                q = double_area / (lo * big)
+                half_sin = np.sqrt(-_nan_min(-(0.5 - 0.5 * AB / (la * lb)), -0.0))
+                r = (la + lb) / double_area
+                cos_min[p] = _nan_min(cos_min[p], cos_n)
+                total[p] += sector
+                spread[p] = _nan_min(spread[p], _nan_min(sector, np.pi - sector))
+                shortest[p] = _nan_min(shortest[p], la)
+                sin_min[p] = _nan_min(sin_min[p], half_sin)
+                q_min[p] = _nan_min(q_min[p], q)
+                rho[p] = -_nan_min(-rho[p], -r)
+                longest[p] = -_nan_min(-longest[p], -big)
+                t[p] = -_nan_min(-t[p], -tol[f])
 
 
 @compiled

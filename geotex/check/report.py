@@ -232,7 +232,7 @@ def check_mesh(V, F, *, self_intersections: bool = True, manifold3d: bool = True
     inconsistent = topo.inconsistent
     nm_verts = non_manifold_vertices(F, n, topo)
     degenerate = degenerate_faces(Vn, F)
-    duplicates = duplicate_face_groups(F)
+    duplicates = duplicate_face_groups(F, topo)
     count, labels = face_components(F, n)
 
     # exact duplicate positions among referenced vertices (unwelded seams)
@@ -269,6 +269,11 @@ def check_mesh(V, F, *, self_intersections: bool = True, manifold3d: bool = True
         pairs = np.zeros((0, 2), dtype=np.int64)
 
     chi = int(used.sum()) - int(topo.edges.shape[0]) + m
+    edge_count = int(topo.edges.shape[0])
+    # only the rows of bad edges are read again (examples): the half-edge
+    # arrays (48 bytes per face) are not held while manifold3d builds its copy
+    edges = topo.edges if (boundary.size or nm_edges.size or inconsistent.size) else None
+    del topo, labels, Vn
     genus = None
     closed_manifold = (m > 0 and boundary.size == 0 and nm_edges.size == 0
                        and nm_verts.size == 0 and inconsistent.size == 0)
@@ -276,7 +281,7 @@ def check_mesh(V, F, *, self_intersections: bool = True, manifold3d: bool = True
         genus = (2 * count - chi) // 2
     report(progress, "manifold3d")
     status = "Empty" if not m else manifold_status(V, F) if manifold3d else "not run"
-    return _verdict(V, F, k, edges=topo.edges, edge_count=int(topo.edges.shape[0]), count=count, boundary=boundary,
+    return _verdict(V, F, k, edges=edges, edge_count=edge_count, count=count, boundary=boundary,
                     nm_edges=nm_edges, nm_verts=nm_verts, inconsistent=inconsistent,
                     outward=outward, norm_vol=norm_vol, total_volume=total_volume,
                     degenerate=degenerate, duplicates=duplicates, pairs=pairs, status=status,

@@ -15,6 +15,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
+from geotex.errors import InputError
 from geotex.jit import JIT_MIN_SIZE, compiled
 
 __all__ = [
@@ -26,6 +27,7 @@ __all__ = [
     "face_components",
     "non_manifold_vertices",
     "duplicate_face_groups",
+    "has_twin_faces",
     "repeated_positions",
     "referenced_vertices",
     "position_welded_faces",
@@ -639,8 +641,17 @@ def non_manifold_vertices(F: np.ndarray, n_vertices: int,
     return np.sort(np.concatenate(bad_parts)).astype(np.int64)
 
 
-def duplicate_face_groups(F: np.ndarray) -> np.ndarray:
+def duplicate_face_groups(F: np.ndarray, topo: EdgeTopology | None = None) -> np.ndarray:
     """Return faces that repeat an earlier face's vertex set (any orientation).
+
+    Parameters
+    ----------
+    F : numpy.ndarray, (m, 3) int64
+    topo : EdgeTopology, optional
+        ``edge_topology(F)``: when no edge has more than two faces and no face
+        repeats an index, the faces are distinct exactly when no face has the
+        same neighbour across all three edges (:func:`has_twin_faces`), which
+        is answered without sorting the faces.
 
     Returns
     -------
@@ -651,6 +662,10 @@ def duplicate_face_groups(F: np.ndarray) -> np.ndarray:
     F = np.asarray(F, dtype=np.int64)
     if F.shape[0] == 0:
         return np.zeros(0, dtype=np.int64)
+    if (topo is not None and F.size >= JIT_MIN_SIZE and not (topo.face_count > 2).any()
+            and not ((F[:, 0] == F[:, 1]) | (F[:, 1] == F[:, 2]) | (F[:, 2] == F[:, 0])).any()
+            and not has_twin_faces(topo)):
+        return np.zeros(0, dtype=np.int64)
     s = np.sort(F, axis=1)
     n = int(s[:, 2].max()) + 1
     if n < 2 ** 21:             # one int64 key per face: a 1-D sort, not a row sort
@@ -660,6 +675,60 @@ def duplicate_face_groups(F: np.ndarray) -> np.ndarray:
         _, first, inv = np.unique(s, axis=0, return_index=True, return_inverse=True)
     inv = inv.ravel()
     return np.flatnonzero(first[inv] != np.arange(F.shape[0]))
+
+
+def has_twin_faces(topo: EdgeTopology) -> bool:
+    """Whether some face has one and the same neighbouring face across all three edges.
+
+    With no edge of more than two faces and no repeated index in a face, that
+    is exactly when two faces have the same vertex set.
+
+    Parameters
+    ----------
+    topo : EdgeTopology
+        Of a mesh whose edges have at most two faces.
+
+    Returns
+    -------
+    bool
+
+    Raises
+    ------
+    InputError
+        If an edge has more than two faces.
+    """
+    if (topo.face_count > 2).any():
+        raise InputError("has_twin_faces needs edges of at most two faces")
+    return bool(_twin_faces_loops(topo.half_to_edge, topo.grouped_half_edges(), topo.face_count))
+
+
+@compiled
+def _twin_faces_loops(half_to_edge, half_order, face_count):
+    """:func:`has_twin_faces` as a loop (``half_order`` groups the half-edges by edge)."""
+    ne = face_count.shape[0]
+    start = np.empty(ne, np.int64)
+    acc = 0
+    for e in range(ne):
+        start[e] = acc
+        acc += face_count[e]
+    m = half_to_edge.shape[0] // 3
+    for f in range(m):
+        first = -2
+        same = True
+        for k in range(3):
+            h = 3 * f + k
+            e = half_to_edge[h]
+            other = -1
+            if face_count[e] == 2:
+                a = half_order[start[e]]
+                other = half_order[start[e] + 1] // 3 if a == h else a // 3
+            if other < 0 or (first != -2 and other != first):
+                same = False
+                break
+            first = other
+        if same:
+            return True
+    return False
 
 
 def repeated_positions(V: np.ndarray) -> int:
