@@ -559,12 +559,13 @@ def remapped_folds(shell, mapped, X: np.ndarray, label: np.ndarray, folded, *, s
     disc is tried again with the height there lowered by each factor of
     ``heights`` (where the offset directions converge over a concave region
     a ring folds near its top, not on the surface). Last, for each distance
-    ``a`` of ``reach`` (tiles), all of these are tried on every mapped point
-    within ``2 a`` of the crossing points in space, weighted by that
-    distance (1 within ``a``): a folded chain-mail ring at a crumpled quad of
-    Spot (sub-grid normals 72 degrees apart) cut the rings linked through it
-    that reach into the next quads, which the moves within its quad left
-    where they were.
+    ``a`` of ``reach`` (tiles), all of these are tried on every point within
+    ``2 a`` of the crossing points in space of the element and of the
+    elements whose faces reach into its box, weighted by that distance (1
+    within ``a``): a folded chain-mail ring at a crumpled quad of Spot
+    (sub-grid normals 72 degrees apart) cut the rings linked through it that
+    reach into the next quads, which the moves within its quad left where
+    they were.
 
     Parameters
     ----------
@@ -638,7 +639,12 @@ def remapped_folds(shell, mapped, X: np.ndarray, label: np.ndarray, folded, *, s
             if world is not None:
                 R = world * float(shell.tile_size)
                 dw, _ = cKDTree(X[seed]).query(X, distance_upper_bound=2.0 * R)
-                near = np.flatnonzero(np.isfinite(dw))
+                # the element and those whose faces reach into its box (the rings
+                # linked through it); the others stay where they are
+                Pe = X[faces]
+                mates = np.unique(label[_overlapping(fbox[0], fbox[1], Pe.min(axis=(0, 1)),
+                                                     Pe.max(axis=(0, 1)))])
+                near = np.flatnonzero(np.isfinite(dw) & np.isin(vel, mates))
                 wpool = _pool(X, G, fbox, near, 2.0 * float(shell.tile_size))
             for r, f in trials:
                 if world is None:
