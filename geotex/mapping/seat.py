@@ -8,7 +8,8 @@ Two kinds of mapped elements used to be left out of the union
   16k-31k was left out whole). :func:`remapped_folds` maps the points about
   the crossing faces again through the map averaged over a disc (the fitted
   surface itself folds there), the element alone first, then with its
-  neighbours, then with the height lowered there; :func:`smoothed_folds`
+  neighbours, then with the height lowered there, last with the elements
+  linked through it blended by the distance in space; :func:`smoothed_folds`
   takes umbrella steps over a few rings about the crossing faces as a last
   try. A result is kept only if no moved face crosses any face (exact test).
 * **floating** pieces, which neither cross the base nor lie inside it, so the
