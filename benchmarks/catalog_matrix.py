@@ -7,8 +7,9 @@ own process (wall time, peak memory), and the written STL is judged by
 ``geotex check``, PrusaSlicer (``--info``) and admesh
 (:func:`geotex.check.slicers.slicer_verdicts`).
 
-Run:  python benchmarks/catalog_matrix.py [--workdir DIR]
-Writes benchmarks/results/catalog_matrix.md and .json.
+Run:  python benchmarks/catalog_matrix.py [--workdir DIR] [--shells S ...] [--sets T ...]
+Writes benchmarks/results/catalog_matrix.md and .json (with --shells or --sets,
+only those pairs, to catalog_matrix_part.md and .json unless --name is given).
 """
 
 from __future__ import annotations
@@ -37,11 +38,16 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--workdir", default=None)
     ap.add_argument("--out", default=str(HERE / "results"))
+    ap.add_argument("--shells", nargs="*", default=None, help="only these catalog shells")
+    ap.add_argument("--sets", nargs="*", default=None, help="only these catalog tile sets")
+    ap.add_argument("--name", default=None, help="stem of the result files")
     args = ap.parse_args()
+    name = args.name or ("catalog_matrix_part" if args.shells or args.sets else "catalog_matrix")
     work = Path(args.workdir or tempfile.mkdtemp(prefix="geotex-matrix-"))
     work.mkdir(parents=True, exist_ok=True)
-    sets = [r["name"] for r in list_tilesets() if r["kind"] != "planar"]
-    shells = [r["name"] for r in list_shells()]
+    sets = [r["name"] for r in list_tilesets() if r["kind"] != "planar"
+            and (not args.sets or r["name"] in args.sets)]
+    shells = [r["name"] for r in list_shells() if not args.shells or r["name"] in args.shells]
     env = dict(os.environ)
     rows = []
     for shell in shells:
@@ -58,7 +64,8 @@ def main() -> None:
                 row.update(faces=stats["faces"], quads=stats["quads"],
                            elements=stats["elements"], folded=stats["elements_folded"],
                            floating=stats["elements_floating"],
-                           retries=stats["union_retries"])
+                           retries=stats["union_retries"],
+                           at_defects=stats.get("elements_left_out_at_defects"))
                 row["geotex"], row["reason"] = geotex_check(out, env)
                 sv = judge_slicers(out)
                 row["prusa"] = verdict_word(sv.get("prusaslicer")) if "error" not in sv else "error"
@@ -72,7 +79,7 @@ def main() -> None:
             "machine": platform.machine(), "cores": os.cpu_count(),
             "python": platform.python_version(), "load_1min_end": f"{os.getloadavg()[0]:.1f}"}
     outdir = Path(args.out)
-    (outdir / "catalog_matrix.json").write_text(json.dumps({"meta": meta, "rows": rows},
+    (outdir / f"{name}.json").write_text(json.dumps({"meta": meta, "rows": rows},
                                                            indent=1) + "\n")
     ok = sum(1 for r in rows if r.get("geotex") == "printable" and r.get("prusa") == "ok"
              and r.get("admesh") == "ok")
@@ -83,15 +90,15 @@ def main() -> None:
              "by `geotex check`, PrusaSlicer `--info` and admesh. "
              f"**{ok} of {len(rows)} pairs accepted by all three.**", "",
              "| shell | tiles | faces | elements | folded / floating left out | retries | "
-             "wall s | peak MB | geotex check | PrusaSlicer | admesh |",
-             "|---|---|---|---|---|---|---|---|---|---|---|"]
+             "left out at defects | wall s | peak MB | geotex check | PrusaSlicer | admesh |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         lines.append(f"| {r['shell']} | {r['tiles']} | {r.get('faces', '')} | "
                      f"{r.get('elements', '')} | {r.get('folded', '')} / {r.get('floating', '')} | "
-                     f"{r.get('retries', '')} | {r['seconds']} | {r['peak_mb']} | "
+                     f"{r.get('retries', '')} | {r.get('at_defects', '')} | {r['seconds']} | {r['peak_mb']} | "
                      f"{r['geotex']} | {r.get('prusa', '')} | {r.get('admesh', '')} |")
-    (outdir / "catalog_matrix.md").write_text("\n".join(lines) + "\n")
-    print(f"wrote {outdir / 'catalog_matrix.md'}")
+    (outdir / f"{name}.md").write_text("\n".join(lines) + "\n")
+    print(f"wrote {outdir / (name + '.md')}")
 
 
 if __name__ == "__main__":

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from geotex.check.intersections import self_intersecting_pairs
+from geotex.mapping.seat import smoothed_folds
 from geotex.mapping.shape import SPREAD, shaped_positions
 from geotex.mesh.topology import vertex_components
 from geotex.param.polycube_fit import SurfaceProjector
@@ -265,7 +266,10 @@ def reseated_elements(shell, mapped: "MappedTiles", label: np.ndarray, elements,
     height by each of ``factors`` in turn, mapped again (as a shape when
     ``mapped.shaped``, see :func:`~geotex.mapping.shape.shaped_positions`)
     and kept at the first size whose mapped faces do not cross each other
-    (exact test).
+    (exact test). With ``mapped.shaped``, the elements no size seats are then
+    smoothed over their folded stretch
+    (:func:`~geotex.mapping.seat.smoothed_folds`, kept only where they cross
+    nothing).
 
     Parameters
     ----------
@@ -326,4 +330,11 @@ def reseated_elements(shell, mapped: "MappedTiles", label: np.ndarray, elements,
             else:
                 left.append(e)
         still = np.asarray(left, dtype=np.int64)
+    if mapped.shaped and still.size:
+        # shaped elements (scales on Spot: 3 of 19 folded at a crumpled quad,
+        # folded near their tips even at 0.3 of their size) are smoothed over
+        # the folded stretch instead of left out; strands and rings are laid
+        # back on a smoothed map first by the caller
+        # (:func:`~geotex.mapping.seat.remapped_folds`)
+        X, still = smoothed_folds(X, G, label, still)
     return X, still

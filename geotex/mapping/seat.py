@@ -8,7 +8,8 @@ Two kinds of mapped elements used to be left out of the union
   16k-31k was left out whole). :func:`remapped_folds` maps the points about
   the crossing faces again through the map averaged over a disc (the fitted
   surface itself folds there), the element alone first, then with its
-  neighbours, then with the height lowered there; :func:`smoothed_folds`
+  neighbours, then with the height lowered there, last with the elements
+  linked through it blended by the distance in space; :func:`smoothed_folds`
   takes umbrella steps over a few rings about the crossing faces as a last
   try. A result is kept only if no moved face crosses any face (exact test).
 * **floating** pieces, which neither cross the base nor lie inside it, so the
@@ -30,6 +31,7 @@ import igl
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
 
 from geotex.check.intersections import self_intersecting_pairs
 from geotex.mapping.shape import shaped_positions
@@ -38,7 +40,7 @@ from geotex.shells.locate import interpolated
 
 __all__ = ["floating_elements", "lowered_elements", "propped_elements", "smoothed_folds",
            "remapped_folds", "LOWER_STEPS", "POST_SIDES", "REMAP_RADII",
-           "REMAP_HEIGHTS"]
+           "REMAP_HEIGHTS", "REMAP_REACH"]
 
 #: Drops tried by :func:`lowered_elements`, as fractions of the way from the
 #: element's lowest tile point down to the tile set's anchor depth.
@@ -49,6 +51,11 @@ REMAP_RADII = (0.08, 0.15, 0.25)
 
 #: Height factors :func:`remapped_folds` tries over its largest disc.
 REMAP_HEIGHTS = (0.8, 0.6, 0.45)
+
+#: Distances (tiles) about a folded element's crossing points within which
+#: :func:`remapped_folds` last moves every mapped point, blended by the
+#: distance in space (the whole neighbourhood, across quads).
+REMAP_REACH = (0.5, 1.0)
 
 #: Sides of the prism :func:`propped_elements` stands an element on.
 POST_SIDES = 8
@@ -535,8 +542,8 @@ def _blurred_map(shell, quads: np.ndarray, uv: np.ndarray, radius: float, rings:
 
 
 def remapped_folds(shell, mapped, X: np.ndarray, label: np.ndarray, folded, *, scale: float,
-                   depth_scale: float, radii=REMAP_RADII, heights=REMAP_HEIGHTS
-                   ) -> tuple[np.ndarray, np.ndarray]:
+                   depth_scale: float, radii=REMAP_RADII, heights=REMAP_HEIGHTS,
+                   reach=REMAP_REACH) -> tuple[np.ndarray, np.ndarray]:
     """Lay the folded stretch of each folded element back on a smoothed map.
 
     Where the fitted surface itself folds (its sub-grid triangles turn over
@@ -552,7 +559,14 @@ def remapped_folds(shell, mapped, X: np.ndarray, label: np.ndarray, folded, *, s
     kept. If none is, the largest
     disc is tried again with the height there lowered by each factor of
     ``heights`` (where the offset directions converge over a concave region
-    a ring folds near its top, not on the surface).
+    a ring folds near its top, not on the surface). Last, for each distance
+    ``a`` of ``reach`` (tiles), all of these are tried on every point within
+    ``2 a`` of the crossing points in space of the element and of the
+    elements whose faces reach into its box, weighted by that distance (1
+    within ``a``): a folded chain-mail ring at a crumpled quad of Spot
+    (sub-grid normals 72 degrees apart) cut the rings linked through it that
+    reach into the next quads, which the moves within its quad left where
+    they were.
 
     Parameters
     ----------
@@ -570,6 +584,8 @@ def remapped_folds(shell, mapped, X: np.ndarray, label: np.ndarray, folded, *, s
         Disc radii tried, tile units.
     heights : sequence of float
         Height factors tried with the largest disc.
+    reach : sequence of float
+        Distances (tile sides) of the last, neighbourhood-wide tries.
 
     Returns
     -------
@@ -616,20 +632,36 @@ def remapped_folds(shell, mapped, X: np.ndarray, label: np.ndarray, folded, *, s
         # every face a move can reach: the quads' points move by less than a tile
         pool = _pool(X, G, fbox, region, 2.0 * float(shell.tile_size))
         done = False
-        # the folded element alone first, then with its neighbours in the quad
-        for alone in (True, False):
+        # the folded element alone first, then with its neighbours in the quad,
+        # then every element about it, blended by the distance in space
+        # (linked rings reaching into the quads around it move with it)
+        stages = [(True, None), (False, None)] + [(False, float(a)) for a in reach]
+        for alone, world in stages:
+            if world is not None:
+                R = world * float(shell.tile_size)
+                dw, _ = cKDTree(X[seed]).query(X, distance_upper_bound=2.0 * R)
+                # the element and those whose faces reach into its box (the rings
+                # linked through it); the others stay where they are
+                Pe = X[faces]
+                mates = np.unique(label[_overlapping(fbox[0], fbox[1], Pe.min(axis=(0, 1)),
+                                                     Pe.max(axis=(0, 1)))])
+                near = np.flatnonzero(np.isfinite(dw) & np.isin(vel, mates))
+                wpool = _pool(X, G, fbox, near, 2.0 * float(shell.tile_size))
             for r, f in trials:
-                t = np.clip((2.0 * r - dist) / r, 0.0, 1.0)
+                if world is None:
+                    rg, t, pl = region, np.clip((2.0 * r - dist) / r, 0.0, 1.0), pool
+                else:
+                    rg, t, pl = near, np.clip((2.0 * R - dw[near]) / R, 0.0, 1.0), wpool
                 t = t * t * (3.0 - 2.0 * t)
-                keep = (t > 0) & ((vel[region] == e) if alone else True)
-                mv, tm = region[keep], t[keep]
+                keep = (t > 0) & ((vel[rg] == e) if alone else True)
+                mv, tm = rg[keep], t[keep]
                 y, d = _blurred_map(shell, quad_all[mv], uvw_all[mv, :2], r)
                 # the height lowered by f where the map is laid back (1: kept)
                 wl = w_all[mv] * (1.0 - tm * (1.0 - f))
                 # tried in place, put back if the move crosses anything
                 before = X[mv]
                 X[mv] = before + tm[:, None] * (y + wl[:, None] * d - before)
-                if not _clean_move(X, G, mv, fbox, pool):
+                if not _clean_move(X, G, mv, fbox, pl):
                     X[mv] = before
                     continue
                 at = np.zeros(X.shape[0], dtype=bool)
