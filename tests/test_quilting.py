@@ -646,3 +646,27 @@ def test_merge_of_a_frame_half_with_the_copy_of_its_element_keeps_the_half():
                            corresponding_only=True)
         assert r.status == "absorbed", (dx, r.status, r.reason)
         assert np.array_equal(r.vertices, V) and np.array_equal(r.faces, F2)
+
+
+@pytest.mark.parametrize("corner", [(0.0, 0.0), (2.0, 0.0), (2.0, 2.0), (0.0, 2.0)])
+def test_capped_closes_an_element_cut_at_a_domain_corner(corner):
+    # a dome on a domain corner, cut by both lines through it: each quarter is
+    # open along two planes meeting at the corner; capped closes it with two
+    # caps sharing the corner edge, and the four quarters make up the dome
+    from geotex.tiles.clip import split_by_plane
+    V, F = icosphere(3)
+    # (off the corner a little: the sphere's poles would lie on both cut lines)
+    V = V * [0.14, 0.14, 0.2] + [corner[0] + 0.013, corner[1] - 0.007, 0.0]
+    total = 0.0
+    for Vh, Fh in split_by_plane(V, F, axis=0, value=corner[0], snap=1e-4):
+        for Vq, Fq in split_by_plane(Vh, Fh, axis=1, value=corner[1], snap=1e-4,
+                                     ordered=True):
+            F2, cap, on_cut = capped(Vq, Fq, (0, 0, 2, 2))
+            assert cap.sum() > 0 and closed_element_ok(Vq, F2, intersections=False) == ""
+            total += signed_volume(Vq, F2)
+    assert total == pytest.approx(signed_volume(V, F), rel=1e-3)
+    # a loop along two sides that does not pass their corner line is refused
+    Vs = Vq.copy()
+    Vs[on_cut & (Vs[:, 2] > 0.1), :2] += 0.01
+    with pytest.raises(InputError, match="open away"):
+        capped(Vs, Fq, (0, 0, 2, 2))
