@@ -484,10 +484,10 @@ def plan_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool = 
     if isotropic and len(set(n_colors)) != 1:
         raise InputError(f"colors: an isotropic set has one colour count for all axes, got "
                          f"{colors!r}")
-    if corner_patch and (isotropic or lattice or directional):
-        # isotropic and directional tiles are turned by quarter turns: the
-        # patch would have to be symmetric
-        raise InputError("corner_patch is for planar and complete sets without a lattice")
+    if corner_patch and (not planar or lattice or directional):
+        # isotropic, complete and directional sets turn strips or tiles by
+        # quarter turns: the patch would have to be symmetric
+        raise InputError("corner_patch is for planar sets without a lattice")
     rng = np.random.default_rng(seed)
     report(progress, "strips")
     largest_footprint(src.lo, src.hi)
@@ -569,8 +569,8 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
         Every tile corner holds the same exemplar patch, cut by the two
         lines through the corner point (:func:`~geotex.tiles.strips.corner_patch`;
         one corner colour), and the strips are pruned against it instead of
-        leaving the corners to the strips' ends.  Planar and complete sets
-        without a lattice.
+        leaving the corners to the strips' ends.  Planar sets without a
+        lattice (not directional).
     lattice : bool
         For exemplars laid out on a lattice of period ``params["pitch"]``
         (``1 / pitch`` a whole number): strips and quilting windows start
