@@ -93,22 +93,55 @@ def summary(rows):
 
 
 def picture(path):
-    """Close-up of one strand seam: the strip (weld=False) beside the weld."""
+    """Close-up of the worst seam of the 3x3 weave quilt: distance-only cut beside the tilt-aware one.
+
+    The quilt (2x2 -> 3x3, seed 1) is made once with every merge's inputs
+    recorded; the corresponding pair whose weld bends most with
+    ``tilt_cost=0`` (the paper's distance weight alone) is merged again
+    with the default cut and both results are drawn around the seam.
+    """
     from geotex.render import Panel, render_panels
-    VB, FB = strand(0)
-    VA = VB + [1.0, 0.0, 0.0]
-    before = merge_elements(VA, FB, VB, FB, corresponding_only=True, weld=False)
-    after = merge_elements(VA, FB, VB, FB, corresponding_only=True)
-    strip = np.arange(before.faces.shape[0]) >= before.faces.shape[0] - 2 * 12
-    centre = before.vertices[np.unique(before.faces[strip])].mean(axis=0)
+    pairs = []
+
+    def keep(VA, FA, VB, FB, **kw):
+        r = _merge(VA, FA, VB, FB, **kw)
+        if r.status == "stitched" and r.corresponding:
+            pairs.append((VA, FA, VB, FB, kw))
+        return r
+
+    placement.merge_elements = keep
+    ex = exemplar("weave", size=(2.0, 2.0), seed=0)
+    quilt_texture(ex, out_size=(3.0, 3.0), seed=1, boundary="clip")
+    placement.merge_elements = _merge
+    worst = None
+    for VA, FA, VB, FB, kw in pairs:
+        r = merge_elements(VA, FA, VB, FB, **{**kw, "tilt_cost": 0.0})
+        if worst is None or r.seam_normal_jump_mean > worst[0].seam_normal_jump_mean:
+            # the seam lies in the overlap of the two elements' boxes
+            lo = np.maximum(VA.min(axis=0), VB.min(axis=0))
+            hi = np.minimum(VA.max(axis=0), VB.max(axis=0))
+            worst = (r, merge_elements(VA, FA, VB, FB, **kw), 0.5 * (lo + hi))
     render_panels([
-        Panel(before.vertices, before.faces, scalars=strip.astype(float), cmap="coolwarm",
-              show_edges=True, closeup=centre, closeup_radius=0.2,
-              title=f"before: strip (red), gap {before.seam_gap:.3f}, normal jump "
-                    f"{before.seam_normal_jump_mean:.1f} mean / {before.seam_normal_jump:.1f} max"),
-        Panel(after.vertices, after.faces, show_edges=True, closeup=centre, closeup_radius=0.2,
-              title=f"after: welded, gap 0, normal jump {after.seam_normal_jump_mean:.1f} mean / "
-                    f"{after.seam_normal_jump:.1f} max")], path, size=(800, 600), up="z")
+        Panel(r.vertices, r.faces, show_edges=True, closeup=worst[2], closeup_radius=0.35,
+              highlight={"bends of 12-60 degrees": _bent_edges(r.vertices, r.faces, 12, 60)},
+              title=f"{what}: {r.status}, gap {r.seam_gap:.2g}, normal jump "
+                    f"{r.seam_normal_jump_mean:.1f} mean / {r.seam_normal_jump:.1f} max")
+        for r, what in zip(worst[:2], ("distance-only cut (tilt_cost=0)",
+                                       "tilt-aware cut (default)"))],
+        path, size=(800, 600), up="z")
+
+
+def _bent_edges(V, F, lo, hi):
+    """Edges (k, 2) whose two faces meet at an angle between ``lo`` and ``hi`` degrees."""
+    from geotex.mesh.geometry import face_normals
+    from geotex.mesh.topology import edge_topology
+    topo = edge_topology(F, V.shape[0])
+    inner = topo.face_count == 2
+    ef = topo.edge_faces()[inner]
+    N = face_normals(V, F)
+    ang = np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", N[ef[:, 0]], N[ef[:, 1]]),
+                                       -1.0, 1.0)))
+    return topo.edges[inner][(ang >= lo) & (ang <= hi)]
 
 
 def main():
@@ -116,7 +149,7 @@ def main():
     ap.add_argument("--all", action="store_true")
     ap.add_argument("--only", default="")
     ap.add_argument("--json")
-    ap.add_argument("--picture", help="write a before/after close-up of a strand seam here")
+    ap.add_argument("--picture", help="write a close-up of the worst weave-quilt seam (two cuts) here")
     args = ap.parse_args()
     if args.picture:
         picture(args.picture)

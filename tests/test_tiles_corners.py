@@ -181,3 +181,48 @@ def test_catalog_corner_squares_are_not_left_empty(name):
     V, F = planar_tiling(tiles, random_arrangement(tiles, 6, 6, seed=0), border="open")
     assert corner_density(V, F, (6, 6)).ratio >= (0.85 if name in ("chainmail", "scales")
                                                    else 0.65)
+
+
+def test_corner_patch_pieces_meet_bit_for_bit_on_the_two_lines():
+    from geotex.tiles.strips import corner_patch
+
+    ex = studs()
+    p = corner_patch(ex.vertices, ex.faces.astype(np.int64), ex.size, np.random.default_rng(2))
+    P = {k: V for k, (V, F) in p.pieces.items()}
+    assert all(len(F) for V, F in p.pieces.values())
+    # every piece lies in its quadrant, and neighbouring pieces share their cut
+    # vertices exactly (the corner point's vertical line too)
+    sx = {"ne": 1, "se": 1, "nw": -1, "sw": -1}
+    sy = {"ne": 1, "nw": 1, "se": -1, "sw": -1}
+    for k, V in P.items():
+        assert (sx[k] * V[:, 0] >= 0).all() and (sy[k] * V[:, 1] >= 0).all()
+
+    def on(V, axis):
+        return {tuple(r) for r in V[V[:, axis] == 0.0].tolist()}
+
+    assert on(P["ne"], 0) and on(P["ne"], 0) == on(P["nw"], 0)
+    assert on(P["se"], 0) == on(P["sw"], 0)
+    assert on(P["ne"], 1) == on(P["se"], 1) and on(P["nw"], 1) == on(P["sw"], 1)
+
+
+def test_corner_patch_fills_every_corner_with_the_same_elements_seamlessly():
+    tiles = build_tileset(studs(), colors=2, planar=True, seed=3, interior="paste",
+                          corner_patch=True)
+    assert check_seams(tiles).ok
+    assert tiles.metadata["recipe"]["corner_patch"] is True
+    V, F = planar_tiling(tiles, random_arrangement(tiles, 4, 4, seed=1), border="open")
+    # every inner grid point holds the same patch: the vertices around it agree
+    around = []
+    for x in range(1, 4):
+        for y in range(1, 4):
+            d = V[:, :2] - [x, y]
+            near = np.hypot(d[:, 0], d[:, 1]) < 0.06
+            around.append(sorted(map(tuple, np.round(np.c_[d[near], V[near, 2]], 9).tolist())))
+    assert len(around[0]) > 20 and all(a == around[0] for a in around)
+    # and the corner squares hold as much as the rest (measured 0.41 / 0.41;
+    # without the patch this set's corners are fuller than the rest, 0.50 / 0.39)
+    V6, F6 = planar_tiling(tiles, random_arrangement(tiles, 6, 6, seed=0), border="open")
+    assert 0.85 <= corner_density(V6, F6, (6, 6)).ratio <= 1.15
+    with pytest.raises(InputError, match="corner_patch"):
+        build_tileset(studs(), colors=2, isotropic=True, seed=3, interior="paste",
+                      corner_patch=True)

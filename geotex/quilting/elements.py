@@ -253,16 +253,22 @@ def capped(V: np.ndarray, F: np.ndarray, domain, *, rel_tol: float = 1e-9):
     x0, y0, x1, y1 = (float(d) for d in domain)
     tol = rel_tol * max(x1 - x0, y1 - y0)
     planes = {}
+    sides = (("x0", 0, x0), ("x1", 0, x1), ("y0", 1, y0), ("y1", 1, y1))
     for loop in loops:
         P = V[loop]
-        for key, axis, value in (("x0", 0, x0), ("x1", 0, x1), ("y0", 1, y0), ("y1", 1, y1)):
+        for key, axis, value in sides:
             if np.abs(P[:, axis] - value).max() <= tol:
                 planes.setdefault((key, axis), []).append(loop)
                 break
         else:
-            raise InputError("a prefilled element is open away from the domain edges "
-                             f"(boundary loop at {P.mean(axis=0).round(4).tolist()}): "
-                             "prefilled elements must be closed or cut by the domain sides")
+            parts = _corner_parts(loop, P, sides, tol)
+            if parts is None:
+                raise InputError("a prefilled element is open away from the domain edges "
+                                 f"(boundary loop at {P.mean(axis=0).round(4).tolist()}): "
+                                 "prefilled elements must be closed or cut by the domain "
+                                 "sides")
+            for plane, part in parts:
+                planes.setdefault(plane, []).append(part)
     caps = []
     for (_, axis), group in planes.items():
         other = 1 - axis
@@ -276,15 +282,48 @@ def capped(V: np.ndarray, F: np.ndarray, domain, *, rel_tol: float = 1e-9):
             raise InputError("a prefilled element's cut opening could not be capped")
         # straight runs of the outline (e.g. along the flat bottom) give flat ears
         tri = without_flat_triangles(np.concatenate(polys), tri)
-        caps.append(ids[tri])
+        group_caps = ids[tri]
+        # each plane's caps are oriented on their own (an element cut at a
+        # corner has caps in two planes, sharing the corner edge)
+        if edge_topology(np.r_[F, group_caps], n).inconsistent.size:
+            group_caps = group_caps[:, ::-1]
+        caps.append(group_caps)
         on_cut[ids] = True
     cap_faces = np.concatenate(caps)
-    topo = edge_topology(np.r_[F, cap_faces], n)
-    if topo.inconsistent.size:
-        cap_faces = cap_faces[:, ::-1]
     F2 = np.ascontiguousarray(np.r_[F, cap_faces])
     cap = np.r_[np.zeros(F.shape[0], bool), np.ones(cap_faces.shape[0], bool)]
     return F2, cap, on_cut
+
+
+def _corner_parts(loop, P, sides, tol):
+    """Split a boundary loop that runs along two adjacent domain sides at their corner.
+
+    An element cut by both lines through a domain corner (a Wang tile's
+    corner patch) has one opening lying in two planes, ``x = x0 or x1`` and
+    ``y = y0 or y1``, meeting at the vertical line through the corner.  When
+    the loop passes that line at exactly two vertices, it is split there
+    into its run in each plane; each run, closed by the chord between the
+    two corner vertices, is capped in its plane, and the two caps share the
+    chord.  Returns ``[((key, axis), run), ...]`` or ``None``.
+    """
+    for kx, ax, vx in sides[:2]:
+        on_x = np.abs(P[:, ax] - vx) <= tol
+        for ky, ay, vy in sides[2:]:
+            on_y = np.abs(P[:, ay] - vy) <= tol
+            both = np.flatnonzero(on_x & on_y)
+            if not (on_x | on_y).all() or both.size != 2:
+                continue
+            i, j = int(both[0]), int(both[1])
+            first = loop[i:j + 1]
+            second = np.r_[loop[j:], loop[:i + 1]]
+            run_x = first if on_x[i:j + 1].all() else second
+            run_y = second if run_x is first else first
+            if not (on_x[np.isin(loop, run_x)].all() and on_y[np.isin(loop, run_y)].all()):
+                continue
+            if run_x.size < 3 or run_y.size < 3:
+                continue
+            return [((kx, ax), run_x), ((ky, ay), run_y)]
+    return None
 
 
 def caps_like(V, F, VA, caps):

@@ -42,8 +42,10 @@ Element ``A`` (already in the texture; may carry fixed vertices) and element
    "covered" is ambiguous there; they are cut by the paper's overlap rule
    instead (:func:`_corresponding_cut`): the coinciding zone is free, the
    part without counterpart is SOURCE, the part inside the other element
-   and where the other element goes on is SINK; ``A`` is cut first and
-   ``B`` next to ``A``'s seam, giving up what ``A`` kept.
+   and where the other element goes on is SINK; ``A`` is cut first, where
+   the two surfaces coincide *and face the same way* (eq. 8's cost plus the
+   angle between the two surfaces, ``tilt_cost``), and ``B`` on ``A``'s
+   seam (its cost is the distance to that seam), giving up what ``A`` kept.
 3. **Weld** (corresponding pairs).  The kept pieces' boundary loops are
    paired by proximity; optionally (``zone > 0``) both pieces are first
    deformed toward the midpoints of corresponding points over the overlap
@@ -80,9 +82,13 @@ by default only the cut loops are moved (to their common midpoint curve)
 and welded: the midpoint Laplacian editing of the whole overlap zone is
 implemented (``zone``) but off, because on the weave quilts it did not
 lower the normal jump (mean over seam edges 9.6 / 7.1 / 8.7 degrees with
-``zone=1`` against 9.7 / 7.9 / 5.4 without) and shrank merged strands by
-0.6-2 % of their volume.  About one weld in ten still self-intersects and
-falls back to the pulled strip.
+``zone=1`` against 9.7 / 7.9 / 5.4 without, with the cut of that time) and
+shrank merged strands by 0.6-2 % of their volume.  The cut of ``A`` adds
+the angle between the two surfaces to eq. 8's distance (the paper uses the
+distance only), and ``B`` is cut on ``A``'s seam: then every join of the
+weave quilts welds (before, one in ten self-intersected: the two loops a
+ring apart and the strands sloping differently there) and the seams bend
+by 1.7-2.0 degrees on average (``benchmarks/results/quilting.md`` 4c).
 """
 
 from __future__ import annotations
@@ -210,7 +216,8 @@ def _dual_cut(V, F, dist, source, sink):
     return min_cut_keep(m, pairs, w, source=source, sink=sink)
 
 
-def _corresponding_cut(VA, FA, VB, FB, NA, NB, fixA, out_b, eps, band_rings):
+def _corresponding_cut(VA, FA, VB, FB, NA, NB, fixA, out_b, eps, band_rings,
+                       tilt_cost=1.0):
     """Keep-masks of faces for two elements that coincide where they overlap.
 
     The paper's rule for corresponding elements (copies of one element, or
@@ -221,10 +228,18 @@ def _corresponding_cut(VA, FA, VB, FB, NA, NB, fixA, out_b, eps, band_rings):
     elements' common box is kept (SOURCE); the part inside the other element
     (an end cap inside the other strand) and the vertices whose counterpart
     on the other element lies outside the common box go (SINK).  ``A`` is
-    cut first; ``B`` then gives up every face whose counterpart on ``A`` was
-    kept and may cut only within ``band_rings`` of its mean edge lengths
-    of ``A``'s seam, so the two seams lie next to each other and the kept
-    pieces do not overlap.  Returns ``None`` when the elements do not
+    cut first, with the paper's weight over the distance to ``B`` plus
+    ``tilt_cost`` mean edge lengths per radian between ``A``'s vertex normal
+    and ``B``'s surface there: two strand pieces that coincide in position
+    but slope differently (a strand of one copy running over, the other's
+    under) make a crease of 15-20 degrees at a seam cut there.  ``B`` then
+    gives up every face whose counterpart on ``A`` was kept (except on
+    ``A``'s seam itself, closer than ``tau``) and may cut only within
+    ``band_rings`` of its mean edge lengths of ``A``'s seam, at the least
+    distance from that seam: the two loops then lie on one ring (weave
+    quilts: loops at most 0.04 apart along the strand, mostly under 0.008;
+    before, most joins were one ring apart, 0.06, some two), so the weld
+    moves them by almost nothing.  Returns ``None`` when the elements do not
     coincide anywhere (the general path then applies).
     """
     h = float(np.mean([mean_edge_length(VA, FA, per_face=True) or 1.0,
@@ -248,7 +263,13 @@ def _corresponding_cut(VA, FA, VB, FB, NA, NB, fixA, out_b, eps, band_rings):
     source_v = ((~nearA & ~covA) | ~boxA) & ~sink_v
     sinkA = sink_v[FA].any(axis=1)
     sourceA = (source_v[FA].all(axis=1) & ~sinkA) | fixA[FA].any(axis=1)
-    keep_a = _dual_cut(VA, FA, dA, sourceA, sinkA & ~sourceA)
+    costA = dA
+    if tilt_cost > 0:
+        # eq. 8 with the surfaces' directions: a seam where the two elements
+        # coincide but slope differently creases the merged element
+        cosang = np.einsum("ij,ij->i", NA, face_normals(VB, FB)[fA])
+        costA = dA + tilt_cost * h * np.arccos(np.clip(cosang, -1.0, 1.0))
+    keep_a = _dual_cut(VA, FA, costA, sourceA, sinkA & ~sourceA)
     if keep_a.all() or not keep_a.any():
         return None
     # B: give up what A kept, cut next to A's seam (within band_rings
@@ -261,13 +282,14 @@ def _corresponding_cut(VA, FA, VB, FB, NA, NB, fixA, out_b, eps, band_rings):
     if seam.shape[0] == 0:
         return None
     hB = mean_edge_length(VB, FB, per_face=True) or 1.0
-    near_seam = cKDTree(seam).query(VB)[0] <= band_rings * hB
-    sink_v = (~nearB & covB) | (nearB & keep_a[fB]) | out_b
+    to_seam = cKDTree(seam).query(VB)[0]
+    near_seam = to_seam <= band_rings * hB
+    sink_v = (~nearB & covB) | (nearB & keep_a[fB] & (to_seam > tau)) | out_b
     free_v = nearB & near_seam & ~sink_v
     source_v = ~sink_v & ~free_v
     sinkB = sink_v[FB].any(axis=1)
     sourceB = source_v[FB].all(axis=1) & ~sinkB
-    keep_b = _dual_cut(VB, FB, dB, sourceB, sinkB)
+    keep_b = _dual_cut(VB, FB, to_seam, sourceB, sinkB)
     return keep_a, keep_b
 
 
@@ -284,7 +306,7 @@ def merge_elements(VA, FA, VB, FB, *, fixed_a=None, domain=None, band_rings: int
                    same_tol: float = 0.04, match_tol: float = 0.05,
                    match_fraction: float = 0.85, corresponding_only: bool = False,
                    cap_a=None, weld: bool = True, zone: float = 0.0,
-                   weld_tol: float = 0.5) -> MergeResult:
+                   weld_tol: float = 0.5, tilt_cost: float = 1.0) -> MergeResult:
     """Merge element ``B`` into element ``A`` (see the module docstring).
 
     Parameters
@@ -363,6 +385,14 @@ def merge_elements(VA, FA, VB, FB, *, fixed_a=None, domain=None, band_rings: int
     weld_tol : float, optional
         Loop vertices closer than this fraction of the loop edges to a vertex
         of the other loop become that vertex when welding.
+    tilt_cost : float, optional
+        Corresponding pairs: the cut of ``A`` also pays this many mean edge
+        lengths per radian of angle between the two surfaces, so the seam
+        runs where they face the same way (0: distance only, the paper's
+        eq. 8).  Measured on the weave quilts of
+        ``benchmarks/bench_seams.py``: 0.5 and 1 give the same seams; 3 and
+        more pull the cut into the overlap's ends, where the loops no longer
+        pair up, and welds fail.
     corresponding_only : bool, optional
         When the pair does not correspond (see ``max_shift``, ``match_tol``,
         ``match_fraction``; tested at the ICP shift, which is applied only
@@ -418,7 +448,8 @@ def merge_elements(VA, FA, VB, FB, *, fixed_a=None, domain=None, band_rings: int
         return keep_a("absorbed")
     if cov_a.all() and not fixA.any() and not capA.any() and not out_b.any():
         return MergeResult(VB, FB, fixB, "absorbed")
-    kept = (_corresponding_cut(VA, FA, VB, FB, NA, NB, fixA, out_b, eps, band_rings)
+    kept = (_corresponding_cut(VA, FA, VB, FB, NA, NB, fixA, out_b, eps, band_rings,
+                                tilt_cost=tilt_cost)
             if shifted else None)
     if kept is None and corresponding_only:
         # the general cut would fuse them into one larger element

@@ -34,6 +34,7 @@ from geotex.tiles.frame import concatenated, frame_of
 from geotex.tiles.periodic import periodic_tileset
 from geotex.tiles.strips import (GAP, element_boxes, empty_strip, largest_footprint,
                                  lattice_corner, lattice_phase, pick_strips)
+from geotex.tiles.strips import corner_patch as cut_corner_patch
 from geotex.tiles.tileset import TileSet, tile_rng
 from geotex.tiles.verify import side_boundaries
 
@@ -448,7 +449,8 @@ class PlannedSet:
 
 def plan_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool = False,
                  lattice: bool = False, seed: int = 0, interior: str = "quilt",
-                 directional: bool = False, progress=None) -> PlannedSet:
+                 directional: bool = False, corner_patch: bool = False,
+                 progress=None) -> PlannedSet:
     """Draw the strips of a set and place them into the frame of every tile.
 
     The first half of :func:`build_tileset` (same options, same random
@@ -482,10 +484,15 @@ def plan_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool = 
     if isotropic and len(set(n_colors)) != 1:
         raise InputError(f"colors: an isotropic set has one colour count for all axes, got "
                          f"{colors!r}")
+    if corner_patch and (not planar or lattice or directional):
+        # isotropic, complete and directional sets turn strips or tiles by
+        # quarter turns: the patch would have to be symmetric
+        raise InputError("corner_patch is for planar sets without a lattice")
     rng = np.random.default_rng(seed)
     report(progress, "strips")
     largest_footprint(src.lo, src.hi)
     grid = _lattice(src) if lattice else None
+    patch = cut_corner_patch(src.V, src.F, src.size, rng) if corner_patch else None
     strips, taken = {}, set()
     if isotropic:
         strips[0], taken = pick_strips(src.V, src.F, src.size, count=n_colors[0],
@@ -502,7 +509,7 @@ def plan_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool = 
                     new, taken = pick_strips(src.V, src.F, src.size, count=1,
                                              along=STRIP_AXIS[cls], rng=rng, taken=taken,
                                              lattice=grid, chosen_before=before,
-                                             meets_itself=False)
+                                             meets_itself=False, corner_patch=patch)
                     strips[cls] += new
     if isotropic:
         strips[1] = strips[2] = strips[0]
@@ -514,7 +521,7 @@ def plan_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool = 
         groups, cols = tile_keys(n_colors, PLANAR_GROUPS if planar or isotropic
                                  else COMPLETE_GROUPS)
 
-    frames = [frame_of((strips[a], strips[b]), c)
+    frames = [frame_of((strips[a], strips[b]), c, patch)
               for (a, b), c in zip(groups.tolist(), cols.tolist())]
     plan = TilePlan(src=src, frames=frames, interior=interior, lattice=grid, seed=int(seed),
                     pixels=ExemplarPixels(src.V, src.F, src.labels, src.lo, src.hi))
@@ -524,7 +531,8 @@ def plan_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool = 
 
 def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool = False,
                   lattice: bool = False, seed: int = 0, interior: str = "quilt",
-                  directional: bool = False, name: str | None = None, progress=None, map_tiles=None) -> TileSet:
+                  directional: bool = False, name: str | None = None, progress=None,
+                  map_tiles=None, corner_patch: bool = False) -> TileSet:
     """Build a planar, complete or isotropic geometric Wang tile set.
 
     Parameters
@@ -557,6 +565,12 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
         and the default up axis (2). Mapped on a closed polycube it is first
         turned to follow the flow
         (:func:`geotex.tiles.directional.oriented_tileset`).
+    corner_patch : bool
+        Every tile corner holds the same exemplar patch, cut by the two
+        lines through the corner point (:func:`~geotex.tiles.strips.corner_patch`;
+        one corner colour), and the strips are pruned against it instead of
+        leaving the corners to the strips' ends.  Planar sets without a
+        lattice (not directional).
     lattice : bool
         For exemplars laid out on a lattice of period ``params["pitch"]``
         (``1 / pitch`` a whole number): strips and quilting windows start
@@ -634,7 +648,8 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
         raise InputError("a directional set is built with interior 'quilt' or 'paste'")
     planned = plan_tileset(exemplar, colors=colors, planar=planar, isotropic=isotropic,
                            lattice=lattice, seed=seed, interior=interior,
-                           directional=directional, progress=progress)
+                           directional=directional, corner_patch=corner_patch,
+                           progress=progress)
     plan, groups, cols = planned.plan, planned.groups, planned.cols
     n_colors, grid, recipe = planned.n_colors, plan.lattice, planned.recipe
     frames = plan.frames
@@ -678,6 +693,8 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
                         seam_normal_jump_max=round(float(np.nanmax(S[:, 3])), 3))
     if directional:
         meta["recipe"]["directional"] = True
+    if corner_patch:
+        meta["recipe"]["corner_patch"] = True
     return TileSet.from_tiles(tiles, groups, cols, n_colors=n_colors, height=planned.height,
                               depth=planned.depth, name=name or recipe["name"] or "tileset",
                               metadata=meta)

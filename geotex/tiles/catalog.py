@@ -93,6 +93,7 @@ def rebuild(name: str, *, progress=None, table: dict | None = None, map_tiles=No
     return build_tileset(ex, colors=r["colors"], planar=r.get("planar", False),
                          isotropic=r.get("isotropic", False), lattice=r.get("lattice", False),
                          directional=r.get("directional", False),
+                         corner_patch=r.get("corner_patch", False),
                          seed=r["seed"], interior=r.get("interior", "paste"), name=name,
                          progress=progress, map_tiles=map_tiles)
 

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 
 from geotex.errors import InputError
-from geotex.mesh.topology import concatenated
+from geotex.mesh.topology import concatenated, face_components
 from geotex.tiles.colors import EAST, NORTH, SOUTH, WEST
-from geotex.tiles.strips import Strip
+from geotex.tiles.strips import CornerPatch, Strip
 
 __all__ = ["placed_half", "frame_of", "concatenated"]
 
@@ -46,7 +46,8 @@ def placed_half(strip: Strip, side: int) -> tuple[tuple[np.ndarray, np.ndarray],
     return (out, F), boxes
 
 
-def frame_of(strips_ab, colors) -> tuple[tuple[np.ndarray, np.ndarray], np.ndarray]:
+def frame_of(strips_ab, colors, patch: CornerPatch | None = None
+             ) -> tuple[tuple[np.ndarray, np.ndarray], np.ndarray]:
     """The frame of one tile.
 
     Parameters
@@ -55,6 +56,11 @@ def frame_of(strips_ab, colors) -> tuple[tuple[np.ndarray, np.ndarray], np.ndarr
         Strips of the south/north class and of the west/east class.
     colors : sequence of 4 int
         Colours of sides south, east, north, west.
+    patch : CornerPatch, optional
+        The patch every corner holds (:func:`geotex.tiles.strips.corner_patch`):
+        its piece on the tile's side of both lines through each corner is
+        added, moved by whole tile units (so the pieces of neighbouring
+        tiles meet bit for bit on the sides).
 
     Returns
     -------
@@ -69,4 +75,21 @@ def frame_of(strips_ab, colors) -> tuple[tuple[np.ndarray, np.ndarray], np.ndarr
         mesh, b = placed_half(strip, side)
         parts.append(mesh)
         boxes.append(b)
+    if patch is not None:
+        for key, (du, dv) in (("ne", (0.0, 0.0)), ("nw", (1.0, 0.0)), ("sw", (1.0, 1.0)),
+                              ("se", (0.0, 1.0))):
+            V, F = patch.pieces[key]
+            if not len(F):
+                continue
+            V = V.copy()
+            V[:, 0] += du
+            V[:, 1] += dv
+            parts.append((V, F))
+            n, labels = face_components(F, len(V))
+            corners = V[F][:, :, :2]
+            lo = np.full((n, 2), np.inf)
+            hi = np.full((n, 2), -np.inf)
+            np.minimum.at(lo, labels, corners.min(axis=1))
+            np.maximum.at(hi, labels, corners.max(axis=1))
+            boxes.append(np.c_[lo, hi])
     return concatenated(parts), np.vstack(boxes)

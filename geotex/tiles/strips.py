@@ -41,7 +41,7 @@ from geotex.mesh.topology import face_components
 from geotex.tiles.clip import split_by_plane
 from geotex.tiles.fill import GAP, PIXEL, footprint_pixels, grown_heights, pixel_heights
 
-__all__ = ["Strip", "empty_strip", "element_boxes", "pick_strips", "largest_footprint", "lattice_phase",
+__all__ = ["Strip", "CornerPatch", "corner_patch", "empty_strip", "element_boxes", "pick_strips", "largest_footprint", "lattice_phase",
            "lattice_corner", "corner_footprints", "corner_conflicts"]
 
 CLEAR = 0.5 * GAP   # clearance of strip elements from the perpendicular tile sides
@@ -49,6 +49,9 @@ CANDIDATES = 96     # random segment positions tried per colour
 SHORTLIST = 24      # best candidates (by covered length) pruned and compared
 END = 0.3           # length near a segment end whose coverage counts twice
 EXACT = 12          # strips with at most this many elements in play are pruned exactly
+PATCH = 0.12        # corner patch: elements within this of the patch centre (both axes)
+PATCH_NUDGES = [(0.0, 0.0)] + [(0.003 * np.cos(a), 0.003 * np.sin(a))
+                               for a in np.arange(8) * np.pi / 4 + 0.3]
 
 
 @dataclass(frozen=True)
@@ -75,6 +78,107 @@ class Strip:
     along: int
     boxes: np.ndarray
     corners: dict
+
+
+@dataclass(frozen=True)
+class CornerPatch:
+    """The elements every tile corner of a set holds (one corner colour).
+
+    Attributes
+    ----------
+    pieces : dict of str -> tuple (V, F)
+        The patch cut by the two lines through its centre, in coordinates
+        relative to the centre: ``"ne"`` (``x, y >= 0``), ``"nw"``, ``"sw"``,
+        ``"se"``; pieces share their cut vertices bit for bit.
+    as_x, as_y : dict
+        :func:`corner_footprints`-style images of the patch seen as the end
+        of a strip along a horizontal (``as_x``) or vertical side
+        (``as_y``), for :func:`corner_conflicts`.
+    origin : tuple of float
+        Exemplar point at the patch centre.
+    """
+
+    pieces: dict
+    as_x: dict
+    as_y: dict
+    origin: tuple
+
+
+def corner_patch(V: np.ndarray, F: np.ndarray, size, rng: np.random.Generator,
+                 *, radius: float = PATCH) -> CornerPatch:
+    """Cut the patch that every tile corner holds from the exemplar.
+
+    A Wang tile set leaves the tile corners to whatever the strips of the
+    two sides bring, and strips of different classes must not collide
+    there, so the ends of the strips chosen last are pruned (with elements
+    as long as a third of a side, scales, whole corner squares stay bare).
+    Here every corner point of every tiling gets the same exemplar
+    neighbourhood instead: around an exemplar point drawn with ``rng`` (an
+    element's centre, inside the exemplar by at least half a side), every
+    element whose box comes within ``radius`` of it along both axes,
+    including the elements straddling the point, cut by the two lines
+    through it (the second cut ``ordered``, so the four pieces agree on
+    the shared cut vertices; the point is nudged by 0.003 where a vertex
+    would lie within 0.0002 of a line and be snapped into a sliver).  A
+    tile's corner gets the piece on its side of both lines; the strips are
+    then pruned against the patch (``corner_patch`` of
+    :func:`pick_strips`).  The corners of a tiling repeat (one corner
+    colour, as in corner-based Wang tiles), the sides stay random.  This is
+    not the paper's corner merge (strips overlapping at the corner with
+    corresponding elements deformed together): the strips here hold only
+    the elements crossing their line, so two strips' elements at a corner
+    are different elements and cannot be merged.
+
+    Returns
+    -------
+    CornerPatch
+
+    Raises
+    ------
+    InputError
+        No element centre lies far enough inside the exemplar.
+    """
+    labels, lo, hi = element_boxes(V, F)
+    centre = 0.5 * (lo[:, :2] + hi[:, :2])
+    inside = np.flatnonzero(((centre >= 0.5) & (centre <= np.asarray(size) - 0.5)).all(axis=1))
+    if inside.size == 0:
+        raise InputError("corner patch: no element lies half a tile inside the exemplar")
+    centre0 = centre[int(inside[rng.integers(inside.size)])]
+    # the cuts snap vertices within 1e-4 of a line onto it; a vertex that close
+    # (of the element or of the first cut) leaves a sliver at the corner, so
+    # the centre is nudged, by a few thousandths, until none is within 2e-4
+    for nudge in PATCH_NUDGES:
+        p0 = centre0 + np.asarray(nudge)
+        near = np.flatnonzero(((lo[:, :2] <= p0 + radius)
+                               & (hi[:, :2] >= p0 - radius)).all(axis=1))
+        keep = np.isin(labels, near)
+        Fc = F[keep]
+        used = np.unique(Fc)
+        remap = np.full(len(V), -1, dtype=np.int64)
+        remap[used] = np.arange(len(used))
+        Vc = V[used].copy()
+        Vc[:, :2] -= p0
+        Fc = remap[Fc]
+        lab = np.searchsorted(near, labels[keep])
+        west, east = split_by_plane(Vc, Fc, axis=0, value=0.0, snap=1e-4)
+        pieces = {}
+        for side, half in (("w", west), ("e", east)):
+            south, north = split_by_plane(*half, axis=1, value=0.0, snap=1e-4, ordered=True)
+            pieces["s" + side], pieces["n" + side] = south, north
+        xy = np.concatenate([Vp[:, :2] for Vp, _ in pieces.values()])
+        close = (np.abs(xy) < 2e-4) & (xy != 0.0)
+        if not close.any():
+            break
+    images = {}
+    for along in (0, 1):
+        P = _to_strip(Vc, (0.0, 0.0), along)
+        start = corner_footprints(P, Fc, lab, len(near))
+        P[:, 0] += 1.0
+        far = corner_footprints(P, Fc, lab, len(near))
+        images[along] = {"above_start": start["above_start"],
+                         "below_start": start["below_start"],
+                         "above_far": far["above_far"], "below_far": far["below_far"]}
+    return CornerPatch(pieces, images[0], images[1], (float(p0[0]), float(p0[1])))
 
 
 def empty_strip(along: int) -> Strip:
@@ -278,7 +382,8 @@ def lattice_corner(lo: np.ndarray, hi: np.ndarray, pitch: float, phase) -> tuple
 
 def pick_strips(V: np.ndarray, F: np.ndarray, size, *, count: int, along: int,
                 rng: np.random.Generator, taken=(), lattice=None,
-                chosen_before=(), meets_itself: bool = True) -> tuple[list[Strip], set]:
+                chosen_before=(), meets_itself: bool = True,
+                corner_patch: CornerPatch | None = None) -> tuple[list[Strip], set]:
     """Choose ``count`` distinct edge strips from an exemplar.
 
     Every candidate segment keeps its crossing elements that stay
@@ -318,6 +423,10 @@ def pick_strips(V: np.ndarray, F: np.ndarray, size, *, count: int, along: int,
         side: only in an isotropic set, where one class serves every side.
         Otherwise a corner pairs strips of two different classes, and the new
         strips are checked against ``chosen_before`` only.
+    corner_patch : CornerPatch, optional
+        The patch every tile corner holds (:func:`corner_patch`); elements
+        that would collide with it at a corner go too (a planar set: strips
+        along ``x`` on horizontal sides, along ``y`` on vertical ones).
 
     Returns
     -------
@@ -380,7 +489,8 @@ def pick_strips(V: np.ndarray, F: np.ndarray, size, *, count: int, along: int,
                      - np.clip(np.maximum(a, 1 - END), None, 1))
             members = _without_corner_conflicts(V, F, labels, cand, tuple(origin[c]), along,
                                                 before + strips if meets_itself else before,
-                                                own=meets_itself, value=value)
+                                                own=meets_itself, value=value,
+                                                patch=corner_patch)
             key = frozenset(members.tolist())
             if not key or key in used:
                 continue
@@ -403,7 +513,7 @@ def pick_strips(V: np.ndarray, F: np.ndarray, size, *, count: int, along: int,
 
 
 def _without_corner_conflicts(V, F, labels, members, origin, along, others, own=True,
-                              value=None):
+                              value=None, patch=None):
     """The elements of ``members`` to keep so that the strip collides at no corner.
 
     An element colliding with a strip of ``others`` (either way round) goes;
@@ -428,6 +538,11 @@ def _without_corner_conflicts(V, F, labels, members, origin, along, others, own=
     for other in others:
         banned |= corner_conflicts(imgs, other.corners).any(axis=1)
         banned |= corner_conflicts(other.corners, imgs).any(axis=0)
+    if patch is not None and n:
+        # the patch meets a strip along x as the end of a vertical strip, and
+        # one along y as the end of a horizontal strip
+        banned |= (corner_conflicts(imgs, patch.as_y).any(axis=1) if along == 0
+                   else corner_conflicts(patch.as_x, imgs).any(axis=0))
     free = np.flatnonzero(~banned)
     m = len(free)
     if m <= EXACT:
