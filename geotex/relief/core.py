@@ -41,6 +41,7 @@ from geotex.errors import InputError
 from geotex.jit import JIT_MIN_SIZE, compiled
 from geotex.mesh.arrays import as_mesh_arrays
 from geotex.options import finite_number, positive_number
+from geotex.mesh.topology import first_use_order
 from geotex.progress import report
 from geotex.relief.subdivide import refined_by_edge_splits
 
@@ -233,15 +234,16 @@ def _smoothed(F, n, h, steps):
     return h
 
 
-def _lowered_where_crossing(P, F, off, N, gain, pairs, precision):
+def _lowered_where_crossing(P, F, D, gain, pairs, precision):
     """Lower the relief around crossing faces until they are clean locally.
 
-    The first search is the judge's (every pair, whole mesh); later rounds
-    only search the faces within a few rings of the lowered region (the
-    judge then judges again: the faces at moved vertices against the whole
-    mesh, see :func:`geotex.check.report.recheck_moved`).  Rounds halve the relief
-    on the crossing faces and two rings around them; after ``RELIEF_ROUNDS``
-    they flatten it on growing rings.
+    ``P + gain[:, None] * D`` is the relief (``D``: the full motion of every
+    vertex).  The first search is the judge's (every pair, whole mesh); later
+    rounds only search the faces within a few rings of the lowered region
+    (the judge then judges again: the faces at moved vertices against the
+    whole mesh, see :func:`geotex.check.report.recheck_moved`).  Rounds halve
+    the relief on the crossing faces and two rings around them; after
+    ``RELIEF_ROUNDS`` they flatten it on growing rings.
     """
     n = P.shape[0]
     gain = gain.copy()
@@ -271,7 +273,7 @@ def _lowered_where_crossing(P, F, off, N, gain, pairs, precision):
         for _ in range(4):
             near = grown(near)
         local = np.flatnonzero(at(near))
-        Vr = (P + (off * gain)[:, None] * N).astype(precision).astype(np.float64)
+        Vr = (P + gain[:, None] * D).astype(precision).astype(np.float64)
         sub = self_intersecting_pairs(Vr, F[local])
         pairs = local[np.asarray(sub, dtype=np.int64).reshape(-1, 2)] if len(sub) else ()
     return gain, rounds
@@ -385,22 +387,40 @@ def displaced_solid(V, F, heights: Callable[[ReliefPoints], np.ndarray] | None =
                 raise InputError(f"weights must be {n} values, got shape {w.shape}")
             off = off * np.clip(w, 0.0, 1.0)
         del w
-    # from here on only positions, normals, faces and offsets are used: the refinement's
-    # per-vertex face and barycentrics and the per-face parents (~45 MB at 2M faces) are
-    # released before the check, where the memory peak is
+    # from here on only the positions, the motion and the faces are used: the
+    # refinement's per-vertex face and barycentrics and the per-face parents
+    # (~45 MB at 2M faces) are released before the check, where the memory peak is
     del h, points
     sec["heights"] = time.perf_counter() - t
     t = time.perf_counter()
     report(progress, "displace")
-    Vd = P + off[:, None] * N
+    # the full motion D = off * N (one array instead of two); a lowered relief
+    # P + gain * D equals P + (off * gain) * N bit for bit, gain being 1, a power
+    # of 2 or 0 (scaling by a power of 2 commutes with rounding)
+    D = off[:, None] * N
+    del off, N
     Fd = Fr
+    refined_faces = int(Fr.shape[0])
+    decimate = decimate_to is not None and Fd.shape[0] > int(decimate_to)
+    if judge is not None and not decimate:
+        # number the vertices by first use in the faces, as the stored form (and any
+        # reader) numbers them: a judge that rounds and welds then gets back faces equal
+        # to these and can share them instead of holding a second copy at the check
+        order = first_use_order(Fd, n)
+        inv = np.empty_like(order)
+        inv[order] = np.arange(n, dtype=np.int64)
+        Fd = inv[Fd]
+        P, D = P[order], D[order]
+        del order, inv, Fr
+    Vd = None
     sec["displace"] = time.perf_counter() - t
     report(progress, "decimate")
-    if decimate_to is not None and Fd.shape[0] > int(decimate_to):
+    if decimate:
         import fast_simplification
 
         t = time.perf_counter()
-        Vd, Fd = fast_simplification.simplify(Vd, Fd.astype(np.int32), target_count=int(decimate_to))
+        Vd, Fd = fast_simplification.simplify(P + D, Fd.astype(np.int32),
+                                              target_count=int(decimate_to))
         Vd, Fd = np.asarray(Vd, np.float64), np.asarray(Fd, np.int64)
         sec["decimate"] = time.perf_counter() - t
         fix_intersections_here = False            # vertex ids no longer match the heights
@@ -411,7 +431,9 @@ def displaced_solid(V, F, heights: Callable[[ReliefPoints], np.ndarray] | None =
     if judge is not None:
         t = time.perf_counter()
         report(progress, "check")
-        Vs, Fs, rep = judge(Vd, Fd)
+        # the displaced vertices are handed over without a name kept here: a judge
+        # that only needs their stored form can release them before its check
+        Vs, Fs, rep = judge(P + D if Vd is None else Vd, Fd)
         gain = np.ones(n)
         passes = 0
         while (fix_intersections_here and not rep.printable and rep.self_intersecting_pairs
@@ -421,16 +443,18 @@ def displaced_solid(V, F, heights: Callable[[ReliefPoints], np.ndarray] | None =
             if ex is not None and len(ex) == rep.self_intersecting_pairs:
                 pairs = np.asarray(ex, dtype=np.int64).reshape(-1, 2)
             else:
-                pairs = self_intersecting_pairs(Vd.astype(precision).astype(np.float64), Fd)
-            gain, r = _lowered_where_crossing(P, Fd, off, N, gain, pairs, precision)
+                pairs = self_intersecting_pairs(
+                    (P + gain[:, None] * D).astype(precision).astype(np.float64), Fd)
+            gain, r = _lowered_where_crossing(P, Fd, D, gain, pairs, precision)
             rounds += r
             passes += 1
-            Vd = P + (off * gain)[:, None] * N
-            Vs, Fs, rep = judge(Vd, Fd)
+            Vs, Fs, rep = judge(P + gain[:, None] * D, Fd)
         Vd, Fd = Vs, Fs
         sec["check"] = time.perf_counter() - t
+    elif Vd is None:
+        Vd = P + D
     stats = {"faces": int(Fd.shape[0]), "vertices": int(Vd.shape[0]),
-             "refined_faces": int(Fr.shape[0]), "edge_length": L,
+             "refined_faces": refined_faces, "edge_length": L,
              "relief_reduced_rounds": rounds,
              "seconds": {k: round(v, 3) for k, v in sec.items()}}
     return ReliefResult(np.ascontiguousarray(Vd), np.ascontiguousarray(Fd), rep, stats)
