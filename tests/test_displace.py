@@ -388,3 +388,27 @@ def test_height_map_blur_equals_scipy_gaussian_filter(shape, sigma):
     assert got.dtype == np.float32 and got.tobytes() == want.tobytes()
     assert np.array_equal(filtered_height_map(H, sigma_pixels=sigma, invert=True), 1.0 - want)
     assert filtered_height_map(H, sigma_pixels=0.2).tobytes() == H.tobytes()      # no blur
+
+
+@pytest.mark.parametrize("name,options", [
+    ("triplanar", {}), ("cubic", {}),
+    ("triplanar", dict(rotation=33.0, offset_u=3.1, offset_v=-7.0, scale_v=13.0,
+                       sharpness=2.5)),
+    ("cubic", dict(rotation=-120.0, blend=0.4, offset_v=500.0))])
+def test_blended_projections_compiled_equal_numpy(monkeypatch, name, options):
+    # the compiled triplanar / cubic loop gives the numpy path's heights bit for bit
+    # (points below the origin and far beyond one tile: the periodic wrap both ways)
+    import geotex.displace.mappings as mp
+    from geotex.mesh.primitives import torus
+
+    V, F = torus(30.0, 12.0, n_major=48, n_minor=24)
+    pts = relief_points(V - 5.0, F, edge_length=2.0)
+    H = np.random.default_rng(7).random((37, 53)).astype(np.float32)
+    opt = mp.mapping_options(name, scale_u=9.0, **options)
+    monkeypatch.setattr(mp, "JIT_MIN_SIZE", 0)
+    fast = mp.projected_heights(pts, H, opt)
+    monkeypatch.setattr(mp, "JIT_MIN_SIZE", 10 ** 12)
+    slow = mp.projected_heights(pts, H, opt)
+    assert fast.dtype == slow.dtype == np.float64
+    assert fast.tobytes() == slow.tobytes()
+    assert 0.0 <= fast.min() and fast.max() <= 1.0 and np.ptp(fast) > 0.5
