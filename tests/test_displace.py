@@ -412,3 +412,30 @@ def test_blended_projections_compiled_equal_numpy(monkeypatch, name, options):
     assert fast.dtype == slow.dtype == np.float64
     assert fast.tobytes() == slow.tobytes()
     assert 0.0 <= fast.min() and fast.max() <= 1.0 and np.ptp(fast) > 0.5
+
+
+def test_relief_lowering_compiled_rings_equal_numpy(monkeypatch):
+    # the lowering rounds grow their rings by a compiled pass from JIT_MIN_SIZE on, and
+    # search crossings on the local vertices only: the same gains as the numpy rings
+    import geotex.relief.core as core
+    from geotex.check.intersections import self_intersecting_pairs
+    from geotex.mesh.primitives import torus
+
+    V, F = torus(4.0, 3.0, n_major=40, n_minor=24)
+    pts = relief_points(V, F, edge_length=0.5)
+    h = 0.5 + 0.5 * np.sin(3.0 * pts.positions[:, 0]) * np.cos(3.0 * pts.positions[:, 1])
+    D = (1.6 * h)[:, None] * pts.normals
+    P, Fr = pts.positions, pts.faces
+    pairs = self_intersecting_pairs((P + D).astype(np.float32).astype(np.float64), Fr)
+    assert len(pairs) > 0
+    got = []
+    for size in (0, 10 ** 12):
+        monkeypatch.setattr(core, "JIT_MIN_SIZE", size)
+        got.append(core._lowered_where_crossing(P, Fr, D, np.ones(P.shape[0]), pairs,
+                                                np.float32))
+    (g0, r0), (g1, r1) = got
+    assert r0 == r1 > 0 and g0.tobytes() == g1.tobytes() and (g0 < 1).any()
+    # what the rounds left is clean on the whole mesh where they looked
+    Vr = (P + g0[:, None] * D).astype(np.float32).astype(np.float64)
+    left = self_intersecting_pairs(Vr, Fr)
+    assert not np.isin(np.asarray(left).ravel(), np.unique(np.asarray(pairs).ravel())).any()

@@ -249,16 +249,27 @@ def _lowered_where_crossing(P, F, D, gain, pairs, precision):
     gain = gain.copy()
     rounds = 0
     rings = 2
-    cols = [np.ascontiguousarray(F[:, k]) for k in range(3)]
+    if F.size >= JIT_MIN_SIZE:                   # one pass per ring, no temporaries
+        fbuf = np.empty(F.shape[0], dtype=np.bool_)
 
-    def at(mask):                                # faces with a vertex in ``mask``
-        return mask[cols[0]] | mask[cols[1]] | mask[cols[2]]
+        def at(mask):
+            _faces_at(mask, F, fbuf)
+            return fbuf
 
-    def grown(mask):                             # one ring more
-        f = at(mask)
-        for col in cols:
-            mask[col[f]] = True
-        return mask
+        def grown(mask):
+            _grow_ring(mask, F, fbuf)
+            return mask
+    else:
+        cols = [np.ascontiguousarray(F[:, k]) for k in range(3)]
+
+        def at(mask):                            # faces with a vertex in ``mask``
+            return mask[cols[0]] | mask[cols[1]] | mask[cols[2]]
+
+        def grown(mask):                         # one ring more
+            f = at(mask)
+            for col in cols:
+                mask[col[f]] = True
+            return mask
 
     while len(pairs) and rounds < 3 * RELIEF_ROUNDS:
         hit = np.zeros(n, dtype=bool)
@@ -273,10 +284,33 @@ def _lowered_where_crossing(P, F, D, gain, pairs, precision):
         for _ in range(4):
             near = grown(near)
         local = np.flatnonzero(at(near))
-        Vr = (P + gain[:, None] * D).astype(precision).astype(np.float64)
-        sub = self_intersecting_pairs(Vr, F[local])
+        # the search sees only the vertices of these faces (its answer depends on them
+        # alone): the relief is recomputed there, not over the whole mesh
+        used, Fl = np.unique(F[local], return_inverse=True)
+        Vr = (P[used] + gain[used, None] * D[used]).astype(precision).astype(np.float64)
+        sub = self_intersecting_pairs(Vr, Fl.reshape(-1, 3))
         pairs = local[np.asarray(sub, dtype=np.int64).reshape(-1, 2)] if len(sub) else ()
     return gain, rounds
+
+
+@compiled
+def _faces_at(mask, F, out):
+    """``out[f]``: whether face ``f`` has a vertex in ``mask``."""
+    for f in range(F.shape[0]):
+        out[f] = mask[F[f, 0]] or mask[F[f, 1]] or mask[F[f, 2]]
+
+
+@compiled
+def _grow_ring(mask, F, fbuf):
+    """Add to ``mask`` every vertex of a face that has a vertex in ``mask`` (one
+    ring; the faces are found before any vertex is added)."""
+    for f in range(F.shape[0]):
+        fbuf[f] = mask[F[f, 0]] or mask[F[f, 1]] or mask[F[f, 2]]
+    for f in range(F.shape[0]):
+        if fbuf[f]:
+            mask[F[f, 0]] = True
+            mask[F[f, 1]] = True
+            mask[F[f, 2]] = True
 
 
 def displaced_solid(V, F, heights: Callable[[ReliefPoints], np.ndarray] | None = None, *,
