@@ -439,3 +439,51 @@ def test_relief_lowering_compiled_rings_equal_numpy(monkeypatch):
     Vr = (P + g0[:, None] * D).astype(np.float32).astype(np.float64)
     left = self_intersecting_pairs(Vr, Fr)
     assert not np.isin(np.asarray(left).ravel(), np.unique(np.asarray(pairs).ravel())).any()
+
+
+def test_crossings_found_near_folds_before_the_judge(monkeypatch):
+    # the search near folded faces finds only true crossings; when it finds all of the
+    # judge's, the relief is lowered before the first verdict, the judge runs once and
+    # the solid equals the one lowered after the judge's own search, bit for bit
+    import geotex.displace.api as api
+    import geotex.relief.core as core
+    from geotex.check.intersections import self_intersecting_pairs
+    from geotex.check.report import check_mesh
+    from geotex.mesh.primitives import torus
+
+    V, F = torus(4.0, 3.0, n_major=40, n_minor=24)
+    pts = relief_points(V, F, edge_length=0.5)
+    h = 0.5 + 0.5 * np.sin(3.0 * pts.positions[:, 0]) * np.cos(3.0 * pts.positions[:, 1])
+    D = (1.6 * h)[:, None] * pts.normals
+    P, Fr = pts.positions, pts.faces
+    full = self_intersecting_pairs((P + D).astype(np.float32).astype(np.float64), Fr)
+    near = core._likely_crossings(P, Fr, D, np.float32)
+    assert len(near) > 0
+    assert {tuple(p) for p in near.tolist()} == {tuple(p) for p in full.tolist()}
+    judged = []
+    original = api.check_mesh
+
+    def spy(*args, **kwargs):
+        judged.append(1)
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(api, "check_mesh", spy)
+    rejudged = []
+    recheck = api.recheck_moved
+    monkeypatch.setattr(api, "recheck_moved",
+                        lambda *a, **k: rejudged.append(1) or recheck(*a, **k))
+    out = {}
+    for floor in (10 ** 12, 0):
+        monkeypatch.setattr(core, "PRESEARCH_MIN_FACES", floor)
+        judged.clear()
+        rejudged.clear()
+        r = displaced_solid(V, F, points=pts, heights_array=h, depth=1.6,
+                            judge=api.stored_judge(np.float32), precision=np.float32)
+        out[floor] = (r, len(judged) + len(rejudged))
+    (late, n_late), (early, n_early) = out[10 ** 12], out[0]
+    assert n_late == 2 and n_early == 1 and early.stats["relief_reduced_rounds"] > 0
+    assert early.report == check_mesh(early.vertices, early.faces, manifold3d=False,
+                                      max_examples=2 ** 62) and early.report.printable
+    assert early.vertices.tobytes() == late.vertices.tobytes()
+    assert np.array_equal(early.faces, late.faces)
+    assert early.stats["relief_reduced_rounds"] == late.stats["relief_reduced_rounds"]
