@@ -295,8 +295,9 @@ def _likely_crossings(P, F, D, precision):
     their base orientation.  The faces within :data:`PRESEARCH_RINGS` rings of
     the faces turned by more than ``acos(PRESEARCH_COS)`` are searched (only
     them); around every crossing found the search widens by
-    :data:`PRESEARCH_GROW` rings until no new pair appears.  Every pair found is
-    a real crossing; pairs elsewhere are the judge's to find (on Spot at 1.8M
+    :data:`PRESEARCH_GROW` rings until no new pair appears.  Every pair found
+    crosses under the judge's predicates (normalised on the searched faces, as
+    in the lowering rounds' local searches); pairs elsewhere are the judge's to find (on Spot at 1.8M
     faces this finds all 959 of the judge's, so the first verdict is clean and
     no re-judge is needed).
 
