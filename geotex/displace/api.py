@@ -120,8 +120,9 @@ def stored_judge(precision):
             # (where the memory peak is), and faces the stored form numbers as they
             # were (vertices already in order of first use, none welded) are shared
             del Vx
-            if Fs.shape == np.shape(Fx) and np.array_equal(Fs, Fx):
-                Fs = np.asarray(Fx)
+            if (isinstance(Fx, np.ndarray) and Fx.dtype == Fs.dtype
+                    and Fx.flags.c_contiguous and np.array_equal(Fs, Fx)):
+                Fs = Fx
             rep = check_mesh(Vs, Fs, manifold3d=False, max_examples=2 ** 62)
         if rep.printable or all(r.endswith("self-intersecting face pairs")
                                 for r in rep.reasons):
