@@ -388,3 +388,132 @@ def test_height_map_blur_equals_scipy_gaussian_filter(shape, sigma):
     assert got.dtype == np.float32 and got.tobytes() == want.tobytes()
     assert np.array_equal(filtered_height_map(H, sigma_pixels=sigma, invert=True), 1.0 - want)
     assert filtered_height_map(H, sigma_pixels=0.2).tobytes() == H.tobytes()      # no blur
+
+
+@pytest.mark.parametrize("name,options", [
+    ("triplanar", {}), ("cubic", {}),
+    ("triplanar", dict(rotation=33.0, offset_u=3.1, offset_v=-7.0, scale_v=13.0,
+                       sharpness=2.5)),
+    ("cubic", dict(rotation=-120.0, blend=0.4, offset_v=500.0))])
+def test_blended_projections_compiled_equal_numpy(monkeypatch, name, options):
+    # the compiled triplanar / cubic loop gives the numpy path's heights bit for bit
+    # (points below the origin and far beyond one tile: the periodic wrap both ways)
+    import geotex.displace.mappings as mp
+    from geotex.mesh.primitives import torus
+
+    V, F = torus(30.0, 12.0, n_major=48, n_minor=24)
+    pts = relief_points(V - 5.0, F, edge_length=2.0)
+    H = np.random.default_rng(7).random((37, 53)).astype(np.float32)
+    opt = mp.mapping_options(name, scale_u=9.0, **options)
+    monkeypatch.setattr(mp, "JIT_MIN_SIZE", 0)
+    fast = mp.projected_heights(pts, H, opt)
+    monkeypatch.setattr(mp, "JIT_MIN_SIZE", 10 ** 12)
+    slow = mp.projected_heights(pts, H, opt)
+    assert fast.dtype == slow.dtype == np.float64
+    assert fast.tobytes() == slow.tobytes()
+    assert 0.0 <= fast.min() and fast.max() <= 1.0 and np.ptp(fast) > 0.5
+
+
+def test_relief_lowering_compiled_rings_equal_numpy(monkeypatch):
+    # the lowering rounds grow their rings by a compiled pass from JIT_MIN_SIZE on, and
+    # search crossings on the local vertices only: the same gains as the numpy rings
+    import geotex.relief.core as core
+    from geotex.check.intersections import self_intersecting_pairs
+    from geotex.mesh.primitives import torus
+
+    V, F = torus(4.0, 3.0, n_major=40, n_minor=24)
+    pts = relief_points(V, F, edge_length=0.5)
+    h = 0.5 + 0.5 * np.sin(3.0 * pts.positions[:, 0]) * np.cos(3.0 * pts.positions[:, 1])
+    D = (1.6 * h)[:, None] * pts.normals
+    P, Fr = pts.positions, pts.faces
+    pairs = self_intersecting_pairs((P + D).astype(np.float32).astype(np.float64), Fr)
+    assert len(pairs) > 0
+    got = []
+    for size in (0, 10 ** 12):
+        monkeypatch.setattr(core, "JIT_MIN_SIZE", size)
+        got.append(core._lowered_where_crossing(P, Fr, D, np.ones(P.shape[0]), pairs,
+                                                np.float32))
+    (g0, r0), (g1, r1) = got
+    assert r0 == r1 > 0 and g0.tobytes() == g1.tobytes() and (g0 < 1).any()
+    # what the rounds left is clean on the whole mesh where they looked
+    Vr = (P + g0[:, None] * D).astype(np.float32).astype(np.float64)
+    left = self_intersecting_pairs(Vr, Fr)
+    assert not np.isin(np.asarray(left).ravel(), np.unique(np.asarray(pairs).ravel())).any()
+
+
+def test_crossings_found_near_folds_before_the_judge(monkeypatch):
+    # the search near folded faces finds only true crossings; when it finds all of the
+    # judge's, the relief is lowered before the first verdict, the judge runs once and
+    # the solid equals the one lowered after the judge's own search, bit for bit
+    import geotex.displace.api as api
+    import geotex.relief.core as core
+    from geotex.check.intersections import self_intersecting_pairs
+    from geotex.check.report import check_mesh
+    from geotex.mesh.primitives import torus
+
+    V, F = torus(4.0, 3.0, n_major=40, n_minor=24)
+    pts = relief_points(V, F, edge_length=0.5)
+    h = 0.5 + 0.5 * np.sin(3.0 * pts.positions[:, 0]) * np.cos(3.0 * pts.positions[:, 1])
+    D = (1.6 * h)[:, None] * pts.normals
+    P, Fr = pts.positions, pts.faces
+    full = self_intersecting_pairs((P + D).astype(np.float32).astype(np.float64), Fr)
+    near = core._likely_crossings(P, Fr, D, np.float32)
+    assert len(near) > 0
+    assert {tuple(p) for p in near.tolist()} == {tuple(p) for p in full.tolist()}
+    judged = []
+    original = api.check_mesh
+
+    def spy(*args, **kwargs):
+        judged.append(1)
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(api, "check_mesh", spy)
+    rejudged = []
+    recheck = api.recheck_moved
+    monkeypatch.setattr(api, "recheck_moved",
+                        lambda *a, **k: rejudged.append(1) or recheck(*a, **k))
+    out = {}
+    for floor in (10 ** 12, 0):
+        monkeypatch.setattr(core, "PRESEARCH_MIN_FACES", floor)
+        judged.clear()
+        rejudged.clear()
+        r = displaced_solid(V, F, points=pts, heights_array=h, depth=1.6,
+                            judge=api.stored_judge(np.float32), precision=np.float32)
+        out[floor] = (r, len(judged) + len(rejudged))
+    (late, n_late), (early, n_early) = out[10 ** 12], out[0]
+    assert n_late == 2 and n_early == 1 and early.stats["relief_reduced_rounds"] > 0
+    assert early.report == check_mesh(early.vertices, early.faces, manifold3d=False,
+                                      max_examples=2 ** 62) and early.report.printable
+    assert early.vertices.tobytes() == late.vertices.tobytes()
+    assert np.array_equal(early.faces, late.faces)
+    assert early.stats["relief_reduced_rounds"] == late.stats["relief_reduced_rounds"]
+
+
+def test_judge_gets_faces_in_first_use_order_and_shares_them():
+    # the relief numbers its vertices by first use before judging, so the stored form's
+    # faces equal the judged ones and the judge keeps one copy (the memory peak is there)
+    import geotex.displace.api as api
+    from geotex.mesh.topology import first_use_order
+
+    V, F = icosphere(3)
+    V = 10.0 * V
+    seen = []
+    judge = api.stored_judge(np.float32)
+
+    def spy(Vx, Fx):
+        out = judge(Vx, Fx)
+        seen.append((Fx, out[1]))
+        return out
+
+    heights = lambda p: 0.5 + 0.5 * np.sin(2.0 * p.positions[:, 0])  # noqa: E731
+    r = displaced_solid(V, F, heights, depth=0.3, edge_length=0.6, judge=spy,
+                        precision=np.float32)
+    Fx, Fs = seen[0]
+    assert Fs is Fx and Fx.dtype == np.int64
+    n = int(Fx.max()) + 1
+    assert np.array_equal(first_use_order(Fx, n), np.arange(n))
+    plain = displaced_solid(V, F, heights, depth=0.3, edge_length=0.6, precision=np.float32)
+    # the same solid as without a judge, vertices renumbered only
+    a = r.vertices[r.faces]
+    b = plain.vertices[plain.faces].astype(np.float32).astype(np.float64)
+    assert r.report.printable and a.tobytes() == b.tobytes()

@@ -108,19 +108,30 @@ def stored_judge(precision):
     last = []          # (faces, rounded input, stored V, stored F, vertex map, report)
 
     def judge(Vx, Fx):
+        n_in = np.shape(Vx)[0]
         rep = _rejudged(last, Vx, Fx, precision) if last else None
         if rep is not None:
             Vs, Fs = rep[0], last[0][3]
             rep = rep[1]
         else:
+            last[:] = []
             Vs, Fs = stored_form(Vx, Fx, precision=precision)
+            # only the stored form is judged: the input is released before the check
+            # (where the memory peak is), and faces the stored form numbers as they
+            # were (vertices already in order of first use, none welded) are shared
+            del Vx
+            if (isinstance(Fx, np.ndarray) and Fx.dtype == Fs.dtype
+                    and Fx.flags.c_contiguous and np.array_equal(Fs, Fx)):
+                Fs = Fx
             rep = check_mesh(Vs, Fs, manifold3d=False, max_examples=2 ** 62)
         if rep.printable or all(r.endswith("self-intersecting face pairs")
                                 for r in rep.reasons):
-            last[:] = [_judged_state(Vx, Fx, Vs, Fs, rep, precision)]
+            last[:] = [_judged_state(n_in, Fx, Vs, Fs, rep)]
             return Vs, Fs, rep
         last[:] = []
-        s = printable_stored_solid(Vx, Fx, precision=precision, manifold3d=False)
+        # the stored form is its own stored form: judging it again as the verified
+        # export does gives what the input would give
+        s = printable_stored_solid(Vs, Fs, precision=precision, manifold3d=False)
         return s.vertices, s.faces, s.report
 
     return judge
@@ -132,13 +143,26 @@ def _rounded(Vx, precision):
     return (np.asarray(Vx, dtype=np.float64).astype(p) + p(0.0)).astype(np.float64)
 
 
-def _judged_state(Vx, Fx, Vs, Fs, rep, precision):
-    """What :func:`_rejudged` needs of a judged call; the map is ``None`` when
-    the stored form welded two input vertices (then there is no shortcut)."""
-    vmap = np.full(np.asarray(Vx).shape[0], -1, dtype=np.int64)
+def _judged_state(n_in, Fx, Vs, Fs, rep):
+    """What :func:`_rejudged` needs of a judged call of ``n_in`` input vertices:
+    the map input -> stored vertex (``None`` when the stored form welded two
+    input vertices: then there is no shortcut; ``"same"`` when it is the
+    identity) and the input's rounded coordinates, taken from the stored ones
+    (they are those, with ``-0.0`` as ``0.0``)."""
+    R = Vs + 0.0                                  # -0.0 -> 0.0, else equal
+    if Fs is Fx and Vs.shape[0] == n_in:
+        # every vertex stored as itself: no map, and no copy unless a -0.0 differs
+        if not (np.signbit(Vs) & (Vs == 0.0)).any():
+            R = Vs
+        return (Fx, R, Vs, Fs, "same", rep)
+    vmap = np.full(n_in, -1, dtype=np.int64)
     vmap[np.asarray(Fx).ravel()] = Fs.ravel()
-    injective = int((vmap >= 0).sum()) == Vs.shape[0]
-    return (Fx, _rounded(Vx, precision), Vs, Fs, vmap if injective else None, rep)
+    if int((vmap >= 0).sum()) != Vs.shape[0]:
+        return (Fx, None, Vs, Fs, None, rep)
+    R0 = np.zeros((n_in, 3))                      # unreferenced rows are never compared
+    used = vmap >= 0
+    R0[used] = R[vmap[used]]
+    return (Fx, R0, Vs, Fs, vmap, rep)
 
 
 def _rejudged(last, Vx, Fx, precision):
@@ -152,14 +176,19 @@ def _rejudged(last, Vx, Fx, precision):
     :func:`geotex.check.report.check_mesh` of the stored arrays.
     """
     F0, R0, Vs0, Fs, vmap, rep0 = last[0]
-    if vmap is None or Fx is not F0 or np.asarray(Vx).shape[0] != vmap.shape[0]:
+    if vmap is None or Fx is not F0 or np.asarray(Vx).shape[0] != R0.shape[0]:
         return None
     R = _rounded(Vx, precision)
     diff = R.view(np.uint64) != R0.view(np.uint64)
     moved = np.flatnonzero(diff[:, 0] | diff[:, 1] | diff[:, 2])
-    moved = moved[vmap[moved] >= 0]
+    del diff
     Vs = Vs0.copy()
-    Vs[vmap[moved]] = R[moved]
+    if isinstance(vmap, str):                     # "same": stored vertex i is input vertex i
+        Vs[moved] = R[moved]
+    else:
+        moved = moved[vmap[moved] >= 0]
+        Vs[vmap[moved]] = R[moved]
+    del R
     rep = recheck_moved(Vs0, Vs, Fs, rep0, max_examples=2 ** 62)
     return None if rep is None else (Vs, rep)
 

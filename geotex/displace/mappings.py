@@ -35,6 +35,7 @@ import numpy as np
 
 from geotex.displace.heightmap import sample_periodic
 from geotex.errors import InputError
+from geotex.jit import JIT_MIN_SIZE, compiled, helper
 from geotex.options import finite_number, positive_number
 
 __all__ = ["MAPPINGS", "MappingOptions", "mapping_options", "projected_heights"]
@@ -133,9 +134,12 @@ def _side_sample(H, P, N, k, opt):
     return sample_periodic(H, *_tiles(sgn * P[:, i], P[:, j], opt))
 
 
-def _triplanar(H, P, N, opt):
+def _triplanar(H, P, N, opt, lo):
     W = np.abs(N) ** opt.sharpness
     W /= np.maximum(W.sum(axis=1, keepdims=True), 1e-300)
+    if P.shape[0] >= JIT_MIN_SIZE:
+        return _blended(H, P, lo, N, W, opt, 1e-4, True)
+    P = P - lo
     h = np.zeros(P.shape[0])
     for k in range(3):
         sel = W[:, k] > 1e-4
@@ -147,19 +151,87 @@ def _triplanar(H, P, N, opt):
     return h / np.maximum(ws, 1e-300)
 
 
-def _cubic(H, P, N, opt):
+def _cubic(H, P, N, opt, lo):
     A = np.abs(N)
     top = A.max(axis=1, keepdims=True)
     b = max(opt.blend, 1e-6)
     W = np.clip((A - (top - b)) / b, 0.0, 1.0)
     W = W * W * (3 - 2 * W)
     W /= np.maximum(W.sum(axis=1, keepdims=True), 1e-300)
+    if P.shape[0] >= JIT_MIN_SIZE:
+        return _blended(H, P, lo, N, W, opt, 0.0, False)
+    P = P - lo
     h = np.zeros(P.shape[0])
     for k in range(3):
         sel = W[:, k] > 0
         if sel.any():
             h[sel] += W[sel, k] * _side_sample(H, P[sel], N[sel], k, opt)
     return h
+
+
+def _blended(H, P, lo, N, W, opt, floor, divide):
+    """The numpy paths of :func:`_triplanar` and :func:`_cubic` as one compiled
+    loop (the same operations in the same order: bit for bit), without the
+    masked copies and the per-side temporaries."""
+    r = math.radians(opt.rotation)
+    out = np.empty(P.shape[0])
+    _blended_loop(np.ascontiguousarray(H, dtype=np.float32), P, np.asarray(lo, np.float64), N,
+                  W, math.cos(r), math.sin(r), float(opt.offset_u), float(opt.offset_v),
+                  float(opt.scale_u), float(opt.scale_v), float(floor), bool(divide), out)
+    return out
+
+
+@helper
+def _periodic_sample(H, u, v):
+    """:func:`geotex.displace.heightmap.sample_periodic` at one point (the same
+    operations, float32 interpolation included)."""
+    hh = H.shape[0]
+    ww = H.shape[1]
+    x = u * ww - 0.5
+    y = (1.0 - v) * hh - 0.5
+    x0 = np.floor(x)
+    y0 = np.floor(y)
+    fx = np.float32(x - x0)
+    fy = np.float32(y - y0)
+    ix = np.int64(x0)
+    iy = np.int64(y0)
+    if ix < 0 or ix >= ww:            # the same integers as %, without a division
+        ix %= ww
+    if iy < 0 or iy >= hh:
+        iy %= hh
+    ix1 = ix + 1 if ix + 1 < ww else 0
+    iy1 = iy + 1 if iy + 1 < hh else 0
+    a = H[iy, ix]
+    b = H[iy, ix1]
+    c = H[iy1, ix]
+    d = H[iy1, ix1]
+    top = a + (b - a) * fx
+    bot = c + (d - c) * fx
+    return np.float64(top + (bot - top) * fy)
+
+
+@compiled
+def _blended_loop(H, P, lo, N, W, c, s, off_u, off_v, su, sv, floor, divide, out):
+    for q in range(P.shape[0]):
+        h = 0.0
+        ws = 0.0
+        for k in range(3):
+            w = W[q, k]
+            if w > floor:
+                # _axis_frame(k), the side read from outside (_side_sample), _tiles
+                i = (k + 1) % 3
+                j = (k + 2) % 3
+                sg = 1.0 if N[q, k] >= 0 else -1.0
+                a = sg * (P[q, i] - lo[i])
+                b = P[q, j] - lo[j]
+                x = c * a + s * b + off_u
+                y = -s * a + c * b + off_v
+                h += w * _periodic_sample(H, x / su, y / sv)
+                ws += w
+        if divide:                    # np.maximum(ws, 1e-300), NaN kept
+            out[q] = h / (ws if (ws >= 1e-300 or ws != ws) else 1e-300)
+        else:
+            out[q] = h
 
 
 def _whole_tiles(length: float, scale: float) -> float:
@@ -229,9 +301,9 @@ def projected_heights(points, H, opt: MappingOptions, *, uv=None) -> np.ndarray:
     center = 0.5 * (lo + hi)
     name = opt.name
     if name == "triplanar":
-        return _triplanar(H, P - lo, N, opt)
+        return _triplanar(H, P, N, opt, lo)
     if name == "cubic":
-        return _cubic(H, P - lo, N, opt)
+        return _cubic(H, P, N, opt, lo)
     if name.startswith("planar-"):
         a, b = AXES[name[-2]], AXES[name[-1]]
         return sample_periodic(H, *_tiles(P[:, a] - lo[a], P[:, b] - lo[b], opt))
