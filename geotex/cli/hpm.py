@@ -34,14 +34,17 @@ def register(sub):
                         "the field's singularities), the neighbours for a stochastic one; "
                         "field: the smooth field always; neighbours: propagated from patch "
                         "to patch (the paper's)")
-    p.add_argument("--field-tolerance", type=float, default=10.0, metavar="DEG",
-                   help="with a field: a neighbour's continuation is kept only within DEG "
-                        "degrees of the field's direction (default 10)")
+    p.add_argument("--field-tolerance", type=float, default=25.0, metavar="DEG",
+                   help="with a field: a neighbour's continuation is turned onto the field's "
+                        "direction and kept as a candidate when the turn is at most DEG "
+                        "degrees (default 25)")
     p.add_argument("--angle", type=float, default=None, metavar="DEG",
                    help="orientation of the first patch in degrees (default random); with "
                         "the automatic field: the field's turn about the normals")
     p.add_argument("--orientation-spread", default="30", metavar="DEG|any",
-                   help="without --field: a patch next to textured faces is matched only at "
+                   help="when the orientation comes from the neighbours (a stochastic image, "
+                        "or --orientation neighbours): a patch next to textured faces is "
+                        "matched only at "
                         "orientations within DEG degrees of its main neighbour's, so the "
                         "orientation carries over as in the paper (default 30); 'any' "
                         "searches every orientation")
