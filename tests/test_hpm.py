@@ -945,3 +945,19 @@ def test_hpm_user_field_is_followed_and_continued():
     assert sum(lv["continued"] for lv in r.report()["levels"]) > 0
     dev = field_deviation(V, F, r, img, comb_direction_field(V, F, fld).vectors, 2)
     assert np.quantile(dev, 0.75) < 8.0
+
+
+def test_hpm_automatic_field_on_a_mesh_with_zero_area_faces():
+    # simplified meshes have faces of zero area (Spot at 30k: 81), on which no field is
+    # defined: the field is solved without them and they take a neighbour's vector
+    from geotex.image.hpm import _pattern_field
+    V, F = torus(1.0, 0.4, n_major=48, n_minor=16)
+    V = V.copy()
+    V[F[0, 2]] = 0.5 * (V[F[0, 0]] + V[F[0, 1]])     # face 0 collapses onto its edge
+    from geotex.mesh.geometry import degenerate_faces
+    bad = degenerate_faces(V, F)
+    assert bad.size >= 1
+    vec, sym = _pattern_field(V, F, stripe_image(), None)
+    assert np.allclose(np.linalg.norm(vec, axis=1), 1.0)
+    r = hpm_texture(V, F, stripe_image(), scale=2.0, seed=0)
+    assert r.report()["pattern"]["field"] == "auto" and np.isfinite(r.uv).all()

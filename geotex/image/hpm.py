@@ -184,7 +184,7 @@ from geotex.image.fftmatch import (match_energy, opponent_colors, pattern_scale,
                                    quarter_turn_symmetry, texture_spectra)
 from geotex.image.patches import load_image
 from geotex.mesh.arrays import as_mesh_arrays
-from geotex.mesh.geometry import face_areas
+from geotex.mesh.geometry import degenerate_faces, face_areas
 from geotex.mesh.record import Mesh
 from geotex.mesh.topology import edge_topology
 from geotex.options import count, finite_number, positive_number
@@ -1462,11 +1462,32 @@ def _pattern_field(V, F, img, angle):
     combing's cut edges.
     """
     sym = 4 if quarter_turn_symmetry(img) >= QUARTER_TURN else 2
-    fld = smooth_direction_field(V, F, symmetry=sym)
-    vec = comb_direction_field(V, F, fld).vectors
+    # faces of zero area (simplified meshes have some) carry no direction: the field is
+    # solved without them (they weigh nothing in a cluster's direction) and they get a
+    # neighbour's vector, or the x axis
+    bad = degenerate_faces(V, F)
+    keep = np.setdiff1d(np.arange(F.shape[0]), bad)
+    fld = smooth_direction_field(V, F[keep], symmetry=sym)
+    sub = comb_direction_field(V, F[keep], fld).vectors
     if angle is not None:
         a = np.radians(angle)
-        vec = np.cos(a) * vec + np.sin(a) * np.cross(fld.normals, vec)
+        sub = np.cos(a) * sub + np.sin(a) * np.cross(fld.normals, sub)
+    vec = np.zeros((F.shape[0], 3))
+    vec[keep] = sub
+    vec[bad] = (1.0, 0.0, 0.0)
+    if bad.size and keep.size:
+        FF = face_adjacency(V, F).face_neighbors
+        for _ in range(bad.size):            # waves: each bad face from a good neighbour
+            nb = FF[bad]
+            good = np.isin(nb, keep) & (nb >= 0)
+            has = good.any(axis=1)
+            if not has.any():
+                break
+            vec[bad[has]] = vec[nb[has, np.argmax(good[has], axis=1)]]
+            keep = np.union1d(keep, bad[has])
+            bad = bad[~has]
+            if bad.size == 0:
+                break
     return np.ascontiguousarray(vec), sym
 
 
