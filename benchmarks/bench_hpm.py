@@ -72,6 +72,18 @@ def border_rotation(V, F, uv, uv_faces, regions):
     return ang[(r0 != r1) & (r0 >= 0) & (r1 >= 0)]
 
 
+def orientation_breaks(V, F, uv, uv_faces, *, limit: float = 20.0) -> float:
+    """Share of all inner edges across which the texture turns by more than ``limit`` degrees.
+
+    The turn is :func:`border_rotation` over every inner edge (0 inside a
+    placement), taken modulo 180 degrees (a pattern turned by a half turn
+    shows the same rows).
+    """
+    rot = border_rotation(V, F, uv, uv_faces, np.arange(F.shape[0]))
+    r = rot % 180.0
+    return float(np.mean(np.minimum(r, 180.0 - r) > limit)) if rot.size else 0.0
+
+
 def continuity_regions(V, F, uv_faces):
     """Faces joined across every edge where the texture map is continuous.
 

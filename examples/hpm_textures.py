@@ -18,7 +18,11 @@ Pictures (written to OUT_DIR), after the paper's figures:
   smaller than the pattern lose its structure, and these shapes' clusters
   flat enough to take one patch are about one net cell wide at 0.3 x the
   diagonal (the report's ``patch_periods``: rope net 0.93 at 0.3, 1.27 at
-  0.15).
+  0.15).  The structured images (bricks, weave, rope net, slate tiles) take
+  their orientation from the smoothest direction field of each surface
+  (``orientation_field="auto"``), so their rows run one way over the body
+  and turn only around the field's singularities; the stochastic ones
+  (gravel, peppers, water) follow their neighbours as before.
 
 The textured surfaces are the base meshes with the output texture
 coordinates and the input image itself (what ``geotex hpm`` writes as GLB /

@@ -517,9 +517,11 @@ def test_hpm_lattice_snapping_keeps_the_phase_across_borders(image, monkeypatch)
     r_on, r_off = lattice_residual(F, on, img, per), lattice_residual(F, off, img, per)
     assert r_on.size and r_off.size
     # share of the map's jumps that keep the phase (within 0.05 of the shortest period):
-    # checker 0.18 -> 0.37, stripes (8 px: the tolerance is one pixel) 0.29 -> 0.34 here
+    # checker 0.18 -> 0.37 (neighbours' orientation), 0.20 -> 0.28 with the automatic
+    # cross field (snaps that turn a patch by more than FIELD_SNAP_TURN are undone);
+    # stripes (8 px: the tolerance is one pixel) 0.29 -> 0.34 here
     tol = 0.05 * np.linalg.norm(per, axis=1).min()
-    assert np.mean(r_on < tol) > np.mean(r_off < tol) + (0.1 if image == "checker" else 0.02)
+    assert np.mean(r_on < tol) > np.mean(r_off < tol) + (0.05 if image == "checker" else 0.02)
     t = on.uv[on.uv_faces]
     a = (t[:, 1, 0] - t[:, 0, 0]) * (t[:, 2, 1] - t[:, 0, 1]) \
         - (t[:, 1, 1] - t[:, 0, 1]) * (t[:, 2, 0] - t[:, 0, 0])
@@ -835,3 +837,127 @@ def test_cli_hpm_structure_flags(tmp_path, capsys):
     assert main(["hpm", str(base), "--image", str(img), "--scale", "2", "--min-patch", "-1",
                  "-o", str(tmp_path / "x.glb")]) != 0
     assert "--min-patch" in capsys.readouterr().err
+
+
+# ---------------------------------------------------------------------------
+# one orientation over the surface: a smooth direction field (issue 16, paper Fig. 10)
+# ---------------------------------------------------------------------------
+
+def field_deviation(V, F, r, img, vectors, sym):
+    """Per face: angle (degrees) between the image x axis on the surface and the field."""
+    uv = r.uv[r.uv_faces] * [img.shape[1], img.shape[0]]
+    P = V[F]
+    E = np.stack([P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]], 2)
+    D = np.stack([uv[:, 1] - uv[:, 0], uv[:, 2] - uv[:, 0]], 2)
+    X = (E @ np.linalg.inv(D))[:, :, 0]
+    n = np.cross(E[:, :, 0], E[:, :, 1])
+    c = np.sum(X * vectors, 1)
+    s = np.sum(np.cross(vectors, X) * n, 1) / np.linalg.norm(n, axis=1)
+    return np.degrees(np.abs(np.angle(np.exp(1j * sym * np.arctan2(s, c))))) / sym
+
+
+def test_quarter_turn_symmetry_tells_a_grid_from_stripes():
+    from geotex.image.fftmatch import quarter_turn_symmetry
+    assert quarter_turn_symmetry(checker_image(8, 96)) > 0.9
+    assert quarter_turn_symmetry(stripe_image()) < 0.3
+    assert quarter_turn_symmetry(np.full((32, 32, 3), 7, np.uint8)) == 0.0
+    with pytest.raises(InputError):
+        quarter_turn_symmetry(np.zeros((4, 4)))
+
+
+def test_pattern_field_symmetry_and_turn():
+    from geotex.image.hpm import _pattern_field
+    V, F = icosphere(3)
+    v2, s2 = _pattern_field(V, F, stripe_image(), None)
+    v4, s4 = _pattern_field(V, F, checker_image(8, 96), None)
+    assert (s2, s4) == (2, 4)
+    t, _ = _pattern_field(V, F, stripe_image(), 30.0)
+    n = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    ang = np.degrees(np.arctan2(np.sum(np.cross(v2, t) * n, 1), np.sum(v2 * t, 1)))
+    assert np.allclose(ang, 30.0, atol=1e-6)
+    assert np.allclose(np.sum(t * n, 1), 0.0, atol=1e-9)
+
+
+def test_hpm_field_keeps_one_orientation_on_a_torus():
+    # stripes on a torus: the neighbours' orientation drifts from patch to patch and
+    # separately grown regions meet turned; with the smooth line field (no singularity
+    # on a torus) every patch follows it and the stripes turn little across borders
+    from geotex.image.hpm import _pattern_field
+    V, F = torus(1.0, 0.4, n_major=96, n_minor=26)
+    img = stripe_image()
+    on = hpm_texture(V, F, img, scale=2.0, seed=1)
+    off = hpm_texture(V, F, img, scale=2.0, seed=1, orientation_field="never")
+    vec, sym = _pattern_field(V, F, img, None)
+    assert sym == 2
+    dev_on = field_deviation(V, F, on, img, vec, sym)
+    r_on, r_off = border_rotation(V, F, on), border_rotation(V, F, off)
+    m_on = np.minimum(r_on % 180, 180 - r_on % 180)
+    m_off = np.minimum(r_off % 180, 180 - r_off % 180)
+    # measured (seed 1): deviation from the field median / p75 / p95 1.9 / 4.5 / 16.8
+    # degrees; rotation across borders (mod 180) p75 / p90 7.4 / 14.0 with the field,
+    # 21.3 / 50.2 without; pattern turned by 180 degrees across 0.5 % of the borders
+    assert np.quantile(dev_on, 0.75) < 8.0 and np.quantile(dev_on, 0.95) < 25.0
+    assert np.quantile(m_on, 0.75) < 0.5 * np.quantile(m_off, 0.75)
+    assert np.quantile(m_on, 0.9) < 0.5 * np.quantile(m_off, 0.9)
+    assert np.quantile(m_on, 0.75) < 10.0
+    assert np.mean(r_on > 150.0) < 0.02
+    assert on.report()["pattern"]["field_symmetry"] == 2
+    assert "field_symmetry" not in off.report()["pattern"]
+
+
+def test_hpm_orientation_field_options_and_stochastic_samples(files, capsys):
+    V, F = icosphere(3)
+    img = noise_image(64, 64)            # stochastic: no field unless asked for
+    auto = hpm_texture(V, F, img, scale=3.0, seed=0)
+    never = hpm_texture(V, F, img, scale=3.0, seed=0, orientation_field="never")
+    assert np.array_equal(auto.uv, never.uv) and np.array_equal(auto.uv_faces, never.uv_faces)
+    assert "field" not in auto.report()["pattern"]
+    always = hpm_texture(V, F, img, scale=3.0, seed=0, orientation_field="always")
+    assert always.report()["pattern"]["field"] == "auto"
+    assert np.isfinite(always.uv).all()
+    again = hpm_texture(V, F, img, scale=3.0, seed=0, orientation_field="always")
+    assert np.array_equal(always.uv, again.uv)
+    with pytest.raises(InputError, match="orientation_field"):
+        hpm_texture(V, F, img, scale=3.0, orientation_field="yes")
+    with pytest.raises(InputError, match="field_tolerance"):
+        hpm_texture(V, F, img, scale=3.0, field_tolerance=-1.0)
+    tmp, base, png = files
+    rep = tmp / "o.json"
+    assert main(["hpm", str(base), "--image", str(png), "--scale", "3", "--orientation",
+                 "field", "--report", str(rep), "-o", str(tmp / "o.glb")]) == 0
+    assert json.loads(rep.read_text())["pattern"]["field"] == "auto"
+    assert main(["hpm", str(base), "--image", str(png), "--scale", "3", "--field-tolerance",
+                 "-2", "-o", str(tmp / "x.glb")]) != 0
+    assert "--field-tolerance" in capsys.readouterr().err
+
+
+def test_hpm_user_field_is_followed_and_continued():
+    # a user's line field: every patch takes its direction (before: +-20 degrees of it,
+    # no neighbour continuation), the neighbours' continuations are kept when near it
+    from geotex.fields.directions import smooth_direction_field
+    from geotex.fields.combing import comb_direction_field
+    V, F = torus(1.0, 0.4, n_major=64, n_minor=20)
+    fld = smooth_direction_field(V, F, symmetry=2, seed=0)
+    img = stripe_image()
+    r = hpm_texture(V, F, img, scale=2.0, seed=0, field=fld)
+    assert r.report()["pattern"]["field"] == "given"
+    assert sum(lv["continued"] for lv in r.report()["levels"]) > 0
+    dev = field_deviation(V, F, r, img, comb_direction_field(V, F, fld).vectors, 2)
+    assert np.quantile(dev, 0.75) < 8.0
+
+
+def test_hpm_automatic_field_on_a_mesh_with_zero_area_faces():
+    # simplified meshes have faces of zero area (Spot at 30k: 81), on which no field is
+    # defined: the field is solved without them and they take a neighbour's vector
+    from geotex.image.hpm import _pattern_field
+    V, F = torus(1.0, 0.4, n_major=48, n_minor=16)
+    V = V.copy()
+    V[F[0, 2]] = 0.5 * (V[F[0, 0]] + V[F[0, 1]])     # face 0 collapses onto its edge
+    from geotex.mesh.geometry import degenerate_faces
+    bad = degenerate_faces(V, F)
+    assert bad.size >= 1
+    vec, sym = _pattern_field(V, F, stripe_image(), None)
+    assert np.allclose(np.linalg.norm(vec, axis=1), 1.0)
+    r = hpm_texture(V, F, stripe_image(), scale=2.0, seed=0)
+    assert r.report()["pattern"]["field"] == "auto" and np.isfinite(r.uv).all()

@@ -25,11 +25,26 @@ def register(sub):
                    help="surface length (mm) covered by the image width (default: a quarter "
                         "of the bounding-box diagonal)")
     p.add_argument("--field", default=None, metavar="F.npz",
-                   help="direction field from 'geotex field': patches follow it")
+                   help="direction field from 'geotex field': every patch takes its "
+                        "direction, neighbours' continuations within --field-tolerance of it")
+    p.add_argument("--orientation", choices=("auto", "field", "neighbours"), default="auto",
+                   help="without --field: where the patches' orientation comes from; auto "
+                        "(default): a smooth direction field of the surface for a periodic or "
+                        "anisotropic image (one orientation over the surface, breaks only at "
+                        "the field's singularities), the neighbours for a stochastic one; "
+                        "field: the smooth field always; neighbours: propagated from patch "
+                        "to patch (the paper's)")
+    p.add_argument("--field-tolerance", type=float, default=25.0, metavar="DEG",
+                   help="with a field: a neighbour's continuation is turned onto the field's "
+                        "direction and kept as a candidate when the turn is at most DEG "
+                        "degrees (default 25)")
     p.add_argument("--angle", type=float, default=None, metavar="DEG",
-                   help="orientation of the first patch in degrees (default random)")
+                   help="orientation of the first patch in degrees (default random); with "
+                        "the automatic field: the field's turn about the normals")
     p.add_argument("--orientation-spread", default="30", metavar="DEG|any",
-                   help="without --field: a patch next to textured faces is matched only at "
+                   help="when the orientation comes from the neighbours (a stochastic image, "
+                        "or --orientation neighbours): a patch next to textured faces is "
+                        "matched only at "
                         "orientations within DEG degrees of its main neighbour's, so the "
                         "orientation carries over as in the paper (default 30); 'any' "
                         "searches every orientation")
@@ -146,14 +161,18 @@ def run(args) -> int:
                                  orientation_spread=spread, band_distance=args.band,
                                  face_match=args.face_level == "match",
                                  subpixel=args.subpixel, structure=args.structure == "auto",
-                                 min_patch=args.min_patch, progress=bar)
+                                 min_patch=args.min_patch,
+                                 orientation_field={"auto": "auto", "field": "always",
+                                                    "neighbours": "never"}[args.orientation],
+                                 field_tolerance=args.field_tolerance, progress=bar)
     except Exception as exc:
         from geotex.errors import InputError
         if isinstance(exc, InputError):
             msg = str(exc)
             if msg.startswith("the base mesh"):
                 raise UsageError(f"{args.base}: {msg}") from None
-            raise flag_error(exc, {"scale": "--scale", "min_patch": "--min-patch"}) from None
+            raise flag_error(exc, {"scale": "--scale", "min_patch": "--min-patch",
+                                    "field_tolerance": "--field-tolerance"}) from None
         raise
     if args.displace is not None:
         status = write_relief(args, args.base, args.image, out, result.uv[result.uv_faces])

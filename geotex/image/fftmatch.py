@@ -44,7 +44,8 @@ from scipy.ndimage import map_coordinates
 from geotex.errors import InputError
 
 __all__ = ["opponent_colors", "TextureSpectra", "texture_spectra", "match_energy",
-           "brute_force_energy", "PatternScale", "pattern_scale"]
+           "brute_force_energy", "PatternScale", "pattern_scale",
+           "quarter_turn_symmetry"]
 
 #: An autocorrelation peak counts as a repeat of the pattern when it and the value at twice
 #: its lag both reach this (see :func:`pattern_scale`).
@@ -492,3 +493,57 @@ def pattern_scale(image) -> PatternScale:
     per = np.array(found)
     return PatternScale(True, float(np.linalg.norm(per, axis=1).max()), per, corr,
                         float(min(strength)), coherence, orientation)
+
+
+def quarter_turn_symmetry(image) -> float:
+    """How much a sample looks the same after a quarter turn (in [-1, 1]).
+
+    The normalised luminance autocorrelation ``rho`` (as in
+    :func:`pattern_scale`, lags within a quarter of the smaller side) is
+    compared with itself turned by 90 degrees: the Pearson correlation of
+    the two over the disc of lags, lag 0 left out.  A square grid (rope net,
+    basket weave) gives values near 1, stripes, bricks and other patterns with
+    one dominant direction low or negative values.
+
+    Parameters
+    ----------
+    image : array_like, (h, w, 3) or (h, w) uint8 or float
+
+    Returns
+    -------
+    float
+        0 for a constant image.
+
+    Raises
+    ------
+    InputError
+        If the image is not (h, w) or (h, w, 3+) with h, w >= 8.
+    """
+    a = np.asarray(image, dtype=np.float64)
+    if a.ndim == 3 and a.shape[2] >= 3:
+        Y = a[:, :, :3] @ _WEIGHTS[0]
+    elif a.ndim == 2:
+        Y = a.copy()
+    else:
+        raise InputError(f"image must be (h, w) or (h, w, 3), got shape {a.shape}")
+    h, w = Y.shape
+    if min(h, w) < 8:
+        raise InputError(f"image must be at least 8 x 8 pixels, got {w} x {h}")
+    Y = Y - Y.mean()
+    var = float(np.mean(Y * Y))
+    if var <= 1e-12 * (1.0 + float(np.mean(a * a))):
+        return 0.0
+    shape = (2 * h, 2 * w)
+    spec = sfft.rfft2(Y, s=shape)
+    acf = sfft.irfft2(spec * np.conj(spec), s=shape)
+    one = sfft.rfft2(np.ones((h, w)), s=shape)
+    cnt = sfft.irfft2(one * np.conj(one), s=shape)
+    rho = np.fft.fftshift(acf / np.maximum(np.rint(cnt), 1.0) / var)
+    r = max(min(h, w) // 4, 2)
+    rho = rho[h - r:h + r + 1, w - r:w + r + 1]
+    yy, xx = np.mgrid[-r:r + 1, -r:r + 1]
+    disc = (np.hypot(xx, yy) <= r) & ((xx != 0) | (yy != 0))
+    x, y = rho[disc], np.rot90(rho)[disc]
+    x, y = x - x.mean(), y - y.mean()
+    den = float(np.sqrt(np.sum(x * x) * np.sum(y * y)))
+    return float(np.sum(x * y) / den) if den > 0 else 0.0

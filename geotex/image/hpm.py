@@ -115,6 +115,30 @@ distance of the jumps to the lattice, quartiles in periods, went from
 large to snap without folding faces).  See :func:`hpm_texture`
 (``structure``) for what it changed.
 
+One orientation over the surface (``orientation_field``, issue 16; paper
+§5.1, Fig. 10).  Propagating the neighbour's orientation from patch to patch
+(the paper's way) lets it drift with the surface's curvature: regions grown
+separately meet turned (on Spot 10k with bricks, basket weave and rope net a
+quarter of the patch-border edges turned by 25-35 degrees or more).  For a
+periodic or anisotropic sample the orientation therefore comes, by default,
+from the smoothest line field of the surface
+(:func:`geotex.fields.smooth_direction_field`, a cross field for a sample
+that looks the same after a quarter turn; combed so that separately started
+regions agree on its sign), as for a user's ``field``: a cluster's direction
+is the area-weighted ``N``-fold mean of the field carried into its
+flattening by every face's linear map; a cluster over which it is not
+coherent enough for one rigid patch (``FIELD_COHERENCE``) is subdivided;
+the FFT search uses that one orientation (the grid turned onto it); the
+neighbours' continuations (and their whole-period moves) are turned onto it
+about their shared border when they need at most ``field_tolerance`` and
+then moved to the lowest matching error within ``CONTINUATION_WINDOW`` of a
+pattern size (their phase is corrected, the orientation kept); crack moves
+(lattice snapping, relaxation) that turn the patch by more than
+``FIELD_SNAP_TURN`` / ``FIELD_MOVE_TURN`` degrees are undone.  The pattern
+then breaks only at the field's singularities and the combing's cut, and
+where two neighbours' phases disagree.  See :func:`hpm_texture`
+(``orientation_field``) for what it changed.
+
 Sub-pixel refinement (``subpixel``, off by default): the FFT minimum lies
 on whole matching pixels and on the orientation grid; with ``subpixel`` it
 is refined by parabolas of the continuous mask error (bilinear samples) in
@@ -154,11 +178,13 @@ from scipy.sparse.csgraph import breadth_first_order, connected_components, dijk
 
 from geotex.errors import InputError, MissingFileError
 from geotex.image.atlas import rasterize_triangles
+from geotex.fields.combing import comb_direction_field
+from geotex.fields.directions import smooth_direction_field
 from geotex.image.fftmatch import (match_energy, opponent_colors, pattern_scale,
-                                   texture_spectra)
+                                   quarter_turn_symmetry, texture_spectra)
 from geotex.image.patches import load_image
 from geotex.mesh.arrays import as_mesh_arrays
-from geotex.mesh.geometry import face_areas
+from geotex.mesh.geometry import degenerate_faces, face_areas
 from geotex.mesh.record import Mesh
 from geotex.mesh.topology import edge_topology
 from geotex.options import count, finite_number, positive_number
@@ -180,6 +206,26 @@ LATTICE_CANDIDATES = 24
 #: A border vertex of a periodic sample within this fraction of the shortest period of a
 #: lattice copy of its neighbour's texture position takes that copy (see :func:`hpm_texture`).
 LATTICE_SNAP = 0.12
+
+#: Smallest coherence of the field over a cluster (``|mean exp(i N phi)|``, see
+#: ``field_direction`` in :func:`hpm_texture`) for one rigid patch; a cluster where the
+#: field turns more is subdivided (not on the finest cluster level).
+FIELD_COHERENCE = 0.95
+
+#: With a field, a neighbour's continuation is moved to the lowest matching error within
+#: this fraction of the pattern size (period, or correlation length) of it.
+CONTINUATION_WINDOW = 0.25
+
+#: With a field, crack moves (lattice snapping, relaxation) spread inside a patch are undone
+#: when they turn it by more than this many degrees.
+FIELD_MOVE_TURN = 1.0
+
+#: The same for the lattice snapping (it keeps the pattern's phase across borders).
+FIELD_SNAP_TURN = 3.0
+
+#: Quarter-turn symmetry of a sample's autocorrelation from which its field is a cross
+#: field (4 directions) instead of a line field.
+QUARTER_TURN = 0.8
 
 #: Largest relaxation move, as a fraction of the shortest edge at the vertex (texture space).
 RELAX_EDGE_FRACTION = 0.2
@@ -205,6 +251,7 @@ class HPMLevel:
     matched_faces: int = 0
     forced: int = 0
     lattice_snapped: int = 0
+    field_refused: int = 0
 
     @property
     def mean_error(self) -> float:
@@ -219,7 +266,8 @@ class HPMLevel:
                 "filled_faces": self.filled_faces, "continued": self.continued,
                 "refused": dict(sorted(self.refused.items())), "projected": self.projected,
                 "free_border": self.free_border, "matched_faces": self.matched_faces,
-                "forced": self.forced, "lattice_snapped": self.lattice_snapped}
+                "forced": self.forced, "lattice_snapped": self.lattice_snapped,
+                "field_refused": self.field_refused}
 
 
 @dataclass(frozen=True, eq=False)
@@ -383,7 +431,8 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                 match_size: int = 200, flattening: str = "mean_value",
                 snap: float = 1.5, relax: bool = True, face_group: int = 4,
                 subpixel: bool = False, face_match: bool = True, structure: bool = True,
-                min_patch: float = 0.3,
+                min_patch: float = 0.3, orientation_field: str = "auto",
+                field_tolerance: float = 25.0,
                 progress=None) -> HPMResult:
     """Texture a closed mesh with patches of one image, coarse to fine (see module docstring).
 
@@ -399,11 +448,39 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         image's width.
     field : DirectionField or array_like (m, 3), optional
         Orientation: every patch's image x axis follows the per-face field
-        (searched within +-20 degrees of it, and of its symmetric copies for
-        an N-direction field).
+        (its direction over the flattened cluster, the representative of an
+        N-direction field nearest the main neighbour's orientation; the FFT
+        search uses that orientation only, and the neighbours'
+        continuations, moved by whole periods for a periodic sample, are
+        candidates when within ``field_tolerance`` of it).  A cluster over
+        which the field turns too much for one rigid patch (coherence of
+        ``exp(i N phi)`` below ``FIELD_COHERENCE``) is subdivided.
     angle : float, optional
-        Orientation of the first patch in degrees (without ``field``;
+        Orientation of the first patch in degrees (without a field;
         default random).  Later patches take the orientation that fits.
+        With the automatic field (``orientation_field``) the field is
+        turned by ``angle`` about the normals.
+    orientation_field : {"auto", "always", "never"}, optional
+        Without ``field``: ``"auto"`` (default) computes the smoothest line
+        field of the surface (cross field for a sample that looks the same
+        after a quarter turn, see :func:`_pattern_field`) for a periodic or
+        anisotropic sample (``structure``) and uses it as ``field``, so that
+        one orientation holds over the surface and breaks only at the
+        field's singularities (the paper propagates the neighbour's
+        orientation, which drifts with the surface's curvature and meets
+        itself turned where separately grown regions meet); stochastic
+        samples keep the neighbours' orientation (byte-identical).
+        ``"always"`` uses the field for every sample, ``"never"`` never.
+        Spot 10k, seeds 0-2 (benchmarks/results/hpm.md section 7): rotation
+        across patch borders, 75th percentile, bricks / basket weave / rope
+        net 25-31 -> 15-18 degrees, inner edges turning by more than 20
+        degrees 5.3-6.1 % -> 3.2-3.7 %; median 2-3 -> 4-7 degrees (fewer
+        exact continuations); seams where the map jumps unchanged within the
+        seed spread; 720-940 placements instead of 580-720, CPU +1-2 s
+        (slate tiles 28 -> 41 s, 1150 faces unfolded instead of 350).
+    field_tolerance : float, optional
+        Degrees: with a field, a neighbour's continuation is a candidate
+        only when its orientation is within this of the field's direction.
     seed : int, optional
         Seed of every random choice; same inputs and seed give the same uv.
     orientations : int, optional
@@ -563,18 +640,29 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
     ppm_m = ppm / f
     center = spectra.center
     var2 = 2.0 * max(spectra.variance, 1e-12)
-    # field: per-face direction and allowed orientation indices
+    ps = pattern_scale(img)
+    # field: per-face direction (the user's, or a smooth field for a structured sample)
+    if orientation_field not in ("auto", "always", "never"):
+        raise InputError(f"orientation_field must be 'auto', 'always' or 'never', got "
+                         f"{orientation_field!r}")
+    field_tol = np.radians(finite_number(field_tolerance, name="field_tolerance"))
+    if field_tol < 0:
+        raise InputError(f"field_tolerance must be >= 0 degrees, got {field_tolerance!r}")
     fvec = None
-    allowed = None                       # every orientation
+    sym = 1
+    auto_field = False
     if field is not None:
         fvec = np.asarray(getattr(field, "vectors", field), dtype=np.float64)
         if fvec.shape != (m, 3):
             raise InputError(f"field has {fvec.shape[0]} faces, the mesh {m}")
         sym = max(int(getattr(field, "symmetry", 1)), 1)
-        ang = spectra.angles
-        d = np.min(np.abs(((ang[:, None] - 2 * np.pi * np.arange(sym)[None, :] / sym) + np.pi)
-                          % (2 * np.pi) - np.pi), axis=1)
-        allowed = np.flatnonzero(d <= np.radians(20.0) + 1e-9)
+        if sym > 1:                      # one representative per face, combed
+            fvec = comb_direction_field(V, F, fvec, symmetry=sym).vectors
+    elif orientation_field == "always" or (orientation_field == "auto" and structure and (
+            ps.periodic or ps.coherence > ANISOTROPIC_COHERENCE)):
+        report(progress, "field")
+        fvec, sym = _pattern_field(V, F, img, angle)
+        auto_field = True
     # vertex graph for band distances (both directions stored: searched as directed, which
     # spares scipy a transpose per search)
     E = edge_topology(F, V.shape[0]).edges
@@ -583,7 +671,6 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                                                   np.concatenate([E[:, 1], E[:, 0]]))),
                       shape=(V.shape[0],) * 2)
     band_w = band_distance * scale
-    ps = pattern_scale(img)
     patch_factor = finite_number(min_patch, name="min_patch")
     if patch_factor < 0:
         raise InputError(f"min_patch must be >= 0 periods, got {min_patch!r}")
@@ -609,9 +696,15 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         basis = np.array([p1, q], dtype=np.float64)          # rows: the two lattice vectors
         stripes = ps.periods.shape[0] == 1
         snap_tol = LATTICE_SNAP * min(np.linalg.norm(p1), np.linalg.norm(q))
+    # continuation window (matching pixels, with a field): a quarter of the pattern size
+    win = max(1, int(round(CONTINUATION_WINDOW * (_pattern_size(ps, img.shape) if ps.periodic
+                                                  else ps.correlation_length) / f)))
     pattern_info = {"periodic": bool(ps.periodic), "period_px": ps.period,
                     "correlation_length_px": ps.correlation_length,
                     "coherence": ps.coherence, "min_patch": min_patch, "band_width": band_w}
+    if fvec is not None:
+        pattern_info["field"] = "auto" if auto_field else "given"
+        pattern_info["field_symmetry"] = sym
     # equivalent-disc diameter of every cluster, per level (for the minimal patch size)
     diam = [2.0 * np.sqrt(np.bincount(lv.labels, weights=A, minlength=lv.n_clusters) / np.pi)
             for lv in Hc.levels]
@@ -679,6 +772,40 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         the local y axis is flipped to keep the texture unmirrored on the surface."""
         return np.column_stack([loc[:, 0], -loc[:, 1]]) * ppm_m
 
+    def field_direction(verts, loc, faces):
+        """The field's direction in the matching-pixel frame of a flattened cluster.
+
+        Every face's field vector is carried by the face's own linear map
+        (surface -> flattening -> matching pixels); the area-weighted mean of
+        ``exp(i N phi)`` gives the direction (radians, one of the ``N``
+        representatives) and its coherence (1: the field is parallel in the
+        flattening, 0: it turns all the way round, e.g. about a singularity).
+        """
+        return field_angle(verts, pix(loc), faces)
+
+    def field_angle(verts, X2, faces):
+        """:func:`field_direction` for any 2D positions ``X2`` of ``verts`` (no mirror)."""
+        U = np.zeros((V.shape[0], 2))
+        U[verts] = X2
+        P = V[F[faces]]
+        T = U[F[faces]]
+        E = np.stack([P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]], axis=2)        # (k, 3, 2)
+        D = np.stack([T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]], axis=2)        # (k, 2, 2)
+        G = np.einsum("kji,kjl->kil", E, E)
+        G = G + 1e-12 * np.trace(G, axis1=1, axis2=2)[:, None, None] * np.eye(2)
+        coef = np.linalg.solve(G, np.einsum("kji,kj->ki", E, fvec[faces])[:, :, None])
+        d = (D @ coef)[:, :, 0]
+        w = A[faces]
+        phi = np.arctan2(d[:, 1], d[:, 0])
+        z = np.sum(w * np.exp(1j * sym * phi))
+        tot = float(w.sum())
+        a = float(np.angle(z)) / sym
+        if sym > 1:       # the representative nearest the (combed) vectors' own mean
+            a1 = float(np.angle(np.sum(w * np.exp(1j * phi))))
+            step = 2 * np.pi / sym
+            a += step * np.round(((a1 - a) % (2 * np.pi)) / step)
+        return a, (abs(z) / tot if tot > 0 else 0.0)
+
     def fft_placement(rot_k, shift):
         """(R, t) of a translation ``shift`` of the mask over rotated copy ``rot_k``:
         matching-image position = R pix + t."""
@@ -735,6 +862,21 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             if np.linalg.det(R) > 0:
                 out.append((R, ym - R @ xm))
         return out
+
+    def turned_fit(fk, bverts, bl, in_c, a):
+        """Placement ``fk`` (R, t) turned to orientation ``a`` (radians) about the
+        texture position of its shared border: the mean of the band vertices that
+        belong to the cluster and agree, or of all agreeing band vertices.  Near
+        that border the neighbour's pattern keeps its phase; the turn that is
+        needed to follow the field spreads away from it."""
+        Ab = st.agreed()[bverts] / f
+        ok = np.isfinite(Ab[:, 0])
+        on = ok & in_c[bverts]
+        sel = on if on.sum() >= 2 else ok
+        x0 = pix(bl[bverts[sel]]).mean(axis=0)
+        y0 = fk[0] @ x0 + fk[1]
+        Ra = np.array([[np.cos(a), np.sin(a)], [-np.sin(a), np.cos(a)]])
+        return Ra, y0 - Ra @ x0
 
     def mask_points(tb, origin):
         """Raster-frame positions ``q`` (k, 2) of the mask pixels ``tb``."""
@@ -864,6 +1006,11 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         if c is not None:
             lv = Hc.levels[li]
             N = frame(li)[0]
+        if fvec is not None:
+            a_fld, coh = field_direction(verts, loc, faces)
+            if coh < FIELD_COHERENCE and not last:
+                refuse(li, 'field_turns')    # the field turns too much for one rigid patch
+                return None
         # band of textured faces within band_w of the cluster
         in_c = np.zeros(V.shape[0], bool)
         in_c[verts] = True
@@ -907,21 +1054,48 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             bl[bverts] = bloc
         Lall = np.zeros((V.shape[0], 2))
         Lall[verts] = loc
-        # orientation grid: without a field, the raster frame is turned so that the main
-        # neighbour's orientation is exactly one of the searched orientations (the FFT
-        # candidates then include the exact continuation of its pattern, and the others
-        # lie at multiples of 360 / orientations degrees from it)
+        # orientation grid: the raster frame is turned so that the reference orientation
+        # is exactly one of the searched orientations (the FFT candidates then include it,
+        # and the others lie at multiples of 360 / orientations degrees from it).  Without
+        # a field the reference is the main neighbour's orientation (its exact
+        # continuation is then a candidate); with a field it is the field's direction in
+        # the cluster (the representative nearest the main neighbour's orientation), and
+        # only the neighbours' continuations within ``field_tol`` of it are candidates
         nfit = None
         fits = []
+        fits_all = False
         Rd = np.eye(2)
-        if band_faces.size and fvec is None and st.n_patch > 0:
+        a_ref = None
+        if fvec is not None:
+            a_ref = a_fld
+        if band_faces.size and st.n_patch > 0:
             fits = neighbour_fits(bverts, bl, c is None)
             nfit = fits[0] if fits else None
-            if nfit is not None:
-                a_nb = np.arctan2(nfit[0][0, 1], nfit[0][0, 0])
-                dev = (spectra.angles - a_nb + np.pi) % (2 * np.pi) - np.pi
-                dl = -dev[int(np.argmin(np.abs(dev)))]          # a_nb - nearest angle
-                Rd = np.array([[np.cos(dl), np.sin(dl)], [-np.sin(dl), np.cos(dl)]])
+            fits_all = bool(fits)
+            if fvec is not None:
+                if nfit is not None:
+                    a_nb = np.arctan2(nfit[0][0, 1], nfit[0][0, 0])
+                    step = 2 * np.pi / sym
+                    a_ref = a_fld + step * np.round(((a_nb - a_fld) % (2 * np.pi)) / step)
+                    # the neighbours' continuations turned to the field's direction (about
+                    # their shared border), those that need at most ``field_tol``
+                    turned = []
+                    for fk in fits:
+                        ak = np.arctan2(fk[0][0, 1], fk[0][0, 0])
+                        if _angle_gap(ak, a_ref, sym) <= field_tol + 1e-12:
+                            ar = a_fld + step * np.round(((ak - a_fld) % (2 * np.pi)) / step)
+                            turned.append(turned_fit(fk, bverts, bl, in_c, ar))
+                    fits = turned
+                    nfit = fits[0] if fits else None
+                    levels[li].field_refused += int(nfit is None)
+            elif nfit is not None:
+                a_ref = np.arctan2(nfit[0][0, 1], nfit[0][0, 0])
+        k_ref = None
+        if a_ref is not None:
+            dev = (spectra.angles - a_ref + np.pi) % (2 * np.pi) - np.pi
+            k_ref = int(np.argmin(np.abs(dev)))
+            dl = -dev[k_ref]                                    # a_ref - nearest angle
+            Rd = np.array([[np.cos(dl), np.sin(dl)], [-np.sin(dl), np.cos(dl)]])
 
         def qpix(x):
             return pix(x) @ Rd.T
@@ -949,8 +1123,10 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             K[tb] = 1.0
         K = K.reshape(hm, wm)
         if li == 0 or not J.any():
-            which = allowed
-            if st.n_patch == 0 and fvec is None:
+            which = None
+            if fvec is not None:         # the field's direction (the combed representative)
+                which = [k_ref]
+            elif st.n_patch == 0:
                 a0 = np.radians(angle) if angle is not None else rng.random() * 2 * np.pi
                 which = [int(np.argmin(np.abs((spectra.angles - a0 + np.pi) % (2 * np.pi)
                                               - np.pi)))]
@@ -976,8 +1152,12 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                 if lattice is not None:
                     cont = lattice_continuation(cont, fits if c is None else fits[:1], Rd,
                                                 loc, tb, I, origin, li)
-            which = allowed
-            if cont is not None and spread is not None:
+            which = None
+            if fvec is not None:
+                # the field gives the orientation: only its direction (the representative
+                # next to the main neighbour's, without a neighbour fit the combed one)
+                which = [k_ref]
+            elif cont is not None and spread is not None:
                 # orientation propagates from the neighbours (paper §3): only the
                 # orientations within ``spread`` of the neighbour's own are searched
                 Rm = nfit[0] @ Rd.T                # the main neighbour's orientation
@@ -988,6 +1168,22 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                     which = np.array([int(np.argmin(dev))])
             Eg = match_energy(spectra, I.reshape(hm, wm, -1), J.reshape(hm, wm), K,
                               which=which)
+            if fvec is not None and cont is not None:
+                # with a field the continuation has the searched orientation: take the
+                # FFT minimum within ``CONTINUATION_WINDOW`` of a pattern size of it (its
+                # phase corrected, e.g. after whole-period moves of a sample that is not
+                # exactly periodic), the error of the exact pixel grid
+                rk = spectra.angles[k_ref]
+                Rk_ = np.array([[np.cos(rk), np.sin(rk)], [-np.sin(rk), np.cos(rk)]])
+                sxy = Rk_.T @ (cont[1] - center) + center + origin
+                ix, iy = int(np.rint(sxy[0])), int(np.rint(sxy[1]))
+                y0_, x0_ = max(iy - win, 0), max(ix - win, 0)
+                blk = Eg[0, y0_:max(iy + win + 1, 0), x0_:max(ix + win + 1, 0)]
+                if blk.size and np.isfinite(blk).any():
+                    by, bx = np.unravel_index(int(np.argmin(blk)), blk.shape)
+                    Rw, tw = fft_placement(k_ref, np.array([x0_ + bx, y0_ + by],
+                                                           dtype=np.float64) - origin)
+                    cont = (Rw, tw, float(blk[by, bx]))
             flat = Eg.ravel()
             if not np.isfinite(flat).any():
                 refuse(li, 'no_position')
@@ -1039,7 +1235,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             close = has & (np.linalg.norm(P - np.nan_to_num(nb_uv), axis=1) <= snap)
             close = _snap(P, nb_uv, close, tri)
 
-            def spread_moves(moved, keep):
+            def spread_moves(moved, keep, turn=FIELD_MOVE_TURN):
                 """Spread the moves of border vertices inside the cluster through the
                 recursive mapping (the moved vertices imposed at every level), as in the
                 paper; ``keep`` rows stay where they are.  Returns the new positions, or
@@ -1050,7 +1246,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                     return None
                 if proj:
                     ok_ = not folded(verts, np.column_stack([moved[:, 0], -moved[:, 1]]),
-                                     faces)
+                                     faces) and not turns(moved, turn)
                     return moved if ok_ else None
                 if fixed is None:
                     fixed = np.zeros((V.shape[0], 2))
@@ -1061,10 +1257,22 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                 _, v2, loc2, f2 = flatten(li, c, fixed, fixed_mask)
                 P2 = to_image(loc2, R_, t_)
                 P2[keep] = moved[keep]
-                if folded(verts, np.column_stack([P2[:, 0], -P2[:, 1]]), faces):
+                if folded(verts, np.column_stack([P2[:, 0], -P2[:, 1]]), faces) or \
+                        turns(P2, turn):
                     fixed, fixed_mask = fx0, fm0
                     return None
                 return P2
+
+            def turns(P2, turn):
+                """With a field: whether the moves turn the patch away from its
+                orientation by more than ``FIELD_MOVE_TURN`` degrees (spread by the
+                recursive mapping, the relaxation's small border moves turned whole
+                patches by 6 degrees (median) on a torus with stripes)."""
+                if fvec is None:
+                    return False
+                a0 = field_angle(verts, P, faces)[0]
+                a1 = field_angle(verts, P2, faces)[0]
+                return _angle_gap(a1, a0, sym) > np.radians(turn)
 
             if lattice is not None and (has & ~close).any():
                 # periodic sample: a border vertex within ``snap_tol`` of a copy of the
@@ -1081,7 +1289,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                 if near_.any():
                     moved = P.copy()
                     got = _snap(moved, target, near_, tri)
-                    P2 = spread_moves(moved, close | got)
+                    P2 = spread_moves(moved, close | got, FIELD_SNAP_TURN)
                     if P2 is not None:
                         P = P2
                         close = close | got
@@ -1232,6 +1440,55 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
     fl = np.where(st.face_level < 0, L - 1, st.face_level)
     return HPMResult(uv=np.ascontiguousarray(uv_out), uv_faces=uv_faces, patch=st.patch,
                      face_level=fl, levels=levels, pattern=pattern_info)
+
+
+def _angle_gap(a: float, b: float, sym: int) -> float:
+    """Smallest angle between direction ``a`` and the ``sym`` representatives of ``b``."""
+    step = 2 * np.pi / sym
+    return abs((a - b + 0.5 * step) % step - 0.5 * step)
+
+
+def _pattern_field(V, F, img, angle):
+    """Smooth direction field for a structured sample: (per-face vectors, symmetry).
+
+    The smoothest field of the surface (:func:`geotex.fields.smooth_direction_field`,
+    no constraint), with 4-fold symmetry when the sample looks the same turned by a
+    quarter turn (:func:`geotex.image.fftmatch.quarter_turn_symmetry` above
+    ``QUARTER_TURN``), 2-fold (lines) otherwise; turned by ``angle`` degrees about
+    the normals when given (the smoothest field is defined up to such a turn).  The
+    vectors are combed (:func:`geotex.fields.comb_direction_field`): a patch without a
+    textured neighbour to continue takes the representative nearest them, so that
+    separately started regions agree on the pattern's sign except across the
+    combing's cut edges.
+    """
+    sym = 4 if quarter_turn_symmetry(img) >= QUARTER_TURN else 2
+    # faces of zero area (simplified meshes have some) carry no direction: the field is
+    # solved without them (they weigh nothing in a cluster's direction) and they get a
+    # neighbour's vector, or the x axis
+    bad = degenerate_faces(V, F)
+    keep = np.setdiff1d(np.arange(F.shape[0]), bad)
+    fld = smooth_direction_field(V, F[keep], symmetry=sym)
+    sub = comb_direction_field(V, F[keep], fld).vectors
+    if angle is not None:
+        a = np.radians(angle)
+        sub = np.cos(a) * sub + np.sin(a) * np.cross(fld.normals, sub)
+    vec = np.zeros((F.shape[0], 3))
+    vec[keep] = sub
+    vec[bad] = (1.0, 0.0, 0.0)
+    if bad.size and keep.size:
+        FF = face_adjacency(V, F).face_neighbors
+        for _ in range(bad.size):            # waves: each bad face from a good neighbour
+            nb = FF[bad]
+            good = np.isin(nb, keep) & (nb >= 0)
+            has = good.any(axis=1)
+            if not has.any():
+                break
+            vec[bad[has]] = vec[nb[has, np.argmax(good[has], axis=1)]]
+            keep = np.union1d(keep, bad[has])
+            bad = bad[~has]
+            if bad.size == 0:
+                break
+    return np.ascontiguousarray(vec), sym
 
 
 def _pattern_size(ps, shape) -> float:
