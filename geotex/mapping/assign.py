@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from geotex.errors import InputError
-from geotex.tiles.directional import ridge_edges
+from geotex.tiles.directional import quad_turns, ridge_edges, tile_turns
 from geotex.tiles.tileset import TileSet
 
 __all__ = ["edge_colors", "tiles_for_quads"]
@@ -52,8 +52,9 @@ def tiles_for_quads(tiles: TileSet, quad_axes: np.ndarray, quad_edge: np.ndarray
         A complete set (one group per quad frame), an isotropic set
         (``tiles.isotropic``: one colour class shared by all axes, so the
         group is ignored), or an oriented directional set
-        (:func:`geotex.tiles.directional.oriented_tileset`: edges where the
-        flow does not run on across take its ridge colour instead of theirs).
+        (:func:`geotex.tiles.directional.oriented_tileset`: each quad's turn is
+        chosen by :func:`geotex.tiles.directional.quad_turns`, and edges where
+        the flow does not run on across take its ridge colour instead of theirs).
     quad_axes : numpy.ndarray, (q, 2) int64
         In-plane axes ``(a1, a2)`` of each quad's frame (its tile group).
     quad_edge : numpy.ndarray, (q, 4) int64
@@ -77,12 +78,17 @@ def tiles_for_quads(tiles: TileSet, quad_axes: np.ndarray, quad_edge: np.ndarray
         if not info.get("oriented"):
             raise InputError(f"tile set {tiles.name!r} is a directional base set; turn it to "
                              "the flow first (geotex.tiles.directional.oriented_tileset)")
-        ridge = ridge_edges(quad_axes, quad_edge, len(colors), up=info.get("up", 2),
-                            bare=bare)
+        up = info.get("up", 2)
+        turns = quad_turns(quad_axes, quad_edge, len(colors), up=up, bare=bare)
+        ridge = ridge_edges(quad_axes, quad_edge, len(colors), up=up, bare=bare, turns=turns)
         colors = np.where(ridge, int(info["ridge"]), colors)
     side = colors[quad_edge]                                    # (q, 4)
     if getattr(tiles, "isotropic", False):
         keys, table = side, tiles.colors
+    elif info:
+        # the turn is part of the key: (group, turn, colours)
+        keys = np.hstack([quad_axes, turns[:, None], side])
+        table = np.hstack([tiles.groups, tile_turns(tiles)[:, None], tiles.colors])
     else:
         keys = np.hstack([quad_axes, side])
         table = np.hstack([tiles.groups, tiles.colors])
@@ -98,7 +104,7 @@ def tiles_for_quads(tiles: TileSet, quad_axes: np.ndarray, quad_edge: np.ndarray
         found |= np.asarray(bare, dtype=bool)
     if not found.all():
         k = keys[np.argmin(found)]
-        what = (f"group {tuple(k[:2])} with colours {tuple(k[2:])}" if k.size == 6
+        what = (f"group {tuple(k[:2])} with colours {tuple(k[-4:])}" if k.size >= 6
                 else f"colours {tuple(k)}")
         raise InputError(f"tile set {tiles.name!r} has no tile for {what}; a closed shape "
                          "needs a complete or isotropic set, not a planar one")

@@ -18,7 +18,7 @@ import numpy as np
 
 from geotex.errors import InputError
 from geotex.mesh.topology import edge_topology
-from geotex.tiles.directional import oriented_tileset, side_kinds
+from geotex.tiles.directional import oriented_tileset, side_kinds, tile_turns
 from geotex.tiles.fill import footprint_pixels
 from geotex.tiles.tileset import TileSet
 
@@ -118,7 +118,7 @@ def _class_keys(tiles: TileSet) -> np.ndarray:
 def _kind_keys(tiles: TileSet) -> np.ndarray:
     """(T, 4, 2) grouping keys of an oriented directional set: (kind, colour), ridge (4, 0)."""
     info = tiles.metadata["directional"]
-    kinds = side_kinds(tiles.groups, up=info.get("up", 2))
+    kinds = side_kinds(tiles.groups, up=info.get("up", 2), turns=tile_turns(tiles))
     ridge = tiles.colors == int(info["ridge"])
     return np.stack([np.where(ridge, 4, kinds), np.where(ridge, 0, tiles.colors)], -1)
 
