@@ -9,8 +9,13 @@ names anisotropic textures as future work, last section of
 The flow. Every quad of a polycube lies on a chart with outward normal along one
 world axis. With ``up`` the world "up" axis (default Z), the flow on a side
 chart (normal not along ``up``) runs toward ``-up`` (scales hang down, like roof
-tiles or fish scales with gravity), and on the top and bottom charts (normal
-along ``up``) toward ``+T`` with ``T = (up + 2) % 3`` (Y for up = Z).
+tiles or fish scales with gravity). The top and bottom charts (normal along
+``up``) have no down: each of their quads takes the one of four axis
+directions that makes fewest ridges (:func:`quad_turns`), so a top chart's
+scales run out over its rims and on down the sides, a bottom chart's run in
+from its rims. (Before, every top and bottom quad flowed toward ``+T``, ``T =
+(up + 2) % 3``, :func:`flow_of_group`, which left ridges on three of a top
+chart's four rims; ``quad_turns(..., optimise=False)`` still gives that rule.)
 
 The base set. The directional set is built once as a planar set whose elements
 point ``+v`` (:func:`geotex.tiles.build.build_tileset` with ``directional``):
@@ -27,15 +32,19 @@ in that side's own strip coordinates ``(t, s)`` (``t`` along the positive world
 axis of the edge, ``s = n x t``, the same on both quads of the edge, fold or
 not; :func:`geotex.tiles.frame.placed_half`), and its *kind* is the flow in
 those coordinates: ``+t, +s, -t, -s`` (codes 0, 1, 2, 3). Two quads may share
-an edge's strip only when they give it the same kind; where they do not (on a
-box with up = Z: the top rim edges along Y, and the X rim edge upstream of the
-top flow, and likewise on the bottom), the edge takes the ridge colour, whose
-sides are empty on every tile: no element crosses that edge, like the ridge
-or hip line of a roof. Elsewhere, including every fold between two side charts,
-the scales run on across the edge.
+an edge's strip only when they give it the same kind; where they do not, the
+edge takes the ridge colour, whose sides are empty on every tile: no element
+crosses that edge, like the ridge or hip line of a roof. Elsewhere, including
+every fold between two side charts, the scales run on across the edge. How many
+ridges the hanging sides force depends on the charts: on a box with a ``k x
+k`` top, ``3 k`` per top and bottom whatever the turns (an integer program
+agrees: a uniform flow, two halves flowing apart, or four quarters flowing out
+all cost as much), so there :func:`quad_turns` gains nothing; on the organic
+catalog polycubes, with many small top and bottom charts, it removes a third.
 
 The turned copies are made in memory (:func:`oriented_tileset`): six groups of
-the base tiles, each turned by its group's ``r``, positions turned by exact
+the base tiles, each turned by the turns its group allows (one on side
+charts, four on top and bottom), positions turned by exact
 formulas (``u' = 1 - v`` etc.), so sides of one kind and colour stay
 bit-identical. Files hold the base set only.
 """
