@@ -11,7 +11,6 @@ from geotex.errors import InputError
 from geotex.exemplars import exemplar
 from geotex.mapping import edge_colors, tiles_for_quads
 from geotex.mesh.primitives import torus
-from geotex.mesh.topology import edge_topology
 from geotex.shells import build_shell, quad_points_to_shell
 from geotex.tiles import build_tileset, check_seams, load_tileset, save_tileset
 from geotex.tiles.colors import COMPLETE_GROUPS, SOUTH, EAST, NORTH, WEST
