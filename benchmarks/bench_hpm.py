@@ -18,7 +18,14 @@ Embark water 300² resized to 256² and 512²); none are committed.  The wall
 time is the best of ``--repeat`` runs, with the CPU time of that run and the
 load average, because the 2 cores are shared with other jobs.
 
-Run:  python benchmarks/bench_hpm.py [--repeat 1]
+With ``--all-images`` only the issue's time target is checked on every image
+in ``../shared/data/images`` (quilting classic and Embark, at their own
+size): Spot 10k, the same scale, seed 0, default options, CPU and wall
+seconds, placements, faces unfolded at face level, the rotation across
+placement borders, the orientation breaks and the contrast where the map
+jumps; written to ``results/hpm_images.md`` and ``results/hpm_images.json``.
+
+Run:  python benchmarks/bench_hpm.py [--repeat 1] [--all-images]
 """
 
 from __future__ import annotations
@@ -141,10 +148,62 @@ def image(name: str, size: int | None = None) -> np.ndarray:
     return np.ascontiguousarray(img)
 
 
+def all_images(repeat: int = 1) -> list:
+    """Time ``hpm_texture`` on every image in ``../shared/data/images`` (Spot 10k, seed 0).
+
+    Returns one dict per image (also written to ``results/hpm_images.md`` / ``.json``).
+    """
+    import hashlib
+    V, F = spot(10000)
+    scale = 0.3 * float(np.linalg.norm(np.ptp(V, axis=0)))
+    names = sorted(str(p.relative_to(IMAGES)) for p in IMAGES.rglob("*")
+                   if p.suffix.lower() in (".png", ".jpg", ".jpeg"))
+    rows = []
+    lines = ["# Benchmark: hierarchical pattern mapping on every image", "",
+             f"{datetime.date.today().isoformat()}. Machine: {platform.machine()}, "
+             f"{os.cpu_count()} cores shared with other jobs (CPU seconds are inflated by "
+             "contention; the load average is the 1-minute one after the run). Script: "
+             "`benchmarks/bench_hpm.py --all-images`. Spot simplified to 10k faces, scale "
+             f"{scale:.3f} (0.3 x the diagonal), seed 0, default options, images at their own "
+             "size. Target (issue 16): at most 10 s.", "",
+             "| image | size | wall (s) | CPU (s) | load avg | placed | faces unfolded | "
+             "rotation across borders median ; p75 (deg) | orientation breaks | "
+             "where the map jumps | uv md5 |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for name in names:
+        img = image(name)
+        w, c, r = timed(lambda: hpm_texture(V, F, img, scale=scale, seed=0), repeat)
+        load = os.getloadavg()[0]
+        rep = r.report()
+        rot = border_rotation(V, F, r.uv, r.uv_faces, r.patch)
+        q50, q75 = np.quantile(rot, [0.5, 0.75]) if rot.size else (0.0, 0.0)
+        jump = seam_contrast(V, F, r.uv, r.uv_faces, img,
+                             continuity_regions(V, F, r.uv_faces)).ratio
+        row = {"image": name, "size": list(img.shape[:2]), "wall": w, "cpu": c, "load": load,
+               "placed": sum(lv["placed"] for lv in rep["levels"]),
+               "unfolded": rep["levels"][-1]["filled_faces"],
+               "rotation_median": float(q50), "rotation_p75": float(q75),
+               "breaks": orientation_breaks(V, F, r.uv, r.uv_faces), "jump_ratio": jump,
+               "md5": hashlib.md5(r.uv.tobytes() + r.uv_faces.tobytes()).hexdigest()[:10]}
+        rows.append(row)
+        lines.append(f"| {name} | {img.shape[1]}x{img.shape[0]} | {w:.2f} | {c:.2f} | "
+                     f"{load:.1f} | {row['placed']} | {row['unfolded']} | {q50:.1f} ; {q75:.1f} "
+                     f"| {row['breaks']:.3f} | {jump:.3f} | {row['md5']} |")
+        print(lines[-1], flush=True)
+    (HERE / "results" / "hpm_images.md").write_text("\n".join(lines) + "\n")
+    (HERE / "results" / "hpm_images.json").write_text(json.dumps(rows, indent=1))
+    return rows
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeat", type=int, default=1)
+    ap.add_argument("--all-images", action="store_true",
+                    help="only time every image in ../shared/data/images (Spot 10k)")
     args = ap.parse_args()
+    if args.all_images:
+        all_images(args.repeat)
+        return
     meshes = {10000: spot(10000), 30000: spot(30000)}
     imgs = {"gravel 128": image("quilting_classic/t4_gravel.png"),
             "bricks 192": image("quilting_classic/t1_bricks.png"),

@@ -259,6 +259,26 @@ def test_fft_energy_equals_brute_force():
     assert np.all(~np.isfinite(E[h - ys.max():, :])) and np.all(~np.isfinite(E[:, w - xs.max():]))
 
 
+def test_bilinear_lookup_equals_map_coordinates():
+    # the matcher's bilinear lookup (pixel centres at +0.5, clamped to the border) is
+    # scipy's order-1 interpolation with mode "nearest", on every channel, for points
+    # inside, on the border and far outside, on square and non-square images
+    from scipy.ndimage import map_coordinates
+
+    from geotex.image import hpm as hpm_module
+    rng = np.random.default_rng(3)
+    for h, w in ((17, 23), (9, 9), (2, 5)):
+        img = rng.random((h, w, 3))
+        xy = np.column_stack([rng.uniform(-4, w + 4, 400), rng.uniform(-4, h + 4, 400)])
+        xy[:8] = [[0.5, 0.5], [w - 0.5, h - 0.5], [w, h], [0, 0], [w - 0.5, 0.5],
+                  [0.5, h - 0.5], [w / 2, h - 0.5], [w - 1e-9, 1.0]]
+        got = hpm_module._sample(img, xy)
+        ref = np.stack([map_coordinates(img[:, :, k], [xy[:, 1] - 0.5, xy[:, 0] - 0.5],
+                                        order=1, mode="nearest") for k in range(3)], 1)
+        assert got.shape == (400, 3)
+        np.testing.assert_allclose(got, ref, rtol=0, atol=1e-12)
+
+
 def checker_image(cell=8, n=96, seed=0):
     """A grey checkerboard of ``cell``-pixel squares with a little noise, uint8."""
     rng = np.random.default_rng(seed)

@@ -369,10 +369,14 @@ def _sample(img: np.ndarray, xy: np.ndarray) -> np.ndarray:
     y0 = np.minimum(np.floor(y).astype(np.int64), h - 2) if h > 1 else np.zeros(y.size, np.int64)
     fx = (x - x0)[:, None]
     fy = (y - y0)[:, None]
-    x1 = np.minimum(x0 + 1, w - 1)
-    y1 = np.minimum(y0 + 1, h - 1)
-    top = img[y0, x0] * (1 - fx) + img[y0, x1] * fx
-    bot = img[y1, x0] * (1 - fx) + img[y1, x1] * fx
+    # row gathers from the flattened image (np.take: cheaper than 2-d fancy indexing,
+    # the same values)
+    flat = img.reshape(h * w, -1)
+    i00 = y0 * w + x0
+    dx = np.minimum(x0 + 1, w - 1) - x0
+    dy = (np.minimum(y0 + 1, h - 1) - y0) * w
+    top = np.take(flat, i00, axis=0) * (1 - fx) + np.take(flat, i00 + dx, axis=0) * fx
+    bot = np.take(flat, i00 + dy, axis=0) * (1 - fx) + np.take(flat, i00 + dy + dx, axis=0) * fx
     return top * (1 - fy) + bot * fy
 
 
@@ -901,15 +905,26 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         """
         cont_in = inside_image(to_image(loc, cont[0] @ Rd, cont[1]))
         lim = np.array([W_img, H_img], dtype=np.float64)
+        q = mask_points(tb, origin)
+        Itb = I[tb]
         for Rk, tk in fits:
             P0 = to_image(loc, Rk, tk)
             lo, hi = P0.min(axis=0), P0.max(axis=0)
             ok = np.all((lo + lattice >= 0) & (hi + lattice <= lim), axis=1)
-            for sh in lattice[np.flatnonzero(ok)[:LATTICE_CANDIDATES]]:
-                t2 = tk + sh / f
-                ek = band_error(Rk @ Rd.T, t2, tb, I, origin)
+            shifts = lattice[np.flatnonzero(ok)[:LATTICE_CANDIDATES]]
+            if not shifts.size:
+                continue
+            Rr = Rk @ Rd.T
+            t2s = tk + shifts / f                               # (s, 2), one per move
+            # every move's band error in one batched bilinear lookup (the same values
+            # and per-move sums as one band_error call per move)
+            qR = q @ Rr.T
+            S = _sample(small, (qR[None] + t2s[:, None]).reshape(-1, 2))
+            D = (Itb[None] - S.reshape(t2s.shape[0], tb.size, -1)) ** 2
+            for i in range(t2s.shape[0]):
+                ek = float(np.sum(D[i]))
                 if ek < cont[2] or not cont_in:
-                    cont, cont_in = (Rk @ Rd.T, t2, ek), True
+                    cont, cont_in = (Rr, t2s[i], ek), True
         return cont
 
     def inside_image(P):
