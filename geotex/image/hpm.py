@@ -1078,7 +1078,6 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         # only the neighbours' continuations within ``field_tol`` of it are candidates
         nfit = None
         fits = []
-        fits_all = False
         Rd = np.eye(2)
         a_ref = None
         if fvec is not None:
@@ -1086,7 +1085,6 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         if band_faces.size and st.n_patch > 0:
             fits = neighbour_fits(bverts, bl, c is None)
             nfit = fits[0] if fits else None
-            fits_all = bool(fits)
             if fvec is not None:
                 if nfit is not None:
                     a_nb = np.arctan2(nfit[0][0, 1], nfit[0][0, 0])
