@@ -303,6 +303,27 @@ class PatternScale:
         return self.period if self.periodic else self.correlation_length
 
 
+def _centred_luminance(image):
+    """``(a, Y)``: the image as float64 and its luminance minus its mean, (h, w).
+
+    Raises
+    ------
+    InputError
+        If the image is not (h, w) or (h, w, 3+) with h, w >= 8.
+    """
+    a = np.asarray(image, dtype=np.float64)
+    if a.ndim == 3 and a.shape[2] >= 3:
+        Y = a[:, :, :3] @ _WEIGHTS[0]
+    elif a.ndim == 2:
+        Y = a.copy()
+    else:
+        raise InputError(f"image must be (h, w) or (h, w, 3), got shape {a.shape}")
+    h, w = Y.shape
+    if min(h, w) < 8:
+        raise InputError(f"image must be at least 8 x 8 pixels, got {w} x {h}")
+    return a, Y - Y.mean()
+
+
 def pattern_scale(image) -> PatternScale:
     """Estimate the size and anisotropy of a sample's pattern.
 
@@ -360,17 +381,8 @@ def pattern_scale(image) -> PatternScale:
         If the image is not (h, w) or (h, w, 3+) with h, w >= 8.
     """
 
-    a = np.asarray(image, dtype=np.float64)
-    if a.ndim == 3 and a.shape[2] >= 3:
-        Y = a[:, :, :3] @ _WEIGHTS[0]
-    elif a.ndim == 2:
-        Y = a.copy()
-    else:
-        raise InputError(f"image must be (h, w) or (h, w, 3), got shape {a.shape}")
+    a, Y = _centred_luminance(image)
     h, w = Y.shape
-    if min(h, w) < 8:
-        raise InputError(f"image must be at least 8 x 8 pixels, got {w} x {h}")
-    Y = Y - Y.mean()
     var = float(np.mean(Y * Y))
     # structure tensor
     gx = ndi.sobel(Y, axis=1)
@@ -519,17 +531,8 @@ def quarter_turn_symmetry(image) -> float:
     InputError
         If the image is not (h, w) or (h, w, 3+) with h, w >= 8.
     """
-    a = np.asarray(image, dtype=np.float64)
-    if a.ndim == 3 and a.shape[2] >= 3:
-        Y = a[:, :, :3] @ _WEIGHTS[0]
-    elif a.ndim == 2:
-        Y = a.copy()
-    else:
-        raise InputError(f"image must be (h, w) or (h, w, 3), got shape {a.shape}")
+    a, Y = _centred_luminance(image)
     h, w = Y.shape
-    if min(h, w) < 8:
-        raise InputError(f"image must be at least 8 x 8 pixels, got {w} x {h}")
-    Y = Y - Y.mean()
     var = float(np.mean(Y * Y))
     if var <= 1e-12 * (1.0 + float(np.mean(a * a))):
         return 0.0
