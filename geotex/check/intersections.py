@@ -68,7 +68,7 @@ import numpy as np
 from geotex.errors import InputError
 from geotex.jit import JIT_MIN_SIZE, compiled, helper
 from geotex.mesh.arrays import as_mesh_arrays
-from geotex.mesh.topology import edge_topology, has_twin_faces
+from geotex.mesh.topology import edge_topology, has_twin_faces, unpaired_edge_vertices
 
 __all__ = ["self_intersecting_pairs", "self_intersecting_pairs_touching", "REL_TOL", "ABS_TOL"]
 
@@ -104,7 +104,7 @@ _KEY_BITS = 62
 _OCC_CELLS = 1 << 28
 
 
-def self_intersecting_pairs(V, F, *, max_pairs=None, topology=None,
+def self_intersecting_pairs(V, F, *, max_pairs=None, topology=None, unpaired_vertices=None,
                             distinct_faces: bool = False, parts=None) -> np.ndarray:
     """Return every pair of faces of a triangle mesh whose triangles intersect.
 
@@ -122,6 +122,13 @@ def self_intersecting_pairs(V, F, *, max_pairs=None, topology=None,
     topology : geotex.mesh.topology.EdgeTopology, optional
         ``edge_topology(F, len(V))`` when the caller has it already (large
         meshes use it; it is computed otherwise).
+    unpaired_vertices : array_like, (n,) bool, optional
+        The vertices on an edge that is not used exactly once in each
+        direction (a boundary, non-manifold or inconsistently oriented edge),
+        when the caller knows them: all the search needs of the edge
+        topology besides the grouping of duplicate faces (with
+        ``distinct_faces`` no topology is then built or held, which is what
+        the memory peak of :func:`geotex.check.report.check_mesh` needs).
     distinct_faces : bool, optional
         The caller knows that no two faces have the same vertex set (for
         example from :func:`geotex.mesh.topology.duplicate_face_groups`):
@@ -221,19 +228,30 @@ def self_intersecting_pairs(V, F, *, max_pairs=None, topology=None,
     empty = np.zeros((0, 2), dtype=np.int64)
     if m < 2 or max_pairs == 0:
         return empty
+    unpaired = None
+    if unpaired_vertices is not None:
+        unpaired = np.asarray(unpaired_vertices)
+        if unpaired.shape != (V.shape[0],) or unpaired.dtype != bool:
+            raise InputError(f"unpaired_vertices must be one bool per vertex, shape "
+                             f"({V.shape[0]},), got {unpaired.dtype} {unpaired.shape}")
     topo = None
     if F.size >= JIT_MIN_SIZE:
-        topo = edge_topology(F, V.shape[0]) if topology is None else topology
+        topo = topology
+        if topo is None and (unpaired is None or not distinct_faces):
+            topo = edge_topology(F, V.shape[0])
+        if unpaired is None:
+            unpaired = unpaired_edge_vertices(topo, V.shape[0])
     else:
         parts = None                         # the part sweep is compiled only
     classes = None if distinct_faces else _duplicate_classes(F, topo)
+    del topo, topology                       # not held through the search
     if classes is not None:                  # duplicate faces: solve on one per class
         first, cls = classes
         pairs = _distinct_pairs(V, F[first], max_pairs,
                                 parts=None if parts is None else parts[first])
         pairs = _expanded(first[pairs], cls, max_pairs)
     else:
-        pairs = _distinct_pairs(V, F, max_pairs, topo=topo, parts=parts)
+        pairs = _distinct_pairs(V, F, max_pairs, unpaired=unpaired, parts=parts)
     return pairs
 
 
@@ -357,9 +375,9 @@ def _faces_near(Vn, F, sel):
     return np.flatnonzero(hot[cols[0]] | hot[cols[1]] | hot[cols[2]])
 
 
-def _distinct_pairs(V, F, max_pairs, *, topo=None, parts=None):
+def _distinct_pairs(V, F, max_pairs, *, unpaired=None, parts=None):
     """:func:`self_intersecting_pairs` for faces with distinct vertex sets
-    (``topo``: their edge topology, when known; ``parts``: see there)."""
+    (``unpaired``: their unpaired-edge vertices, when known; ``parts``: see there)."""
     m = F.shape[0]
     empty = np.zeros((0, 2), dtype=np.int64)
     workers = _workers()
@@ -368,10 +386,10 @@ def _distinct_pairs(V, F, max_pairs, *, topo=None, parts=None):
         faces = _FaceData(_normalized(V, F), F, mapper=pool.map)
         if faces.active.size < 2:
             return empty
-        faces.separated = _separated_fans(faces, mapper=pool.map, topo=topo)
+        faces.separated = _separated_fans(faces, mapper=pool.map, unpaired=unpaired)
         faces.mask_unseparated()
         faces.corner_columns = None             # not read again: 12 bytes per face less
-        del topo
+        del unpaired
         found = []
         count = 0
         swept = None if parts is None else _part_sweep(faces, parts, mapper=pool.map)
@@ -659,7 +677,7 @@ class _FaceData:
 # vertex fans that cannot intersect
 
 
-def _separated_fans(faces: _FaceData, *, mapper=map, topo=None) -> np.ndarray:
+def _separated_fans(faces: _FaceData, *, mapper=map, unpaired=None) -> np.ndarray:
     """Vertices whose faces provably meet only along their shared edges.
 
     Returns a boolean array over the vertices.  A vertex ``p`` qualifies
@@ -701,11 +719,10 @@ def _separated_fans(faces: _FaceData, *, mapper=map, topo=None) -> np.ndarray:
     inactive[faces.active] = False
     good[F[inactive].ravel()] = False
     # every edge used exactly once in each direction
-    if F.size >= JIT_MIN_SIZE:
-        topo = edge_topology(F, n) if topo is None else topo
-        bad = topo.edges[(topo.face_count != 2) | (topo.forward_count != 1)]
-        good[bad.ravel()] = False
-        del topo, bad
+    if unpaired is not None or F.size >= JIT_MIN_SIZE:
+        if unpaired is None:
+            unpaired = unpaired_edge_vertices(edge_topology(F, n), n)
+        good &= ~unpaired
     else:
         u = F.ravel()
         v = F[:, [1, 2, 0]].ravel()

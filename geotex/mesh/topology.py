@@ -26,6 +26,7 @@ __all__ = [
     "vertex_components",
     "face_components",
     "non_manifold_vertices",
+    "unpaired_edge_vertices",
     "duplicate_face_groups",
     "has_twin_faces",
     "repeated_positions",
@@ -530,6 +531,28 @@ def face_components(F: np.ndarray, n_vertices: int) -> tuple[int, np.ndarray]:
     """
     count, vlab = vertex_components(F, n_vertices)
     return count, vlab[np.asarray(F)[:, 0]] if len(F) else np.zeros(0, np.int64)
+
+
+def unpaired_edge_vertices(topo: EdgeTopology, n: int) -> np.ndarray:
+    """Return the vertices on an edge not used exactly once in each direction.
+
+    Parameters
+    ----------
+    topo : EdgeTopology
+        Of the faces (:func:`edge_topology`).
+    n : int
+        Number of vertices.
+
+    Returns
+    -------
+    numpy.ndarray, (n,) bool
+        True at both ends of every boundary, non-manifold or inconsistently
+        oriented edge (see ``unpaired_vertices`` of
+        :func:`geotex.check.intersections.self_intersecting_pairs`).
+    """
+    out = np.zeros(n, dtype=bool)
+    out[topo.edges[(topo.face_count != 2) | (topo.forward_count != 1)].ravel()] = True
+    return out
 
 
 #: Vertices with more corners than this skip the fan walk of
