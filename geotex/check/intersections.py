@@ -741,8 +741,14 @@ def _separated_fans(faces: _FaceData, *, mapper=map, unpaired=None) -> np.ndarra
     # per corner, in face order (corner k of a face is at vertex F[:, k]);
     # per-vertex minima, maxima and sums by scattering
     cols = faces.corner_columns
-    unit = [np.ascontiguousarray(faces.plane[:, i]) for i in range(3)]
-    N = [sum(np.bincount(c, weights=x, minlength=n) for c in cols) for x in unit]
+    # the face normals one axis at a time (kept only for the numpy path's terms)
+    unit, N = [], []
+    for i in range(3):
+        x = np.ascontiguousarray(faces.plane[:, i])
+        N.append(sum(np.bincount(c, weights=x, minlength=n) for c in cols))
+        if F.size < JIT_MIN_SIZE:
+            unit.append(x)
+    del x
     with np.errstate(divide="ignore", invalid="ignore"):
         norm = np.sqrt(N[0] * N[0] + N[1] * N[1] + N[2] * N[2])
         N = [x / norm for x in N]
@@ -760,6 +766,7 @@ def _separated_fans(faces: _FaceData, *, mapper=map, unpaired=None) -> np.ndarra
         # compiled: terms and scatter in one loop, vertices split between two
         # threads (each vertex gets its terms in the numpy path's order)
         Nv = np.ascontiguousarray(np.stack(N, axis=1))
+        N = None                                # only Nv is read from here
         cuts = [0, n // 2, n]
         for _ in mapper(lambda k: _fan_term_loops(V, F, faces.plane, faces.tol, faces.active_mask(),
                                                   Nv, cuts[k], cuts[k + 1], _FACE_BLOCK, *acc),
@@ -856,12 +863,12 @@ def _pair_tasks(faces: _FaceData):
     Over all tasks, every pair of active faces whose boxes overlap is
     examined exactly once.  A key is ``i * m + j`` with ``i < j``.
     """
-    box, cell0, level = _grid_levels(faces)
+    cell0, level = _grid_levels(faces)
     for lev in np.unique(level):
         cell = cell0 * _LEVEL_RATIO ** lev
         cur = np.flatnonzero(level == lev)
         low = np.flatnonzero(level < lev)
-        yield from _level_tasks(faces, box, cell, cur, _near(box, cur, low))
+        yield from _level_tasks(faces, cell, cur, _near(faces, cur, low))
 
 
 def _touching_tasks(faces: _FaceData, chosen: np.ndarray):
@@ -873,33 +880,43 @@ def _touching_tasks(faces: _FaceData, chosen: np.ndarray):
     cells), so every pair of overlapping boxes with a chosen face is examined
     exactly once.
     """
-    box, cell0, level = _grid_levels(faces)
+    cell0, level = _grid_levels(faces)
     mine = chosen[faces.active]
     for lev in np.unique(level[mine]):
         cell = cell0 * _LEVEL_RATIO ** lev
         cur = np.flatnonzero(mine & (level == lev))
         low = np.flatnonzero(~mine | (level < lev))
-        yield from _level_tasks(faces, box, cell, cur, _near(box, cur, low))
+        yield from _level_tasks(faces, cell, cur, _near(faces, cur, low))
 
 
-def _near(box, cur, low):
-    """The rows of ``low`` whose boxes meet the bounding box of the boxes ``cur``."""
+def _near(faces, cur, low):
+    """The rows of ``low`` whose boxes meet the bounding box of the boxes ``cur``
+    (rows of ``faces.active``)."""
     if low.size:
         near = np.ones(low.size, dtype=bool)
+        act, box32 = faces.active, faces.box32
         for axis in range(3):
-            lo = box[axis][cur].min()
-            hi = box[3 + axis][cur].max()
-            near &= (box[axis][low] <= hi) & (box[3 + axis][low] >= lo)
+            lo = box32[act[cur], axis].min()
+            hi = box32[act[cur], 3 + axis].max()
+            near &= (box32[act[low], axis] <= hi) & (box32[act[low], 3 + axis] >= lo)
         low = low[near]
     return low
 
 
+def _active_boxes(faces):
+    """The active faces' boxes, one contiguous float32 array per bound (low x, y, z,
+    high x, y, z): only the numpy grid reads them (the compiled one reads ``box32``)."""
+    return [np.ascontiguousarray(faces.box32[faces.active, k]) for k in range(6)]
+
+
 def _grid_levels(faces: _FaceData):
-    """The active faces' boxes (one array per bound), the finest cell and each face's level."""
-    # one contiguous array per bound (low x, y, z, high x, y, z)
-    box = [np.ascontiguousarray(faces.box32[faces.active, k]) for k in range(6)]
-    extent = np.maximum(np.maximum(box[3] - box[0], box[4] - box[1]),
-                        box[5] - box[2]).astype(np.float64)
+    """The finest cell and each active face's level."""
+    extent = None                                # largest side of each box, float32
+    for axis in range(3):
+        side = faces.box32[faces.active, 3 + axis] - faces.box32[faces.active, axis]
+        extent = side if extent is None else np.maximum(extent, side)
+    del side
+    extent = extent.astype(np.float64)
     cell0 = _CELL_RATIO * float(np.quantile(extent, _BASE_QUANTILE))
     # level L: cells of cell0 * 2**L, faces up to twice that size (<= 3 cells
     # per axis); an even mesh has all its faces on level 0
@@ -911,7 +928,7 @@ def _grid_levels(faces: _FaceData):
         if not short.any():
             break
         level[short] += 1
-    return box, cell0, level
+    return cell0, level
 
 
 def _cell_bounds(box, rows, cell):
@@ -981,7 +998,7 @@ def _fits(size, shift) -> bool:
     return float(size[0]) * size[1] * size[2] * 2 < 2.0 ** (_KEY_BITS - shift)
 
 
-def _level_tasks(faces, box, cell, cur, low):
+def _level_tasks(faces, cell, cur, low):
     """Sort one level's grid entries by cell and yield its pair tasks.
 
     ``cur`` and ``low`` are rows of ``faces.active``: the faces of this level
@@ -1000,6 +1017,7 @@ def _level_tasks(faces, box, cell, cur, low):
             for k in range(cuts.size - 1):
                 yield partial(_pair_task, faces, level, int(cuts[k]), int(cuts[k + 1]))
             return
+    box = _active_boxes(faces)
     lo, hi = _cell_bounds(box, cur, cell)
     cmin = [int(x.min()) for x in lo]
     cmax = [int(x.max()) for x in hi]
@@ -1797,20 +1815,31 @@ def _level_grid(box32, act, cur, low, cell, row_bits, key_bits, chunk, occ_cells
                 if ((keys[q] >> shift) & 1) == 0:
                     counts[q] = p - q
             start = p + 1
-    cuts = np.empty(total + 2, np.int64)
-    cuts[0] = 0
+    # two passes (count, then fill): no array of one slot per entry for the cuts
     nc = 1
+    acc = 0
+    last = 0
+    for p in range(total):
+        acc += counts[p]
+        if acc >= chunk:
+            nc += 1
+            acc = 0
+            last = p + 1
+    if last != total:
+        nc += 1
+    cuts = np.empty(nc, np.int64)
+    cuts[0] = 0
+    k = 1
     acc = 0
     for p in range(total):
         acc += counts[p]
         if acc >= chunk:
-            cuts[nc] = p + 1
-            nc += 1
+            cuts[k] = p + 1
+            k += 1
             acc = 0
-    if cuts[nc - 1] != total:
-        cuts[nc] = total
-        nc += 1
-    return True, first, face, counts, cuts[:nc].copy()
+    if cuts[k - 1] != total:
+        cuts[k] = total
+    return True, first, face, counts, cuts
 
 
 @compiled
