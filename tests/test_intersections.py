@@ -368,9 +368,9 @@ def test_broad_phase_matches_brute_force(seed, monkeypatch):
     levels = []
     level_tasks = gi._level_tasks
 
-    def spy(faces, box, cell, cur, low):
+    def spy(faces, cell, cur, low):
         levels.append(cell)
-        return level_tasks(faces, box, cell, cur, low)
+        return level_tasks(faces, cell, cur, low)
 
     monkeypatch.setattr(gi, "_level_tasks", spy)
     # mostly small triangles and a few up to 500 times larger: several levels
