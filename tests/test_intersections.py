@@ -368,9 +368,9 @@ def test_broad_phase_matches_brute_force(seed, monkeypatch):
     levels = []
     level_tasks = gi._level_tasks
 
-    def spy(faces, box, cell, cur, low):
+    def spy(faces, cell, cur, low):
         levels.append(cell)
-        return level_tasks(faces, box, cell, cur, low)
+        return level_tasks(faces, cell, cur, low)
 
     monkeypatch.setattr(gi, "_level_tasks", spy)
     # mostly small triangles and a few up to 500 times larger: several levels
@@ -919,3 +919,24 @@ def test_compiled_level_grid_gives_the_numpy_pairs_on_an_overlapping_solid(monke
     assert slow.shape[0] > 100 and np.array_equal(fast, slow)
     part = self_intersecting_pairs(V2, F2, max_pairs=50)
     assert 1 <= part.shape[0] <= 50 and as_set(part) <= as_set(slow)
+
+
+@pytest.mark.parametrize("big", [False, True])
+def test_unpaired_vertices_given_or_computed_same_pairs(big, monkeypatch):
+    # an open, crossing mesh: a pierced sphere with a hole, on both paths
+    from geotex.mesh.topology import edge_topology, unpaired_edge_vertices
+
+    if big:
+        monkeypatch.setattr(gi, "JIT_MIN_SIZE", 1)
+    V, F, _ = two_spheres()
+    F = F[1:]
+    want = self_intersecting_pairs(V, F)
+    assert want.shape[0] > 0
+    un = unpaired_edge_vertices(edge_topology(F, len(V)), len(V))
+    assert un.any()
+    got = self_intersecting_pairs(V, F, unpaired_vertices=un, distinct_faces=True)
+    assert np.array_equal(got, want)
+    with pytest.raises(InputError):
+        self_intersecting_pairs(V, F, unpaired_vertices=un[1:])
+    with pytest.raises(InputError):
+        self_intersecting_pairs(V, F, unpaired_vertices=un.astype(np.int64))

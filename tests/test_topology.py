@@ -270,3 +270,23 @@ def test_duplicate_faces_with_topology_equal_sorting(monkeypatch, jit):
         assert got.dtype == np.int64 and np.array_equal(got, ref)
     assert duplicate_face_groups(cases[1]).tolist() == [len(F) + 1]
     assert duplicate_face_groups(cases[2]).tolist() == [len(F)]
+
+
+def test_unpaired_edge_vertices_marks_bad_edges_only():
+    from geotex.mesh.topology import unpaired_edge_vertices
+
+    V, F = icosphere(2)
+    assert not unpaired_edge_vertices(edge_topology(F, len(V)), len(V)).any()
+    # a hole: the three corners of the removed face are on boundary edges
+    out = unpaired_edge_vertices(edge_topology(F[1:], len(V)), len(V))
+    assert set(np.flatnonzero(out)) == set(F[0])
+    # a flipped face: its three edges run twice the same way
+    G = F.copy()
+    G[5] = G[5, ::-1]
+    out = unpaired_edge_vertices(edge_topology(G, len(V)), len(V))
+    assert set(np.flatnonzero(out)) == set(F[5])
+    # an open grid: exactly its border vertices
+    V, F = grid_plane(4, 3)
+    border = (V[:, 0] == V[:, 0].min()) | (V[:, 0] == V[:, 0].max()) | \
+        (V[:, 1] == V[:, 1].min()) | (V[:, 1] == V[:, 1].max())
+    assert np.array_equal(unpaired_edge_vertices(edge_topology(F, len(V)), len(V)), border)

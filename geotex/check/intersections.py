@@ -68,7 +68,7 @@ import numpy as np
 from geotex.errors import InputError
 from geotex.jit import JIT_MIN_SIZE, compiled, helper
 from geotex.mesh.arrays import as_mesh_arrays
-from geotex.mesh.topology import edge_topology, has_twin_faces
+from geotex.mesh.topology import edge_topology, has_twin_faces, unpaired_edge_vertices
 
 __all__ = ["self_intersecting_pairs", "self_intersecting_pairs_touching", "REL_TOL", "ABS_TOL"]
 
@@ -104,7 +104,7 @@ _KEY_BITS = 62
 _OCC_CELLS = 1 << 28
 
 
-def self_intersecting_pairs(V, F, *, max_pairs=None, topology=None,
+def self_intersecting_pairs(V, F, *, max_pairs=None, topology=None, unpaired_vertices=None,
                             distinct_faces: bool = False, parts=None) -> np.ndarray:
     """Return every pair of faces of a triangle mesh whose triangles intersect.
 
@@ -122,6 +122,13 @@ def self_intersecting_pairs(V, F, *, max_pairs=None, topology=None,
     topology : geotex.mesh.topology.EdgeTopology, optional
         ``edge_topology(F, len(V))`` when the caller has it already (large
         meshes use it; it is computed otherwise).
+    unpaired_vertices : array_like, (n,) bool, optional
+        The vertices on an edge that is not used exactly once in each
+        direction (a boundary, non-manifold or inconsistently oriented edge),
+        when the caller knows them: all the search needs of the edge
+        topology besides the grouping of duplicate faces (with
+        ``distinct_faces`` no topology is then built or held, which is what
+        the memory peak of :func:`geotex.check.report.check_mesh` needs).
     distinct_faces : bool, optional
         The caller knows that no two faces have the same vertex set (for
         example from :func:`geotex.mesh.topology.duplicate_face_groups`):
@@ -221,19 +228,30 @@ def self_intersecting_pairs(V, F, *, max_pairs=None, topology=None,
     empty = np.zeros((0, 2), dtype=np.int64)
     if m < 2 or max_pairs == 0:
         return empty
+    unpaired = None
+    if unpaired_vertices is not None:
+        unpaired = np.asarray(unpaired_vertices)
+        if unpaired.shape != (V.shape[0],) or unpaired.dtype != bool:
+            raise InputError(f"unpaired_vertices must be one bool per vertex, shape "
+                             f"({V.shape[0]},), got {unpaired.dtype} {unpaired.shape}")
     topo = None
     if F.size >= JIT_MIN_SIZE:
-        topo = edge_topology(F, V.shape[0]) if topology is None else topology
+        topo = topology
+        if topo is None and (unpaired is None or not distinct_faces):
+            topo = edge_topology(F, V.shape[0])
+        if unpaired is None:
+            unpaired = unpaired_edge_vertices(topo, V.shape[0])
     else:
         parts = None                         # the part sweep is compiled only
     classes = None if distinct_faces else _duplicate_classes(F, topo)
+    del topo, topology                       # not held through the search
     if classes is not None:                  # duplicate faces: solve on one per class
         first, cls = classes
         pairs = _distinct_pairs(V, F[first], max_pairs,
                                 parts=None if parts is None else parts[first])
         pairs = _expanded(first[pairs], cls, max_pairs)
     else:
-        pairs = _distinct_pairs(V, F, max_pairs, topo=topo, parts=parts)
+        pairs = _distinct_pairs(V, F, max_pairs, unpaired=unpaired, parts=parts)
     return pairs
 
 
@@ -357,9 +375,9 @@ def _faces_near(Vn, F, sel):
     return np.flatnonzero(hot[cols[0]] | hot[cols[1]] | hot[cols[2]])
 
 
-def _distinct_pairs(V, F, max_pairs, *, topo=None, parts=None):
+def _distinct_pairs(V, F, max_pairs, *, unpaired=None, parts=None):
     """:func:`self_intersecting_pairs` for faces with distinct vertex sets
-    (``topo``: their edge topology, when known; ``parts``: see there)."""
+    (``unpaired``: their unpaired-edge vertices, when known; ``parts``: see there)."""
     m = F.shape[0]
     empty = np.zeros((0, 2), dtype=np.int64)
     workers = _workers()
@@ -368,10 +386,10 @@ def _distinct_pairs(V, F, max_pairs, *, topo=None, parts=None):
         faces = _FaceData(_normalized(V, F), F, mapper=pool.map)
         if faces.active.size < 2:
             return empty
-        faces.separated = _separated_fans(faces, mapper=pool.map, topo=topo)
+        faces.separated = _separated_fans(faces, mapper=pool.map, unpaired=unpaired)
         faces.mask_unseparated()
         faces.corner_columns = None             # not read again: 12 bytes per face less
-        del topo
+        del unpaired
         found = []
         count = 0
         swept = None if parts is None else _part_sweep(faces, parts, mapper=pool.map)
@@ -659,7 +677,7 @@ class _FaceData:
 # vertex fans that cannot intersect
 
 
-def _separated_fans(faces: _FaceData, *, mapper=map, topo=None) -> np.ndarray:
+def _separated_fans(faces: _FaceData, *, mapper=map, unpaired=None) -> np.ndarray:
     """Vertices whose faces provably meet only along their shared edges.
 
     Returns a boolean array over the vertices.  A vertex ``p`` qualifies
@@ -701,11 +719,10 @@ def _separated_fans(faces: _FaceData, *, mapper=map, topo=None) -> np.ndarray:
     inactive[faces.active] = False
     good[F[inactive].ravel()] = False
     # every edge used exactly once in each direction
-    if F.size >= JIT_MIN_SIZE:
-        topo = edge_topology(F, n) if topo is None else topo
-        bad = topo.edges[(topo.face_count != 2) | (topo.forward_count != 1)]
-        good[bad.ravel()] = False
-        del topo, bad
+    if unpaired is not None or F.size >= JIT_MIN_SIZE:
+        if unpaired is None:
+            unpaired = unpaired_edge_vertices(edge_topology(F, n), n)
+        good &= ~unpaired
     else:
         u = F.ravel()
         v = F[:, [1, 2, 0]].ravel()
@@ -724,8 +741,14 @@ def _separated_fans(faces: _FaceData, *, mapper=map, topo=None) -> np.ndarray:
     # per corner, in face order (corner k of a face is at vertex F[:, k]);
     # per-vertex minima, maxima and sums by scattering
     cols = faces.corner_columns
-    unit = [np.ascontiguousarray(faces.plane[:, i]) for i in range(3)]
-    N = [sum(np.bincount(c, weights=x, minlength=n) for c in cols) for x in unit]
+    # the face normals one axis at a time (kept only for the numpy path's terms)
+    unit, N = [], []
+    for i in range(3):
+        x = np.ascontiguousarray(faces.plane[:, i])
+        N.append(sum(np.bincount(c, weights=x, minlength=n) for c in cols))
+        if F.size < JIT_MIN_SIZE:
+            unit.append(x)
+    del x
     with np.errstate(divide="ignore", invalid="ignore"):
         norm = np.sqrt(N[0] * N[0] + N[1] * N[1] + N[2] * N[2])
         N = [x / norm for x in N]
@@ -743,6 +766,7 @@ def _separated_fans(faces: _FaceData, *, mapper=map, topo=None) -> np.ndarray:
         # compiled: terms and scatter in one loop, vertices split between two
         # threads (each vertex gets its terms in the numpy path's order)
         Nv = np.ascontiguousarray(np.stack(N, axis=1))
+        N = None                                # only Nv is read from here
         cuts = [0, n // 2, n]
         for _ in mapper(lambda k: _fan_term_loops(V, F, faces.plane, faces.tol, faces.active_mask(),
                                                   Nv, cuts[k], cuts[k + 1], _FACE_BLOCK, *acc),
@@ -839,12 +863,12 @@ def _pair_tasks(faces: _FaceData):
     Over all tasks, every pair of active faces whose boxes overlap is
     examined exactly once.  A key is ``i * m + j`` with ``i < j``.
     """
-    box, cell0, level = _grid_levels(faces)
+    cell0, level = _grid_levels(faces)
     for lev in np.unique(level):
         cell = cell0 * _LEVEL_RATIO ** lev
         cur = np.flatnonzero(level == lev)
         low = np.flatnonzero(level < lev)
-        yield from _level_tasks(faces, box, cell, cur, _near(box, cur, low))
+        yield from _level_tasks(faces, cell, cur, _near(faces, cur, low))
 
 
 def _touching_tasks(faces: _FaceData, chosen: np.ndarray):
@@ -856,33 +880,43 @@ def _touching_tasks(faces: _FaceData, chosen: np.ndarray):
     cells), so every pair of overlapping boxes with a chosen face is examined
     exactly once.
     """
-    box, cell0, level = _grid_levels(faces)
+    cell0, level = _grid_levels(faces)
     mine = chosen[faces.active]
     for lev in np.unique(level[mine]):
         cell = cell0 * _LEVEL_RATIO ** lev
         cur = np.flatnonzero(mine & (level == lev))
         low = np.flatnonzero(~mine | (level < lev))
-        yield from _level_tasks(faces, box, cell, cur, _near(box, cur, low))
+        yield from _level_tasks(faces, cell, cur, _near(faces, cur, low))
 
 
-def _near(box, cur, low):
-    """The rows of ``low`` whose boxes meet the bounding box of the boxes ``cur``."""
+def _near(faces, cur, low):
+    """The rows of ``low`` whose boxes meet the bounding box of the boxes ``cur``
+    (rows of ``faces.active``)."""
     if low.size:
         near = np.ones(low.size, dtype=bool)
+        act, box32 = faces.active, faces.box32
         for axis in range(3):
-            lo = box[axis][cur].min()
-            hi = box[3 + axis][cur].max()
-            near &= (box[axis][low] <= hi) & (box[3 + axis][low] >= lo)
+            lo = box32[act[cur], axis].min()
+            hi = box32[act[cur], 3 + axis].max()
+            near &= (box32[act[low], axis] <= hi) & (box32[act[low], 3 + axis] >= lo)
         low = low[near]
     return low
 
 
+def _active_boxes(faces):
+    """The active faces' boxes, one contiguous float32 array per bound (low x, y, z,
+    high x, y, z): only the numpy grid reads them (the compiled one reads ``box32``)."""
+    return [np.ascontiguousarray(faces.box32[faces.active, k]) for k in range(6)]
+
+
 def _grid_levels(faces: _FaceData):
-    """The active faces' boxes (one array per bound), the finest cell and each face's level."""
-    # one contiguous array per bound (low x, y, z, high x, y, z)
-    box = [np.ascontiguousarray(faces.box32[faces.active, k]) for k in range(6)]
-    extent = np.maximum(np.maximum(box[3] - box[0], box[4] - box[1]),
-                        box[5] - box[2]).astype(np.float64)
+    """The finest cell and each active face's level."""
+    extent = None                                # largest side of each box, float32
+    for axis in range(3):
+        side = faces.box32[faces.active, 3 + axis] - faces.box32[faces.active, axis]
+        extent = side if extent is None else np.maximum(extent, side)
+    del side
+    extent = extent.astype(np.float64)
     cell0 = _CELL_RATIO * float(np.quantile(extent, _BASE_QUANTILE))
     # level L: cells of cell0 * 2**L, faces up to twice that size (<= 3 cells
     # per axis); an even mesh has all its faces on level 0
@@ -894,7 +928,7 @@ def _grid_levels(faces: _FaceData):
         if not short.any():
             break
         level[short] += 1
-    return box, cell0, level
+    return cell0, level
 
 
 def _cell_bounds(box, rows, cell):
@@ -964,7 +998,7 @@ def _fits(size, shift) -> bool:
     return float(size[0]) * size[1] * size[2] * 2 < 2.0 ** (_KEY_BITS - shift)
 
 
-def _level_tasks(faces, box, cell, cur, low):
+def _level_tasks(faces, cell, cur, low):
     """Sort one level's grid entries by cell and yield its pair tasks.
 
     ``cur`` and ``low`` are rows of ``faces.active``: the faces of this level
@@ -983,6 +1017,7 @@ def _level_tasks(faces, box, cell, cur, low):
             for k in range(cuts.size - 1):
                 yield partial(_pair_task, faces, level, int(cuts[k]), int(cuts[k + 1]))
             return
+    box = _active_boxes(faces)
     lo, hi = _cell_bounds(box, cur, cell)
     cmin = [int(x.min()) for x in lo]
     cmax = [int(x.max()) for x in hi]
@@ -1780,20 +1815,31 @@ def _level_grid(box32, act, cur, low, cell, row_bits, key_bits, chunk, occ_cells
                 if ((keys[q] >> shift) & 1) == 0:
                     counts[q] = p - q
             start = p + 1
-    cuts = np.empty(total + 2, np.int64)
-    cuts[0] = 0
+    # two passes (count, then fill): no array of one slot per entry for the cuts
     nc = 1
+    acc = 0
+    last = 0
+    for p in range(total):
+        acc += counts[p]
+        if acc >= chunk:
+            nc += 1
+            acc = 0
+            last = p + 1
+    if last != total:
+        nc += 1
+    cuts = np.empty(nc, np.int64)
+    cuts[0] = 0
+    k = 1
     acc = 0
     for p in range(total):
         acc += counts[p]
         if acc >= chunk:
-            cuts[nc] = p + 1
-            nc += 1
+            cuts[k] = p + 1
+            k += 1
             acc = 0
-    if cuts[nc - 1] != total:
-        cuts[nc] = total
-        nc += 1
-    return True, first, face, counts, cuts[:nc].copy()
+    if cuts[k - 1] != total:
+        cuts[k] = total
+    return True, first, face, counts, cuts
 
 
 @compiled

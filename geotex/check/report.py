@@ -259,21 +259,29 @@ def check_mesh(V, F, *, self_intersections: bool = True, manifold3d: bool = True
         if wrong.size:
             examples["inward_components"] = _first(wrong, k)
 
+    chi = int(used.sum()) - int(topo.edges.shape[0]) + m
+    edge_count = int(topo.edges.shape[0])
+    bad_edges = np.concatenate([boundary, nm_edges, inconsistent])
+    # what the self-intersection search needs of the edge topology: the ends of
+    # edges not used once each way (boundary, non-manifold or inconsistent ones)
+    unpaired = np.zeros(n, dtype=bool)
+    unpaired[topo.edges[bad_edges].ravel()] = True
+    # only the rows of bad edges are read again (examples): the edge topology
+    # (~100 bytes per face) is not held through the self-intersection search
+    # (the memory peak) nor while manifold3d builds its copy
+    edges = topo.edges if bad_edges.size else None
+    dup_topo = topo if duplicates.size and not dup_positions else None   # groups the duplicates
+    del topo, labels, Vn, bad_edges
+
     pairs = None
     report(progress, "self-intersections")
     if self_intersections and m:
         pairs = (self_intersecting_pairs(V, position_welded_faces(V, F)) if dup_positions
-                 else self_intersecting_pairs(V, F, topology=topo,
+                 else self_intersecting_pairs(V, F, topology=dup_topo, unpaired_vertices=unpaired,
                                               distinct_faces=duplicates.size == 0))
     elif self_intersections:
         pairs = np.zeros((0, 2), dtype=np.int64)
-
-    chi = int(used.sum()) - int(topo.edges.shape[0]) + m
-    edge_count = int(topo.edges.shape[0])
-    # only the rows of bad edges are read again (examples): the half-edge
-    # arrays (48 bytes per face) are not held while manifold3d builds its copy
-    edges = topo.edges if (boundary.size or nm_edges.size or inconsistent.size) else None
-    del topo, labels, Vn
+    del dup_topo, unpaired
     genus = None
     closed_manifold = (m > 0 and boundary.size == 0 and nm_edges.size == 0
                        and nm_verts.size == 0 and inconsistent.size == 0)

@@ -38,7 +38,10 @@ def _hash_columns(columns: list[np.ndarray]) -> np.ndarray:
     """A 64-bit mixing hash of the columns (collisions possible, checked later)."""
     key = columns[0] * _MIX1
     for col, mix in zip(columns[1:], (_MIX2, _MIX3)):
-        key = (key << np.uint64(29)) | (key >> np.uint64(35))
+        high = key >> np.uint64(35)             # rotate left by 29, in place
+        key <<= np.uint64(29)
+        key |= high
+        del high
         key ^= col * mix
     return key
 
@@ -66,17 +69,25 @@ def weld_exact(P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     k = P.shape[0]
     if k == 0:
         return P.reshape(0, 3).copy(), np.zeros(0, dtype=np.int64)
-    P = np.ascontiguousarray(P)
-    P = P + P.dtype.type(0.0)          # -0.0 + 0.0 == +0.0: one bit pattern for zero
+    Q = np.ascontiguousarray(P)
+    if np.may_share_memory(Q, P):
+        Q = Q + Q.dtype.type(0.0)      # -0.0 + 0.0 == +0.0: one bit pattern for zero
+    else:
+        Q += Q.dtype.type(0.0)         # a copy already: no second one
+    P = Q
+    del Q
     columns = _exact_columns(P)
     key = _hash_columns(columns)
     if k >= JIT_MIN_SIZE:
         bits = max(4, int(2 * k - 1).bit_length())
-        table = np.full(1 << bits, -1, dtype=np.int64)
+        # row ids as int32 when they fit (the table is the largest array here)
+        rows = np.int32 if k < 2 ** 31 else np.int64
+        table = np.full(1 << bits, -1, dtype=rows)
         inverse = np.empty(k, dtype=np.int64)
-        first = np.empty(k, dtype=np.int64)
+        first = np.empty(k, dtype=rows)
         extra = columns[2] if len(columns) == 3 else columns[1][:0]
         n = _weld_table(key, columns[0], columns[1], extra, table, 64 - bits, inverse, first)
+        del table, key, columns, extra
         return P[first[:n]], inverse
     perm = np.argsort(key, kind="quicksort")
     ks = key[perm]

@@ -107,6 +107,7 @@ def _weld_corners(path, P: np.ndarray, fmt_meta: dict):
         raise MeshFileError(
             path, f"non-finite coordinates at vertex {bad} (facet {bad // 3}, corner "
                   f"{bad % 3}): {P[bad].tolist()} (NaN or infinity; the file is corrupt)")
+    del finite
     unique, inverse = weld_exact(P)
     V = unique.astype(np.float64)
     F = inverse.reshape(-1, 3)

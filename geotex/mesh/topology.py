@@ -26,6 +26,7 @@ __all__ = [
     "vertex_components",
     "face_components",
     "non_manifold_vertices",
+    "unpaired_edge_vertices",
     "duplicate_face_groups",
     "has_twin_faces",
     "repeated_positions",
@@ -532,6 +533,28 @@ def face_components(F: np.ndarray, n_vertices: int) -> tuple[int, np.ndarray]:
     return count, vlab[np.asarray(F)[:, 0]] if len(F) else np.zeros(0, np.int64)
 
 
+def unpaired_edge_vertices(topo: EdgeTopology, n: int) -> np.ndarray:
+    """Return the vertices on an edge not used exactly once in each direction.
+
+    Parameters
+    ----------
+    topo : EdgeTopology
+        Of the faces (:func:`edge_topology`).
+    n : int
+        Number of vertices.
+
+    Returns
+    -------
+    numpy.ndarray, (n,) bool
+        True at both ends of every boundary, non-manifold or inconsistently
+        oriented edge (see ``unpaired_vertices`` of
+        :func:`geotex.check.intersections.self_intersecting_pairs`).
+    """
+    out = np.zeros(n, dtype=bool)
+    out[topo.edges[(topo.face_count != 2) | (topo.forward_count != 1)].ravel()] = True
+    return out
+
+
 #: Vertices with more corners than this skip the fan walk of
 #: :func:`non_manifold_vertices` and go to the general test.
 _MAX_FAN_WALK = 64
@@ -573,11 +596,17 @@ def non_manifold_vertices(F: np.ndarray, n_vertices: int,
     if m == 0:
         return np.zeros(0, dtype=np.int64)
     topo = topo if topo is not None else edge_topology(F, n_vertices)
-    order = topo.grouped_half_edges()
-    start = topo.edge_starts()
+    # half-edge and corner ids as int32 when they fit (the same values): this
+    # function's temporaries are the memory peak of a large check
+    idx = np.int32 if 3 * m < 2 ** 31 else np.int64
     two = topo.face_count == 2
     e2 = np.flatnonzero(two)
-    a, b = order[start[e2]], order[start[e2] + 1]     # the two half-edges of each
+    s2 = topo.edge_starts()[e2]
+    order = topo.grouped_half_edges()
+    a = order[s2].astype(idx)                         # the two half-edges of each
+    s2 += 1
+    b = order[s2].astype(idx)
+    del s2
     corner_vertex = F.ravel()
     valence = np.bincount(corner_vertex, minlength=n_vertices)
     # vertices the walk cannot decide
@@ -591,12 +620,18 @@ def non_manifold_vertices(F: np.ndarray, n_vertices: int,
     if walk.size:
         # corner 3f + k starts half-edge 3f + k; across it (twin t) the next
         # corner at the same vertex is the one ending t: 3 (t // 3) + (t + 1) % 3
-        twin = np.full(3 * m, -1, dtype=np.int64)
+        twin = np.full(3 * m, -1, dtype=idx)
         twin[a] = b
         twin[b] = a
-        nxt = twin // 3 * 3 + (twin % 3 + 1) % 3
-        first = np.empty(n_vertices, dtype=np.int64)
-        first[corner_vertex[::-1]] = np.arange(3 * m - 1, -1, -1)
+        nxt = twin // 3
+        nxt *= 3
+        np.remainder(twin, 3, out=twin)
+        twin += 1
+        np.remainder(twin, 3, out=twin)
+        nxt += twin
+        del twin
+        first = np.empty(n_vertices, dtype=idx)
+        first[corner_vertex[::-1]] = np.arange(3 * m - 1, -1, -1, dtype=idx)
         s = first[walk]
         cur = nxt[s]
         need = valence[walk]
@@ -612,7 +647,12 @@ def non_manifold_vertices(F: np.ndarray, n_vertices: int,
 
     gv = np.flatnonzero(general)
     if gv.size:
-        # general test on the corners of the remaining vertices
+        # general test on the corners of the remaining vertices: only two-face
+        # edges with an end among them give graph edges
+        ends = topo.edges[e2]
+        sel = general[ends[:, 0]] | general[ends[:, 1]]
+        del ends
+        a, b = a[sel], b[sel]
         he_start = corner_vertex                   # vertex where each half-edge starts
         same_dir = he_start[a] == he_start[b]
         a_e = a // 3 * 3 + (a % 3 + 1) % 3
@@ -622,8 +662,8 @@ def non_manifold_vertices(F: np.ndarray, n_vertices: int,
         keep = general[corner_vertex[rows]]
         rows, cols = rows[keep], cols[keep]
         nodes = np.flatnonzero(general[corner_vertex])
-        index = np.full(3 * m, -1, dtype=np.int64)
-        index[nodes] = np.arange(nodes.size)
+        index = np.full(3 * m, -1, dtype=idx)
+        index[nodes] = np.arange(nodes.size, dtype=idx)
         k = nodes.size
         g = sp.coo_matrix((np.ones(rows.size, dtype=np.int8), (index[rows], index[cols])),
                           shape=(k, k)).tocsr()
