@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from geotex.check.intersections import self_intersecting_pairs
+from geotex.check.intersections import self_intersecting_pairs, self_intersecting_pairs_touching
 from geotex.mapping.seat import smoothed_folds
 from geotex.mapping.shape import SPREAD, shaped_positions
 from geotex.mesh.topology import vertex_components
@@ -132,6 +132,7 @@ class MappedTiles:
     element: np.ndarray
     shaped: bool = True
     shift: np.ndarray | None = None
+    leaned: np.ndarray | None = None
 
 
 def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: float,
@@ -158,7 +159,11 @@ def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: floa
         :data:`~geotex.mapping.shape.MAX_EXTENT` tiles as one shape, similar
         to its tile shape (:func:`~geotex.mapping.shape.shaped_positions`);
         Shaped elements that would overlap are pushed apart along the surface
-        (:func:`~geotex.mapping.shape.spread_centres`). False maps every point
+        (:func:`~geotex.mapping.shape.spread_centres`); elements laid across
+        their leaning offset direction that cross an element standing upright
+        (exact test of the leaned elements' faces) are mapped again upright (a
+        leaned and an upright stud meeting at a graze left the union with
+        crossing faces on the main job's Spot). False maps every point
         through the quad map (:func:`shell_positions`).
     projector : SurfaceProjector, optional
         Closest points on the shell's fitted surface, passed to
@@ -207,16 +212,39 @@ def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: floa
     _, element = vertex_components(faces, kept.size)
     below = depth_scale(tiles, scale, anchor)
     if shaped:
-        X, shift = shaped_positions(shell, quad_of_vertex[kept], uvw[kept], element,
-                                    scale=scale, depth_scale=below, spread=SPREAD,
-                                    return_shift=True, projector=projector)
+        X, shift, leaned = shaped_positions(shell, quad_of_vertex[kept], uvw[kept], element,
+                                            scale=scale, depth_scale=below, spread=SPREAD,
+                                            return_shift=True, return_leaned=True,
+                                            projector=projector)
+        crowded = _crowded_leaned(X, faces, element, leaned)
+        if crowded.any():
+            vs = np.flatnonzero(crowded[element])
+            _, local = np.unique(element[vs], return_inverse=True)
+            X = X.copy()
+            X[vs] = shaped_positions(shell, quad_of_vertex[kept][vs], uvw[kept][vs], local,
+                                     scale=scale, depth_scale=below, shift=shift[vs],
+                                     lean=np.zeros(int(local.max()) + 1, dtype=bool),
+                                     projector=projector)
+            leaned = leaned & ~crowded
     else:
         X = shell_positions(shell, quad_of_vertex[kept], uvw[kept], scale=scale,
                             depth_scale=below)
         shift = np.zeros_like(X)
+        leaned = np.zeros(int(element.max()) + 1 if element.size else 0, dtype=bool)
     return MappedTiles(X, faces, int(on.sum() - start.sum()), int((~keep_face).sum()),
                        quad_of_vertex[kept], uvw[kept], tile_faces, element, bool(shaped),
-                       shift)
+                       shift, leaned)
+
+
+def _crowded_leaned(X, faces, element, leaned):
+    """Leaned elements that cross an element standing as the map's offsets do."""
+    label = element[faces[:, 0]]
+    pairs = self_intersecting_pairs_touching(X, faces, np.flatnonzero(leaned[label]))
+    a, b = label[pairs[:, 0]], label[pairs[:, 1]]
+    mixed = (a != b) & (leaned[a] != leaned[b])
+    out = np.zeros(leaned.shape, dtype=bool)
+    out[np.where(leaned[a], a, b)[mixed]] = True
+    return out
 
 
 def depth_scale(tiles: TileSet, scale: float, anchor) -> float:
@@ -319,6 +347,7 @@ def reseated_elements(shell, mapped: "MappedTiles", label: np.ndarray, elements,
                               scale=scale, depth_scale=depth_scale,
                               shrink=np.full(still.size, float(f)), similar=mapped.shaped,
                               shift=None if mapped.shift is None else mapped.shift[verts],
+                              lean=None if mapped.leaned is None else mapped.leaned[still],
                               projector=projector)
         fstart = np.cumsum(counts) - counts
         left = []
