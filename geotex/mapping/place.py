@@ -22,8 +22,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial import cKDTree
 
-from geotex.check.intersections import self_intersecting_pairs, self_intersecting_pairs_touching
+from geotex.check.intersections import self_intersecting_pairs
 from geotex.mapping.seat import smoothed_folds
 from geotex.mapping.shape import SPREAD, shaped_positions
 from geotex.mesh.topology import vertex_components
@@ -237,12 +238,31 @@ def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: floa
 
 
 def _crowded_leaned(X, faces, element, leaned):
-    """Leaned elements that cross an element standing as the map's offsets do."""
+    """Leaned elements that cross an element standing as the map's offsets do.
+
+    The exact test runs on the leaned elements and the elements whose boxes
+    overlap theirs, one part per element.
+    """
+    n = leaned.size
+    out = np.zeros(n, dtype=bool)
+    if not leaned.any():
+        return out
+    lo = np.full((n, 3), np.inf)
+    hi = np.full((n, 3), -np.inf)
+    np.minimum.at(lo, element, X)
+    np.maximum.at(hi, element, X)
+    lean = np.flatnonzero(leaned)
+    near = cKDTree(0.5 * (lo + hi)).query_ball_point(
+        0.5 * (lo[lean] + hi[lean]), float(np.linalg.norm(hi - lo, axis=1).max()))
+    i, j = np.repeat(lean, [len(c) for c in near]), np.concatenate(
+        [np.asarray(c, dtype=np.int64) for c in near])
+    overlap = np.all((lo[i] <= hi[j]) & (lo[j] <= hi[i]), axis=1) & (i != j)
+    cand = np.union1d(lean, j[overlap])
     label = element[faces[:, 0]]
-    pairs = self_intersecting_pairs_touching(X, faces, np.flatnonzero(leaned[label]))
+    sub = np.flatnonzero(np.isin(label, cand))
+    pairs = sub[self_intersecting_pairs(X, faces[sub], parts=label[sub])]
     a, b = label[pairs[:, 0]], label[pairs[:, 1]]
     mixed = (a != b) & (leaned[a] != leaned[b])
-    out = np.zeros(leaned.shape, dtype=bool)
     out[np.where(leaned[a], a, b)[mixed]] = True
     return out
 
