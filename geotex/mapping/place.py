@@ -22,6 +22,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from geotex.check.intersections import self_intersecting_pairs
 from geotex.mapping.seat import smoothed_folds
@@ -132,6 +133,7 @@ class MappedTiles:
     element: np.ndarray
     shaped: bool = True
     shift: np.ndarray | None = None
+    leaned: np.ndarray | None = None
 
 
 def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: float,
@@ -158,7 +160,11 @@ def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: floa
         :data:`~geotex.mapping.shape.MAX_EXTENT` tiles as one shape, similar
         to its tile shape (:func:`~geotex.mapping.shape.shaped_positions`);
         Shaped elements that would overlap are pushed apart along the surface
-        (:func:`~geotex.mapping.shape.spread_centres`). False maps every point
+        (:func:`~geotex.mapping.shape.spread_centres`); elements laid across
+        their leaning offset direction that cross an element standing upright
+        (exact test of the leaned elements' faces) are mapped again upright (a
+        leaned and an upright stud meeting at a graze left the union with
+        crossing faces on the main job's Spot). False maps every point
         through the quad map (:func:`shell_positions`).
     projector : SurfaceProjector, optional
         Closest points on the shell's fitted surface, passed to
@@ -207,16 +213,58 @@ def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: floa
     _, element = vertex_components(faces, kept.size)
     below = depth_scale(tiles, scale, anchor)
     if shaped:
-        X, shift = shaped_positions(shell, quad_of_vertex[kept], uvw[kept], element,
-                                    scale=scale, depth_scale=below, spread=SPREAD,
-                                    return_shift=True, projector=projector)
+        X, shift, leaned = shaped_positions(shell, quad_of_vertex[kept], uvw[kept], element,
+                                            scale=scale, depth_scale=below, spread=SPREAD,
+                                            return_shift=True, return_leaned=True,
+                                            projector=projector)
+        crowded = _crowded_leaned(X, faces, element, leaned)
+        if crowded.any():
+            vs = np.flatnonzero(crowded[element])
+            _, local = np.unique(element[vs], return_inverse=True)
+            X = X.copy()
+            X[vs] = shaped_positions(shell, quad_of_vertex[kept][vs], uvw[kept][vs], local,
+                                     scale=scale, depth_scale=below, shift=shift[vs],
+                                     lean=np.zeros(int(local.max()) + 1, dtype=bool),
+                                     projector=projector)
+            leaned = leaned & ~crowded
     else:
         X = shell_positions(shell, quad_of_vertex[kept], uvw[kept], scale=scale,
                             depth_scale=below)
         shift = np.zeros_like(X)
+        leaned = np.zeros(int(element.max()) + 1 if element.size else 0, dtype=bool)
     return MappedTiles(X, faces, int(on.sum() - start.sum()), int((~keep_face).sum()),
                        quad_of_vertex[kept], uvw[kept], tile_faces, element, bool(shaped),
-                       shift)
+                       shift, leaned)
+
+
+def _crowded_leaned(X, faces, element, leaned):
+    """Leaned elements that cross an element standing as the map's offsets do.
+
+    The exact test runs on the leaned elements and the elements whose boxes
+    overlap theirs, one part per element.
+    """
+    n = leaned.size
+    out = np.zeros(n, dtype=bool)
+    if not leaned.any():
+        return out
+    lo = np.full((n, 3), np.inf)
+    hi = np.full((n, 3), -np.inf)
+    np.minimum.at(lo, element, X)
+    np.maximum.at(hi, element, X)
+    lean = np.flatnonzero(leaned)
+    near = cKDTree(0.5 * (lo + hi)).query_ball_point(
+        0.5 * (lo[lean] + hi[lean]), float(np.linalg.norm(hi - lo, axis=1).max()))
+    i, j = np.repeat(lean, [len(c) for c in near]), np.concatenate(
+        [np.asarray(c, dtype=np.int64) for c in near])
+    overlap = np.all((lo[i] <= hi[j]) & (lo[j] <= hi[i]), axis=1) & (i != j)
+    cand = np.union1d(lean, j[overlap])
+    label = element[faces[:, 0]]
+    sub = np.flatnonzero(np.isin(label, cand))
+    pairs = sub[self_intersecting_pairs(X, faces[sub], parts=label[sub])]
+    a, b = label[pairs[:, 0]], label[pairs[:, 1]]
+    mixed = (a != b) & (leaned[a] != leaned[b])
+    out[np.where(leaned[a], a, b)[mixed]] = True
+    return out
 
 
 def depth_scale(tiles: TileSet, scale: float, anchor) -> float:
@@ -319,6 +367,7 @@ def reseated_elements(shell, mapped: "MappedTiles", label: np.ndarray, elements,
                               scale=scale, depth_scale=depth_scale,
                               shrink=np.full(still.size, float(f)), similar=mapped.shaped,
                               shift=None if mapped.shift is None else mapped.shift[verts],
+                              lean=None if mapped.leaned is None else mapped.leaned[still],
                               projector=projector)
         fstart = np.cumsum(counts) - counts
         left = []
