@@ -134,7 +134,7 @@ about their shared border when they need at most ``field_tolerance`` and
 then moved to the lowest matching error within ``CONTINUATION_WINDOW`` of a
 pattern size (their phase is corrected, the orientation kept), so a cluster
 whose FFT minimum is above ``max_error`` is refused before its continuations
-are evaluated (their lattice moves were a third of the CPU time on slate
+are evaluated (their lattice moves were a quarter of the CPU time on slate
 tiles, where most face-level fits fail; before, a continuation whose window
 held no admissible position kept its bilinear error and could pass: 29 of
 about 1700 refusals on Spot 10k with slate tiles); crack moves
