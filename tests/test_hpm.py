@@ -774,6 +774,37 @@ def test_refine_placement_recovers_a_subpixel_shift_and_angle():
     assert e2 <= 1e-12 and np.allclose(t2, t_true) and np.allclose(R2, R_true)
 
 
+def test_compiled_sampling_equals_the_numpy_path_bit_for_bit():
+    from geotex.image.hpm import _sample
+    rng = np.random.default_rng(4)
+    img = opponent_colors(noise_image(37, 53, seed=5).astype(np.float64) / 255.0)
+    xy = np.vstack([rng.uniform(-5.0, 60.0, (5000, 2)),           # inside and clamped
+                    np.mgrid[0:54:0.5, 0:38:0.5].reshape(2, -1).T,  # pixel centres, edges
+                    [[0.5, 0.5], [53.5, 37.5], [-0.0, 0.0]]])
+    slow, fast = _sample(img, xy), _sample(img, xy, True)
+    assert fast.dtype == slow.dtype and fast.shape == slow.shape
+    assert np.array_equal(fast, slow)
+    # NaN positions keep the numpy path
+    bad = xy[:3].copy()
+    bad[1, 0] = np.nan
+    with pytest.raises(IndexError):
+        _sample(img, bad, True)
+
+
+def test_hpm_compiled_sampling_gives_the_same_uv(monkeypatch):
+    import geotex.image.hpm as hpm
+    V, F = torus(1.0, 0.4, n_major=32, n_minor=12)
+    img = noise_image(64, 64)
+    kw = dict(scale=0.6, seed=1, max_error=0.2)
+    monkeypatch.setattr(hpm, "SAMPLE_JIT_FACES", 10 ** 9)
+    monkeypatch.setattr(hpm, "JIT_MIN_SIZE", 10 ** 9)
+    slow = hpm_texture(V, F, img, **kw)
+    monkeypatch.setattr(hpm, "SAMPLE_JIT_FACES", 0)
+    fast = hpm_texture(V, F, img, **kw)
+    assert np.array_equal(slow.uv, fast.uv) and np.array_equal(slow.uv_faces, fast.uv_faces)
+    assert slow.report() == fast.report()
+
+
 @pytest.fixture(scope="module")
 def face_level_runs():
     # the torus of test_hpm_fills_few_faces_at_face_level, where some finest

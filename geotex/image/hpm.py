@@ -132,7 +132,12 @@ the FFT search uses that one orientation (the grid turned onto it); the
 neighbours' continuations (and their whole-period moves) are turned onto it
 about their shared border when they need at most ``field_tolerance`` and
 then moved to the lowest matching error within ``CONTINUATION_WINDOW`` of a
-pattern size (their phase is corrected, the orientation kept); crack moves
+pattern size (their phase is corrected, the orientation kept), so a cluster
+whose FFT minimum is above ``max_error`` is refused before its continuations
+are evaluated (their lattice moves were a quarter of the CPU time on slate
+tiles, where most face-level fits fail; before, a continuation whose window
+held no admissible position kept its bilinear error and could pass: 29 of
+about 1700 refusals on Spot 10k with slate tiles); crack moves
 (lattice snapping, relaxation) that turn the patch by more than
 ``FIELD_SNAP_TURN`` / ``FIELD_MOVE_TURN`` degrees are undone.  The pattern
 then breaks only at the field's singularities and the combing's cut, and
@@ -178,6 +183,7 @@ from scipy.sparse.csgraph import breadth_first_order, connected_components, dijk
 
 from geotex.errors import InputError, MissingFileError
 from geotex.image.atlas import rasterize_triangles
+from geotex.jit import JIT_MIN_SIZE, compiled
 from geotex.fields.combing import comb_direction_field
 from geotex.fields.directions import smooth_direction_field
 from geotex.image.fftmatch import (match_energy, opponent_colors, pattern_scale,
@@ -226,6 +232,11 @@ FIELD_SNAP_TURN = 3.0
 #: Quarter-turn symmetry of a sample's autocorrelation from which its field is a cross
 #: field (4 directions) instead of a line field.
 QUARTER_TURN = 0.8
+
+#: Bases from this many faces up sample the image with the compiled loop (the same
+#: values; ``GEOTEX_JIT_MIN_SIZE`` lower than this lowers it).  A mapping of 2000 faces
+#: does tens of thousands of lookups; below that, loading numba (~0.4 s once) costs more.
+SAMPLE_JIT_FACES = 2000
 
 #: Largest relaxation move, as a fraction of the shortest edge at the vertex (texture space).
 RELAX_EDGE_FRACTION = 0.2
@@ -360,9 +371,16 @@ def _block_mean(img: np.ndarray, f: int) -> np.ndarray:
     return x.mean(axis=(1, 3))
 
 
-def _sample(img: np.ndarray, xy: np.ndarray) -> np.ndarray:
-    """Bilinear samples of ``img`` (h, w, c) at pixel positions ``xy`` (x, y), clamped."""
+def _sample(img: np.ndarray, xy: np.ndarray, fast: bool = False) -> np.ndarray:
+    """Bilinear samples of ``img`` (h, w, c) at pixel positions ``xy`` (x, y), clamped.
+
+    With ``fast`` the compiled loop :func:`_sample_compiled` gives the same
+    values bit for bit without the numpy temporaries (positions with a NaN
+    keep the numpy path).
+    """
     h, w = img.shape[:2]
+    if fast and h > 1 and w > 1 and not np.isnan(xy).any():
+        return _sample_compiled(img, np.ascontiguousarray(xy, dtype=np.float64))
     x = np.clip(xy[:, 0] - 0.5, 0.0, w - 1.0)
     y = np.clip(xy[:, 1] - 0.5, 0.0, h - 1.0)
     x0 = np.minimum(np.floor(x).astype(np.int64), w - 2) if w > 1 else np.zeros(x.size, np.int64)
@@ -378,6 +396,29 @@ def _sample(img: np.ndarray, xy: np.ndarray) -> np.ndarray:
     top = np.take(flat, i00, axis=0) * (1 - fx) + np.take(flat, i00 + dx, axis=0) * fx
     bot = np.take(flat, i00 + dy, axis=0) * (1 - fx) + np.take(flat, i00 + dy + dx, axis=0) * fx
     return top * (1 - fy) + bot * fy
+
+
+@compiled
+def _sample_compiled(img, xy):
+    """:func:`_sample` for an image of at least 2 x 2 pixels and positions without NaN:
+    the same operations in the same order per sample, so the same values."""
+    h, w, nc = img.shape
+    n = xy.shape[0]
+    out = np.empty((n, nc))
+    for i in range(n):
+        x = min(max(xy[i, 0] - 0.5, 0.0), w - 1.0)
+        y = min(max(xy[i, 1] - 0.5, 0.0), h - 1.0)
+        x0 = min(int(np.floor(x)), w - 2)
+        y0 = min(int(np.floor(y)), h - 2)
+        fx = x - x0
+        fy = y - y0
+        x1 = min(x0 + 1, w - 1)
+        y1 = min(y0 + 1, h - 1)
+        for k in range(nc):
+            top = img[y0, x0, k] * (1 - fx) + img[y0, x1, k] * fx
+            bot = img[y1, x0, k] * (1 - fx) + img[y1, x1, k] * fx
+            out[i, k] = top * (1 - fy) + bot * fy
+    return out
 
 
 class _State:
@@ -626,6 +667,9 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                          f"{elen:.3g} units, more than half the image; give a scale of at "
                          f"least {2.0 * elen * W_img / min(W_img, H_img):.3g}")
     rng = np.random.default_rng(seed)
+    # compiled bilinear sampling (the same values): on small bases loading numba costs
+    # more than the thousands of small lookups save
+    fast = m >= min(SAMPLE_JIT_FACES, JIT_MIN_SIZE)
     report(progress, "hierarchy")
     Hc = cluster_hierarchy(V, F, seed=int(rng.integers(2**31)))
     bh = barycentric_hierarchy(V, F, Hc, coordinates=flattening)
@@ -889,7 +933,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
 
     def band_error(R, t, tb, I, origin):
         """Squared mask error of the placement ``R q + t`` of the raster frame ``q``."""
-        S = _sample(small, mask_points(tb, origin) @ R.T + t)
+        S = _sample(small, mask_points(tb, origin) @ R.T + t, fast)
         return float(np.sum((I[tb] - S) ** 2))
 
     def lattice_continuation(cont, fits, Rd, loc, tb, I, origin, li):
@@ -919,10 +963,9 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             # every move's band error in one batched bilinear lookup (the same values
             # and per-move sums as one band_error call per move)
             qR = q @ Rr.T
-            S = _sample(small, (qR[None] + t2s[:, None]).reshape(-1, 2))
+            S = _sample(small, (qR[None] + t2s[:, None]).reshape(-1, 2), fast)
             D = (Itb[None] - S.reshape(t2s.shape[0], tb.size, -1)) ** 2
-            for i in range(t2s.shape[0]):
-                ek = float(np.sum(D[i]))
+            for i, ek in enumerate(D.reshape(t2s.shape[0], -1).sum(axis=1).tolist()):
                 if ek < cont[2] or not cont_in:
                     cont, cont_in = (Rr, t2s[i], ek), True
         return cont
@@ -1131,7 +1174,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             tri_b = qpix(bl[F[band_faces]].reshape(-1, 2)).reshape(-1, 3, 2) - origin
             tb, fb, bb = rasterize_triangles(tri_b, wm, hm)
             uvb = np.einsum("tk,tkd->td", bb, st.corner[band_faces[fb]]) / f
-            I[tb] = _sample(small, uvb)
+            I[tb] = _sample(small, uvb, fast)
             J[tb] = 1.0
             K[tb] = 1.0
         K = K.reshape(hm, wm)
@@ -1153,6 +1196,37 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             refined = None
             err = 0.0
         else:
+            which = None
+            if fvec is not None:
+                # the field gives the orientation: only its direction (the representative
+                # next to the main neighbour's, without a neighbour fit the combed one)
+                which = [k_ref]
+            elif nfit is not None and spread is not None:
+                # orientation propagates from the neighbours (paper §3): only the
+                # orientations within ``spread`` of the neighbour's own are searched
+                Rm = nfit[0] @ Rd.T                # the main neighbour's orientation
+                a_nb = np.arctan2(Rm[0, 1], Rm[0, 0])
+                dev = np.abs((spectra.angles - a_nb + np.pi) % (2 * np.pi) - np.pi)
+                which = np.flatnonzero(dev <= spread + 1e-9)
+                if which.size == 0:
+                    which = np.array([int(np.argmin(dev))])
+            Eg = match_energy(spectra, I.reshape(hm, wm, -1), J.reshape(hm, wm), K,
+                              which=which)
+            flat = Eg.ravel()
+            if not np.isfinite(flat).any():
+                refuse(li, 'no_position')
+                return None
+            best = float(flat.min())
+            near = np.flatnonzero(flat <= best + 1e-9 * (1.0 + best))
+            pick = near[int(rng.integers(near.size))]
+            if (fvec is not None or nfit is None) and not (subpixel or force) \
+                    and best / J.sum() / var2 > max_error:
+                # refused whatever the continuations give: with a field a continuation is
+                # taken at the FFT minimum near it (below), whose error is at least
+                # ``best``; the continuations (the lattice moves above all) are not
+                # evaluated for a cluster that is subdivided anyway
+                refuse(li, 'error')
+                return -best / J.sum() / var2
             cont = None
             if nfit is not None:
                 # the neighbour's placement in the turned raster frame: R Rd^T q + t
@@ -1165,22 +1239,6 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                 if lattice is not None:
                     cont = lattice_continuation(cont, fits if c is None else fits[:1], Rd,
                                                 loc, tb, I, origin, li)
-            which = None
-            if fvec is not None:
-                # the field gives the orientation: only its direction (the representative
-                # next to the main neighbour's, without a neighbour fit the combed one)
-                which = [k_ref]
-            elif cont is not None and spread is not None:
-                # orientation propagates from the neighbours (paper §3): only the
-                # orientations within ``spread`` of the neighbour's own are searched
-                Rm = nfit[0] @ Rd.T                # the main neighbour's orientation
-                a_nb = np.arctan2(Rm[0, 1], Rm[0, 0])
-                dev = np.abs((spectra.angles - a_nb + np.pi) % (2 * np.pi) - np.pi)
-                which = np.flatnonzero(dev <= spread + 1e-9)
-                if which.size == 0:
-                    which = np.array([int(np.argmin(dev))])
-            Eg = match_energy(spectra, I.reshape(hm, wm, -1), J.reshape(hm, wm), K,
-                              which=which)
             if fvec is not None and cont is not None:
                 # with a field the continuation has the searched orientation: take the
                 # FFT minimum within ``CONTINUATION_WINDOW`` of a pattern size of it (its
@@ -1197,13 +1255,6 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                     Rw, tw = fft_placement(k_ref, np.array([x0_ + bx, y0_ + by],
                                                            dtype=np.float64) - origin)
                     cont = (Rw, tw, float(blk[by, bx]))
-            flat = Eg.ravel()
-            if not np.isfinite(flat).any():
-                refuse(li, 'no_position')
-                return None
-            best = float(flat.min())
-            near = np.flatnonzero(flat <= best + 1e-9 * (1.0 + best))
-            pick = near[int(rng.integers(near.size))]
             refined = None
             if subpixel:
                 # the FFT minimum lies on the pixel grid and on the orientation grid:
@@ -1212,7 +1263,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                 rot_k = int(kk if which is None else np.asarray(which)[kk])
                 R0, t0 = fft_placement(rot_k, np.array([dx, dy], dtype=np.float64) - origin)
                 R1, t1, e_1 = _refine_placement(small, R0, t0, mask_points(tb, origin), I[tb],
-                                                np.pi / orientations)
+                                                np.pi / orientations, fast)
                 if inside_image(to_image(loc, R1 @ Rd, t1)):
                     refined, best = (R1, t1), e_1
                 else:
@@ -1223,13 +1274,14 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                 Pc = to_image(loc, cont[0] @ Rd, cont[1])
                 if inside_image(Pc):
                     best, pick, refined = cont[2], None, None
-                    levels[li].continued += 1
             err = best / J.sum() / var2
             if err > max_error:
                 if not force:
                     refuse(li, 'error')
                     return -err
                 levels[li].forced += 1
+            if pick is None and refined is None:
+                levels[li].continued += 1
         if refined is not None:
             R_, t_ = refined
         elif pick is None:
@@ -1308,7 +1360,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                         close = close | got
                         levels[li].lattice_snapped += int(got.sum())
             if relax and (has & ~close).any():
-                moved = _relax(P, verts, faces, has & ~close, F, st, full, rng, f)
+                moved = _relax(P, verts, faces, has & ~close, F, st, full, rng, f, fast)
                 P2 = spread_moves(moved, close)
                 if P2 is not None:
                     P = P2
@@ -1524,7 +1576,7 @@ def _pattern_size(ps, shape) -> float:
     return float(n_in.max() if n_in.size else n.min())
 
 
-def _refine_placement(img, R, t, q, target, angle_step):
+def _refine_placement(img, R, t, q, target, angle_step, fast=False):
     """Sub-pixel and sub-grid refinement of a mask placement ``x -> R q + t``.
 
     The FFT search gives the best placement on the pixel grid and on the
@@ -1534,7 +1586,8 @@ def _refine_placement(img, R, t, q, target, angle_step):
     parabola in x, in y (steps of half a pixel) and in the angle (steps of
     half the orientation grid, rotating about the mask's centroid), two
     rounds with halved steps; the lowest evaluated placement is kept, so the
-    result is never worse than the start.
+    result is never worse than the start.  ``fast``: sample the image with the
+    compiled loop (same values).
 
     Returns
     -------
@@ -1551,7 +1604,7 @@ def _refine_placement(img, R, t, q, target, angle_step):
 
     def energy(p):
         R1, t1 = place(p)
-        d = target - _sample(img, q @ R1.T + t1)
+        d = target - _sample(img, q @ R1.T + t1, fast)
         return float(np.sum(d * d))
 
     p = np.zeros(3)
@@ -1605,7 +1658,7 @@ def _snap(P, target, close, tri):
     return close
 
 
-def _relax(P, verts, faces, movable, F, st, full, rng, f):
+def _relax(P, verts, faces, movable, F, st, full, rng, f, fast=False):
     """Local edge relaxation (Fig. 6): greedy random moves of shared border vertices.
 
     ``P`` (p, 2) full-res positions of ``verts``; ``movable`` marks the shared
@@ -1614,6 +1667,7 @@ def _relax(P, verts, faces, movable, F, st, full, rng, f):
     texture at samples along the shared edges around it, weighted by the
     vertex's hat function; candidate moves are drawn in a disc of radius
     ``f`` pixels halved at each of three rounds, and the best is kept.
+    ``fast``: sample the image with the compiled loop (same values).
     """
     mv = np.flatnonzero(movable)
     if mv.size == 0:
@@ -1645,13 +1699,13 @@ def _relax(P, verts, faces, movable, F, st, full, rng, f):
 
     na, nbb = nb[ea], nb[eb]
     y = na[:, None, :] * (1 - ts)[None, :, None] + nbb[:, None, :] * ts[None, :, None]
-    target = _sample(full, y.reshape(-1, 2))         # the neighbour's texture along the edges
+    target = _sample(full, y.reshape(-1, 2), fast)   # the neighbour's texture along the edges
     b = pos[eb]
 
     def err(cand):                       # cand (k, 2) positions of the movable vertices
         a = cand[owner]
         x = a[:, None, :] * (1 - ts)[None, :, None] + b[:, None, :] * ts[None, :, None]
-        d = _sample(full, x.reshape(-1, 2)) - target
+        d = _sample(full, x.reshape(-1, 2), fast) - target
         w = np.broadcast_to((1 - ts)[None, :], x.shape[:2]).ravel()
         per = np.sum(d * d, axis=1) * w
         return np.bincount(np.repeat(owner, ts.size), weights=per, minlength=vid.size)
