@@ -415,21 +415,20 @@ def rooted_elements(shell, mapped, X: np.ndarray, label: np.ndarray, elements, *
             left.append(e)
             continue
         pull = np.where(wj < 0, wj / wmin[j], 0.0)
-        fallback = None
+        kept = None
         for s in steps:
             Xe = X[v] - (float(s) * reach[j] * pull)[:, None] * d[j]
             met, folded = _crossings_near(Xe, local, e, X, G, boxes, V0, F0)
             if folded or met.size == 0 or met[0] != 1:
                 continue
+            if kept is None or met.size == 1:      # meeting only the base is best
+                kept = (Xe, met)
             if met.size == 1:
-                fallback = (Xe, met)
                 break
-            if fallback is None:
-                fallback = (Xe, met)
-        if fallback is None:
+        if kept is None:
             left.append(e)
             continue
-        Xe, met = fallback
+        Xe, met = kept
         X[v] = Xe
         lo[e], hi[e] = Xe.min(axis=0), Xe.max(axis=0)
         # parts 2.. are the elements whose boxes overlapped, in index order
