@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -10,7 +12,7 @@ from geotex.mapping import element_contacts, mapped_tiles, texture_height, tiles
 from geotex.mapping.assign import edge_colors
 from geotex.mapping.place import depth_scale
 from geotex.mapping.seat import (floating_elements, lowered_elements, propped_elements,
-                                 remapped_folds, smoothed_folds)
+                                 remapped_folds, rooted_elements, smoothed_folds)
 from geotex.mesh.geometry import signed_volume
 from geotex.mesh.primitives import box, icosphere
 from geotex.mesh.topology import concatenated, edge_topology, face_components
@@ -207,3 +209,97 @@ def test_shaped_scales_no_size_seats_are_smoothed_instead_of_left_out():
     assert c.folded.size > 10 and still.size == 0
     c2 = element_contacts(X, m.faces)
     assert np.intersect1d(c2.folded, c.folded).size == 0
+
+
+@pytest.fixture(scope="module")
+def studs_on_torus():
+    from geotex.shells import load_named as load_shell
+    from geotex.tiles.catalog import load_named as load_tiles
+
+    shell, tiles = load_shell("torus"), load_tiles("studs")
+    pc = shell.polycube
+    colors = edge_colors(pc.layout.edge_axis, tiles.n_colors, seed=0)
+    tq = tiles_for_quads(tiles, pc.layout.quad_axes, pc.layout.quad_edge, colors,
+                         bare=pc.quad_folded)
+    scale = texture_height(shell, tiles) / tiles.height
+    below = depth_scale(tiles, scale, 0.2 * shell.tile_size)
+    m = mapped_tiles(shell, tiles, tq, scale=scale, anchor=0.2 * shell.tile_size)
+    return shell, tiles, m, below
+
+
+def _only_elements(m, keep):
+    """``m`` with only the elements ``keep`` (a mask), renumbered in order."""
+    kv = keep[m.element]
+    new = np.cumsum(kv) - 1
+    kf = kv[m.faces[:, 0]]
+    return dataclasses.replace(
+        m, vertices=m.vertices[kv], faces=new[m.faces[kf]], quads=m.quads[kv],
+        tile_points=m.tile_points[kv], tile_faces=m.tile_faces[kf],
+        element=(np.cumsum(keep) - 1)[m.element[kv]], shift=m.shift[kv])
+
+
+def test_a_lifted_shaped_element_gets_a_root_into_the_base_and_keeps_its_top(studs_on_torus):
+    shell, tiles, m, below = studs_on_torus
+    V0, F0 = shell.base_vertices, shell.base_faces
+    label = m.element[m.faces[:, 0]]
+    # the studs near two of them (the exact contact test of all is slow)
+    lifted = np.array([3, int(label.max()) // 2])
+    centre = np.stack([np.bincount(m.element, weights=m.vertices[:, i]) for i in range(3)], 1)
+    centre /= np.bincount(m.element)[:, None]
+    near = np.linalg.norm(centre[:, None] - centre[lifted][None], axis=2).min(axis=1)
+    m = _only_elements(m, near < 1.5 * shell.tile_size)
+    lifted = np.searchsorted(np.flatnonzero(near < 1.5 * shell.tile_size), lifted)
+    c = element_contacts(m.vertices, m.faces, label=m.element[m.faces[:, 0]])
+    none = np.zeros((0, 2), dtype=np.int64)
+    assert floating_elements(V0, F0, m.vertices, m.faces, label=c.label, touching=none).size == 0
+    # lift the two off the base along their normals by more than their root
+    X = m.vertices.copy()
+    for e in lifted:
+        v = m.element == e
+        n = np.mean(X[v], axis=0) - np.mean(X[v & (m.tile_points[:, 2] < 0)], axis=0)
+        X[v] += 1.5 * tiles.depth * below * n / np.linalg.norm(n)
+    fl = floating_elements(V0, F0, X, m.faces, label=c.label, touching=none)
+    assert fl.tolist() == sorted(lifted.tolist())
+    X2, left, met = rooted_elements(shell, m, X, c.label, fl, depth=tiles.depth * below)
+    assert left.size == 0
+    assert floating_elements(V0, F0, X2, m.faces, label=c.label, touching=none).size == 0
+    # only the points below the surface moved, and only those of the lifted studs
+    moved = np.flatnonzero(np.any(X2 != X, axis=1))
+    assert moved.size > 0 and np.all(m.tile_points[moved, 2] < 0)
+    assert np.isin(m.element[moved], lifted).all()
+    # nothing crosses itself; the new contacts are exactly the pairs returned
+    c2 = element_contacts(X2, m.faces, label=c.label)
+    assert c2.folded.size == 0
+    new = {tuple(p) for p in c2.touching.tolist()} - {tuple(p) for p in c.touching.tolist()}
+    assert new == {tuple(p) for p in met.tolist()}
+    assert all(set(p) & set(lifted.tolist()) for p in new)
+    # an element with nothing below the surface has no root to extend
+    flat = m.tile_points.copy()
+    flat[:, 2] = np.abs(flat[:, 2])
+    X3, left, met = rooted_elements(shell, dataclasses.replace(m, tile_points=flat), X, c.label,
+                                    fl, depth=tiles.depth * below)
+    assert left.tolist() == fl.tolist() and np.array_equal(X3, X) and met.size == 0
+
+
+@pytest.mark.slow
+def test_a_shrunk_scale_left_above_the_base_is_rooted_not_left_out():
+    # Spot's scales: a scale shrunk to re-seat its fold in quad 289 (offset
+    # directions up to 79 degrees from the crumpled sub-grid's normals) ends wholly
+    # above the base; the contact with a neighbour found before the shrink hid it
+    shell, m, c, scale, below, X, still = _mapped_on("spot", "scales")
+    tiles_depth = float(-m.tile_points[:, 2].min())
+    V0, F0 = shell.base_vertices, shell.base_faces
+    moved = np.setdiff1d(c.folded, still)
+    stale = np.isin(c.touching, moved).any(axis=1)
+    hidden = floating_elements(V0, F0, X, m.faces, label=c.label, touching=c.touching,
+                               heights=m.tile_points[:, 2])
+    fl = floating_elements(V0, F0, X, m.faces, label=c.label, touching=c.touching[~stale],
+                           heights=m.tile_points[:, 2])
+    assert hidden.size == 0 and fl.size >= 1 and np.isin(fl, moved).all()
+    X2, left, met = rooted_elements(shell, m, X, c.label, fl, depth=tiles_depth * below)
+    assert left.size == 0 and met.size == 0
+    none = np.zeros((0, 2), dtype=np.int64)
+    assert floating_elements(V0, F0, X2, m.faces, label=c.label, touching=none,
+                             heights=m.tile_points[:, 2]).size == 0
+    changed = np.any(X2 != X, axis=1)
+    assert np.all(m.tile_points[changed, 2] < 0) and np.isin(m.element[changed], fl).all()

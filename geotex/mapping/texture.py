@@ -20,7 +20,7 @@ from geotex.errors import GeotexError, InputError
 from geotex.mapping.assign import edge_colors, tiles_for_quads
 from geotex.mapping.place import depth_scale, mapped_tiles, reseated_elements
 from geotex.mapping.seat import (floating_elements, lowered_elements, propped_elements,
-                                 remapped_folds, smoothed_folds)
+                                 remapped_folds, rooted_elements, smoothed_folds)
 from geotex.mapping.union import (UNION_STAGES, ElementContacts, element_contacts,
                                   united_with_base)
 from geotex.mesh.topology import face_components
@@ -76,7 +76,8 @@ class TextureStats:
         Folded elements shrunk in place, or smoothed over the folded stretch,
         that then fit.
     elements_lowered, elements_propped : int
-        Floating elements lowered onto the base, or stood on it with a post
+        Floating elements lowered onto the base (strands, rings) or whose
+        roots were extended into it (shaped elements), or stood on it with a post
         (:mod:`~geotex.mapping.seat`).
     cavities_filled : int
         Closed voids between elements and the base that the union's result
@@ -307,9 +308,10 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
     # shrunk elements may now meet others: the union judges them by their boxes
     moved = np.setdiff1d(folded, still)
     # strands and rings follow the point-by-point map (periodic and lattice sets):
-    # they are re-seated rather than dropped. Shaped elements (studs) keep their
-    # one shape and size: one still folded after shrinking, or floating, is left
-    # out as before (re-seating them laid studs on posts and cost 1-2 s at ~400k)
+    # they are re-seated rather than dropped. Shaped elements (studs, scales) keep
+    # their one shape and size: one still folded after shrinking and smoothing is
+    # left out, one floating gets a longer root below (remapping studs point by
+    # point and standing floating ones on posts cost 1-2 s more at ~400k)
     reseat = not mapped.shaped
     if reseat:
         X, still = remapped_folds(shell, mapped, X, contacts.label, still, scale=scale,
@@ -322,17 +324,29 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
     # the union into many operands
     contacts = contacts._replace(folded=np.union1d(moved, still))
     # elements that would float are lowered onto the base, or stood on it
+    # (strands, rings), or their roots are extended into it (shaped elements
+    # keep their shape above the surface). A moved element's contacts found
+    # before the move no longer hold: it is not held up by them
     n_el = int(contacts.label.max()) + 1 if contacts.label.size else 0
     usable = np.ones(n_el, dtype=bool)
     usable[still] = False
-    floating = (floating_elements(shell.base_vertices, shell.base_faces, X, mapped.faces,
-                                  label=contacts.label, touching=contacts.touching,
-                                  usable=usable, heights=mapped.tile_points[:, 2])
-                if reseat else np.zeros(0, dtype=np.int64))
-    X, unseated = lowered_elements(shell, mapped, contacts.label, floating, scale=scale,
-                                   depth_scale=below, depth=tiles.depth)
+    stale = np.isin(contacts.touching, moved).any(axis=1)
+    floating = floating_elements(shell.base_vertices, shell.base_faces, X, mapped.faces,
+                                 label=contacts.label, touching=contacts.touching[~stale],
+                                 usable=usable, heights=mapped.tile_points[:, 2])
+    if reseat:
+        X, unseated = lowered_elements(shell, mapped, contacts.label, floating, scale=scale,
+                                       depth_scale=below, depth=tiles.depth)
+    else:
+        X, unseated, met = rooted_elements(shell, mapped, X, contacts.label, floating,
+                                           depth=tiles.depth * below)
+        if met.size:                # roots that reach a neighbour's: united together
+            touching = np.unique(np.vstack([contacts.touching, met]), axis=0)
+            contacts = contacts._replace(touching=touching)
     lowered = np.setdiff1d(floating, unseated)
-    PV, PF, propped, _ = propped_elements(shell, mapped, X, contacts.label, unseated,
+    # (shaped elements are not stood on posts: one no root seats is left out)
+    PV, PF, propped, _ = propped_elements(shell, mapped, X, contacts.label,
+                                          unseated if reseat else unseated[:0],
                                           scale=scale, depth_scale=below, depth=tiles.depth)
     # (lowered elements and posts were kept only where they cross nothing else)
     mapped = dataclasses.replace(mapped, vertices=X)
