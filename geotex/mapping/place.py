@@ -27,6 +27,7 @@ from scipy.spatial import cKDTree
 from geotex.check.intersections import self_intersecting_pairs
 from geotex.mapping.seat import smoothed_folds
 from geotex.mapping.shape import SPREAD, shaped_positions
+from geotex.mesh.geometry import group_boxes
 from geotex.mesh.topology import vertex_components
 from geotex.param.polycube_fit import SurfaceProjector
 from geotex.shells.locate import interpolated
@@ -247,10 +248,7 @@ def _crowded_leaned(X, faces, element, leaned):
     out = np.zeros(n, dtype=bool)
     if not leaned.any():
         return out
-    lo = np.full((n, 3), np.inf)
-    hi = np.full((n, 3), -np.inf)
-    np.minimum.at(lo, element, X)
-    np.maximum.at(hi, element, X)
+    lo, hi = group_boxes(X, element, n)
     lean = np.flatnonzero(leaned)
     near = cKDTree(0.5 * (lo + hi)).query_ball_point(
         0.5 * (lo[lean] + hi[lean]), float(np.linalg.norm(hi - lo, axis=1).max()))

@@ -37,6 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from geotex.errors import InputError
+from geotex.mesh.geometry import group_boxes
 from geotex.mesh.topology import face_components
 from geotex.tiles.clip import split_by_plane
 from geotex.tiles.fill import GAP, PIXEL, footprint_pixels, grown_heights, pixel_heights
@@ -208,11 +209,9 @@ def element_boxes(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray,
     lo, hi : numpy.ndarray, (E, 3) float64
     """
     n, labels = face_components(F, len(V))
-    corners = V[F]                                     # (m, 3, 3)
-    lo = np.full((n, 3), np.inf)
-    hi = np.full((n, 3), -np.inf)
-    np.minimum.at(lo, labels, corners.min(axis=1))
-    np.maximum.at(hi, labels, corners.max(axis=1))
+    vlab = np.full(len(V), -1, dtype=np.int64)
+    vlab[F[:, 0]], vlab[F[:, 1]], vlab[F[:, 2]] = labels, labels, labels
+    lo, hi = group_boxes(V, vlab, n)
     return labels, lo, hi
 
 
