@@ -7,6 +7,8 @@ atomically.
 
 from __future__ import annotations
 
+import atexit
+import gc
 import io
 import multiprocessing
 import os
@@ -50,6 +52,17 @@ def offscreen_pyvista():
     return pv
 
 
+def _no_collection_at_exit() -> None:
+    """Worker set-up: freeze the objects out of the collector when the worker exits.
+
+    The worker exits when its pool is shut down, and its shutdown otherwise
+    walks every VTK and pyvista object in full collections (about 1 s CPU
+    after a picture of ~370k faces, which the caller waits for in
+    ``shutdown``).
+    """
+    atexit.register(gc.freeze)
+
+
 def _load_renderer() -> None:
     offscreen_pyvista()
     import pyvista.plotting  # noqa: F401  (the part of pyvista a picture needs)
@@ -62,7 +75,10 @@ def background_renderer() -> ProcessPoolExecutor:
     submitting :func:`render_panels` or :func:`render_mesh` to this pool draws it
     on another core while the caller goes on (writing and checking files), and
     the import cost is paid while the caller is still computing. The process is
-    spawned (not forked), so it shares no threads or locks with the caller.
+    spawned (not forked), so it shares no threads or locks with the caller, and
+    it skips the garbage collections of its interpreter's shutdown
+    (:func:`gc.freeze` at exit): shutting the pool down takes 0.3 s instead of
+    1.6 s at load 16 after a picture of ~370k faces.
 
     Returns
     -------
@@ -71,7 +87,8 @@ def background_renderer() -> ProcessPoolExecutor:
         ``submit(render_panels, panels, path, ...)`` returns a future whose
         ``result()`` is the written path or raises the render's error.
     """
-    pool = ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("spawn"))
+    pool = ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("spawn"),
+                               initializer=_no_collection_at_exit)
     pool.submit(_load_renderer)
     return pool
 
