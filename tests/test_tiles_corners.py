@@ -226,3 +226,32 @@ def test_corner_patch_fills_every_corner_with_the_same_elements_seamlessly():
     with pytest.raises(InputError, match="corner_patch"):
         build_tileset(studs(), colors=2, isotropic=True, seed=3, interior="paste",
                       corner_patch=True)
+
+
+def test_quilt_best_of_keeps_the_densest_accepted_quilt():
+    # the first accepted quilt is the one best_of=1 returns (same draws); with
+    # best_of=3 quilting goes on and keeps the densest of the accepted ones
+    from geotex.quilting import coverage_fraction
+    from geotex.tiles.build import interior_quilt, plan_tileset
+
+    planned = plan_tileset(studs(), colors=1, planar=True, seed=3)
+    frame, boxes = planned.plan.frames[0]
+    src = planned.plan.src
+
+    def quilted(best_of):
+        tile, stats = interior_quilt(src, frame, boxes, np.random.default_rng(5), attempts=6,
+                                     best_of=best_of)
+        assert tile is not None, stats
+        return tile, stats, coverage_fraction(*tile, (0.0, 0.0, 1.0, 1.0), resolution=100)
+
+    first, s1, c1 = quilted(1)
+    again, _, _ = quilted(1)
+    assert s1["accepted"] == 1
+    assert np.array_equal(first[0], again[0]) and np.array_equal(first[1], again[1])
+    best, s3, c3 = quilted(3)
+    assert 1 < s3["accepted"] <= 3 and s3["attempts"] >= s3["accepted"]
+    assert c3 >= c1
+    with pytest.raises(InputError, match="quilt_best_of"):
+        build_tileset(studs(), colors=1, planar=True, quilt_best_of=0)
+    with pytest.raises(InputError, match="quilt_attempts"):
+        build_tileset(studs(), colors=1, planar=True, quilt_attempts=True)
