@@ -174,13 +174,14 @@ def test_catalog_corner_squares_are_not_left_empty(name):
     # issue 14 asks for 0.85 (benchmarks/results/tiles_corners.md); the catalog
     # before the corner fill and the exact pruning had chainmail 0.55 and
     # scales-planar 0.63, then 0.70 and 0.84; chainmail, cut from its periodic
-    # layout since, reaches 1.03; the directional scales (its 16 ridge-free tiles) 0.87
+    # layout since, reaches 1.03; the directional scales (its 16 ridge-free tiles)
+    # 0.87; scales-planar with its corner patch 1.05
     from geotex.tiles import load_named
 
     tiles = load_named(name)
     V, F = planar_tiling(tiles, random_arrangement(tiles, 6, 6, seed=0), border="open")
-    assert corner_density(V, F, (6, 6)).ratio >= (0.85 if name in ("chainmail", "scales")
-                                                   else 0.65)
+    assert corner_density(V, F, (6, 6)).ratio >= (
+        0.85 if name in ("chainmail", "scales", "scales-planar") else 0.65)
 
 
 def test_corner_patch_pieces_meet_bit_for_bit_on_the_two_lines():
@@ -226,3 +227,48 @@ def test_corner_patch_fills_every_corner_with_the_same_elements_seamlessly():
     with pytest.raises(InputError, match="corner_patch"):
         build_tileset(studs(), colors=2, isotropic=True, seed=3, interior="paste",
                       corner_patch=True)
+
+
+def test_quilt_best_of_keeps_the_densest_accepted_quilt():
+    # the first accepted quilt is the one best_of=1 returns (same draws); with
+    # best_of=3 quilting goes on and keeps the densest of the accepted ones
+    from geotex.quilting import coverage_fraction
+    from geotex.tiles.build import interior_quilt, plan_tileset
+
+    planned = plan_tileset(studs(), colors=1, planar=True, seed=3)
+    frame, boxes = planned.plan.frames[0]
+    src = planned.plan.src
+
+    def quilted(best_of):
+        tile, stats = interior_quilt(src, frame, boxes, np.random.default_rng(5), attempts=6,
+                                     best_of=best_of)
+        assert tile is not None, stats
+        return tile, stats, coverage_fraction(*tile, (0.0, 0.0, 1.0, 1.0), resolution=100)
+
+    first, s1, c1 = quilted(1)
+    again, _, _ = quilted(1)
+    assert s1["accepted"] == 1
+    assert np.array_equal(first[0], again[0]) and np.array_equal(first[1], again[1])
+    best, s3, c3 = quilted(3)
+    assert 1 < s3["accepted"] <= 3 and s3["attempts"] >= s3["accepted"]
+    assert c3 >= c1
+    with pytest.raises(InputError, match="quilt_best_of"):
+        build_tileset(studs(), colors=1, planar=True, quilt_best_of=0)
+    with pytest.raises(InputError, match="quilt_attempts"):
+        build_tileset(studs(), colors=1, planar=True, quilt_attempts=True)
+
+
+def test_corner_patch_of_scales_leaves_no_vertex_next_to_a_cut_line():
+    # a vertex within the cut's snap distance of a line is pushed off it and
+    # leaves a sliver face on the tile side; the patch centre is nudged so
+    # that every vertex is on a line or at least PATCH_SNAP away from it
+    from geotex.exemplars import exemplar
+    from geotex.tiles.strips import PATCH_SNAP, corner_patch
+
+    ex = exemplar("scales", size=(4.0, 4.0), seed=0)
+    for seed in range(3):
+        p = corner_patch(ex.vertices, ex.faces.astype(np.int64), ex.size,
+                         np.random.default_rng(seed))
+        xy = np.abs(np.concatenate([V[:, :2] for V, _ in p.pieces.values()]))
+        assert xy[xy != 0.0].min() >= PATCH_SNAP
+        assert (xy == 0.0).any(axis=0).all()      # cut vertices on both lines

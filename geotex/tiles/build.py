@@ -151,7 +151,8 @@ def interior_paste(src: Source, frame, rng: np.random.Generator, *, pixels=None,
 
 def interior_quilt(src: Source, frame, frame_boxes: np.ndarray, rng: np.random.Generator,
                    *, window: float = QUILT_WINDOW, attempts: int = QUILT_ATTEMPTS,
-                   lattice=None) -> tuple[tuple[np.ndarray, np.ndarray] | None, dict]:
+                   best_of: int = 1, lattice=None
+                   ) -> tuple[tuple[np.ndarray, np.ndarray] | None, dict]:
     """Synthesize a tile around its frame by constrained mesh quilting.
 
     The tile ``[0, 1]^2`` is the quilting domain of
@@ -164,7 +165,10 @@ def interior_quilt(src: Source, frame, frame_boxes: np.ndarray, rng: np.random.G
     side is bit-identical to the frame's, every element is a valid solid,
     no vertex leaves the tile, and interior elements keep :data:`CLEAR` from
     the sides (those that do not are dropped); otherwise quilting is retried
-    with another seed, ``attempts`` times in all.
+    with another seed, ``attempts`` times in all. With ``best_of`` above 1,
+    quilting goes on after the first accepted result until ``best_of``
+    results were accepted (or the attempts are used up), and the one
+    covering most of the tile is kept (the first of equals).
 
     Parameters
     ----------
@@ -178,6 +182,8 @@ def interior_quilt(src: Source, frame, frame_boxes: np.ndarray, rng: np.random.G
         Side of the exemplar window copies are taken from.
     attempts : int
         Quilting tries.
+    best_of : int
+        Accepted results to choose the densest from (1: the first accepted).
     lattice : tuple (pitch, phase_x, phase_y), optional
         Take windows only at the exemplar's lattice points, so that copies
         (placed at multiples of the pitch) stay on the tile's lattice.
@@ -193,7 +199,8 @@ def interior_quilt(src: Source, frame, frame_boxes: np.ndarray, rng: np.random.G
         (``seam_gap_max`` relative to the cell, ``seam_normal_jump_mean``,
         ``seam_normal_jump_max`` in degrees; ``nan`` without stitches, and
         counting merges that were undone afterwards) and, on failure, the last
-        ``problem``.
+        ``problem``; ``attempts`` counts the tries made, ``accepted`` the
+        results compared.
     """
     wx, wy = min(window, src.size[0]), min(window, src.size[1])
     pitch = src.params.get("pitch")
@@ -208,6 +215,7 @@ def interior_quilt(src: Source, frame, frame_boxes: np.ndarray, rng: np.random.G
     max_foot = float((src.hi - src.lo)[:, :2].max())
     occupied = np.clip(np.asarray(frame_boxes, dtype=np.float64).reshape(-1, 4), 0.0, 1.0)
     problem = "no attempt"
+    best, accepted = None, 0
     for attempt in range(1, attempts + 1):
         origin = _window_origin(rng, src.size, (wx, wy), lattice)
         seed = int(rng.integers(2 ** 31))
@@ -225,17 +233,26 @@ def interior_quilt(src: Source, frame, frame_boxes: np.ndarray, rng: np.random.G
             problem = "quilting gave invalid elements: " + res.report.summary()
             continue
         tile, problem, changes = _accepted(res, want, frame_elements, max_foot)
-        if tile is not None:
+        if tile is None:
+            continue
+        accepted += 1
+        cover = coverage_fraction(tile[0], tile[1], (0.0, 0.0, 1.0, 1.0), resolution=100) \
+            if best_of > 1 else 0.0
+        if best is None or cover > best[0]:
             m = res.report.merges
-            return tile, {"elements": res.report.elements - changes["dropped"],
-                          "attempts": attempt, "reverted": changes["reverted"],
-                          "dropped": changes["dropped"],
-                          "merges": int(m.get("stitched", 0) + m.get("union", 0)),
-                          "stitched": int(m.get("stitched", 0)),
-                          "seam_gap_max": res.report.seam_gap_max,
-                          "seam_normal_jump_mean": res.report.seam_normal_jump_mean,
-                          "seam_normal_jump_max": res.report.seam_normal_jump_max}
-    return None, {"attempts": attempts, "problem": problem}
+            best = (cover, tile, {"elements": res.report.elements - changes["dropped"],
+                                  "reverted": changes["reverted"],
+                                  "dropped": changes["dropped"],
+                                  "merges": int(m.get("stitched", 0) + m.get("union", 0)),
+                                  "stitched": int(m.get("stitched", 0)),
+                                  "seam_gap_max": res.report.seam_gap_max,
+                                  "seam_normal_jump_mean": res.report.seam_normal_jump_mean,
+                                  "seam_normal_jump_max": res.report.seam_normal_jump_max})
+        if accepted >= best_of:
+            break
+    if best is None:
+        return None, {"attempts": attempts, "problem": problem}
+    return best[1], {**best[2], "attempts": attempt, "accepted": accepted}
 
 
 def _window_origin(rng, size, extent, lattice):
@@ -355,6 +372,10 @@ class TilePlan:
         The set seed; tile ``t`` uses :func:`tile_rng` of it.
     pixels : ExemplarPixels
         The exemplar's footprint rasters (:mod:`geotex.tiles.fill`).
+    attempts : int
+        Quilting tries per tile before the paste fallback (:func:`interior_quilt`).
+    best_of : int
+        Accepted quilts per tile to keep the densest of (:func:`interior_quilt`).
     """
 
     src: Source
@@ -363,6 +384,8 @@ class TilePlan:
     lattice: tuple | None
     seed: int
     pixels: object
+    attempts: int = QUILT_ATTEMPTS
+    best_of: int = 1
 
 
 def built_tile(plan: TilePlan, t: int) -> tuple[tuple[np.ndarray, np.ndarray], dict]:
@@ -394,7 +417,8 @@ def built_tile(plan: TilePlan, t: int) -> tuple[tuple[np.ndarray, np.ndarray], d
     frame, boxes = plan.frames[t]
     tile, stats = None, {"pasted": 0}
     if plan.interior == "quilt":
-        tile, q = interior_quilt(src, frame, boxes, rng, lattice=grid)
+        tile, q = interior_quilt(src, frame, boxes, rng, lattice=grid,
+                                 attempts=plan.attempts, best_of=plan.best_of)
         stats["merges"] = q.get("merges", 0)
         stats["stitched"] = q.get("stitched", 0)
         if stats["stitched"]:
@@ -450,6 +474,7 @@ class PlannedSet:
 def plan_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool = False,
                  lattice: bool = False, seed: int = 0, interior: str = "quilt",
                  directional: bool = False, corner_patch: bool = False,
+                 quilt_attempts: int = QUILT_ATTEMPTS, quilt_best_of: int = 1,
                  progress=None) -> PlannedSet:
     """Draw the strips of a set and place them into the frame of every tile.
 
@@ -484,6 +509,9 @@ def plan_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool = 
     if isotropic and len(set(n_colors)) != 1:
         raise InputError(f"colors: an isotropic set has one colour count for all axes, got "
                          f"{colors!r}")
+    for key, value in (("quilt_attempts", quilt_attempts), ("quilt_best_of", quilt_best_of)):
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+            raise InputError(f"{key}: a whole number of at least 1, got {value!r}")
     if corner_patch and (not planar or lattice or directional):
         # isotropic, complete and directional sets turn strips or tiles by
         # quarter turns: the patch would have to be symmetric
@@ -524,7 +552,8 @@ def plan_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool = 
     frames = [frame_of((strips[a], strips[b]), c, patch)
               for (a, b), c in zip(groups.tolist(), cols.tolist())]
     plan = TilePlan(src=src, frames=frames, interior=interior, lattice=grid, seed=int(seed),
-                    pixels=ExemplarPixels(src.V, src.F, src.labels, src.lo, src.hi))
+                    pixels=ExemplarPixels(src.V, src.F, src.labels, src.lo, src.hi),
+                    attempts=int(quilt_attempts), best_of=int(quilt_best_of))
     return PlannedSet(plan=plan, strips=strips, groups=groups, cols=cols,
                       n_colors=tuple(n_colors), height=height, depth=depth, recipe=recipe)
 
@@ -532,7 +561,8 @@ def plan_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool = 
 def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool = False,
                   lattice: bool = False, seed: int = 0, interior: str = "quilt",
                   directional: bool = False, name: str | None = None, progress=None,
-                  map_tiles=None, corner_patch: bool = False) -> TileSet:
+                  map_tiles=None, corner_patch: bool = False,
+                  quilt_attempts: int = QUILT_ATTEMPTS, quilt_best_of: int = 1) -> TileSet:
     """Build a planar, complete or isotropic geometric Wang tile set.
 
     Parameters
@@ -571,6 +601,15 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
         one corner colour), and the strips are pruned against it instead of
         leaving the corners to the strips' ends.  Planar sets without a
         lattice (not directional).
+    quilt_attempts : int
+        Quilting tries per tile (interior ``"quilt"``) before the paste
+        fallback; default :data:`QUILT_ATTEMPTS`. Recorded in
+        ``metadata["recipe"]`` when not the default.
+    quilt_best_of : int
+        Quilting goes on, within ``quilt_attempts`` tries, until this many
+        results were accepted, and keeps the one covering most of the tile
+        (:func:`interior_quilt`); 1 (default) keeps the first. Recorded in
+        ``metadata["recipe"]`` when not 1.
     lattice : bool
         For exemplars laid out on a lattice of period ``params["pitch"]``
         (``1 / pitch`` a whole number): strips and quilting windows start
@@ -584,7 +623,7 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
     interior : {"quilt", "paste", "periodic"}
         How tile interiors are filled: constrained mesh quilting around the
         frame (:func:`interior_quilt`; a tile whose quilting is not accepted
-        after :data:`QUILT_ATTEMPTS` tries is pasted instead, counted in
+        after ``quilt_attempts`` tries is pasted instead, counted in
         ``metadata["paste_fallbacks"]``), or whole exemplar elements placed
         between the frame's (:func:`interior_paste`, fast). ``"periodic"``
         uses neither strips nor quilting: the tiles are cut from the
@@ -619,7 +658,8 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
     InputError
         Unknown interior method, bad colours (or unequal colours for an
         isotropic set, or ``planar`` with ``isotropic``), elements too large
-        for a tile, or an exemplar with too few distinct strips.
+        for a tile, an exemplar with too few distinct strips, or ``quilt_attempts``
+        or ``quilt_best_of`` below 1.
     GeotexError
         ``map_tiles`` left out a tile.
 
@@ -649,6 +689,7 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
     planned = plan_tileset(exemplar, colors=colors, planar=planar, isotropic=isotropic,
                            lattice=lattice, seed=seed, interior=interior,
                            directional=directional, corner_patch=corner_patch,
+                           quilt_attempts=quilt_attempts, quilt_best_of=quilt_best_of,
                            progress=progress)
     plan, groups, cols = planned.plan, planned.groups, planned.cols
     n_colors, grid, recipe = planned.n_colors, plan.lattice, planned.recipe
@@ -695,6 +736,10 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
         meta["recipe"]["directional"] = True
     if corner_patch:
         meta["recipe"]["corner_patch"] = True
+    if quilt_attempts != QUILT_ATTEMPTS:
+        meta["recipe"]["quilt_attempts"] = int(quilt_attempts)
+    if quilt_best_of != 1:
+        meta["recipe"]["quilt_best_of"] = int(quilt_best_of)
     return TileSet.from_tiles(tiles, groups, cols, n_colors=n_colors, height=planned.height,
                               depth=planned.depth, name=name or recipe["name"] or "tileset",
                               metadata=meta)

@@ -86,7 +86,7 @@ def rebuild(name: str, *, progress=None, table: dict | None = None, map_tiles=No
         Unknown name.
     """
     from geotex.exemplars import exemplar
-    from geotex.tiles.build import build_tileset
+    from geotex.tiles.build import QUILT_ATTEMPTS, build_tileset
 
     r = CATALOG.recipe(name, table)
     ex = exemplar(r["exemplar"]["name"], **r["exemplar"].get("params", {}))
@@ -94,6 +94,8 @@ def rebuild(name: str, *, progress=None, table: dict | None = None, map_tiles=No
                          isotropic=r.get("isotropic", False), lattice=r.get("lattice", False),
                          directional=r.get("directional", False),
                          corner_patch=r.get("corner_patch", False),
+                         quilt_attempts=r.get("quilt_attempts", QUILT_ATTEMPTS),
+                         quilt_best_of=r.get("quilt_best_of", 1),
                          seed=r["seed"], interior=r.get("interior", "paste"), name=name,
                          progress=progress, map_tiles=map_tiles)
 

@@ -51,8 +51,9 @@ SHORTLIST = 24      # best candidates (by covered length) pruned and compared
 END = 0.3           # length near a segment end whose coverage counts twice
 EXACT = 12          # strips with at most this many elements in play are pruned exactly
 PATCH = 0.12        # corner patch: elements within this of the patch centre (both axes)
-PATCH_NUDGES = [(0.0, 0.0)] + [(0.003 * np.cos(a), 0.003 * np.sin(a))
+PATCH_NUDGES = [(0.0, 0.0)] + [(r * np.cos(a), r * np.sin(a)) for r in (0.003, 0.006, 0.009)
                                for a in np.arange(8) * np.pi / 4 + 0.3]
+PATCH_SNAP = 2e-4   # corner patch: least distance of a vertex off a cut line from it
 
 
 @dataclass(frozen=True)
@@ -119,8 +120,10 @@ def corner_patch(V: np.ndarray, F: np.ndarray, size, rng: np.random.Generator,
     element whose box comes within ``radius`` of it along both axes,
     including the elements straddling the point, cut by the two lines
     through it (the second cut ``ordered``, so the four pieces agree on
-    the shared cut vertices; the point is nudged by 0.003 where a vertex
-    would lie within 0.0002 of a line and be snapped into a sliver).  A
+    the shared cut vertices; the point is nudged by 0.003 to 0.009 where a
+    vertex would lie within :data:`PATCH_SNAP` of a line and be snapped into
+    a sliver: the first of :data:`PATCH_NUDGES` that leaves no vertex that
+    close, or else the one whose closest vertex is farthest).  A
     tile's corner gets the piece on its side of both lines; the strips are
     then pruned against the patch (``corner_patch`` of
     :func:`pick_strips`).  The corners of a tiling repeat (one corner
@@ -147,7 +150,8 @@ def corner_patch(V: np.ndarray, F: np.ndarray, size, rng: np.random.Generator,
     centre0 = centre[int(inside[rng.integers(inside.size)])]
     # the cuts snap vertices within 1e-4 of a line onto it; a vertex that close
     # (of the element or of the first cut) leaves a sliver at the corner, so
-    # the centre is nudged, by a few thousandths, until none is within 2e-4
+    # the centre is nudged, by a few thousandths, until none is within PATCH_SNAP
+    best = None
     for nudge in PATCH_NUDGES:
         p0 = centre0 + np.asarray(nudge)
         near = np.flatnonzero(((lo[:, :2] <= p0 + radius)
@@ -166,10 +170,14 @@ def corner_patch(V: np.ndarray, F: np.ndarray, size, rng: np.random.Generator,
         for side, half in (("w", west), ("e", east)):
             south, north = split_by_plane(*half, axis=1, value=0.0, snap=1e-4, ordered=True)
             pieces["s" + side], pieces["n" + side] = south, north
-        xy = np.concatenate([Vp[:, :2] for Vp, _ in pieces.values()])
-        close = (np.abs(xy) < 2e-4) & (xy != 0.0)
-        if not close.any():
+        xy = np.abs(np.concatenate([Vp[:, :2] for Vp, _ in pieces.values()]))
+        off = xy[xy != 0.0]
+        gap = float(off.min()) if off.size else np.inf
+        if best is None or gap > best[0]:
+            best = (gap, p0, Vc, Fc, lab, near, pieces)
+        if gap >= PATCH_SNAP:
             break
+    _, p0, Vc, Fc, lab, near, pieces = best
     images = {}
     for along in (0, 1):
         P = _to_strip(Vc, (0.0, 0.0), along)
