@@ -1166,13 +1166,13 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             return None
         tri_c = qpix(Lall[F[faces]].reshape(-1, 2)).reshape(-1, 3, 2) - origin
         K = np.zeros(hm * wm)
-        t_, _, _ = rasterize_triangles(tri_c, wm, hm)
+        t_, _, _ = rasterize_triangles(tri_c, wm, hm, fast=fast)
         K[t_] = 1.0
         I = np.zeros((hm * wm, small.shape[2]))
         J = np.zeros(hm * wm)
         if band_faces.size:
             tri_b = qpix(bl[F[band_faces]].reshape(-1, 2)).reshape(-1, 3, 2) - origin
-            tb, fb, bb = rasterize_triangles(tri_b, wm, hm)
+            tb, fb, bb = rasterize_triangles(tri_b, wm, hm, fast=fast)
             uvb = np.einsum("tk,tkd->td", bb, st.corner[band_faces[fb]]) / f
             I[tb] = _sample(small, uvb, fast)
             J[tb] = 1.0
