@@ -259,6 +259,23 @@ def test_fft_energy_equals_brute_force():
     assert np.all(~np.isfinite(E[h - ys.max():, :])) and np.all(~np.isfinite(E[:, w - xs.max():]))
 
 
+def test_mask_spectra_equal_rfft2_of_each_plane():
+    # the row-pruned transform of the mask and its support (one call, rows of the
+    # support only) gives the values of rfft2 per plane, for bands anywhere, empty too
+    import scipy.fft as sfft
+
+    from geotex.image import fftmatch
+    rng = np.random.default_rng(5)
+    for h, w, r0, r1 in ((24, 30, 3, 9), (24, 30, 0, 24), (17, 16, 16, 17), (20, 20, 5, 5)):
+        J = np.zeros((h, w))
+        J[r0:r1] = rng.random((r1 - r0, w)) > 0.4
+        I = rng.random((h, w, 3)) * J[:, :, None]
+        fI, fJ = fftmatch._mask_spectra(I, J)
+        assert np.array_equal(fI, np.conj(sfft.rfft2(np.moveaxis(I, 2, 0).astype(np.float32),
+                                                     axes=(-2, -1))))
+        assert np.array_equal(fJ, np.conj(sfft.rfft2(J.astype(np.float32))))
+
+
 def test_bilinear_lookup_equals_map_coordinates():
     # the matcher's bilinear lookup (pixel centres at +0.5, clamped to the border) is
     # scipy's order-1 interpolation with mode "nearest", on every channel, for points

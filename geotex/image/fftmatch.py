@@ -191,8 +191,7 @@ def match_energy(spectra: TextureSpectra, mask, support, footprint, *, which=Non
     J = np.asarray(support, dtype=np.float64)
     K = np.asarray(footprint, dtype=np.float64)
     idx = np.arange(spectra.angles.size) if which is None else np.asarray(which, np.int64)
-    fI = np.conj(sfft.rfft2(np.moveaxis(I, 2, 0).astype(np.float32), axes=(-2, -1)))
-    fJ = np.conj(sfft.rfft2(J.astype(np.float32)))
+    fI, fJ = _mask_spectra(I, J)
     if which is None:
         St, St2 = spectra.spec_t, spectra.spec_t2
     else:
@@ -239,6 +238,30 @@ def match_energy(spectra: TextureSpectra, mask, support, footprint, *, which=Non
     ok = (dx >= lo[:, :, None]) & (dx <= hi[:, :, None])
     out[:, :hy, :wx] = np.where(ok, blk, np.inf)
     return out
+
+
+def _mask_spectra(I, J):
+    """Conjugate spectra of the mask's channels ``(c, h, w // 2 + 1)`` and of its support.
+
+    The same values as ``rfft2`` of each plane (float32): the row transforms
+    are computed only over the rows from the support's first to its last
+    (the others are zero), all planes in one call, then the column
+    transforms, as ``rfft2`` itself proceeds; only the sign of some zeros
+    may differ.  A mask is a band along one cluster: a fraction of the rows.
+    """
+    h, w = J.shape
+    nc = I.shape[2]
+    out = np.zeros((nc + 1, h, w // 2 + 1), np.complex64)
+    rows = np.flatnonzero(J.any(axis=1))
+    if rows.size:
+        r0, r1 = int(rows[0]), int(rows[-1]) + 1
+        X = np.empty((nc + 1, r1 - r0, w), np.float32)
+        X[:nc] = np.moveaxis(I[r0:r1], 2, 0)
+        X[nc] = J[r0:r1]
+        out[:, r0:r1] = sfft.rfft(X, axis=-1)
+        out = sfft.fft(out, axis=-2, overwrite_x=True)
+    out = np.conj(out, out=out)
+    return out[:nc], out[nc]
 
 
 def brute_force_energy(image, mask, support, dy: int, dx: int) -> float:
