@@ -276,6 +276,21 @@ def test_mask_spectra_equal_rfft2_of_each_plane():
         assert np.array_equal(fJ, np.conj(sfft.rfft2(J.astype(np.float32))))
 
 
+def test_compiled_energy_assembly_gives_the_same_bytes():
+    rng = np.random.default_rng(6)
+    T = opponent_colors(rng.random((30, 26, 3)))
+    spectra = texture_spectra(T, orientations=7)
+    J = np.zeros((30, 26))
+    J[4:11, 3:12] = rng.random((7, 9)) > 0.3
+    I = rng.random((30, 26, 3)) * J[:, :, None]
+    K = J.copy()
+    K[8:14, 6:15] = 1.0
+    for which in (None, [2], [0, 4]):
+        E = match_energy(spectra, I, J, K, which=which)
+        assert np.isfinite(E).any() and not np.isfinite(E).all()
+        assert match_energy(spectra, I, J, K, which=which, fast=True).tobytes() == E.tobytes()
+
+
 def test_bilinear_lookup_equals_map_coordinates():
     # the matcher's bilinear lookup (pixel centres at +0.5, clamped to the border) is
     # scipy's order-1 interpolation with mode "nearest", on every channel, for points

@@ -1187,7 +1187,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                 which = [int(np.argmin(np.abs((spectra.angles - a0 + np.pi) % (2 * np.pi)
                                               - np.pi)))]
             Eg = match_energy(spectra, I.reshape(hm, wm, -1), J.reshape(hm, wm), K,
-                              which=which)
+                              which=which, fast=fast)
             okp = np.flatnonzero(np.isfinite(Eg.ravel()))
             if okp.size == 0:
                 refuse(li, 'no_position')
@@ -1211,7 +1211,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                 if which.size == 0:
                     which = np.array([int(np.argmin(dev))])
             Eg = match_energy(spectra, I.reshape(hm, wm, -1), J.reshape(hm, wm), K,
-                              which=which)
+                              which=which, fast=fast)
             flat = Eg.ravel()
             if not np.isfinite(flat).any():
                 refuse(li, 'no_position')
