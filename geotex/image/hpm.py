@@ -233,9 +233,10 @@ FIELD_SNAP_TURN = 3.0
 #: field (4 directions) instead of a line field.
 QUARTER_TURN = 0.8
 
-#: Bases from this many faces up sample the image with the compiled loop (the same
-#: values; ``GEOTEX_JIT_MIN_SIZE`` lower than this lowers it).  A mapping of 2000 faces
-#: does tens of thousands of lookups; below that, loading numba (~0.4 s once) costs more.
+#: Bases from this many faces up sample the image, rasterize the masks and assemble
+#: the matching energies with compiled loops (the same values; ``GEOTEX_JIT_MIN_SIZE``
+#: lower than this lowers it).  A mapping of 2000 faces does tens of thousands of
+#: lookups; below that, loading numba (~0.4 s once) costs more.
 SAMPLE_JIT_FACES = 2000
 
 #: Largest relaxation move, as a fraction of the shortest edge at the vertex (texture space).
@@ -667,8 +668,8 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                          f"{elen:.3g} units, more than half the image; give a scale of at "
                          f"least {2.0 * elen * W_img / min(W_img, H_img):.3g}")
     rng = np.random.default_rng(seed)
-    # compiled bilinear sampling (the same values): on small bases loading numba costs
-    # more than the thousands of small lookups save
+    # compiled bilinear sampling, rasterization and energy assembly (the same values): on
+    # small bases loading numba costs more than the thousands of small calls save
     fast = m >= min(SAMPLE_JIT_FACES, JIT_MIN_SIZE)
     report(progress, "hierarchy")
     Hc = cluster_hierarchy(V, F, seed=int(rng.integers(2**31)))
