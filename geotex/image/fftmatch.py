@@ -9,9 +9,10 @@ of placing the mask at every translation ``x0`` of the sample ``T`` is
 with ``(f * g)(x0) = sum_x f(x) g(x + x0)``, computed for all translations at
 once with real FFTs (``F^-1(conj(F(f)) F(g))``).  The spectra of ``T`` and
 ``T^2`` are precomputed for every orientation (rotated copies of the sample),
-so a fit costs the forward transforms of ``I`` and ``J`` and one inverse
-transform per orientation.  Channels are summed in the Fourier domain before
-the inverse transform.
+so a fit costs the forward transforms of ``I`` and ``J`` (one call, the row
+transforms over the rows of the support only: a band is a fraction of the
+sample) and one inverse transform per orientation.  Channels are summed in the
+Fourier domain before the inverse transform.
 
 The sample is **not** assumed toroidal: a translation is admissible only
 when the whole footprint of the patch (the cluster and its mask) falls on
