@@ -259,6 +259,38 @@ def test_fft_energy_equals_brute_force():
     assert np.all(~np.isfinite(E[h - ys.max():, :])) and np.all(~np.isfinite(E[:, w - xs.max():]))
 
 
+def test_mask_spectra_equal_rfft2_of_each_plane():
+    # the row-pruned transform of the mask and its support (one call, rows of the
+    # support only) gives the values of rfft2 per plane, for bands anywhere, empty too
+    import scipy.fft as sfft
+
+    from geotex.image import fftmatch
+    rng = np.random.default_rng(5)
+    for h, w, r0, r1 in ((24, 30, 3, 9), (24, 30, 0, 24), (17, 16, 16, 17), (20, 20, 5, 5)):
+        J = np.zeros((h, w))
+        J[r0:r1] = rng.random((r1 - r0, w)) > 0.4
+        I = rng.random((h, w, 3)) * J[:, :, None]
+        fI, fJ = fftmatch._mask_spectra(I, J)
+        assert np.array_equal(fI, np.conj(sfft.rfft2(np.moveaxis(I, 2, 0).astype(np.float32),
+                                                     axes=(-2, -1))))
+        assert np.array_equal(fJ, np.conj(sfft.rfft2(J.astype(np.float32))))
+
+
+def test_compiled_energy_assembly_gives_the_same_bytes():
+    rng = np.random.default_rng(6)
+    T = opponent_colors(rng.random((30, 26, 3)))
+    spectra = texture_spectra(T, orientations=7)
+    J = np.zeros((30, 26))
+    J[4:11, 3:12] = rng.random((7, 9)) > 0.3
+    I = rng.random((30, 26, 3)) * J[:, :, None]
+    K = J.copy()
+    K[8:14, 6:15] = 1.0
+    for which in (None, [2], [0, 4]):
+        E = match_energy(spectra, I, J, K, which=which)
+        assert np.isfinite(E).any() and not np.isfinite(E).all()
+        assert match_energy(spectra, I, J, K, which=which, fast=True).tobytes() == E.tobytes()
+
+
 def test_bilinear_lookup_equals_map_coordinates():
     # the matcher's bilinear lookup (pixel centres at +0.5, clamped to the border) is
     # scipy's order-1 interpolation with mode "nearest", on every channel, for points

@@ -31,6 +31,7 @@ import xatlas
 from geotex.errors import InputError
 from geotex.image.composite import composite_at
 from geotex.image.records import LappedTexture
+from geotex.jit import compiled
 from geotex.mesh.arrays import as_mesh_arrays
 from geotex.mesh.record import Mesh
 
@@ -107,7 +108,8 @@ def build_atlas(V, F, *, resolution: int = 1024, padding: int = 2) -> Atlas:
                  n_charts=int(atlas.chart_count))
 
 
-def rasterize_triangles(tri, width: int, height: int, *, strict: bool = False):
+def rasterize_triangles(tri, width: int, height: int, *, strict: bool = False,
+                        fast: bool = False):
     """Texel centres inside 2D triangles.
 
     Parameters
@@ -119,6 +121,12 @@ def rasterize_triangles(tri, width: int, height: int, *, strict: bool = False):
     strict : bool, optional
         Only texels strictly inside (barycentric coordinates > 1e-9); by
         default texels on an edge count for every triangle that has it.
+    fast : bool, optional
+        Use the compiled loop :func:`_rasterize_compiled` (the same output bit
+        for bit, without the numpy temporaries: for the thousands of small
+        calls of :func:`geotex.image.hpm.hpm_texture`; loading numba costs
+        about a second once).  Triangles with a non-finite coordinate keep
+        the numpy path.
 
     Returns
     -------
@@ -128,8 +136,11 @@ def rasterize_triangles(tri, width: int, height: int, *, strict: bool = False):
     bary : numpy.ndarray, (t, 3) float64
     """
     T = np.asarray(tri, dtype=np.float64)
-    out_t, out_f, out_b = [], [], []
     eps = 1e-9 if strict else -1e-9
+    if fast and np.isfinite(T).all():
+        return _rasterize_compiled(np.ascontiguousarray(T.reshape(-1, 3, 2)), int(width),
+                                   int(height), eps)
+    out_t, out_f, out_b = [], [], []
     for s in range(0, T.shape[0], _CHUNK):
         P = T[s:s + _CHUNK]
         lo = np.ceil(P.min(axis=1) - 0.5).astype(np.int64)
@@ -164,6 +175,54 @@ def rasterize_triangles(tri, width: int, height: int, *, strict: bool = False):
         z = np.zeros(0, np.int64)
         return z, z, np.zeros((0, 3))
     return np.concatenate(out_t), np.concatenate(out_f), np.concatenate(out_b)
+
+
+@compiled
+def _rasterize_compiled(T, width, height, eps):
+    """:func:`rasterize_triangles` for finite triangles: the same texels in the same
+    order (triangle by triangle, row by row) and the same operations per texel, so
+    the same barycentric coordinates."""
+    m = T.shape[0]
+    lo = np.empty((m, 2), np.int64)
+    n = np.empty((m, 2), np.int64)
+    total = 0
+    for i in range(m):
+        for d in range(2):
+            a = min(min(T[i, 0, d], T[i, 1, d]), T[i, 2, d])
+            b = max(max(T[i, 0, d], T[i, 1, d]), T[i, 2, d])
+            l_ = max(int(np.ceil(a - 0.5)), 0)
+            h_ = min(int(np.floor(b - 0.5)), (width if d == 0 else height) - 1)
+            lo[i, d] = l_
+            n[i, d] = max(h_ - l_ + 1, 0)
+        total += n[i, 0] * n[i, 1]
+    texel = np.empty(total, np.int64)
+    face = np.empty(total, np.int64)
+    bary = np.empty((total, 3))
+    k = 0
+    for i in range(m):
+        A0, A1 = T[i, 0, 0], T[i, 0, 1]
+        B0, B1 = T[i, 1, 0], T[i, 1, 1]
+        C0, C1 = T[i, 2, 0], T[i, 2, 1]
+        den = (B1 - C1) * (A0 - C0) + (C0 - B0) * (A1 - C1)
+        if not abs(den) > 0:
+            continue
+        for r in range(n[i, 1]):
+            cy = lo[i, 1] + r
+            py = cy + 0.5
+            for c in range(n[i, 0]):
+                cx = lo[i, 0] + c
+                px = cx + 0.5
+                l0 = ((B1 - C1) * (px - C0) + (C0 - B0) * (py - C1)) / den
+                l1 = ((C1 - A1) * (px - C0) + (A0 - C0) * (py - C1)) / den
+                l2 = 1.0 - l0 - l1
+                if l0 > eps and l1 > eps and l2 > eps:
+                    texel[k] = cy * width + cx
+                    face[k] = i
+                    bary[k, 0] = l0
+                    bary[k, 1] = l1
+                    bary[k, 2] = l2
+                    k += 1
+    return texel[:k].copy(), face[:k].copy(), bary[:k].copy()
 
 
 def _texel_triangles(atlas: Atlas) -> np.ndarray:

@@ -9,9 +9,10 @@ of placing the mask at every translation ``x0`` of the sample ``T`` is
 with ``(f * g)(x0) = sum_x f(x) g(x + x0)``, computed for all translations at
 once with real FFTs (``F^-1(conj(F(f)) F(g))``).  The spectra of ``T`` and
 ``T^2`` are precomputed for every orientation (rotated copies of the sample),
-so a fit costs the forward transforms of ``I`` and ``J`` and one inverse
-transform per orientation.  Channels are summed in the Fourier domain before
-the inverse transform.
+so a fit costs the forward transforms of ``I`` and ``J`` (one call, the row
+transforms over the rows of the support only: a band is a fraction of the
+sample) and one inverse transform per orientation.  Channels are summed in the
+Fourier domain before the inverse transform.
 
 The sample is **not** assumed toroidal: a translation is admissible only
 when the whole footprint of the patch (the cluster and its mask) falls on
@@ -38,10 +39,12 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy import fft as sfft
+
 from scipy import ndimage as ndi
 from scipy.ndimage import map_coordinates
 
 from geotex.errors import InputError
+from geotex.jit import compiled
 
 __all__ = ["opponent_colors", "TextureSpectra", "texture_spectra", "match_energy",
            "brute_force_energy", "PatternScale", "pattern_scale",
@@ -163,7 +166,8 @@ def texture_spectra(image, *, orientations: int = 24) -> TextureSpectra:
                           spec_t2=spec_t2, variance=var)
 
 
-def match_energy(spectra: TextureSpectra, mask, support, footprint, *, which=None):
+def match_energy(spectra: TextureSpectra, mask, support, footprint, *, which=None,
+                 fast: bool = False):
     """Matching energy of a mask at every translation and orientation.
 
     Parameters
@@ -179,6 +183,10 @@ def match_energy(spectra: TextureSpectra, mask, support, footprint, *, which=Non
         admissible when none of them falls outside the rotated sample.
     which : array_like of int, optional
         Orientations to evaluate (default all).
+    fast : bool, optional
+        Assemble the admissible block in the compiled loop
+        :func:`_admissible_energy` (the same values; loading numba costs
+        about a second once, worth it for thousands of calls).
 
     Returns
     -------
@@ -191,8 +199,7 @@ def match_energy(spectra: TextureSpectra, mask, support, footprint, *, which=Non
     J = np.asarray(support, dtype=np.float64)
     K = np.asarray(footprint, dtype=np.float64)
     idx = np.arange(spectra.angles.size) if which is None else np.asarray(which, np.int64)
-    fI = np.conj(sfft.rfft2(np.moveaxis(I, 2, 0).astype(np.float32), axes=(-2, -1)))
-    fJ = np.conj(sfft.rfft2(J.astype(np.float32)))
+    fI, fJ = _mask_spectra(I, J)
     if which is None:
         St, St2 = spectra.spec_t, spectra.spec_t2
     else:
@@ -208,8 +215,6 @@ def match_energy(spectra: TextureSpectra, mask, support, footprint, *, which=Non
         return np.maximum(E.astype(np.float64) + sum_i2, 0.0)
     # admissible block: the footprint must not wrap around
     hy, wx = h - int(ys.max()), w - int(xs.max())
-    out = np.full(E.shape, np.inf)
-    blk = np.maximum(E[:, :hy, :wx].astype(np.float64) + sum_i2, 0.0)
     # inside of the rotated image: |r1 . (p - c)| <= w/2 - 1, |r2 . (p - c)| <= h/2 - 1
     # for every footprint pixel p; for each orientation and row dy the admissible
     # shifts dx form one interval (intersection of two slabs)
@@ -235,10 +240,58 @@ def match_energy(spectra: TextureSpectra, mask, support, footprint, *, which=Non
                         np.maximum(x1, x2))
         lo = np.maximum(lo, lo_k)
         hi = np.minimum(hi, hi_k)
+    if fast:
+        return _admissible_energy(E, sum_i2, lo, hi, wx)
+    out = np.full(E.shape, np.inf)
+    blk = np.maximum(E[:, :hy, :wx].astype(np.float64) + sum_i2, 0.0)
     dx = np.arange(wx, dtype=np.float64)[None, None, :]
     ok = (dx >= lo[:, :, None]) & (dx <= hi[:, :, None])
     out[:, :hy, :wx] = np.where(ok, blk, np.inf)
     return out
+
+
+@compiled
+def _admissible_energy(E, sum_i2, lo, hi, wx):
+    """``max(E + sum_i2, 0)`` (in float64) where row ``dy < hy`` (``hy = lo.shape[1]``)
+    and column ``dx < wx`` lie in ``[lo, hi]`` of their orientation and row, ``inf``
+    elsewhere: :func:`match_energy`'s numpy assembly in one pass (the same values)."""
+    k, h, w = E.shape
+    hy = lo.shape[1]
+    out = np.empty((k, h, w))
+    for a in range(k):
+        for y in range(h):
+            for x in range(w):
+                v = np.inf
+                if y < hy and x < wx and x >= lo[a, y] and x <= hi[a, y]:
+                    v = np.float64(E[a, y, x]) + sum_i2
+                    if v < 0.0:
+                        v = 0.0
+                out[a, y, x] = v
+    return out
+
+
+def _mask_spectra(I, J):
+    """Conjugate spectra of the mask's channels ``(c, h, w // 2 + 1)`` and of its support.
+
+    The same values as ``rfft2`` of each plane (float32): the row transforms
+    are computed only over the rows from the support's first to its last
+    (the others are zero), all planes in one call, then the column
+    transforms, as ``rfft2`` itself proceeds; only the sign of some zeros
+    may differ.  A mask is a band along one cluster: a fraction of the rows.
+    """
+    h, w = J.shape
+    nc = I.shape[2]
+    out = np.zeros((nc + 1, h, w // 2 + 1), np.complex64)
+    rows = np.flatnonzero(J.any(axis=1))
+    if rows.size:
+        r0, r1 = int(rows[0]), int(rows[-1]) + 1
+        X = np.empty((nc + 1, r1 - r0, w), np.float32)
+        X[:nc] = np.moveaxis(I[r0:r1], 2, 0)
+        X[nc] = J[r0:r1]
+        out[:, r0:r1] = sfft.rfft(X, axis=-1)
+        out = sfft.fft(out, axis=-2, overwrite_x=True)
+    out = np.conj(out, out=out)
+    return out[:nc], out[nc]
 
 
 def brute_force_energy(image, mask, support, dy: int, dx: int) -> float:

@@ -233,9 +233,10 @@ FIELD_SNAP_TURN = 3.0
 #: field (4 directions) instead of a line field.
 QUARTER_TURN = 0.8
 
-#: Bases from this many faces up sample the image with the compiled loop (the same
-#: values; ``GEOTEX_JIT_MIN_SIZE`` lower than this lowers it).  A mapping of 2000 faces
-#: does tens of thousands of lookups; below that, loading numba (~0.4 s once) costs more.
+#: Bases from this many faces up sample the image, rasterize the masks and assemble
+#: the matching energies with compiled loops (the same values; ``GEOTEX_JIT_MIN_SIZE``
+#: lower than this lowers it).  A mapping of 2000 faces does tens of thousands of
+#: lookups; below that, loading numba (~0.4 s once) costs more.
 SAMPLE_JIT_FACES = 2000
 
 #: Largest relaxation move, as a fraction of the shortest edge at the vertex (texture space).
@@ -667,8 +668,8 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                          f"{elen:.3g} units, more than half the image; give a scale of at "
                          f"least {2.0 * elen * W_img / min(W_img, H_img):.3g}")
     rng = np.random.default_rng(seed)
-    # compiled bilinear sampling (the same values): on small bases loading numba costs
-    # more than the thousands of small lookups save
+    # compiled bilinear sampling, rasterization and energy assembly (the same values): on
+    # small bases loading numba costs more than the thousands of small calls save
     fast = m >= min(SAMPLE_JIT_FACES, JIT_MIN_SIZE)
     report(progress, "hierarchy")
     Hc = cluster_hierarchy(V, F, seed=int(rng.integers(2**31)))
@@ -1166,13 +1167,13 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             return None
         tri_c = qpix(Lall[F[faces]].reshape(-1, 2)).reshape(-1, 3, 2) - origin
         K = np.zeros(hm * wm)
-        t_, _, _ = rasterize_triangles(tri_c, wm, hm)
+        t_, _, _ = rasterize_triangles(tri_c, wm, hm, fast=fast)
         K[t_] = 1.0
         I = np.zeros((hm * wm, small.shape[2]))
         J = np.zeros(hm * wm)
         if band_faces.size:
             tri_b = qpix(bl[F[band_faces]].reshape(-1, 2)).reshape(-1, 3, 2) - origin
-            tb, fb, bb = rasterize_triangles(tri_b, wm, hm)
+            tb, fb, bb = rasterize_triangles(tri_b, wm, hm, fast=fast)
             uvb = np.einsum("tk,tkd->td", bb, st.corner[band_faces[fb]]) / f
             I[tb] = _sample(small, uvb, fast)
             J[tb] = 1.0
@@ -1187,7 +1188,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                 which = [int(np.argmin(np.abs((spectra.angles - a0 + np.pi) % (2 * np.pi)
                                               - np.pi)))]
             Eg = match_energy(spectra, I.reshape(hm, wm, -1), J.reshape(hm, wm), K,
-                              which=which)
+                              which=which, fast=fast)
             okp = np.flatnonzero(np.isfinite(Eg.ravel()))
             if okp.size == 0:
                 refuse(li, 'no_position')
@@ -1211,7 +1212,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                 if which.size == 0:
                     which = np.array([int(np.argmin(dev))])
             Eg = match_energy(spectra, I.reshape(hm, wm, -1), J.reshape(hm, wm), K,
-                              which=which)
+                              which=which, fast=fast)
             flat = Eg.ravel()
             if not np.isfinite(flat).any():
                 refuse(li, 'no_position')
