@@ -20,8 +20,9 @@ module per step:
 5. distortion of the map and how well the fitted surface covers the base.
 
 With ``tile_size=None`` steps 2-5 run for a schedule of sizes, largest first,
-until one resolves the genus, leaves no quad bare and covers the base
-(:mod:`~geotex.param.polycube_size`); the attempts are recorded in
+until one resolves the genus, leaves no quad bare and covers the base (within
+a tile, and no more than :data:`~geotex.param.polycube_size.MAX_BARE` of it out
+of the texture's reach: :func:`bare_fraction`; :mod:`~geotex.param.polycube_size`); the attempts are recorded in
 :attr:`PolyCubeDiagnostics.tile_search`.
 
 Unlike a deformation of the input, the map is defined on the polycube's own
@@ -34,6 +35,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import igl
 import numpy as np
 
 from geotex.check import check_mesh
@@ -45,8 +47,9 @@ from geotex.mesh.topology import edge_topology, faces_within_rings, vertex_compo
 from geotex.param.distortion import distortion_summary
 from geotex.param.polycube_fit import SurfaceProjector, fitted_surface
 from geotex.param.polycube_quads import QuadLayout, chart_axes
-from geotex.param.polycube_size import (AUTO_FLOOR, AUTO_START, AUTO_STEP, EXTRA_FITTED,
-                                        MAX_FITTED, MAX_QUADS, MIN_COVERAGE, SKIP_BELOW,
+from geotex.param.polycube_size import (AUTO_FLOOR, AUTO_START, AUTO_STEP, BARE_DEPTH,
+                                        EXTRA_FITTED, MAX_FITTED, MAX_QUADS, MIN_COVERAGE,
+                                        MAX_BARE, SKIP_BELOW,
                                         size_schedule, thin_spot)
 from geotex.param.polycube_surface import boundary_quads, subdivided_quads
 from geotex.param.voxels import (largest_component, manifold_solid, occupancy,
@@ -54,7 +57,7 @@ from geotex.param.voxels import (largest_component, manifold_solid, occupancy,
 from geotex.progress import report
 
 __all__ = ["PolyCube", "PolyCubeDiagnostics", "polycube", "POLYCUBE_STAGES", "validate_input",
-           "GRID_SHIFTS"]
+           "GRID_SHIFTS", "bare_fraction"]
 
 POLYCUBE_STAGES = ("check", "voxels", "fit", "distortion")
 
@@ -76,8 +79,8 @@ class PolyCubeDiagnostics:
         The voxel candidate that was used (cell, shift, repair strategy, ...).
     tile_search : dict
         How the tile size was found: ``automatic``, and every ``attempts``
-        entry (``tile_size``, ``result``; ``quads``, ``bare`` and
-        ``within_tile`` when fitted); automatic searches add ``start``,
+        entry (``tile_size``, ``result``; ``quads``, ``bare``,
+        ``within_tile`` and ``bare_area`` when fitted); automatic searches add ``start``,
         ``floor`` and ``chosen``.
     """
 
@@ -289,13 +292,20 @@ def _attempt(V, F, *, lo, ts, chi, k, r, iterations, max_quads=None, progress=No
             bad = _bad_quads(fit, c["F"], c["labels"].size, r)
             cov = _coverage(Vt, F, fit.Y, c["F"])
             done.append((c, fit, bad, cov))
-        # a candidate that covers the base beats one that does not, then fewer bare quads
-        key = (cov["within_tile"] < MIN_COVERAGE, int(bad.sum()), -cov["within_tile"])
+        # a candidate that covers the base beats one that does not, then fewer bare
+        # quads, then less base area outside the texture's reach
+        key = (not _covers(cov), int(bad.sum()), cov["bare"], -cov["within_tile"])
         if out["best"] is None or key < out["key"]:
             out["best"], out["key"], out["coverage"] = (c, fit, bad), key, cov
         if key[:2] == (False, 0) or out["fitted"] == 3:
             break
     return out
+
+
+def _covers(cov: dict) -> bool:
+    """Whether a fit covers the base: :data:`MIN_COVERAGE` within a tile, at most
+    :data:`MAX_BARE` of it out of the texture's reach (:func:`bare_fraction`)."""
+    return cov["within_tile"] >= MIN_COVERAGE and cov["bare"] <= MAX_BARE
 
 
 def _same_polycube(a: dict, b: dict) -> bool:
@@ -337,9 +347,9 @@ def _record(a) -> dict:
         return rec
     c, _, bad = a["best"]
     rec.update(quads=int(c["labels"].size), bare=int(bad.sum()),
-               within_tile=float(a["coverage"]["within_tile"]))
-    rec["result"] = "ok" if (rec["bare"] == 0
-                             and rec["within_tile"] >= MIN_COVERAGE) else "not covered"
+               within_tile=float(a["coverage"]["within_tile"]),
+               bare_area=float(a["coverage"]["bare"]))
+    rec["result"] = "ok" if rec["bare"] == 0 and _covers(a["coverage"]) else "not covered"
     return rec
 
 
@@ -357,8 +367,10 @@ def polycube(V, F, *, tile_size: float | None = None, tiles_per_cell: int = 1, r
         default) chooses it: the largest size of
         :func:`~geotex.param.polycube_size.size_schedule` (from 1/12 of the
         largest extent down to 1/200, steps of ``2**-1/4``) whose voxel
-        polycube has the mesh's genus, leaves no quad bare and has 99 % of the
-        base area within one tile of the fitted surface; when no size
+        polycube has the mesh's genus, leaves no quad bare, has 99 % of the
+        base area within one tile of the fitted surface and at most
+        :data:`~geotex.param.polycube_size.MAX_BARE` of it out of the
+        texture's reach (:func:`bare_fraction`); when no size
         qualifies (at most 6 sizes are fitted, 2 after the first that covers
         the base), the fitted size that covers the base with the fewest bare
         quads. The attempts are in :attr:`PolyCubeDiagnostics.tile_search`.
@@ -455,7 +467,7 @@ def _search(V, F, *, extent, genus, opts):
     :data:`EXTRA_FITTED` more once one covers the base (only bare quads are
     left to remove then, which smaller tiles rarely do on very thin parts).
     The best attempt covers the base, then has the fewest bare quads, then the
-    largest tiles.
+    least base area out of reach, then the best coverage within a tile.
     """
     start, floor = extent / AUTO_START, extent / AUTO_FLOOR
     attempts, best, best_key, fitted, covered, skip = [], None, None, 0, None, False
@@ -471,10 +483,10 @@ def _search(V, F, *, extent, genus, opts):
         if a["best"] is None:
             continue
         fitted += 1
-        key = (rec["within_tile"] < MIN_COVERAGE, rec["bare"], -rec["within_tile"])
+        key = (not _covers(a["coverage"]), rec["bare"], rec["bare_area"], -rec["within_tile"])
         if best is None or key < best_key:
             best, best_key = a, key
-        if rec["within_tile"] >= MIN_COVERAGE and covered is None:
+        if _covers(a["coverage"]) and covered is None:
             covered = fitted
         skip = rec["within_tile"] < SKIP_BELOW
         if (rec["result"] == "ok" or fitted >= MAX_FITTED
@@ -534,12 +546,55 @@ def _coverage(V, F, Y, Fq) -> dict:
     """Distance from the base to the fitted surface, in tiles (area-weighted).
 
     Measured from every base face centroid to its closest point on the fitted
-    surface: mean and max distance, and the fractions of the base area within
-    a quarter tile and within one tile.
+    surface: mean and max distance, the fractions of the base area within
+    a quarter tile and within one tile, and ``bare`` (:func:`bare_fraction`).
     """
     C = V[F].mean(axis=1)
     d = np.linalg.norm(SurfaceProjector(Y, Fq).closest(C)[0] - C, axis=1)
     a = face_areas(V, F)
     return {"mean": float(np.average(d, weights=a)), "max": float(d.max()),
             "within_quarter_tile": float(a[d <= 0.25].sum() / a.sum()),
-            "within_tile": float(a[d <= 1.0].sum() / a.sum())}
+            "within_tile": float(a[d <= 1.0].sum() / a.sum()),
+            "bare": bare_fraction(V, F, Y, Fq)}
+
+
+def bare_fraction(V, F, Y, Fq, *, depth: float = BARE_DEPTH) -> float:
+    """Share of the base area farther than ``depth`` outside the fitted surface.
+
+    Tiles are laid on the fitted surface ``(Y, Fq)`` and rise at most their
+    height (a quarter tile for the tallest catalog set) above it, so where the
+    base sticks out of that surface by more than ``depth`` every element is
+    buried in the base and the base is left bare (a thin protrusion the voxels
+    did not resolve). Sampled at four points per base face (the centroid and
+    the three points ``(2/3, 1/6, 1/6)``), each carrying a quarter of the
+    face's area; outside means a winding number of the fitted surface below
+    one half.
+
+    Parameters
+    ----------
+    V : numpy.ndarray, (n, 3) float64
+    F : numpy.ndarray, (m, 3) int64
+        The base.
+    Y : numpy.ndarray, (k, 3) float64
+    Fq : numpy.ndarray, (l, 3) int64
+        The fitted surface (closed), in the same units as ``V``.
+    depth : float, optional
+        In the units of ``V`` (tiles when ``V`` is in tile units).
+
+    Returns
+    -------
+    float
+        In ``[0, 1]``.
+    """
+    w = np.full((4, 3), 1.0 / 6.0)
+    w[0] = 1.0 / 3.0
+    w[[1, 2, 3], [0, 1, 2]] = 2.0 / 3.0
+    S = np.einsum("pj,mjc->mpc", w, V[F]).reshape(-1, 3)
+    a = np.repeat(face_areas(V, F), 4)
+    d = np.linalg.norm(SurfaceProjector(Y, Fq).closest(S)[0] - S, axis=1)
+    far = d > depth
+    wn = np.asarray(igl.fast_winding_number(np.ascontiguousarray(Y, dtype=np.float64),
+                                            np.ascontiguousarray(Fq, dtype=np.int64),
+                                            np.ascontiguousarray(S[far])))
+    far[far] = wn < 0.5
+    return float(a[far].sum() / a.sum())
