@@ -292,20 +292,25 @@ def _attempt(V, F, *, lo, ts, chi, k, r, iterations, max_quads=None, progress=No
             bad = _bad_quads(fit, c["F"], c["labels"].size, r)
             cov = _coverage(Vt, F, fit.Y, c["F"])
             done.append((c, fit, bad, cov))
-        # a candidate that covers the base beats one that does not, then fewer bare
-        # quads, then less base area outside the texture's reach
-        key = (not _covers(cov), int(bad.sum()), cov["bare"], -cov["within_tile"])
+        key = _key(cov, int(bad.sum()))
         if out["best"] is None or key < out["key"]:
             out["best"], out["key"], out["coverage"] = (c, fit, bad), key, cov
-        if key[:2] == (False, 0) or out["fitted"] == 3:
+        if key[:3] == (False, 0, False) or out["fitted"] == 3:
             break
     return out
 
 
-def _covers(cov: dict) -> bool:
-    """Whether a fit covers the base: :data:`MIN_COVERAGE` within a tile, at most
-    :data:`MAX_BARE` of it out of the texture's reach (:func:`bare_fraction`)."""
-    return cov["within_tile"] >= MIN_COVERAGE and cov["bare"] <= MAX_BARE
+def _key(cov: dict, bare_quads: int) -> tuple:
+    """Order of fits, best first: :data:`MIN_COVERAGE` of the base within a tile,
+    then fewer bare quads, then at most :data:`MAX_BARE` of the base out of the
+    texture's reach (:func:`bare_fraction`), then more of it within a tile.
+
+    Ties keep the first fit (the first grid shift, the largest tile): where no
+    fit brings the area out of reach under :data:`MAX_BARE` (a detail smaller
+    than any tile tried), the choice is the one made without that rule.
+    """
+    return (cov["within_tile"] < MIN_COVERAGE, bare_quads, cov["bare"] > MAX_BARE,
+            -cov["within_tile"])
 
 
 def _same_polycube(a: dict, b: dict) -> bool:
@@ -349,7 +354,9 @@ def _record(a) -> dict:
     rec.update(quads=int(c["labels"].size), bare=int(bad.sum()),
                within_tile=float(a["coverage"]["within_tile"]),
                bare_area=float(a["coverage"]["bare"]))
-    rec["result"] = "ok" if rec["bare"] == 0 and _covers(a["coverage"]) else "not covered"
+    key = _key(a["coverage"], rec["bare"])
+    rec["result"] = ("ok" if key[:3] == (False, 0, False) else
+                     "out of reach" if key[:2] == (False, 0) else "not covered")
     return rec
 
 
@@ -372,8 +379,9 @@ def polycube(V, F, *, tile_size: float | None = None, tiles_per_cell: int = 1, r
         :data:`~geotex.param.polycube_size.MAX_BARE` of it out of the
         texture's reach (:func:`bare_fraction`); when no size
         qualifies (at most 6 sizes are fitted, 2 after the first that covers
-        the base), the fitted size that covers the base with the fewest bare
-        quads. The attempts are in :attr:`PolyCubeDiagnostics.tile_search`.
+        the base within a tile), the fitted size that covers the base within
+        a tile with the fewest bare quads (the largest such size unless a
+        smaller one keeps the area out of reach under ``MAX_BARE``). The attempts are in :attr:`PolyCubeDiagnostics.tile_search`.
     tiles_per_cell : int, optional
         Tiles along the side of a voxel: larger gives larger, flatter charts
         but resolves less of the shape.
@@ -466,8 +474,13 @@ def _search(V, F, *, extent, genus, opts):
     the next size of the schedule is skipped. At most :data:`MAX_FITTED` sizes are fitted, and at most
     :data:`EXTRA_FITTED` more once one covers the base (only bare quads are
     left to remove then, which smaller tiles rarely do on very thin parts).
-    The best attempt covers the base, then has the fewest bare quads, then the
-    least base area out of reach, then the best coverage within a tile.
+    The best attempt is the first of the smallest :func:`_key`: it covers the
+    base within a tile, then has the fewest bare quads, then at most
+    :data:`MAX_BARE` of the base out of the texture's reach, then the best
+    coverage within a tile. A base whose thin parts need smaller tiles than
+    the first covering size thus gets them when one of the :data:`EXTRA_FITTED`
+    sizes after it brings the area out of reach under :data:`MAX_BARE`, and
+    keeps the first covering size otherwise.
     """
     start, floor = extent / AUTO_START, extent / AUTO_FLOOR
     attempts, best, best_key, fitted, covered, skip = [], None, None, 0, None, False
@@ -483,10 +496,10 @@ def _search(V, F, *, extent, genus, opts):
         if a["best"] is None:
             continue
         fitted += 1
-        key = (not _covers(a["coverage"]), rec["bare"], rec["bare_area"], -rec["within_tile"])
+        key = _key(a["coverage"], rec["bare"])
         if best is None or key < best_key:
             best, best_key = a, key
-        if _covers(a["coverage"]) and covered is None:
+        if rec["within_tile"] >= MIN_COVERAGE and covered is None:
             covered = fitted
         skip = rec["within_tile"] < SKIP_BELOW
         if (rec["result"] == "ok" or fitted >= MAX_FITTED
