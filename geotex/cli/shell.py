@@ -92,7 +92,7 @@ def shell_of_file(base, tile_size, *, name: str, size_mm=None):
                               "to choose it automatically)") from None
     warning = bare_warning(shell, "use a smaller --tile-size" + (
         " (or leave it out to choose one that covers the base)" if tile_size is not None
-        else " (no automatic size down to the search's floor covered the base)"))
+        else " (the automatic size covers the base within a tile, not this)"))
     if warning:
         print(warning, file=sys.stderr)
     shell.recipe["tile_size"] = shell.tile_size

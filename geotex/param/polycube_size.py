@@ -4,8 +4,10 @@ With ``tile_size=None`` :func:`geotex.param.polycube.polycube` tries the sizes
 of :func:`size_schedule`, from 1/12 of the largest extent down in steps of
 ``2**-1/4`` (about 16 %), and keeps the first (largest) whose voxel polycube
 has the mesh's genus and whose fitted surface leaves no quad bare and covers
-the base (:data:`MIN_COVERAGE` of its area within one tile and at most
-:data:`MAX_BARE` more than :data:`BARE_DEPTH` tiles outside it). The floor is 1/200
+the base (:data:`MIN_COVERAGE` of its area within one tile; the share more
+than :data:`BARE_DEPTH` tiles outside it, out of the texture's reach, is only
+required at most :data:`MAX_BARE` when choosing among the grid shifts of one
+size). The floor is 1/200
 of the extent, or fewer tiles when the polycube would exceed :data:`MAX_QUADS`;
 at most :data:`MAX_FITTED` sizes are fitted (:data:`EXTRA_FITTED` after the
 first that covers the base), then the best attempt is kept.
