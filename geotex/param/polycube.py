@@ -558,15 +558,38 @@ def _coverage(V, F, Y, Fq) -> dict:
 
     Measured from every base face centroid to its closest point on the fitted
     surface: mean and max distance, the fractions of the base area within
-    a quarter tile and within one tile, and ``bare`` (:func:`bare_fraction`).
+    a quarter tile and within one tile, and ``bare`` (:func:`bare_fraction`,
+    from the same closest-point queries).
     """
-    C = V[F].mean(axis=1)
-    d = np.linalg.norm(SurfaceProjector(Y, Fq).closest(C)[0] - C, axis=1)
-    a = face_areas(V, F)
+    S, a4 = _face_samples(V, F)
+    d4 = np.linalg.norm(SurfaceProjector(Y, Fq).closest(S)[0] - S, axis=1)
+    d = d4[::4]                                   # the centroids
+    a = a4[::4] * 4.0
     return {"mean": float(np.average(d, weights=a)), "max": float(d.max()),
             "within_quarter_tile": float(a[d <= 0.25].sum() / a.sum()),
             "within_tile": float(a[d <= 1.0].sum() / a.sum()),
-            "bare": bare_fraction(V, F, Y, Fq)}
+            "bare": _outside_share(S, a4, d4, Y, Fq, BARE_DEPTH)}
+
+
+def _face_samples(V, F) -> tuple[np.ndarray, np.ndarray]:
+    """Four points per face (centroid first, then ``(2/3, 1/6, 1/6)`` and its
+    rotations), ``(4 m, 3)``, and the quarter face area each carries."""
+    w = np.full((4, 3), 1.0 / 6.0)
+    w[0] = 1.0 / 3.0
+    w[[1, 2, 3], [0, 1, 2]] = 2.0 / 3.0
+    S = np.einsum("pj,mjc->mpc", w, V[F]).reshape(-1, 3)
+    return S, np.repeat(face_areas(V, F) / 4.0, 4)
+
+
+def _outside_share(S, a, d, Y, Fq, depth) -> float:
+    """Share of the weights ``a`` of points ``S`` farther than ``depth`` (``d``:
+    their distances) outside the closed surface ``(Y, Fq)`` (winding number < 1/2)."""
+    far = d > depth
+    wn = np.asarray(igl.fast_winding_number(np.ascontiguousarray(Y, dtype=np.float64),
+                                            np.ascontiguousarray(Fq, dtype=np.int64),
+                                            np.ascontiguousarray(S[far])))
+    far[far] = wn < 0.5
+    return float(a[far].sum() / a.sum())
 
 
 def bare_fraction(V, F, Y, Fq, *, depth: float = BARE_DEPTH) -> float:
@@ -597,15 +620,6 @@ def bare_fraction(V, F, Y, Fq, *, depth: float = BARE_DEPTH) -> float:
     float
         In ``[0, 1]``.
     """
-    w = np.full((4, 3), 1.0 / 6.0)
-    w[0] = 1.0 / 3.0
-    w[[1, 2, 3], [0, 1, 2]] = 2.0 / 3.0
-    S = np.einsum("pj,mjc->mpc", w, V[F]).reshape(-1, 3)
-    a = np.repeat(face_areas(V, F), 4)
+    S, a = _face_samples(V, F)
     d = np.linalg.norm(SurfaceProjector(Y, Fq).closest(S)[0] - S, axis=1)
-    far = d > depth
-    wn = np.asarray(igl.fast_winding_number(np.ascontiguousarray(Y, dtype=np.float64),
-                                            np.ascontiguousarray(Fq, dtype=np.int64),
-                                            np.ascontiguousarray(S[far])))
-    far[far] = wn < 0.5
-    return float(a[far].sum() / a.sum())
+    return _outside_share(S, a, d, Y, Fq, depth)
