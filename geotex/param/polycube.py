@@ -380,7 +380,8 @@ def polycube(V, F, *, tile_size: float | None = None, tiles_per_cell: int = 1, r
         quads. The area out of the texture's reach (:func:`bare_fraction`) is
         recorded (``coverage["bare"]``), not required. At any size, up to three
         voxel candidates (grid shifts) are fitted until one also keeps it at most
-        :data:`~geotex.param.polycube_size.MAX_BARE`. The attempts are in :attr:`PolyCubeDiagnostics.tile_search`.
+        :data:`~geotex.param.polycube_size.MAX_BARE`. The attempts are in
+        :attr:`PolyCubeDiagnostics.tile_search`.
     tiles_per_cell : int, optional
         Tiles along the side of a voxel: larger gives larger, flatter charts
         but resolves less of the shape.
