@@ -198,7 +198,7 @@ def run_map(args) -> int:
         shell = scaled_shell(shell, args.size_mm / float(np.ptp(shell.base_vertices,
                                                                  axis=0).max()))
     warning = bare_warning(shell, "rebuild the shell with smaller tiles ('geotex shell build "
-                                  "BASE --tile-size SIZE') or use 'geotex texture'")
+                                  "BASE --tile-size SIZE')")
     if warning:
         print(warning, file=sys.stderr)
     return _finish(args, shell, tiles, out, extra, label=f"{tiles.name} on {shell.name}")
