@@ -265,6 +265,50 @@ def test_coverage_within_one_tile_on_a_generated_shape():
     assert not pc.quad_folded.any()
 
 
+def test_bare_fraction_is_the_area_outside_beyond_the_depth():
+    from geotex.param.polycube import bare_fraction
+
+    V, F = icosphere(3)
+    assert bare_fraction(V, F, V, F) == 0.0                        # on the surface
+    assert bare_fraction(V, F, 2.0 * V, F) == 0.0                  # inside it
+    assert bare_fraction(V, F, 0.5 * V, F) == pytest.approx(1.0)   # half a unit outside
+    assert bare_fraction(V, F, 0.5 * V, F, depth=0.6) == 0.0       # ... within reach
+    half = V.copy()
+    half[V[:, 0] > 0.5] *= 0.5                                     # a cap outside
+    share = bare_fraction(V, F, half, F, depth=0.1)
+    assert 0.05 < share < 0.5
+
+
+def test_rod_out_of_the_fitted_surface_is_reported_bare():
+    from geotex.mesh.primitives import sphere_with_rod
+    from geotex.param.polycube_size import MAX_BARE
+
+    V, F = sphere_with_rod(cell=0.05)
+    coarse = polycube(V, F, tile_size=0.2)          # the voxels lose part of the rod
+    assert coarse.diagnostics.coverage["bare"] > MAX_BARE
+    attempt = coarse.diagnostics.tile_search["attempts"][0]
+    assert attempt["result"] != "ok"
+    assert attempt["bare_area"] == coarse.diagnostics.coverage["bare"]
+    fine = polycube(V, F, tile_size=0.12)
+    assert fine.diagnostics.coverage["bare"] <= MAX_BARE
+    assert fine.diagnostics.tile_search["attempts"][0]["result"] == "ok"
+
+
+def test_spot_horns_within_a_tile_but_bare_are_not_covered():
+    """Spot's horns stay inside one tile of the fitted surface at tile 0.12 but
+    out of the texture's reach: the fit does not count as covering the base."""
+    from geotex.data import sample_path
+    from geotex.io import read_mesh
+    from geotex.param.polycube_size import MAX_BARE
+
+    m = read_mesh(sample_path("spot"))
+    pc = polycube(m.vertices, m.faces, tile_size=0.12)
+    cov = pc.diagnostics.coverage
+    assert cov["within_tile"] >= 0.99 and cov["bare"] > MAX_BARE
+    assert pc.diagnostics.tile_search["attempts"][0]["result"] == "out of reach"
+    assert pc.diagnostics.voxels["fitted"] > 1           # the other grid shifts were tried
+
+
 def test_automatic_tile_size_too_thin_fails_naming_the_place(monkeypatch):
     import geotex.param.polycube as module
 

@@ -185,7 +185,7 @@ def _finish(args, shell, tiles, out, extra, *, label: str, seconds=None) -> int:
 def run_map(args) -> int:
     import numpy as np
 
-    from geotex.shells import load_named as load_shell, shell_path
+    from geotex.shells import bare_warning, load_named as load_shell, shell_path
     from geotex.tiles.catalog import load_named as load_tiles, tileset_path
 
     tiles_file, shell_file = tileset_path(args.tiles), shell_path(args.shell)
@@ -197,6 +197,10 @@ def run_map(args) -> int:
 
         shell = scaled_shell(shell, args.size_mm / float(np.ptp(shell.base_vertices,
                                                                  axis=0).max()))
+    warning = bare_warning(shell, "rebuild the shell with smaller tiles ('geotex shell build "
+                                  "BASE --tile-size SIZE')")
+    if warning:
+        print(warning, file=sys.stderr)
     return _finish(args, shell, tiles, out, extra, label=f"{tiles.name} on {shell.name}")
 
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import sys
+
 from geotex.cli._common import EXIT_OK, UsageError, flag_error, guard_output, preload_compiled
 
 HELP = "build, list and show shells (base mesh + polycube parameterization)"
@@ -65,7 +67,7 @@ def shell_of_file(base, tile_size, *, name: str, size_mm=None):
     from geotex.errors import GeotexError
     from geotex.io import read_mesh
     from geotex.progress import stage_bar
-    from geotex.shells import SHELL_STAGES, build_shell
+    from geotex.shells import SHELL_STAGES, bare_warning, build_shell
 
     mesh = read_mesh(base)
     if size_mm is not None and mesh.n_vertices:
@@ -88,6 +90,11 @@ def shell_of_file(base, tile_size, *, name: str, size_mm=None):
                 raise
             raise GeotexError(f"--tile-size {tile_size:g}: {exc} (or leave --tile-size out "
                               "to choose it automatically)") from None
+    warning = bare_warning(shell, "use a smaller --tile-size" + (
+        " (or leave it out to choose one that covers the base)" if tile_size is not None
+        else " (the automatic size covers the base within a tile, not this)"))
+    if warning:
+        print(warning, file=sys.stderr)
     shell.recipe["tile_size"] = shell.tile_size
     if size_mm is not None:
         shell.recipe["size_mm"] = size_mm

@@ -34,6 +34,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import igl
 import numpy as np
 
 from geotex.check import check_mesh
@@ -45,8 +46,9 @@ from geotex.mesh.topology import edge_topology, faces_within_rings, vertex_compo
 from geotex.param.distortion import distortion_summary
 from geotex.param.polycube_fit import SurfaceProjector, fitted_surface
 from geotex.param.polycube_quads import QuadLayout, chart_axes
-from geotex.param.polycube_size import (AUTO_FLOOR, AUTO_START, AUTO_STEP, EXTRA_FITTED,
-                                        MAX_FITTED, MAX_QUADS, MIN_COVERAGE, SKIP_BELOW,
+from geotex.param.polycube_size import (AUTO_FLOOR, AUTO_START, AUTO_STEP, BARE_DEPTH,
+                                        EXTRA_FITTED, MAX_FITTED, MAX_QUADS, MIN_COVERAGE,
+                                        MAX_BARE, SKIP_BELOW,
                                         size_schedule, thin_spot)
 from geotex.param.polycube_surface import boundary_quads, subdivided_quads
 from geotex.param.voxels import (largest_component, manifold_solid, occupancy,
@@ -54,7 +56,7 @@ from geotex.param.voxels import (largest_component, manifold_solid, occupancy,
 from geotex.progress import report
 
 __all__ = ["PolyCube", "PolyCubeDiagnostics", "polycube", "POLYCUBE_STAGES", "validate_input",
-           "GRID_SHIFTS"]
+           "GRID_SHIFTS", "bare_fraction"]
 
 POLYCUBE_STAGES = ("check", "voxels", "fit", "distortion")
 
@@ -76,8 +78,8 @@ class PolyCubeDiagnostics:
         The voxel candidate that was used (cell, shift, repair strategy, ...).
     tile_search : dict
         How the tile size was found: ``automatic``, and every ``attempts``
-        entry (``tile_size``, ``result``; ``quads``, ``bare`` and
-        ``within_tile`` when fitted); automatic searches add ``start``,
+        entry (``tile_size``, ``result``; ``quads``, ``bare``,
+        ``within_tile`` and ``bare_area`` when fitted); automatic searches add ``start``,
         ``floor`` and ``chosen``.
     """
 
@@ -289,13 +291,25 @@ def _attempt(V, F, *, lo, ts, chi, k, r, iterations, max_quads=None, progress=No
             bad = _bad_quads(fit, c["F"], c["labels"].size, r)
             cov = _coverage(Vt, F, fit.Y, c["F"])
             done.append((c, fit, bad, cov))
-        # a candidate that covers the base beats one that does not, then fewer bare quads
-        key = (cov["within_tile"] < MIN_COVERAGE, int(bad.sum()), -cov["within_tile"])
+        key = _key(cov, int(bad.sum()))
         if out["best"] is None or key < out["key"]:
             out["best"], out["key"], out["coverage"] = (c, fit, bad), key, cov
-        if key[:2] == (False, 0) or out["fitted"] == 3:
+        if key[:3] == (False, 0, False) or out["fitted"] == 3:
             break
     return out
+
+
+def _key(cov: dict, bare_quads: int) -> tuple:
+    """Order of fits, best first: :data:`MIN_COVERAGE` of the base within a tile,
+    then fewer bare quads, then at most :data:`MAX_BARE` of the base out of the
+    texture's reach (:func:`bare_fraction`), then more of it within a tile.
+
+    Ties keep the first fit (the first grid shift, the largest tile): where no
+    fit brings the area out of reach under :data:`MAX_BARE` (a detail smaller
+    than any tile tried), the choice is the one made without that rule.
+    """
+    return (cov["within_tile"] < MIN_COVERAGE, bare_quads, cov["bare"] > MAX_BARE,
+            -cov["within_tile"])
 
 
 def _same_polycube(a: dict, b: dict) -> bool:
@@ -337,9 +351,11 @@ def _record(a) -> dict:
         return rec
     c, _, bad = a["best"]
     rec.update(quads=int(c["labels"].size), bare=int(bad.sum()),
-               within_tile=float(a["coverage"]["within_tile"]))
-    rec["result"] = "ok" if (rec["bare"] == 0
-                             and rec["within_tile"] >= MIN_COVERAGE) else "not covered"
+               within_tile=float(a["coverage"]["within_tile"]),
+               bare_area=float(a["coverage"]["bare"]))
+    key = _key(a["coverage"], rec["bare"])
+    rec["result"] = ("ok" if key[:3] == (False, 0, False) else
+                     "out of reach" if key[:2] == (False, 0) else "not covered")
     return rec
 
 
@@ -361,7 +377,11 @@ def polycube(V, F, *, tile_size: float | None = None, tiles_per_cell: int = 1, r
         base area within one tile of the fitted surface; when no size
         qualifies (at most 6 sizes are fitted, 2 after the first that covers
         the base), the fitted size that covers the base with the fewest bare
-        quads. The attempts are in :attr:`PolyCubeDiagnostics.tile_search`.
+        quads. The area out of the texture's reach (:func:`bare_fraction`) is
+        recorded (``coverage["bare"]``), not required. At any size, up to three
+        voxel candidates (grid shifts) are fitted until one also keeps it at most
+        :data:`~geotex.param.polycube_size.MAX_BARE`. The attempts are in
+        :attr:`PolyCubeDiagnostics.tile_search`.
     tiles_per_cell : int, optional
         Tiles along the side of a voxel: larger gives larger, flatter charts
         but resolves less of the shape.
@@ -454,8 +474,12 @@ def _search(V, F, *, extent, genus, opts):
     the next size of the schedule is skipped. At most :data:`MAX_FITTED` sizes are fitted, and at most
     :data:`EXTRA_FITTED` more once one covers the base (only bare quads are
     left to remove then, which smaller tiles rarely do on very thin parts).
-    The best attempt covers the base, then has the fewest bare quads, then the
-    largest tiles.
+    The best attempt covers the base within a tile, then has the fewest bare
+    quads, then the best coverage. The area out of the texture's reach
+    (:func:`bare_fraction`) is recorded but does not make the search go on:
+    requiring it at most :data:`MAX_BARE` halves Spot's tiles (6.67 -> 4.71 mm
+    at 80 mm) and doubles its output (benchmarks/results/bare.md); within a
+    size, the grid shifts are still tried for it (:func:`_key`).
     """
     start, floor = extent / AUTO_START, extent / AUTO_FLOOR
     attempts, best, best_key, fitted, covered, skip = [], None, None, 0, None, False
@@ -477,7 +501,7 @@ def _search(V, F, *, extent, genus, opts):
         if rec["within_tile"] >= MIN_COVERAGE and covered is None:
             covered = fitted
         skip = rec["within_tile"] < SKIP_BELOW
-        if (rec["result"] == "ok" or fitted >= MAX_FITTED
+        if (key[:2] == (False, 0) or fitted >= MAX_FITTED
                 or (covered is not None and fitted - covered >= EXTRA_FITTED)):
             break
     search = {"automatic": True, "start": start, "floor": floor, "attempts": attempts}
@@ -534,12 +558,69 @@ def _coverage(V, F, Y, Fq) -> dict:
     """Distance from the base to the fitted surface, in tiles (area-weighted).
 
     Measured from every base face centroid to its closest point on the fitted
-    surface: mean and max distance, and the fractions of the base area within
-    a quarter tile and within one tile.
+    surface: mean and max distance, the fractions of the base area within
+    a quarter tile and within one tile, and ``bare`` (:func:`bare_fraction`,
+    from the same closest-point queries).
     """
-    C = V[F].mean(axis=1)
-    d = np.linalg.norm(SurfaceProjector(Y, Fq).closest(C)[0] - C, axis=1)
-    a = face_areas(V, F)
+    S, a4 = _face_samples(V, F)
+    d4 = np.linalg.norm(SurfaceProjector(Y, Fq).closest(S)[0] - S, axis=1)
+    d = d4[::4]                                   # the centroids
+    a = a4[::4] * 4.0
     return {"mean": float(np.average(d, weights=a)), "max": float(d.max()),
             "within_quarter_tile": float(a[d <= 0.25].sum() / a.sum()),
-            "within_tile": float(a[d <= 1.0].sum() / a.sum())}
+            "within_tile": float(a[d <= 1.0].sum() / a.sum()),
+            "bare": _outside_share(S, a4, d4, Y, Fq, BARE_DEPTH)}
+
+
+def _face_samples(V, F) -> tuple[np.ndarray, np.ndarray]:
+    """Four points per face (centroid first, then ``(2/3, 1/6, 1/6)`` and its
+    rotations), ``(4 m, 3)``, and the quarter face area each carries."""
+    w = np.full((4, 3), 1.0 / 6.0)
+    w[0] = 1.0 / 3.0
+    w[[1, 2, 3], [0, 1, 2]] = 2.0 / 3.0
+    S = np.einsum("pj,mjc->mpc", w, V[F]).reshape(-1, 3)
+    return S, np.repeat(face_areas(V, F) / 4.0, 4)
+
+
+def _outside_share(S, a, d, Y, Fq, depth) -> float:
+    """Share of the weights ``a`` of points ``S`` farther than ``depth`` (``d``:
+    their distances) outside the closed surface ``(Y, Fq)`` (winding number < 1/2)."""
+    far = d > depth
+    wn = np.asarray(igl.fast_winding_number(np.ascontiguousarray(Y, dtype=np.float64),
+                                            np.ascontiguousarray(Fq, dtype=np.int64),
+                                            np.ascontiguousarray(S[far])))
+    far[far] = wn < 0.5
+    return float(a[far].sum() / a.sum())
+
+
+def bare_fraction(V, F, Y, Fq, *, depth: float = BARE_DEPTH) -> float:
+    """Share of the base area farther than ``depth`` outside the fitted surface.
+
+    Tiles are laid on the fitted surface ``(Y, Fq)`` and rise at most their
+    height (a quarter tile for the tallest catalog set) above it, so where the
+    base sticks out of that surface by more than ``depth`` every element is
+    buried in the base and the base is left bare (a thin protrusion the voxels
+    did not resolve). Sampled at four points per base face (the centroid and
+    the three points ``(2/3, 1/6, 1/6)``), each carrying a quarter of the
+    face's area; outside means a winding number of the fitted surface below
+    one half.
+
+    Parameters
+    ----------
+    V : numpy.ndarray, (n, 3) float64
+    F : numpy.ndarray, (m, 3) int64
+        The base.
+    Y : numpy.ndarray, (k, 3) float64
+    Fq : numpy.ndarray, (l, 3) int64
+        The fitted surface (closed), in the same units as ``V``.
+    depth : float, optional
+        In the units of ``V`` (tiles when ``V`` is in tile units).
+
+    Returns
+    -------
+    float
+        In ``[0, 1]``.
+    """
+    S, a = _face_samples(V, F)
+    d = np.linalg.norm(SurfaceProjector(Y, Fq).closest(S)[0] - S, axis=1)
+    return _outside_share(S, a, d, Y, Fq, depth)

@@ -4,7 +4,10 @@ With ``tile_size=None`` :func:`geotex.param.polycube.polycube` tries the sizes
 of :func:`size_schedule`, from 1/12 of the largest extent down in steps of
 ``2**-1/4`` (about 16 %), and keeps the first (largest) whose voxel polycube
 has the mesh's genus and whose fitted surface leaves no quad bare and covers
-the base (:data:`MIN_COVERAGE` of its area within one tile). The floor is 1/200
+the base (:data:`MIN_COVERAGE` of its area within one tile; the share more
+than :data:`BARE_DEPTH` tiles outside it, out of the texture's reach, is only
+required at most :data:`MAX_BARE` when choosing among the grid shifts of one
+size). The floor is 1/200
 of the extent, or fewer tiles when the polycube would exceed :data:`MAX_QUADS`;
 at most :data:`MAX_FITTED` sizes are fitted (:data:`EXTRA_FITTED` after the
 first that covers the base), then the best attempt is kept.
@@ -23,7 +26,7 @@ import numpy as np
 from geotex.mesh.geometry import face_normals
 
 __all__ = ["AUTO_START", "AUTO_FLOOR", "AUTO_STEP", "MAX_QUADS", "MAX_FITTED", "EXTRA_FITTED",
-           "MIN_COVERAGE", "SKIP_BELOW",
+           "MIN_COVERAGE", "SKIP_BELOW", "BARE_DEPTH", "MAX_BARE",
            "size_schedule", "thin_spot", "face_thickness"]
 
 #: The automatic search starts at ``extent / AUTO_START`` ...
@@ -42,6 +45,12 @@ EXTRA_FITTED = 2
 MIN_COVERAGE = 0.99
 #: A fit covering less than this skips the next size (the thin parts are far smaller).
 SKIP_BELOW = 0.95
+#: Depth (tiles) outside the fitted surface beyond which the base is bare: the
+#: tallest catalog tile set rises a quarter tile, so no element reaches there.
+BARE_DEPTH = 0.25
+#: Largest share of the base area that may lie out of the texture's reach
+#: (farther than :data:`BARE_DEPTH` outside the fitted surface) for a fit to cover it.
+MAX_BARE = 0.002
 
 
 def size_schedule(start: float, floor: float) -> list[float]:

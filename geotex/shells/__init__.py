@@ -6,13 +6,13 @@ Build one with :func:`build_shell`, save and load with :func:`save_shell` /
 with :func:`locate_on_quads` / :func:`quad_points_to_shell`.
 """
 
-from geotex.shells.build import (SHELL_STAGES, Shell, build_shell, max_offset_height,
-                                 offset_directions)
+from geotex.shells.build import (SHELL_STAGES, Shell, bare_area, bare_warning, build_shell,
+                                 max_offset_height, offset_directions)
 from geotex.shells.catalog import list_shells, load_named, shell_path
 from geotex.shells.scale import scaled_shell
 from geotex.shells.locate import locate_on_quads, quad_points_to_base, quad_points_to_shell
 from geotex.shells.store import load_shell, save_shell
 
 __all__ = ["Shell", "build_shell", "offset_directions", "max_offset_height", "SHELL_STAGES",
-           "save_shell", "load_shell", "list_shells", "shell_path", "load_named",
+           "bare_area", "bare_warning", "save_shell", "load_shell", "list_shells", "shell_path", "load_named",
            "locate_on_quads", "quad_points_to_base", "quad_points_to_shell", "scaled_shell"]

@@ -24,10 +24,12 @@ from geotex.errors import InputError
 from geotex.mesh.arrays import as_mesh_arrays
 from geotex.mesh.geometry import face_cross, vertex_normals
 from geotex.mesh.topology import neighbour_mean
-from geotex.param.polycube import POLYCUBE_STAGES, PolyCube, polycube
+from geotex.param.polycube import POLYCUBE_STAGES, PolyCube, bare_fraction, polycube
+from geotex.param.polycube_size import BARE_DEPTH, MAX_BARE
 from geotex.progress import report
 
-__all__ = ["Shell", "build_shell", "offset_directions", "max_offset_height", "SHELL_STAGES"]
+__all__ = ["Shell", "build_shell", "offset_directions", "max_offset_height", "SHELL_STAGES",
+           "bare_area", "bare_warning"]
 
 SHELL_STAGES = POLYCUBE_STAGES + ("offsets", "height")
 
@@ -80,6 +82,36 @@ class Shell:
     def tile_search(self) -> dict:
         """How the tile size was chosen (see :attr:`PolyCubeDiagnostics.tile_search`)."""
         return self.polycube.diagnostics.tile_search
+
+
+def bare_area(shell: Shell) -> float:
+    """Share of the base area out of the texture's reach (0..1).
+
+    The base farther than :data:`~geotex.param.polycube_size.BARE_DEPTH` tiles
+    outside the fitted surface (:func:`~geotex.param.polycube.bare_fraction`):
+    read from the polycube's coverage, or computed when a shell file made
+    before it was recorded lacks it.
+    """
+    pc = shell.polycube
+    value = pc.diagnostics.coverage.get("bare")
+    if value is None:
+        value = bare_fraction(shell.base_vertices, shell.base_faces, pc.Y, pc.F,
+                              depth=BARE_DEPTH * pc.tile_size)
+    return float(value)
+
+
+def bare_warning(shell: Shell, remedy: str) -> str | None:
+    """One line when more than :data:`~geotex.param.polycube_size.MAX_BARE` of the
+    base is out of the texture's reach (:func:`bare_area`), else None.
+
+    ``remedy`` ends the line (what the user can do, naming the flag).
+    """
+    share = bare_area(shell)
+    if share <= MAX_BARE:
+        return None
+    return (f"warning: {100 * share:.1f}% of the base of {shell.name!r} gets no texture (thin "
+            f"parts more than {BARE_DEPTH:g} tile outside the polycube surface, whose tiles "
+            f"are buried in the base); {remedy}")
 
 
 def offset_directions(V: np.ndarray, F: np.ndarray, *, smoothing: int = 3) -> np.ndarray:
