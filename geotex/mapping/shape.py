@@ -349,7 +349,7 @@ def shaped_positions(shell, quads, uvw, element, *, scale: float,
         # their lines (a crease or a crumpled patch of the fitted surface
         # turning away from the axis) is laid as before
         if CAST_ROUNDS and j1.size:
-            fface[j1], fb[j1], miss = _cast_feet(
+            fface[j1], fb[j1], miss, projector = _cast_feet(
                 pc, quads[idx[j1]], uvw[idx[j1], :2], target[j1], axis[el[j1]],
                 fface[j1], fb[j1], projector, rounds=CAST_ROUNDS)
         else:
@@ -376,8 +376,9 @@ def shaped_positions(shell, quads, uvw, element, *, scale: float,
             c = _off_line(interpolated(pc.Y, pc.F, fface[u], fb[u]) - tgt, ax) > CAST_TOL * size
             if c.any():
                 uc = u[c]
-                cf, cb, miss = _cast_feet(pc, quads[idx[uc]], uvw[idx[uc], :2], tgt[c], ax[c],
-                                          fface[uc], fb[uc], projector, rounds=CAST_ROUNDS)
+                cf, cb, miss, projector = _cast_feet(
+                    pc, quads[idx[uc]], uvw[idx[uc], :2], tgt[c], ax[c], fface[uc], fb[uc],
+                    projector, rounds=CAST_ROUNDS)
                 bad = np.zeros(n_el, dtype=bool)
                 bad[el[uc][miss > LEAN_MISS * size[c]]] = True
                 good = ~bad[el[uc]]
@@ -528,6 +529,8 @@ def _cast_feet(pc, quads, uv, target, direction, face, bary, projector, *, round
     miss : (k,) float64
         Distance of every foot from its line (infinite where the foot's
         triangle turns away from the line: less than 0.2 in cosine).
+    projector : SurfaceProjector or None
+        As :func:`_feet` returns it.
     """
     face, bary = face.copy(), bary.copy()
     for _ in range(int(rounds)):
@@ -539,10 +542,11 @@ def _cast_feet(pc, quads, uv, target, direction, face, bary, projector, *, round
         foot = interpolated(pc.Y, pc.F, face[ok], bary[ok])
         t = np.einsum("ij,ij->i", foot - target[ok], nf[ok]) / cos[ok]
         x = target[ok] + t[:, None] * direction[ok]
-        face[ok], bary[ok], _ = _feet(pc, quads[ok], uv[ok], x, direction[ok], projector)
+        face[ok], bary[ok], projector = _feet(pc, quads[ok], uv[ok], x, direction[ok],
+                                              projector)
     facing = np.einsum("ij,ij->i", face_normals(pc.Y, pc.F[face]), direction) > 0.2
     miss = _off_line(interpolated(pc.Y, pc.F, face, bary) - target, direction)
-    return face, bary, np.where(facing, miss, np.inf)
+    return face, bary, np.where(facing, miss, np.inf), projector
 
 
 def _off_line(rel: np.ndarray, direction: np.ndarray) -> np.ndarray:
