@@ -302,7 +302,7 @@ def shell_positions(shell, quads: np.ndarray, uvw: np.ndarray, *, scale: float,
 
 
 def reseated_elements(shell, mapped: "MappedTiles", label: np.ndarray, elements, *,
-                      scale: float, depth_scale: float, factors=(0.75, 0.55, 0.4, 0.3),
+                      scale: float, depth_scale: float, factors=None,
                       projector: SurfaceProjector | None = None
                       ) -> tuple[np.ndarray, np.ndarray]:
     """Shrink folded elements about their centre and map them again.
@@ -310,7 +310,9 @@ def reseated_elements(shell, mapped: "MappedTiles", label: np.ndarray, elements,
     An element the shell map folds onto itself (where the map bends it
     around a crease) is scaled about the centre of its footprint and in
     height by each of ``factors`` in turn, mapped again (as a shape when
-    ``mapped.shaped``, see :func:`~geotex.mapping.shape.shaped_positions`)
+    ``mapped.shaped``, see :func:`~geotex.mapping.shape.shaped_positions`,
+    then carried along its axis onto the surface and raised along it:
+    ``cast``, which seats 18 of Blub's 37 folded studs at their full size)
     and kept at the first size whose mapped faces do not cross each other
     (exact test). With ``mapped.shaped``, the elements no size seats are then
     smoothed over their folded stretch
@@ -327,8 +329,10 @@ def reseated_elements(shell, mapped: "MappedTiles", label: np.ndarray, elements,
         The folded elements.
     scale, depth_scale : float
         As in :func:`shell_positions`.
-    factors : sequence of float
-        Shrink factors tried.
+    factors : sequence of float, optional
+        Shrink factors tried; default 1, 0.75, 0.55, 0.4, 0.3 with
+        ``mapped.shaped`` (size 1 is cast), else without 1 (the plain map
+        again).
     projector : SurfaceProjector, optional
         Closest points on the shell's fitted surface (the one
         :func:`mapped_tiles` used); built here, once for every size, if not
@@ -341,6 +345,8 @@ def reseated_elements(shell, mapped: "MappedTiles", label: np.ndarray, elements,
     still_folded : numpy.ndarray, (k,) int64
         Elements that could not be re-seated.
     """
+    if factors is None:
+        factors = ((1.0,) if mapped.shaped else ()) + (0.75, 0.55, 0.4, 0.3)
     X = mapped.vertices.copy()
     G = mapped.faces
     still = np.unique(np.asarray(elements, dtype=np.int64))
@@ -366,7 +372,7 @@ def reseated_elements(shell, mapped: "MappedTiles", label: np.ndarray, elements,
                               shrink=np.full(still.size, float(f)), similar=mapped.shaped,
                               shift=None if mapped.shift is None else mapped.shift[verts],
                               lean=None if mapped.leaned is None else mapped.leaned[still],
-                              projector=projector)
+                              projector=projector, cast=mapped.shaped)
         fstart = np.cumsum(counts) - counts
         left = []
         for j, e in enumerate(still):

@@ -18,7 +18,7 @@ import numpy as np
 from geotex.check.report import CHECK_STAGES, CheckReport
 from geotex.errors import GeotexError, InputError
 from geotex.mapping.assign import edge_colors, tiles_for_quads
-from geotex.mapping.place import depth_scale, mapped_tiles, reseated_elements
+from geotex.mapping.place import MappedTiles, depth_scale, mapped_tiles, reseated_elements
 from geotex.mapping.seat import (floating_elements, lowered_elements, propped_elements,
                                  remapped_folds, rooted_elements, smoothed_folds)
 from geotex.mapping.union import (UNION_STAGES, ElementContacts, element_contacts,
@@ -143,6 +143,15 @@ class TexturedSolid:
         exactly the judged coordinates.
     stats : TextureStats
         Counts and timings of every stage.
+    elements : MappedTiles or None
+        With ``keep_elements``: the mapped elements as the job ends them
+        (re-seated, lowered or rooted; before the union, without posts),
+        numbered by ``elements.element``.
+    left_out : numpy.ndarray, (e,) bool, or None
+        With ``keep_elements``: elements of ``elements`` left out of the
+        union (still folded, or at defects) or found floating with no seat
+        (the union drops those that no neighbour holds:
+        ``stats.elements_floating``).
     """
 
     vertices: np.ndarray
@@ -150,6 +159,8 @@ class TexturedSolid:
     tile_of_quad: np.ndarray
     report: CheckReport | None
     stats: TextureStats
+    elements: MappedTiles | None = None
+    left_out: np.ndarray | None = None
 
 
 def texture_height(shell, tiles, height=None) -> float:
@@ -218,8 +229,8 @@ def _elements_near(points, X, G, exclude=None) -> np.ndarray:
 
 
 def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = True,
-                   shaped: bool | None = None, progress=None, on_stored=None
-                   ) -> TexturedSolid:
+                   shaped: bool | None = None, progress=None, on_stored=None,
+                   keep_elements: bool = False) -> TexturedSolid:
     """Lay ``tiles`` over ``shell`` and unite them with its base.
 
     Parameters
@@ -257,6 +268,10 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
         again); the result holds the arrays of the last call. The CLI passes
         a :class:`geotex.printing.StagedWrite`, so the STL is written while
         it is judged.
+    keep_elements : bool, optional
+        Also return the elements as the job ends them and which were left out
+        (``TexturedSolid.elements`` and ``left_out``; what
+        ``benchmarks/bench_shell_shape.py`` measures).
 
     Returns
     -------
@@ -366,6 +381,7 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
                                    contacts=contacts, moved=moved, progress=progress)
     times["union"] = time.perf_counter() - t
     rep = None
+    exclude = None
     retried = 0
     cleanup = {}
     if check:
@@ -381,7 +397,6 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
                                        on_stored=on_stored)
         # the boolean can leave needle faces where an element grazes the base
         # or a neighbour; leave the elements there out and unite again
-        exclude = None
         while not solid.report.printable and retried < RETRIES:
             points = _defect_points(solid.vertices, solid.faces, solid.report)
             if len(points) == 0:
@@ -412,4 +427,11 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
         cavities_filled=union.cavities, **cleanup,
         vertices=int(V.shape[0]), faces=int(F.shape[0]),
         seconds={k: round(v, 3) for k, v in times.items()})
-    return TexturedSolid(V, F, tile_of_quad, rep, stats)
+    if not keep_elements:
+        return TexturedSolid(V, F, tile_of_quad, rep, stats)
+    left_out = np.zeros(n_el, dtype=bool)
+    left_out[still] = True
+    left_out[np.setdiff1d(unseated, propped)] = True
+    if exclude is not None:
+        left_out |= exclude[:n_el]
+    return TexturedSolid(V, F, tile_of_quad, rep, stats, mapped, left_out)
