@@ -7,11 +7,13 @@ on ``PYTHONPATH`` and prints one JSON line: CPU and wall seconds, the
 placements and unfolded faces; with ``--quality`` also the quality columns of
 ``results/hpm_images.md`` (seam ratio border / within with the placed patches
 as regions, where the map jumps, stretch mean / p95, rotation across borders
-median / p75, orientation breaks), computed after the timed run.  Two checkouts are compared by alternating
-them, image by image, in the same shell loop, so that both meet the same
+median / p75, orientation breaks), computed after the timed run.  Two
+checkouts are compared by alternating them, image by image, in the same shell
+loop, or by starting both at once (one per core), so that both meet the same
 load (the 2 cores are shared with other jobs); see ``results/hpm_images.md``.
 
-Run:  PYTHONPATH=CHECKOUT python benchmarks/bench_hpm_pair.py [--seed N] [--quality] IMAGE [IMAGE ...]
+Run:  PYTHONPATH=CHECKOUT python benchmarks/bench_hpm_pair.py [--seed N] [--quality]
+      IMAGE [IMAGE ...]
 """
 
 from __future__ import annotations
