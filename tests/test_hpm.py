@@ -1026,6 +1026,10 @@ def test_hpm_user_field_is_followed_and_continued():
     r = hpm_texture(V, F, img, scale=2.0, seed=0, field=fld)
     assert r.report()["pattern"]["field"] == "given"
     assert sum(lv["continued"] for lv in r.report()["levels"]) > 0
+    # face level: continuations under the threshold are taken without the FFT search
+    last = r.report()["levels"][-1]
+    assert 0 < last["quick"] <= last["continued"]
+    assert max(r.levels[-1].errors) <= 0.35
     dev = field_deviation(V, F, r, img, comb_direction_field(V, F, fld).vectors, 2)
     assert np.quantile(dev, 0.75) < 8.0
 
