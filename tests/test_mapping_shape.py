@@ -167,17 +167,25 @@ def test_shaped_elements_do_not_press_into_each_other(torus_shell, studs):
     assert meeting[1] <= meeting[0] + 0.1 * n, (meeting, n)
 
 
+def _leaned_offsets(shell, degrees):
+    """``shell`` with its offset directions leaned ``degrees`` towards ``D x z``.
+
+    ``degrees``: one angle, or one per vertex.
+    """
+    D = shell.D
+    t = np.cross(D, [0.0, 0.0, 1.0])
+    t /= np.linalg.norm(t, axis=1, keepdims=True)
+    a = np.radians(np.asarray(degrees, dtype=np.float64))[..., None]
+    return dataclasses.replace(shell, D=np.cos(a) * D + np.sin(a) * t)
+
+
 def test_shaped_elements_stay_round_across_their_axis_where_the_offsets_lean(
         torus_shell, studs):
     # offset directions leaning 40 degrees from the surface (as Spot's, smoothed
     # over several tiles, lean on its head): a stud laid in the surface's plane
     # and raised along them stood sheared, its cross-section across the offset
     # direction squashed to cos 40 = 0.77 of its area
-    D = torus_shell.D
-    t = np.cross(D, [0.0, 0.0, 1.0])
-    t /= np.linalg.norm(t, axis=1, keepdims=True)
-    leaned = dataclasses.replace(torus_shell, D=np.cos(np.radians(40)) * D
-                                 + np.sin(np.radians(40)) * t)
+    leaned = _leaned_offsets(torus_shell, 40.0)
     upright, _, _ = _footprints(torus_shell, studs, shaped=True)
     fp, _, m = _footprints(leaned, studs, shaped=True)
     # (laid in the surface's plane, as before: median area 0.77 of upright, elongation
@@ -213,11 +221,7 @@ def test_leaned_studs_are_carried_along_their_axis_onto_the_surface(torus_shell,
     # curved surface it did not (elongation along the axis 1.047 mean, 1.13
     # p95 on this torus with offsets leaning 40 degrees; Blub's fins: studs
     # squashed to 0.6-0.8 of the median footprint)
-    D = torus_shell.D
-    t = np.cross(D, [0.0, 0.0, 1.0])
-    t /= np.linalg.norm(t, axis=1, keepdims=True)
-    leaned = dataclasses.replace(torus_shell, D=np.cos(np.radians(40)) * D
-                                 + np.sin(np.radians(40)) * t)
+    leaned = _leaned_offsets(torus_shell, 40.0)
     fp, _, m = _footprints(leaned, studs, shaped=True)
     n, label = face_components(m.faces, m.vertices.shape[0])
     el_of = np.zeros(n, dtype=np.int64)
@@ -233,14 +237,9 @@ def test_leaned_studs_do_not_cross_upright_neighbours(torus_shell, studs):
     # do, and where the two meet a leaned stud crossing an upright one is
     # stood upright too (a leaned and an upright stud crossing at a graze left
     # the union on the main job's Spot with crossing faces: a retry, 2 left out)
-    D = torus_shell.D
-    t = np.cross(D, [0.0, 0.0, 1.0])
-    t /= np.linalg.norm(t, axis=1, keepdims=True)
     pts = torus_shell.polycube.Y
-    assert len(D) == len(pts)
-    angle = np.radians(25.0 + 25.0 * np.sin(np.arctan2(pts[:, 1], pts[:, 0])))
-    leaned = dataclasses.replace(torus_shell, D=np.cos(angle)[:, None] * D
-                                 + np.sin(angle)[:, None] * t)
+    assert len(torus_shell.D) == len(pts)
+    leaned = _leaned_offsets(torus_shell, 25.0 + 25.0 * np.sin(np.arctan2(pts[:, 1], pts[:, 0])))
     _, _, m = _footprints(leaned, studs, shaped=True)
     label = m.element[m.faces[:, 0]]
     # the leaned elements as the map lays them before looking at contacts
