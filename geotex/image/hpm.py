@@ -206,6 +206,7 @@ from geotex.fields.combing import comb_direction_field
 from geotex.fields.directions import smooth_direction_field
 from geotex.image.fftmatch import (match_energy, opponent_colors, pattern_scale,
                                    quarter_turn_symmetry, texture_spectra)
+from geotex.image.hpm_faces import field_coefficients, textured_band, vertex_faces
 from geotex.image.patches import load_image
 from geotex.mesh.arrays import as_mesh_arrays
 from geotex.mesh.geometry import degenerate_faces, face_areas
@@ -454,31 +455,40 @@ class _State:
         self.vacc = np.zeros((n, 2))        # sum of textured corner positions per vertex
         self.vcnt = np.zeros(n)             # number of textured corners per vertex
         self.vsq = np.zeros(n)              # sum of squared norms (to detect disagreement)
-        self._agreed = None                 # cache of agreed(), reset by mark()
+        self._agreed = None                 # cache of agreed()
+        self._dirty = None                  # vertices marked since, whose rows it updates
         self.vpatch = np.full(n, -1, np.int64)  # last placement that textured each vertex
+
+    def _agreed_rows(self, idx):
+        c = np.maximum(self.vcnt[idx], 1.0)
+        mean = self.vacc[idx] / c[:, None]
+        spread = self.vsq[idx] / c - np.sum(mean * mean, axis=1)
+        ok = (self.vcnt[idx] > 0) & (spread < 1e-6 * (1.0 + self.vsq[idx] / c))
+        return np.where(ok[:, None], mean, np.nan)
 
     def agreed(self) -> np.ndarray:
         """Per-vertex mean textured position, nan where none or where corners disagree.
 
-        The returned array is shared until the next :meth:`mark`: do not modify it.
+        The returned array is read-only and valid until the next :meth:`mark`
+        (which updates it in place: do not keep it across one).
         """
         if self._agreed is None:
-            c = np.maximum(self.vcnt, 1.0)
-            mean = self.vacc / c[:, None]
-            spread = self.vsq / c - np.sum(mean * mean, axis=1)
-            ok = (self.vcnt > 0) & (spread < 1e-6 * (1.0 + self.vsq / c))
-            self._agreed = np.where(ok[:, None], mean, np.nan)
-            self._agreed.setflags(write=False)
+            self._agreed = self._agreed_rows(slice(None))
+        elif self._dirty is not None:
+            self._agreed.setflags(write=True)
+            self._agreed[self._dirty] = self._agreed_rows(self._dirty)
+        self._agreed.setflags(write=False)
+        self._dirty = None
         return self._agreed
 
     def mark(self, F, faces, corner, patch, level):
         """Record the corner positions of newly textured faces."""
-        self._agreed = None
         self.corner[faces] = corner
         self.done[faces] = True
         self.patch[faces] = patch
         self.face_level[faces] = level
         cv = F[faces].ravel()
+        self._dirty = cv if self._dirty is None else np.concatenate([self._dirty, cv])
         self.vpatch[cv] = patch
         n = self.vcnt.size
         self.vcnt += np.bincount(cv, minlength=n)
@@ -738,6 +748,11 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
     G = sp.csr_matrix((np.concatenate([ew, ew]), (np.concatenate([E[:, 0], E[:, 1]]),
                                                   np.concatenate([E[:, 1], E[:, 0]]))),
                       shape=(V.shape[0],) * 2)
+    # per face, the field vector in its edge vectors (carried by any linear map of the face)
+    fcoef = field_coefficients(V, F, fvec) if fvec is not None else None
+    scratch2 = np.zeros((V.shape[0], 2))     # per-vertex positions, read back on the rows set
+    graph = (G.indptr.astype(np.int64), G.indices.astype(np.int64), G.data)
+    vf = vertex_faces(F, V.shape[0]) if fast else None
     band_w = band_distance * scale
     patch_factor = finite_number(min_patch, name="min_patch")
     if patch_factor < 0:
@@ -853,16 +868,11 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
 
     def field_angle(verts, X2, faces):
         """:func:`field_direction` for any 2D positions ``X2`` of ``verts`` (no mirror)."""
-        U = np.zeros((V.shape[0], 2))
+        U = scratch2
         U[verts] = X2
-        P = V[F[faces]]
         T = U[F[faces]]
-        E = np.stack([P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]], axis=2)        # (k, 3, 2)
         D = np.stack([T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]], axis=2)        # (k, 2, 2)
-        G = np.einsum("kji,kjl->kil", E, E)
-        G = G + 1e-12 * np.trace(G, axis1=1, axis2=2)[:, None, None] * np.eye(2)
-        coef = np.linalg.solve(G, np.einsum("kji,kj->ki", E, fvec[faces])[:, :, None])
-        d = (D @ coef)[:, :, 0]
+        d = (D @ fcoef[faces])[:, :, 0]
         w = A[faces]
         phi = np.arctan2(d[:, 1], d[:, 0])
         z = np.sum(w * np.exp(1j * sym * phi))
@@ -1014,6 +1024,14 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         """Mean full-res position of each vertex over textured faces (nan if none)."""
         return st.agreed()[verts]
 
+    def distance_band(src):
+        """The textured faces whose vertices lie within ``band_w`` of ``src`` along
+        mesh edges (compiled from ``SAMPLE_JIT_FACES`` faces: the same faces)."""
+        if fast:
+            return textured_band(graph, src, band_w, vf, F, st.done)
+        dist = dijkstra(G, directed=True, indices=src, min_only=True, limit=band_w)
+        return np.flatnonzero(st.done & np.isfinite(dist)[F].all(axis=1))
+
     def topological_band(in_c, faces):
         """Union of the bands of the textured neighbour clusters along this cluster."""
         nbf = FF[faces].ravel()
@@ -1040,30 +1058,35 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
     def refuse(li, reason):
         levels[li].refused[reason] = levels[li].refused.get(reason, 0) + 1
 
-    def group_frame(faces):
-        """Mean-plane frame of a group of faces (face level): normal, e1, e2."""
-        lab = np.zeros(faces.size, np.int64)
+    def group_frames(gs):
+        """Mean-plane frames ``(e1, e2)`` (k, 3) of the groups of faces ``gs`` (face
+        level), all at once: each group's rows are those of a call of
+        :func:`geotex.patches.flatten.cluster_frames` on that group alone."""
         direction = None
         if fvec is not None:
-            ref = fvec[faces[0]]
-            sgn = np.where(fvec[faces] @ ref < 0, -1.0, 1.0)
-            direction = (np.sum(fvec[faces] * (sgn * A[faces])[:, None], axis=0)
-                         if A[faces].sum() > 0 else ref)[None, :]
-        N, e1, e2 = cluster_frames(V, F[faces], lab, 1, direction)
-        return N[0], e1[0], e2[0]
+            direction = np.zeros((len(gs), 3))
+            for i, faces in enumerate(gs):
+                ref = fvec[faces[0]]
+                sgn = np.where(fvec[faces] @ ref < 0, -1.0, 1.0)
+                direction[i] = (np.sum(fvec[faces] * (sgn * A[faces])[:, None], axis=0)
+                                if A[faces].sum() > 0 else ref)
+        lab = np.repeat(np.arange(len(gs)), [g.size for g in gs])
+        _, e1, e2 = cluster_frames(V, F[np.concatenate(gs)], lab, len(gs), direction)
+        return e1, e2
 
-    def place(li, c, group=None, force=False):
+    def place(li, c, group=None, force=False, gframe=None):
         """Try to texture cluster c of level li; returns the relative error or None.
 
         With ``group`` (face level), the faces ``group`` are textured instead,
-        flattened by projection onto their mean plane.  With ``force`` the best
+        flattened by projection onto their mean plane, whose axes ``gframe``
+        (e1, e2) are given (:func:`group_frames`).  With ``force`` the best
         match is kept even above ``max_error`` (children smaller than the
         pattern).
         """
         if group is not None:
             faces = np.asarray(group, np.int64)
             verts = np.unique(F[faces])
-            _, e1c, e2c = group_frame(faces)
+            e1c, e2c = gframe
             loc = np.stack([V[verts] @ e1c, V[verts] @ e2c], 1)
             if flat_error(verts, loc, faces) > max_flat_error:
                 refuse(li, 'flattening')
@@ -1108,19 +1131,13 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         # band of textured faces within band_w of the cluster
         in_c = np.zeros(V.shape[0], bool)
         in_c[verts] = True
-        touch = st.vcnt > 0
-        src = np.flatnonzero(in_c & touch)
+        src = verts[st.vcnt[verts] > 0]  # (the sources' order does not change the band)
         band_faces = np.zeros(0, np.int64)
         fixed = fixed_mask = None
-        if src.size and band_mode == "distance":
-            dist = dijkstra(G, directed=True, indices=src, min_only=True, limit=band_w)
-            near = np.isfinite(dist)
-            band_faces = np.flatnonzero(st.done & near[F].all(axis=1))
-        elif src.size and c is not None:
+        if src.size and (band_mode == "distance" or c is None):
+            band_faces = distance_band(src)  # (at the face level whatever band_mode)
+        elif src.size:
             band_faces = topological_band(in_c, faces)
-        elif src.size:                   # face level: the constant-width band
-            dist = dijkstra(G, directed=True, indices=src, min_only=True, limit=band_w)
-            band_faces = np.flatnonzero(st.done & np.isfinite(dist)[F].all(axis=1))
         if band_faces.size:
             bverts = np.unique(F[band_faces])
             if proj:
@@ -1460,15 +1477,18 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
     if start is None:
         queues[li0] = list(range(Hc.levels[li0].n_clusters))
 
+    outside = {}                         # (level, cluster) -> the faces across its border
+
     def priority(li, c):
-        lv = Hc.levels[li]
-        lo, hi = Hc.descendants(li, c, L - 1)
-        faces = np.flatnonzero((Hc.levels[-1].labels >= lo) & (Hc.levels[-1].labels < hi))
-        nb = FF[faces]
-        ext = (nb >= 0) & (lv.labels[np.maximum(nb, 0)] != c)
-        if not ext.any():
-            return 0.0
-        return float(st.done[nb[ext]].mean())
+        """Share of the faces across the border of cluster ``c`` that are textured."""
+        nb = outside.get((li, c))
+        if nb is None:
+            lv = Hc.levels[li]
+            lo, hi = Hc.descendants(li, c, L - 1)
+            faces = np.flatnonzero((Hc.levels[-1].labels >= lo) & (Hc.levels[-1].labels < hi))
+            nb = FF[faces]
+            nb = outside[(li, c)] = nb[(nb >= 0) & (lv.labels[np.maximum(nb, 0)] != c)]
+        return np.count_nonzero(st.done[nb]) / nb.size if nb.size else 0.0
 
     for li in range(li0, L):
         if li == L - 1:
@@ -1496,29 +1516,45 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
     report(progress, "faces")
     lf = L - 1
     groups = _face_groups(FF, ~st.done, face_group) if face_match else []
+    # the frames of the groups and of their faces alone (a group that fails is retried
+    # face by face), computed once
+    if groups:
+        ge1, ge2 = group_frames(groups)
+        todo_f = np.concatenate(groups)
+        fe1, fe2 = group_frames([todo_f[i:i + 1] for i in range(todo_f.size)])
+        slot_f = np.full(m, -1, np.int64)
+        slot_f[todo_f] = np.arange(todo_f.size)
+        n_groups = len(groups)
 
-    def group_priority(g):
-        nb = FF[g].ravel()
-        nb = nb[nb >= 0]
-        nb = nb[~np.isin(nb, g)]
-        return float(st.done[nb].mean()) if nb.size else 0.0
+    around = {}                          # group -> the faces across its border
 
-    heap = [(-group_priority(g), i) for i, g in enumerate(groups)]
+    def group_priority(i):
+        """Share of the faces across the border of group ``i`` that are textured."""
+        nb = around.get(i)
+        if nb is None:
+            g = groups[i]
+            nb = FF[g].ravel()
+            nb = nb[nb >= 0]
+            nb = around[i] = nb[~np.isin(nb, g)]
+        return np.count_nonzero(st.done[nb]) / nb.size if nb.size else 0.0
+
+    heap = [(-group_priority(i), i) for i in range(len(groups))]
     heapq.heapify(heap)
     while heap:
         p, i = heapq.heappop(heap)
         g = groups[i]
-        q = -group_priority(g)
+        q = -group_priority(i)
         if q < p - 1e-12 and heap:
             heapq.heappush(heap, (q, i))
             continue
-        r = place(lf, None, group=g)
+        gfr = (ge1[i], ge2[i]) if i < n_groups else (fe1[slot_f[g[0]]], fe2[slot_f[g[0]]])
+        r = place(lf, None, group=g, gframe=gfr)
         if r is None or r < 0:
             if g.size > 1:               # retry face by face
                 levels[lf].subdivided += 1
                 for fc in g:
                     groups.append(np.array([fc]))
-                    heapq.heappush(heap, (-group_priority(groups[-1]), len(groups) - 1))
+                    heapq.heappush(heap, (-group_priority(len(groups) - 1), len(groups) - 1))
         else:
             levels[lf].placed += 1
             levels[lf].errors.append(r)
