@@ -750,7 +750,9 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                       shape=(V.shape[0],) * 2)
     # per face, the field vector in its edge vectors (carried by any linear map of the face)
     fcoef = field_coefficients(V, F, fvec) if fvec is not None else None
-    scratch2 = np.zeros((V.shape[0], 2))     # per-vertex positions, read back on the rows set
+    # per-vertex 2D positions of one fit (a face's flattening, its band's, scratch), read
+    # back only on the rows just set: not cleared between fits
+    scratch2, scratch_b, scratch_l = (np.zeros((V.shape[0], 2)) for _ in range(3))
     graph = (G.indptr.astype(np.int64), G.indices.astype(np.int64), G.data)
     vf = vertex_faces(F, V.shape[0]) if fast else None
     band_w = band_distance * scale
@@ -832,7 +834,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
 
     def folded(verts, loc, faces):
         """Whether some face of the cluster is reversed or collapsed in ``loc``."""
-        U = np.zeros((V.shape[0], 2))
+        U = scratch2
         U[verts] = loc
         t = U[F[faces]]
         d = (t[:, 1, 0] - t[:, 0, 0]) * (t[:, 2, 1] - t[:, 0, 1]) \
@@ -840,7 +842,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         return bool((d <= 1e-12 * np.abs(d).max()).any())
 
     def flat_error(verts, loc, faces):
-        U = np.zeros((V.shape[0], 2))
+        U = scratch2
         U[verts] = loc
         t = U[F[faces]]
         d = (t[:, 1, 0] - t[:, 0, 0]) * (t[:, 2, 1] - t[:, 0, 1]) \
@@ -1024,6 +1026,19 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         """Mean full-res position of each vertex over textured faces (nan if none)."""
         return st.agreed()[verts]
 
+    # the mask planes of the fits (footprint K, colours I, support J), kept zero between
+    # fits: each fit sets the pixels it draws (``drawn``) and the next one clears them
+    planes = (np.zeros(hm * wm), np.zeros((hm * wm, small.shape[2])), np.zeros(hm * wm))
+    drawn = []
+
+    def raster_planes():
+        """The planes (K, I, J), all zero."""
+        for ix in drawn:
+            for plane in planes:
+                plane[ix] = 0.0
+        drawn.clear()
+        return planes
+
     def distance_band(src):
         """The textured faces whose vertices lie within ``band_w`` of ``src`` along
         mesh edges (compiled from ``SAMPLE_JIT_FACES`` faces: the same faces)."""
@@ -1161,9 +1176,9 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                     fixed = fixed_mask = None
                 else:
                     verts, loc = verts2, loc2
-            bl = np.zeros((V.shape[0], 2))
+            bl = scratch_b               # read on the band's vertices only
             bl[bverts] = bloc
-        Lall = np.zeros((V.shape[0], 2))
+        Lall = scratch_l                 # read on the faces' vertices only
         Lall[verts] = loc
         # orientation grid: the raster frame is turned so that the reference orientation
         # is exactly one of the searched orientations (the FFT candidates then include it,
@@ -1218,11 +1233,11 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             refuse(li, 'too_large')
             return None
         tri_c = qpix(Lall[F[faces]].reshape(-1, 2)).reshape(-1, 3, 2) - origin
-        K = np.zeros(hm * wm)
+        K, I, J = raster_planes()
         t_, _, _ = rasterize_triangles(tri_c, wm, hm, fast=fast)
         K[t_] = 1.0
-        I = np.zeros((hm * wm, small.shape[2]))
-        J = np.zeros(hm * wm)
+        drawn.append(t_)
+        nJ = 0.0                         # mask pixels (J.sum(): an exact count)
         if band_faces.size:
             tri_b = qpix(bl[F[band_faces]].reshape(-1, 2)).reshape(-1, 3, 2) - origin
             tb, fb, bb = rasterize_triangles(tri_b, wm, hm, fast=fast)
@@ -1230,12 +1245,14 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             I[tb] = _sample(small, uvb, fast)
             J[tb] = 1.0
             K[tb] = 1.0
+            drawn.append(tb)
+            nJ = float(np.unique(tb).size)
         K = K.reshape(hm, wm)
         # face level with a field: a neighbour's continuation under the threshold is taken
         # without the FFT search (module docstring, 5.)
-        quick = None if li == 0 or not J.any() else \
-            quick_continuation(c, fits, Rd, loc, tb, I, origin, J.sum())
-        if li == 0 or not J.any():
+        quick = None if li == 0 or not nJ else \
+            quick_continuation(c, fits, Rd, loc, tb, I, origin, nJ)
+        if li == 0 or not nJ:
             which = None
             if fvec is not None:         # the field's direction (the combed representative)
                 which = [k_ref]
@@ -1254,7 +1271,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             err = 0.0
         elif quick is not None:
             cont, pick, refined = quick, None, None
-            err = quick[2] / J.sum() / var2
+            err = quick[2] / nJ / var2
             levels[li].continued += 1
             levels[li].quick += 1
         else:
@@ -1282,13 +1299,13 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             near = np.flatnonzero(flat <= best + 1e-9 * (1.0 + best))
             pick = near[int(rng.integers(near.size))]
             if (fvec is not None or nfit is None) and not (subpixel or force) \
-                    and best / J.sum() / var2 > max_error:
+                    and best / nJ / var2 > max_error:
                 # refused whatever the continuations give: with a field a continuation is
                 # taken at the FFT minimum near it (below), whose error is at least
                 # ``best``; the continuations (the lattice moves above all) are not
                 # evaluated for a cluster that is subdivided anyway
                 refuse(li, 'error')
-                return -best / J.sum() / var2
+                return -best / nJ / var2
             cont = None
             if nfit is not None:
                 # the neighbour's placement in the turned raster frame: R Rd^T q + t
@@ -1332,11 +1349,11 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                     best = band_error(R0, t0, tb, I, origin)
                 pick = None if refined is not None else pick
             if cont is not None and (cont[2] <= best or (
-                    lattice is not None and (force or cont[2] <= max_error * J.sum() * var2))):
+                    lattice is not None and (force or cont[2] <= max_error * nJ * var2))):
                 Pc = to_image(loc, cont[0] @ Rd, cont[1])
                 if inside_image(Pc):
                     best, pick, refined = cont[2], None, None
-            err = best / J.sum() / var2
+            err = best / nJ / var2
             if err > max_error:
                 if not force:
                     refuse(li, 'error')
@@ -1426,7 +1443,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                 P2 = spread_moves(moved, close)
                 if P2 is not None:
                     P = P2
-        vpos = np.zeros((V.shape[0], 2))
+        vpos = scratch_l
         vpos[verts] = P
         st.mark(F, faces, vpos[F[faces]], st.n_patch, li)
         st.n_patch += 1
@@ -1761,7 +1778,9 @@ def _relax(P, verts, faces, movable, F, st, full, rng, f, fast=False):
     cnt = np.where(np.isnan(nb[:, 0]), 0.0, 1.0)
     # shared edges of the cluster (both ends with a neighbour position)
     e = np.concatenate([F[faces][:, [0, 1]], F[faces][:, [1, 2]], F[faces][:, [2, 0]]])
-    e = np.unique(np.sort(e, axis=1), axis=0)
+    e = np.sort(e, axis=1)
+    key = np.unique(e[:, 0] * n + e[:, 1])          # = np.unique(e, axis=0), without a
+    e = np.stack([key // n, key % n], axis=1)       # structured sort
     both = (cnt[e[:, 0]] > 0) & (cnt[e[:, 1]] > 0)
     e = e[both]
     if e.shape[0] == 0:
