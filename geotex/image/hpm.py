@@ -258,6 +258,9 @@ QUARTER_TURN = 0.8
 #: lookups; below that, loading numba (~0.4 s once) costs more.
 SAMPLE_JIT_FACES = 2000
 
+#: Multiplier that mirrors 2D positions (k, 2) in y: ``P * FLIP_Y`` is ``(x, -y)`` exactly.
+FLIP_Y = np.array([1.0, -1.0])
+
 #: Largest relaxation move, as a fraction of the shortest edge at the vertex (texture space).
 RELAX_EDGE_FRACTION = 0.2
 
@@ -852,10 +855,12 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             return np.inf
         return abs(A[faces].sum() / a2 - 1.0)
 
+    pflip = np.array([ppm_m, -ppm_m])
+
     def pix(loc):
         """Local coords (mesh units) -> matching pixels; image rows grow downwards, so
         the local y axis is flipped to keep the texture unmirrored on the surface."""
-        return np.column_stack([loc[:, 0], -loc[:, 1]]) * ppm_m
+        return loc * pflip               # (x, -y) * ppm_m, the same values
 
     def field_direction(verts, loc, faces):
         """The field's direction in the matching-pixel frame of a flattened cluster.
@@ -873,7 +878,9 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         U = scratch2
         U[verts] = X2
         T = U[F[faces]]
-        D = np.stack([T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]], axis=2)        # (k, 2, 2)
+        D = np.empty((T.shape[0], 2, 2))                                   # (k, 2, 2)
+        D[:, :, 0] = T[:, 1] - T[:, 0]
+        D[:, :, 1] = T[:, 2] - T[:, 0]
         d = (D @ fcoef[faces])[:, :, 0]
         w = A[faces]
         phi = np.arctan2(d[:, 1], d[:, 0])
@@ -901,7 +908,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
     def from_image(P, R, t):
         """Inverse of :func:`to_image`."""
         p = (P / f - t) @ R / ppm_m
-        return np.column_stack([p[:, 0], -p[:, 1]])
+        return p * FLIP_Y
 
     def neighbour_fits(bverts, bl, every):
         """Rigid placements continuing the neighbours' own coordinates.
@@ -939,7 +946,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             Hm = (X - xm).T @ (Y - ym)
             U, _, Wt = np.linalg.svd(Hm)
             R = (U @ Wt).T
-            if np.linalg.det(R) > 0:
+            if R[0, 0] * R[1, 1] - R[0, 1] * R[1, 0] > 0:     # a rotation (det +-1)
                 out.append((R, ym - R @ xm))
         return out
 
@@ -963,12 +970,13 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         ty, tx = np.divmod(tb, wm)
         return np.stack([tx + 0.5, ty + 0.5], 1) + origin
 
-    def band_error(R, t, tb, I, origin):
-        """Squared mask error of the placement ``R q + t`` of the raster frame ``q``."""
-        S = _sample(small, mask_points(tb, origin) @ R.T + t, fast)
-        return float(np.sum((I[tb] - S) ** 2))
+    def band_error(R, t, q, Itb):
+        """Squared mask error of the placement ``R q + t`` of the mask pixels at ``q``
+        (raster frame, :func:`mask_points`) with colours ``Itb``."""
+        S = _sample(small, q @ R.T + t, fast)
+        return float(np.sum((Itb - S) ** 2))
 
-    def lattice_continuation(cont, fits, Rd, loc, tb, I, origin, li):
+    def lattice_continuation(cont, fits, Rd, loc, q, Itb, li):
         """The best continuation of a neighbour moved by whole periods of the pattern.
 
         A periodic sample shows the same pattern at ``t + k1 p1 + k2 p2``: when
@@ -981,8 +989,6 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         """
         cont_in = inside_image(to_image(loc, cont[0] @ Rd, cont[1]))
         lim = np.array([W_img, H_img], dtype=np.float64)
-        q = mask_points(tb, origin)
-        Itb = I[tb]
         for Rk, tk in fits:
             P0 = to_image(loc, Rk, tk)
             lo, hi = P0.min(axis=0), P0.max(axis=0)
@@ -996,13 +1002,13 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             # and per-move sums as one band_error call per move)
             qR = q @ Rr.T
             S = _sample(small, (qR[None] + t2s[:, None]).reshape(-1, 2), fast)
-            D = (Itb[None] - S.reshape(t2s.shape[0], tb.size, -1)) ** 2
+            D = (Itb[None] - S.reshape(t2s.shape[0], q.shape[0], -1)) ** 2
             for i, ek in enumerate(D.reshape(t2s.shape[0], -1).sum(axis=1).tolist()):
                 if ek < cont[2] or not cont_in:
                     cont, cont_in = (Rr, t2s[i], ek), True
         return cont
 
-    def quick_continuation(c, fits, Rd, loc, tb, I, origin, nJ):
+    def quick_continuation(c, fits, Rd, loc, q, Itb, nJ):
         """At the face level with a field: the neighbours' continuations (already turned
         onto the field's direction) whose band error is below ``max_error`` and whose
         faces stay inside the image; the lowest as ``(R, t, error)`` in the turned raster
@@ -1012,7 +1018,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         lim = max_error * nJ * var2
         out = None
         for Rk, tk in fits:
-            ek = band_error(Rk @ Rd.T, tk, tb, I, origin)
+            ek = band_error(Rk @ Rd.T, tk, q, Itb)
             if ek <= lim and (out is None or ek < out[2]) and \
                     inside_image(to_image(loc, Rk, tk)):
                 out = (Rk @ Rd.T, tk, ek)
@@ -1247,11 +1253,12 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             K[tb] = 1.0
             drawn.append(tb)
             nJ = float(np.unique(tb).size)
+            qb, Itb = mask_points(tb, origin), I[tb]     # the mask pixels and their colours
         K = K.reshape(hm, wm)
         # face level with a field: a neighbour's continuation under the threshold is taken
         # without the FFT search (module docstring, 5.)
         quick = None if li == 0 or not nJ else \
-            quick_continuation(c, fits, Rd, loc, tb, I, origin, nJ)
+            quick_continuation(c, fits, Rd, loc, qb, Itb, nJ)
         if li == 0 or not nJ:
             which = None
             if fvec is not None:         # the field's direction (the combed representative)
@@ -1310,14 +1317,14 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             if nfit is not None:
                 # the neighbour's placement in the turned raster frame: R Rd^T q + t
                 Rc = nfit[0] @ Rd.T
-                cont = (Rc, nfit[1], band_error(Rc, nfit[1], tb, I, origin))
+                cont = (Rc, nfit[1], band_error(Rc, nfit[1], qb, Itb))
                 for Rk, tk in fits[1:]:          # face level: every neighbour's continuation
-                    ek = band_error(Rk @ Rd.T, tk, tb, I, origin)
+                    ek = band_error(Rk @ Rd.T, tk, qb, Itb)
                     if ek < cont[2] and inside_image(to_image(loc, Rk, tk)):
                         cont = (Rk @ Rd.T, tk, ek)
                 if lattice is not None:
                     cont = lattice_continuation(cont, fits if c is None else fits[:1], Rd,
-                                                loc, tb, I, origin, li)
+                                                loc, qb, Itb, li)
             if fvec is not None and cont is not None:
                 # with a field the continuation has the searched orientation: take the
                 # FFT minimum within ``CONTINUATION_WINDOW`` of a pattern size of it (its
@@ -1341,12 +1348,12 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                 kk, dy, dx = np.unravel_index(pick, Eg.shape)
                 rot_k = int(kk if which is None else np.asarray(which)[kk])
                 R0, t0 = fft_placement(rot_k, np.array([dx, dy], dtype=np.float64) - origin)
-                R1, t1, e_1 = _refine_placement(small, R0, t0, mask_points(tb, origin), I[tb],
+                R1, t1, e_1 = _refine_placement(small, R0, t0, qb, Itb,
                                                 np.pi / orientations, fast)
                 if inside_image(to_image(loc, R1 @ Rd, t1)):
                     refined, best = (R1, t1), e_1
                 else:
-                    best = band_error(R0, t0, tb, I, origin)
+                    best = band_error(R0, t0, qb, Itb)
                 pick = None if refined is not None else pick
             if cont is not None and (cont[2] <= best or (
                     lattice is not None and (force or cont[2] <= max_error * nJ * var2))):
@@ -1389,7 +1396,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                 if mm.size == 0:
                     return None
                 if proj:
-                    ok_ = not folded(verts, np.column_stack([moved[:, 0], -moved[:, 1]]),
+                    ok_ = not folded(verts, moved * FLIP_Y,
                                      faces) and not turns(moved, turn)
                     return moved if ok_ else None
                 if fixed is None:
@@ -1401,7 +1408,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                 _, v2, loc2, f2 = flatten(li, c, fixed, fixed_mask)
                 P2 = to_image(loc2, R_, t_)
                 P2[keep] = moved[keep]
-                if folded(verts, np.column_stack([P2[:, 0], -P2[:, 1]]), faces) or \
+                if folded(verts, P2 * FLIP_Y, faces) or \
                         turns(P2, turn):
                     fixed, fixed_mask = fx0, fm0
                     return None
