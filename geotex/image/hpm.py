@@ -201,7 +201,7 @@ from scipy.sparse.csgraph import breadth_first_order, connected_components, dijk
 
 from geotex.errors import InputError, MissingFileError
 from geotex.image.atlas import rasterize_triangles
-from geotex.jit import JIT_MIN_SIZE, compiled
+from geotex.jit import JIT_MIN_SIZE, compiled, helper
 from geotex.fields.combing import comb_direction_field
 from geotex.fields.directions import smooth_direction_field
 from geotex.image.fftmatch import (match_energy, opponent_colors, pattern_scale,
@@ -422,26 +422,58 @@ def _sample(img: np.ndarray, xy: np.ndarray, fast: bool = False) -> np.ndarray:
     return top * (1 - fy) + bot * fy
 
 
+@helper
+def _bilinear(img, px, py, out, i):
+    """Row ``i`` of ``out``: the bilinear sample of ``img`` at ``(px, py)``, as
+    :func:`_sample` computes it (image of at least 2 x 2 pixels, no NaN)."""
+    h, w, nc = img.shape
+    x = min(max(px - 0.5, 0.0), w - 1.0)
+    y = min(max(py - 0.5, 0.0), h - 1.0)
+    x0 = min(int(np.floor(x)), w - 2)
+    y0 = min(int(np.floor(y)), h - 2)
+    fx = x - x0
+    fy = y - y0
+    x1 = min(x0 + 1, w - 1)
+    y1 = min(y0 + 1, h - 1)
+    for k in range(nc):
+        top = img[y0, x0, k] * (1 - fx) + img[y0, x1, k] * fx
+        bot = img[y1, x0, k] * (1 - fx) + img[y1, x1, k] * fx
+        out[i, k] = top * (1 - fy) + bot * fy
+
+
 @compiled
 def _sample_compiled(img, xy):
     """:func:`_sample` for an image of at least 2 x 2 pixels and positions without NaN:
     the same operations in the same order per sample, so the same values."""
-    h, w, nc = img.shape
     n = xy.shape[0]
-    out = np.empty((n, nc))
+    out = np.empty((n, img.shape[2]))
     for i in range(n):
-        x = min(max(xy[i, 0] - 0.5, 0.0), w - 1.0)
-        y = min(max(xy[i, 1] - 0.5, 0.0), h - 1.0)
-        x0 = min(int(np.floor(x)), w - 2)
-        y0 = min(int(np.floor(y)), h - 2)
-        fx = x - x0
-        fy = y - y0
-        x1 = min(x0 + 1, w - 1)
-        y1 = min(y0 + 1, h - 1)
-        for k in range(nc):
-            top = img[y0, x0, k] * (1 - fx) + img[y0, x1, k] * fx
-            bot = img[y1, x0, k] * (1 - fx) + img[y1, x1, k] * fx
-            out[i, k] = top * (1 - fy) + bot * fy
+        _bilinear(img, xy[i, 0], xy[i, 1], out, i)
+    return out
+
+
+@compiled
+def _relax_error_compiled(full, cand, owner, b, target, ts, nv):
+    """The error of :func:`_relax` per movable vertex (its ``err``) without temporaries:
+    per sample along each shared edge the numpy path's operations in its order (the
+    colour sum in channel order, as ``np.sum`` over fewer than 8 channels), accumulated
+    per vertex in row order as ``np.bincount``: the same values."""
+    nt = ts.size
+    out = np.zeros(nv)
+    s = np.empty((1, full.shape[2]))
+    for e in range(owner.size):
+        o = owner[e]
+        for j in range(nt):
+            u = 1 - ts[j]
+            _bilinear(full, cand[o, 0] * u + b[e, 0] * ts[j], cand[o, 1] * u + b[e, 1] * ts[j],
+                      s, 0)
+            r = e * nt + j
+            d = s[0, 0] - target[r, 0]
+            acc = d * d
+            for k in range(1, s.shape[1]):
+                d = s[0, k] - target[r, k]
+                acc += d * d
+            out[o] += acc * u
     return out
 
 
@@ -1252,7 +1284,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             J[tb] = 1.0
             K[tb] = 1.0
             drawn.append(tb)
-            nJ = float(np.unique(tb).size)
+            nJ = float(np.count_nonzero(J))
             qb, Itb = mask_points(tb, origin), I[tb]     # the mask pixels and their colours
         K = K.reshape(hm, wm)
         # face level with a field: a neighbour's continuation under the threshold is taken
@@ -1809,7 +1841,12 @@ def _relax(P, verts, faces, movable, F, st, full, rng, f, fast=False):
     target = _sample(full, y.reshape(-1, 2), fast)   # the neighbour's texture along the edges
     b = pos[eb]
 
+    # compiled: three colour channels (the order of np.sum checked for them), no NaN
+    jit_err = fast and full.shape[2] == 3 and np.isfinite(b).all() and np.isfinite(target).all()
+
     def err(cand):                       # cand (k, 2) positions of the movable vertices
+        if jit_err and np.isfinite(cand).all():
+            return _relax_error_compiled(full, cand, owner, b, target, ts, vid.size)
         a = cand[owner]
         x = a[:, None, :] * (1 - ts)[None, :, None] + b[:, None, :] * ts[None, :, None]
         d = _sample(full, x.reshape(-1, 2), fast) - target
