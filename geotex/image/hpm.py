@@ -1263,7 +1263,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             return pix(x) @ Rd.T
 
         # raster: footprint = cluster + band, origin at its bbox corner
-        pts = loc if not band_faces.size else np.vstack([loc, bl[np.unique(F[band_faces])]])
+        pts = loc if not band_faces.size else np.vstack([loc, bl[bverts]])
         pp = qpix(pts)
         origin = np.floor(pp.min(axis=0)) - 1.0
         ext = np.ceil(pp.max(axis=0)) - origin + 1.0
