@@ -104,6 +104,16 @@ into the original image.
    and 865 -> 804; over seeds 0-2 the seams (patch borders, where the map
    jumps), stretch and rotation across borders stayed within the seed spread
    (benchmarks/results/hpm_images.md, h-hpm10).
+   A face-level fit is mostly of one triangle, so what depends on the mesh
+   alone is computed once per mapping (every face's field coefficients, the
+   mean-plane frames of every group and of each of its faces alone, the faces
+   across each cluster's and group's border for the priorities), the band
+   search and the relaxation's error are compiled
+   (:mod:`geotex.image.hpm_faces`, ``_relax_error_compiled``) and the mask
+   planes are kept between fits: the same uv bit for bit, CPU -23 to -28 % on
+   slate tiles and -26 to -32 % on rough metal (Spot 10k, seeds 0-2; face
+   level -27 / -31 %), -13 to -21 % on bricks, gravel and water
+   (benchmarks/results/hpm_images.md, h-hpm11).
 
 Structured patterns (``structure``, §5.1-5.2 of the paper).  The sample's
 pattern period and anisotropy are estimated once
