@@ -870,10 +870,14 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             frames[li] = cluster_frames(V, F, lv.labels, lv.n_clusters, direction)
         return frames[li]
 
+    polygons = {}                        # (level, cluster) -> its control polygon (read only)
+
     def flatten(li, c, fixed=None, fixed_mask=None):
-        lv = Hc.levels[li]
-        N, e1, e2 = frame(li)
-        poly = control_polygon(V, lv.controls(c), e1[c], e2[c])
+        poly = polygons.get((li, c))
+        if poly is None:
+            e1, e2 = frame(li)[1:]
+            poly = polygons[(li, c)] = control_polygon(V, Hc.levels[li].controls(c), e1[c],
+                                                       e2[c])
         verts, loc, faces = flatten_cluster(bh, li, c, poly, fixed=fixed, fixed_mask=fixed_mask)
         return poly, verts, loc, faces
 
@@ -992,17 +996,21 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                 out.append((R, ym - R @ xm))
         return out
 
-    def turned_fit(fk, bverts, bl, in_c, a):
-        """Placement ``fk`` (R, t) turned to orientation ``a`` (radians) about the
-        texture position of its shared border: the mean of the band vertices that
-        belong to the cluster and agree, or of all agreeing band vertices.  Near
-        that border the neighbour's pattern keeps its phase; the turn that is
-        needed to follow the field spreads away from it."""
+    def turn_centre(bverts, bl, in_c):
+        """The point (matching pixels, cluster frame) about which :func:`turned_fit`
+        turns the neighbours' placements: the mean of the band vertices that belong
+        to the cluster and agree, or of all agreeing band vertices."""
         Ab = st.agreed()[bverts] / f
         ok = np.isfinite(Ab[:, 0])
         on = ok & in_c[bverts]
         sel = on if on.sum() >= 2 else ok
-        x0 = pix(bl[bverts[sel]]).mean(axis=0)
+        return pix(bl[bverts[sel]]).mean(axis=0)
+
+    def turned_fit(fk, x0, a):
+        """Placement ``fk`` (R, t) turned to orientation ``a`` (radians) about the
+        texture position of its shared border, ``x0`` (:func:`turn_centre`).  Near
+        that border the neighbour's pattern keeps its phase; the turn that is
+        needed to follow the field spreads away from it."""
         y0 = fk[0] @ x0 + fk[1]
         Ra = np.array([[np.cos(a), np.sin(a)], [-np.sin(a), np.cos(a)]])
         return Ra, y0 - Ra @ x0
@@ -1252,11 +1260,12 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                     # the neighbours' continuations turned to the field's direction (about
                     # their shared border), those that need at most ``field_tol``
                     turned = []
+                    x0 = turn_centre(bverts, bl, in_c)
                     for fk in fits:
                         ak = np.arctan2(fk[0][0, 1], fk[0][0, 0])
                         if _angle_gap(ak, a_ref, sym) <= field_tol + 1e-12:
                             ar = a_fld + step * np.round(((ak - a_fld) % (2 * np.pi)) / step)
-                            turned.append(turned_fit(fk, bverts, bl, in_c, ar))
+                            turned.append(turned_fit(fk, x0, ar))
                     fits = turned
                     nfit = fits[0] if fits else None
                     levels[li].field_refused += int(nfit is None)
