@@ -110,7 +110,7 @@ into the original image.
    across each cluster's and group's border for the priorities), the band
    search and the relaxation's error are compiled
    (:mod:`geotex.image.hpm_faces`, ``_relax_error_compiled``) and the mask
-   planes are kept between fits: the same uv bit for bit, CPU -23 to -28 % on
+   planes are kept between fits: the same uv bit for bit, CPU -23 to -33 % on
    slate tiles and -26 to -32 % on rough metal (Spot 10k, seeds 0-2; face
    level -27 / -31 %), -13 to -21 % on bricks, gravel and water
    (benchmarks/results/hpm_images.md, h-hpm11).
