@@ -823,10 +823,14 @@ def test_compiled_sampling_equals_the_numpy_path_bit_for_bit():
         _sample(img, bad, True)
 
 
-def test_hpm_compiled_sampling_gives_the_same_uv(monkeypatch):
+@pytest.mark.parametrize("image", ["noise", "stripes"])
+def test_hpm_compiled_sampling_gives_the_same_uv(monkeypatch, image):
+    # compiled sampling, rasterization, energies, band search and relaxation error
+    # against the numpy / scipy paths; stripes: the automatic field at the face level
+    # and the lattice moves
     import geotex.image.hpm as hpm
     V, F = torus(1.0, 0.4, n_major=32, n_minor=12)
-    img = noise_image(64, 64)
+    img = noise_image(64, 64) if image == "noise" else stripe_image()
     kw = dict(scale=0.6, seed=1, max_error=0.2)
     monkeypatch.setattr(hpm, "SAMPLE_JIT_FACES", 10 ** 9)
     monkeypatch.setattr(hpm, "JIT_MIN_SIZE", 10 ** 9)
@@ -835,6 +839,10 @@ def test_hpm_compiled_sampling_gives_the_same_uv(monkeypatch):
     fast = hpm_texture(V, F, img, **kw)
     assert np.array_equal(slow.uv, fast.uv) and np.array_equal(slow.uv_faces, fast.uv_faces)
     assert slow.report() == fast.report()
+    if image == "stripes":
+        levels = fast.report()["levels"]
+        assert fast.report()["pattern"]["field"] == "auto"
+        assert levels[-1]["matched_faces"] > 0
 
 
 @pytest.fixture(scope="module")

@@ -202,6 +202,8 @@ def match_energy(spectra: TextureSpectra, mask, support, footprint, *, which=Non
     fI, fJ = _mask_spectra(I, J)
     if which is None:
         St, St2 = spectra.spec_t, spectra.spec_t2
+    elif idx.size == 1:                  # one orientation (hpm with a field): views, no copy
+        St, St2 = spectra.spec_t[idx[0]:idx[0] + 1], spectra.spec_t2[idx[0]:idx[0] + 1]
     else:
         St, St2 = spectra.spec_t[idx], spectra.spec_t2[idx]
     spec = fJ * St2

@@ -104,6 +104,16 @@ into the original image.
    and 865 -> 804; over seeds 0-2 the seams (patch borders, where the map
    jumps), stretch and rotation across borders stayed within the seed spread
    (benchmarks/results/hpm_images.md, h-hpm10).
+   A face-level fit is mostly of one triangle, so what depends on the mesh
+   alone is computed once per mapping (every face's field coefficients, the
+   mean-plane frames of every group and of each of its faces alone, the faces
+   across each cluster's and group's border for the priorities), the band
+   search and the relaxation's error are compiled
+   (:mod:`geotex.image.hpm_faces`, ``_relax_error_compiled``) and the mask
+   planes are kept between fits: the same uv bit for bit, CPU -23 to -33 % on
+   slate tiles and -26 to -32 % on rough metal (Spot 10k, seeds 0-2; face
+   level -27 / -31 %), -13 to -21 % on bricks, gravel and water
+   (benchmarks/results/hpm_images.md, h-hpm11).
 
 Structured patterns (``structure``, §5.1-5.2 of the paper).  The sample's
 pattern period and anisotropy are estimated once
@@ -201,11 +211,12 @@ from scipy.sparse.csgraph import breadth_first_order, connected_components, dijk
 
 from geotex.errors import InputError, MissingFileError
 from geotex.image.atlas import rasterize_triangles
-from geotex.jit import JIT_MIN_SIZE, compiled
+from geotex.jit import JIT_MIN_SIZE, compiled, helper
 from geotex.fields.combing import comb_direction_field
 from geotex.fields.directions import smooth_direction_field
 from geotex.image.fftmatch import (match_energy, opponent_colors, pattern_scale,
                                    quarter_turn_symmetry, texture_spectra)
+from geotex.image.hpm_faces import field_coefficients, textured_band, vertex_faces
 from geotex.image.patches import load_image
 from geotex.mesh.arrays import as_mesh_arrays
 from geotex.mesh.geometry import degenerate_faces, face_areas
@@ -256,6 +267,9 @@ QUARTER_TURN = 0.8
 #: lower than this lowers it).  A mapping of 2000 faces does tens of thousands of
 #: lookups; below that, loading numba (~0.4 s once) costs more.
 SAMPLE_JIT_FACES = 2000
+
+#: Multiplier that mirrors 2D positions (k, 2) in y: ``P * FLIP_Y`` is ``(x, -y)`` exactly.
+FLIP_Y = np.array([1.0, -1.0])
 
 #: Largest relaxation move, as a fraction of the shortest edge at the vertex (texture space).
 RELAX_EDGE_FRACTION = 0.2
@@ -418,26 +432,58 @@ def _sample(img: np.ndarray, xy: np.ndarray, fast: bool = False) -> np.ndarray:
     return top * (1 - fy) + bot * fy
 
 
+@helper
+def _bilinear(img, px, py, out, i):
+    """Row ``i`` of ``out``: the bilinear sample of ``img`` at ``(px, py)``, as
+    :func:`_sample` computes it (image of at least 2 x 2 pixels, no NaN)."""
+    h, w, nc = img.shape
+    x = min(max(px - 0.5, 0.0), w - 1.0)
+    y = min(max(py - 0.5, 0.0), h - 1.0)
+    x0 = min(int(np.floor(x)), w - 2)
+    y0 = min(int(np.floor(y)), h - 2)
+    fx = x - x0
+    fy = y - y0
+    x1 = min(x0 + 1, w - 1)
+    y1 = min(y0 + 1, h - 1)
+    for k in range(nc):
+        top = img[y0, x0, k] * (1 - fx) + img[y0, x1, k] * fx
+        bot = img[y1, x0, k] * (1 - fx) + img[y1, x1, k] * fx
+        out[i, k] = top * (1 - fy) + bot * fy
+
+
 @compiled
 def _sample_compiled(img, xy):
     """:func:`_sample` for an image of at least 2 x 2 pixels and positions without NaN:
     the same operations in the same order per sample, so the same values."""
-    h, w, nc = img.shape
     n = xy.shape[0]
-    out = np.empty((n, nc))
+    out = np.empty((n, img.shape[2]))
     for i in range(n):
-        x = min(max(xy[i, 0] - 0.5, 0.0), w - 1.0)
-        y = min(max(xy[i, 1] - 0.5, 0.0), h - 1.0)
-        x0 = min(int(np.floor(x)), w - 2)
-        y0 = min(int(np.floor(y)), h - 2)
-        fx = x - x0
-        fy = y - y0
-        x1 = min(x0 + 1, w - 1)
-        y1 = min(y0 + 1, h - 1)
-        for k in range(nc):
-            top = img[y0, x0, k] * (1 - fx) + img[y0, x1, k] * fx
-            bot = img[y1, x0, k] * (1 - fx) + img[y1, x1, k] * fx
-            out[i, k] = top * (1 - fy) + bot * fy
+        _bilinear(img, xy[i, 0], xy[i, 1], out, i)
+    return out
+
+
+@compiled
+def _relax_error_compiled(full, cand, owner, b, target, ts, nv):
+    """The error of :func:`_relax` per movable vertex (its ``err``) without temporaries:
+    per sample along each shared edge the numpy path's operations in its order (the
+    colour sum in channel order, as ``np.sum`` over fewer than 8 channels), accumulated
+    per vertex in row order as ``np.bincount``: the same values."""
+    nt = ts.size
+    out = np.zeros(nv)
+    s = np.empty((1, full.shape[2]))
+    for e in range(owner.size):
+        o = owner[e]
+        for j in range(nt):
+            u = 1 - ts[j]
+            _bilinear(full, cand[o, 0] * u + b[e, 0] * ts[j], cand[o, 1] * u + b[e, 1] * ts[j],
+                      s, 0)
+            r = e * nt + j
+            d = s[0, 0] - target[r, 0]
+            acc = d * d
+            for k in range(1, s.shape[1]):
+                d = s[0, k] - target[r, k]
+                acc += d * d
+            out[o] += acc * u
     return out
 
 
@@ -454,31 +500,40 @@ class _State:
         self.vacc = np.zeros((n, 2))        # sum of textured corner positions per vertex
         self.vcnt = np.zeros(n)             # number of textured corners per vertex
         self.vsq = np.zeros(n)              # sum of squared norms (to detect disagreement)
-        self._agreed = None                 # cache of agreed(), reset by mark()
+        self._agreed = None                 # cache of agreed()
+        self._dirty = None                  # vertices marked since, whose rows it updates
         self.vpatch = np.full(n, -1, np.int64)  # last placement that textured each vertex
+
+    def _agreed_rows(self, idx):
+        c = np.maximum(self.vcnt[idx], 1.0)
+        mean = self.vacc[idx] / c[:, None]
+        spread = self.vsq[idx] / c - np.sum(mean * mean, axis=1)
+        ok = (self.vcnt[idx] > 0) & (spread < 1e-6 * (1.0 + self.vsq[idx] / c))
+        return np.where(ok[:, None], mean, np.nan)
 
     def agreed(self) -> np.ndarray:
         """Per-vertex mean textured position, nan where none or where corners disagree.
 
-        The returned array is shared until the next :meth:`mark`: do not modify it.
+        The returned array is read-only and valid until the next :meth:`mark`
+        (which updates it in place: do not keep it across one).
         """
         if self._agreed is None:
-            c = np.maximum(self.vcnt, 1.0)
-            mean = self.vacc / c[:, None]
-            spread = self.vsq / c - np.sum(mean * mean, axis=1)
-            ok = (self.vcnt > 0) & (spread < 1e-6 * (1.0 + self.vsq / c))
-            self._agreed = np.where(ok[:, None], mean, np.nan)
-            self._agreed.setflags(write=False)
+            self._agreed = self._agreed_rows(slice(None))
+        elif self._dirty is not None:
+            self._agreed.setflags(write=True)
+            self._agreed[self._dirty] = self._agreed_rows(self._dirty)
+        self._agreed.setflags(write=False)
+        self._dirty = None
         return self._agreed
 
     def mark(self, F, faces, corner, patch, level):
         """Record the corner positions of newly textured faces."""
-        self._agreed = None
         self.corner[faces] = corner
         self.done[faces] = True
         self.patch[faces] = patch
         self.face_level[faces] = level
         cv = F[faces].ravel()
+        self._dirty = cv if self._dirty is None else np.concatenate([self._dirty, cv])
         self.vpatch[cv] = patch
         n = self.vcnt.size
         self.vcnt += np.bincount(cv, minlength=n)
@@ -738,6 +793,13 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
     G = sp.csr_matrix((np.concatenate([ew, ew]), (np.concatenate([E[:, 0], E[:, 1]]),
                                                   np.concatenate([E[:, 1], E[:, 0]]))),
                       shape=(V.shape[0],) * 2)
+    # per face, the field vector in its edge vectors (carried by any linear map of the face)
+    fcoef = field_coefficients(V, F, fvec) if fvec is not None else None
+    # per-vertex 2D positions of one fit (a face's flattening, its band's, scratch), read
+    # back only on the rows just set: not cleared between fits
+    scratch2, scratch_b, scratch_l = (np.zeros((V.shape[0], 2)) for _ in range(3))
+    graph = (G.indptr.astype(np.int64), G.indices.astype(np.int64), G.data)
+    vf = vertex_faces(F, V.shape[0]) if fast else None
     band_w = band_distance * scale
     patch_factor = finite_number(min_patch, name="min_patch")
     if patch_factor < 0:
@@ -808,16 +870,20 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             frames[li] = cluster_frames(V, F, lv.labels, lv.n_clusters, direction)
         return frames[li]
 
+    polygons = {}                        # (level, cluster) -> its control polygon (read only)
+
     def flatten(li, c, fixed=None, fixed_mask=None):
-        lv = Hc.levels[li]
-        N, e1, e2 = frame(li)
-        poly = control_polygon(V, lv.controls(c), e1[c], e2[c])
+        poly = polygons.get((li, c))
+        if poly is None:
+            e1, e2 = frame(li)[1:]
+            poly = polygons[(li, c)] = control_polygon(V, Hc.levels[li].controls(c), e1[c],
+                                                       e2[c])
         verts, loc, faces = flatten_cluster(bh, li, c, poly, fixed=fixed, fixed_mask=fixed_mask)
         return poly, verts, loc, faces
 
     def folded(verts, loc, faces):
         """Whether some face of the cluster is reversed or collapsed in ``loc``."""
-        U = np.zeros((V.shape[0], 2))
+        U = scratch2
         U[verts] = loc
         t = U[F[faces]]
         d = (t[:, 1, 0] - t[:, 0, 0]) * (t[:, 2, 1] - t[:, 0, 1]) \
@@ -825,7 +891,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         return bool((d <= 1e-12 * np.abs(d).max()).any())
 
     def flat_error(verts, loc, faces):
-        U = np.zeros((V.shape[0], 2))
+        U = scratch2
         U[verts] = loc
         t = U[F[faces]]
         d = (t[:, 1, 0] - t[:, 0, 0]) * (t[:, 2, 1] - t[:, 0, 1]) \
@@ -835,10 +901,12 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             return np.inf
         return abs(A[faces].sum() / a2 - 1.0)
 
+    pflip = np.array([ppm_m, -ppm_m])
+
     def pix(loc):
         """Local coords (mesh units) -> matching pixels; image rows grow downwards, so
         the local y axis is flipped to keep the texture unmirrored on the surface."""
-        return np.column_stack([loc[:, 0], -loc[:, 1]]) * ppm_m
+        return loc * pflip               # (x, -y) * ppm_m, the same values
 
     def field_direction(verts, loc, faces):
         """The field's direction in the matching-pixel frame of a flattened cluster.
@@ -853,16 +921,13 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
 
     def field_angle(verts, X2, faces):
         """:func:`field_direction` for any 2D positions ``X2`` of ``verts`` (no mirror)."""
-        U = np.zeros((V.shape[0], 2))
+        U = scratch2
         U[verts] = X2
-        P = V[F[faces]]
         T = U[F[faces]]
-        E = np.stack([P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]], axis=2)        # (k, 3, 2)
-        D = np.stack([T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]], axis=2)        # (k, 2, 2)
-        G = np.einsum("kji,kjl->kil", E, E)
-        G = G + 1e-12 * np.trace(G, axis1=1, axis2=2)[:, None, None] * np.eye(2)
-        coef = np.linalg.solve(G, np.einsum("kji,kj->ki", E, fvec[faces])[:, :, None])
-        d = (D @ coef)[:, :, 0]
+        D = np.empty((T.shape[0], 2, 2))                                   # (k, 2, 2)
+        D[:, :, 0] = T[:, 1] - T[:, 0]
+        D[:, :, 1] = T[:, 2] - T[:, 0]
+        d = (D @ fcoef[faces])[:, :, 0]
         w = A[faces]
         phi = np.arctan2(d[:, 1], d[:, 0])
         z = np.sum(w * np.exp(1j * sym * phi))
@@ -889,7 +954,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
     def from_image(P, R, t):
         """Inverse of :func:`to_image`."""
         p = (P / f - t) @ R / ppm_m
-        return np.column_stack([p[:, 0], -p[:, 1]])
+        return p * FLIP_Y
 
     def neighbour_fits(bverts, bl, every):
         """Rigid placements continuing the neighbours' own coordinates.
@@ -927,21 +992,25 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             Hm = (X - xm).T @ (Y - ym)
             U, _, Wt = np.linalg.svd(Hm)
             R = (U @ Wt).T
-            if np.linalg.det(R) > 0:
+            if R[0, 0] * R[1, 1] - R[0, 1] * R[1, 0] > 0:     # a rotation (det +-1)
                 out.append((R, ym - R @ xm))
         return out
 
-    def turned_fit(fk, bverts, bl, in_c, a):
-        """Placement ``fk`` (R, t) turned to orientation ``a`` (radians) about the
-        texture position of its shared border: the mean of the band vertices that
-        belong to the cluster and agree, or of all agreeing band vertices.  Near
-        that border the neighbour's pattern keeps its phase; the turn that is
-        needed to follow the field spreads away from it."""
+    def turn_centre(bverts, bl, in_c):
+        """The point (matching pixels, cluster frame) about which :func:`turned_fit`
+        turns the neighbours' placements: the mean of the band vertices that belong
+        to the cluster and agree, or of all agreeing band vertices."""
         Ab = st.agreed()[bverts] / f
         ok = np.isfinite(Ab[:, 0])
         on = ok & in_c[bverts]
         sel = on if on.sum() >= 2 else ok
-        x0 = pix(bl[bverts[sel]]).mean(axis=0)
+        return pix(bl[bverts[sel]]).mean(axis=0)
+
+    def turned_fit(fk, x0, a):
+        """Placement ``fk`` (R, t) turned to orientation ``a`` (radians) about the
+        texture position of its shared border, ``x0`` (:func:`turn_centre`).  Near
+        that border the neighbour's pattern keeps its phase; the turn that is
+        needed to follow the field spreads away from it."""
         y0 = fk[0] @ x0 + fk[1]
         Ra = np.array([[np.cos(a), np.sin(a)], [-np.sin(a), np.cos(a)]])
         return Ra, y0 - Ra @ x0
@@ -951,12 +1020,13 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         ty, tx = np.divmod(tb, wm)
         return np.stack([tx + 0.5, ty + 0.5], 1) + origin
 
-    def band_error(R, t, tb, I, origin):
-        """Squared mask error of the placement ``R q + t`` of the raster frame ``q``."""
-        S = _sample(small, mask_points(tb, origin) @ R.T + t, fast)
-        return float(np.sum((I[tb] - S) ** 2))
+    def band_error(R, t, q, Itb):
+        """Squared mask error of the placement ``R q + t`` of the mask pixels at ``q``
+        (raster frame, :func:`mask_points`) with colours ``Itb``."""
+        S = _sample(small, q @ R.T + t, fast)
+        return float(np.sum((Itb - S) ** 2))
 
-    def lattice_continuation(cont, fits, Rd, loc, tb, I, origin, li):
+    def lattice_continuation(cont, fits, Rd, loc, q, Itb, li):
         """The best continuation of a neighbour moved by whole periods of the pattern.
 
         A periodic sample shows the same pattern at ``t + k1 p1 + k2 p2``: when
@@ -969,8 +1039,6 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         """
         cont_in = inside_image(to_image(loc, cont[0] @ Rd, cont[1]))
         lim = np.array([W_img, H_img], dtype=np.float64)
-        q = mask_points(tb, origin)
-        Itb = I[tb]
         for Rk, tk in fits:
             P0 = to_image(loc, Rk, tk)
             lo, hi = P0.min(axis=0), P0.max(axis=0)
@@ -984,13 +1052,13 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             # and per-move sums as one band_error call per move)
             qR = q @ Rr.T
             S = _sample(small, (qR[None] + t2s[:, None]).reshape(-1, 2), fast)
-            D = (Itb[None] - S.reshape(t2s.shape[0], tb.size, -1)) ** 2
+            D = (Itb[None] - S.reshape(t2s.shape[0], q.shape[0], -1)) ** 2
             for i, ek in enumerate(D.reshape(t2s.shape[0], -1).sum(axis=1).tolist()):
                 if ek < cont[2] or not cont_in:
                     cont, cont_in = (Rr, t2s[i], ek), True
         return cont
 
-    def quick_continuation(c, fits, Rd, loc, tb, I, origin, nJ):
+    def quick_continuation(c, fits, Rd, loc, q, Itb, nJ):
         """At the face level with a field: the neighbours' continuations (already turned
         onto the field's direction) whose band error is below ``max_error`` and whose
         faces stay inside the image; the lowest as ``(R, t, error)`` in the turned raster
@@ -1000,7 +1068,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         lim = max_error * nJ * var2
         out = None
         for Rk, tk in fits:
-            ek = band_error(Rk @ Rd.T, tk, tb, I, origin)
+            ek = band_error(Rk @ Rd.T, tk, q, Itb)
             if ek <= lim and (out is None or ek < out[2]) and \
                     inside_image(to_image(loc, Rk, tk)):
                 out = (Rk @ Rd.T, tk, ek)
@@ -1013,6 +1081,27 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
     def vertex_uv_of_done(verts):
         """Mean full-res position of each vertex over textured faces (nan if none)."""
         return st.agreed()[verts]
+
+    # the mask planes of the fits (footprint K, colours I, support J), kept zero between
+    # fits: each fit sets the pixels it draws (``drawn``) and the next one clears them
+    planes = (np.zeros(hm * wm), np.zeros((hm * wm, small.shape[2])), np.zeros(hm * wm))
+    drawn = []
+
+    def raster_planes():
+        """The planes (K, I, J), all zero."""
+        for ix in drawn:
+            for plane in planes:
+                plane[ix] = 0.0
+        drawn.clear()
+        return planes
+
+    def distance_band(src):
+        """The textured faces whose vertices lie within ``band_w`` of ``src`` along
+        mesh edges (compiled from ``SAMPLE_JIT_FACES`` faces: the same faces)."""
+        if fast:
+            return textured_band(graph, src, band_w, vf, F, st.done)
+        dist = dijkstra(G, directed=True, indices=src, min_only=True, limit=band_w)
+        return np.flatnonzero(st.done & np.isfinite(dist)[F].all(axis=1))
 
     def topological_band(in_c, faces):
         """Union of the bands of the textured neighbour clusters along this cluster."""
@@ -1040,30 +1129,35 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
     def refuse(li, reason):
         levels[li].refused[reason] = levels[li].refused.get(reason, 0) + 1
 
-    def group_frame(faces):
-        """Mean-plane frame of a group of faces (face level): normal, e1, e2."""
-        lab = np.zeros(faces.size, np.int64)
+    def group_frames(gs):
+        """Mean-plane frames ``(e1, e2)`` (k, 3) of the groups of faces ``gs`` (face
+        level), all at once: each group's rows are those of a call of
+        :func:`geotex.patches.flatten.cluster_frames` on that group alone."""
         direction = None
         if fvec is not None:
-            ref = fvec[faces[0]]
-            sgn = np.where(fvec[faces] @ ref < 0, -1.0, 1.0)
-            direction = (np.sum(fvec[faces] * (sgn * A[faces])[:, None], axis=0)
-                         if A[faces].sum() > 0 else ref)[None, :]
-        N, e1, e2 = cluster_frames(V, F[faces], lab, 1, direction)
-        return N[0], e1[0], e2[0]
+            direction = np.zeros((len(gs), 3))
+            for i, faces in enumerate(gs):
+                ref = fvec[faces[0]]
+                sgn = np.where(fvec[faces] @ ref < 0, -1.0, 1.0)
+                direction[i] = (np.sum(fvec[faces] * (sgn * A[faces])[:, None], axis=0)
+                                if A[faces].sum() > 0 else ref)
+        lab = np.repeat(np.arange(len(gs)), [g.size for g in gs])
+        _, e1, e2 = cluster_frames(V, F[np.concatenate(gs)], lab, len(gs), direction)
+        return e1, e2
 
-    def place(li, c, group=None, force=False):
+    def place(li, c, group=None, force=False, gframe=None):
         """Try to texture cluster c of level li; returns the relative error or None.
 
         With ``group`` (face level), the faces ``group`` are textured instead,
-        flattened by projection onto their mean plane.  With ``force`` the best
+        flattened by projection onto their mean plane, whose axes ``gframe``
+        (e1, e2) are given (:func:`group_frames`).  With ``force`` the best
         match is kept even above ``max_error`` (children smaller than the
         pattern).
         """
         if group is not None:
             faces = np.asarray(group, np.int64)
             verts = np.unique(F[faces])
-            _, e1c, e2c = group_frame(faces)
+            e1c, e2c = gframe
             loc = np.stack([V[verts] @ e1c, V[verts] @ e2c], 1)
             if flat_error(verts, loc, faces) > max_flat_error:
                 refuse(li, 'flattening')
@@ -1108,19 +1202,13 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         # band of textured faces within band_w of the cluster
         in_c = np.zeros(V.shape[0], bool)
         in_c[verts] = True
-        touch = st.vcnt > 0
-        src = np.flatnonzero(in_c & touch)
+        src = verts[st.vcnt[verts] > 0]  # (the sources' order does not change the band)
         band_faces = np.zeros(0, np.int64)
         fixed = fixed_mask = None
-        if src.size and band_mode == "distance":
-            dist = dijkstra(G, directed=True, indices=src, min_only=True, limit=band_w)
-            near = np.isfinite(dist)
-            band_faces = np.flatnonzero(st.done & near[F].all(axis=1))
-        elif src.size and c is not None:
+        if src.size and (band_mode == "distance" or c is None):
+            band_faces = distance_band(src)  # (at the face level whatever band_mode)
+        elif src.size:
             band_faces = topological_band(in_c, faces)
-        elif src.size:                   # face level: the constant-width band
-            dist = dijkstra(G, directed=True, indices=src, min_only=True, limit=band_w)
-            band_faces = np.flatnonzero(st.done & np.isfinite(dist)[F].all(axis=1))
         if band_faces.size:
             bverts = np.unique(F[band_faces])
             if proj:
@@ -1144,9 +1232,9 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                     fixed = fixed_mask = None
                 else:
                     verts, loc = verts2, loc2
-            bl = np.zeros((V.shape[0], 2))
+            bl = scratch_b               # read on the band's vertices only
             bl[bverts] = bloc
-        Lall = np.zeros((V.shape[0], 2))
+        Lall = scratch_l                 # read on the faces' vertices only
         Lall[verts] = loc
         # orientation grid: the raster frame is turned so that the reference orientation
         # is exactly one of the searched orientations (the FFT candidates then include it,
@@ -1172,11 +1260,12 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                     # the neighbours' continuations turned to the field's direction (about
                     # their shared border), those that need at most ``field_tol``
                     turned = []
+                    x0 = turn_centre(bverts, bl, in_c)
                     for fk in fits:
                         ak = np.arctan2(fk[0][0, 1], fk[0][0, 0])
                         if _angle_gap(ak, a_ref, sym) <= field_tol + 1e-12:
                             ar = a_fld + step * np.round(((ak - a_fld) % (2 * np.pi)) / step)
-                            turned.append(turned_fit(fk, bverts, bl, in_c, ar))
+                            turned.append(turned_fit(fk, x0, ar))
                     fits = turned
                     nfit = fits[0] if fits else None
                     levels[li].field_refused += int(nfit is None)
@@ -1193,7 +1282,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             return pix(x) @ Rd.T
 
         # raster: footprint = cluster + band, origin at its bbox corner
-        pts = loc if not band_faces.size else np.vstack([loc, bl[np.unique(F[band_faces])]])
+        pts = loc if not band_faces.size else np.vstack([loc, bl[bverts]])
         pp = qpix(pts)
         origin = np.floor(pp.min(axis=0)) - 1.0
         ext = np.ceil(pp.max(axis=0)) - origin + 1.0
@@ -1201,11 +1290,11 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             refuse(li, 'too_large')
             return None
         tri_c = qpix(Lall[F[faces]].reshape(-1, 2)).reshape(-1, 3, 2) - origin
-        K = np.zeros(hm * wm)
+        K, I, J = raster_planes()
         t_, _, _ = rasterize_triangles(tri_c, wm, hm, fast=fast)
         K[t_] = 1.0
-        I = np.zeros((hm * wm, small.shape[2]))
-        J = np.zeros(hm * wm)
+        drawn.append(t_)
+        nJ = 0.0                         # mask pixels (J.sum(): an exact count)
         if band_faces.size:
             tri_b = qpix(bl[F[band_faces]].reshape(-1, 2)).reshape(-1, 3, 2) - origin
             tb, fb, bb = rasterize_triangles(tri_b, wm, hm, fast=fast)
@@ -1213,12 +1302,15 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             I[tb] = _sample(small, uvb, fast)
             J[tb] = 1.0
             K[tb] = 1.0
+            drawn.append(tb)
+            nJ = float(np.count_nonzero(J))
+            qb, Itb = mask_points(tb, origin), I[tb]     # the mask pixels and their colours
         K = K.reshape(hm, wm)
         # face level with a field: a neighbour's continuation under the threshold is taken
         # without the FFT search (module docstring, 5.)
-        quick = None if li == 0 or not J.any() else \
-            quick_continuation(c, fits, Rd, loc, tb, I, origin, J.sum())
-        if li == 0 or not J.any():
+        quick = None if li == 0 or not nJ else \
+            quick_continuation(c, fits, Rd, loc, qb, Itb, nJ)
+        if li == 0 or not nJ:
             which = None
             if fvec is not None:         # the field's direction (the combed representative)
                 which = [k_ref]
@@ -1237,7 +1329,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             err = 0.0
         elif quick is not None:
             cont, pick, refined = quick, None, None
-            err = quick[2] / J.sum() / var2
+            err = quick[2] / nJ / var2
             levels[li].continued += 1
             levels[li].quick += 1
         else:
@@ -1265,25 +1357,25 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             near = np.flatnonzero(flat <= best + 1e-9 * (1.0 + best))
             pick = near[int(rng.integers(near.size))]
             if (fvec is not None or nfit is None) and not (subpixel or force) \
-                    and best / J.sum() / var2 > max_error:
+                    and best / nJ / var2 > max_error:
                 # refused whatever the continuations give: with a field a continuation is
                 # taken at the FFT minimum near it (below), whose error is at least
                 # ``best``; the continuations (the lattice moves above all) are not
                 # evaluated for a cluster that is subdivided anyway
                 refuse(li, 'error')
-                return -best / J.sum() / var2
+                return -best / nJ / var2
             cont = None
             if nfit is not None:
                 # the neighbour's placement in the turned raster frame: R Rd^T q + t
                 Rc = nfit[0] @ Rd.T
-                cont = (Rc, nfit[1], band_error(Rc, nfit[1], tb, I, origin))
+                cont = (Rc, nfit[1], band_error(Rc, nfit[1], qb, Itb))
                 for Rk, tk in fits[1:]:          # face level: every neighbour's continuation
-                    ek = band_error(Rk @ Rd.T, tk, tb, I, origin)
+                    ek = band_error(Rk @ Rd.T, tk, qb, Itb)
                     if ek < cont[2] and inside_image(to_image(loc, Rk, tk)):
                         cont = (Rk @ Rd.T, tk, ek)
                 if lattice is not None:
                     cont = lattice_continuation(cont, fits if c is None else fits[:1], Rd,
-                                                loc, tb, I, origin, li)
+                                                loc, qb, Itb, li)
             if fvec is not None and cont is not None:
                 # with a field the continuation has the searched orientation: take the
                 # FFT minimum within ``CONTINUATION_WINDOW`` of a pattern size of it (its
@@ -1307,19 +1399,19 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                 kk, dy, dx = np.unravel_index(pick, Eg.shape)
                 rot_k = int(kk if which is None else np.asarray(which)[kk])
                 R0, t0 = fft_placement(rot_k, np.array([dx, dy], dtype=np.float64) - origin)
-                R1, t1, e_1 = _refine_placement(small, R0, t0, mask_points(tb, origin), I[tb],
+                R1, t1, e_1 = _refine_placement(small, R0, t0, qb, Itb,
                                                 np.pi / orientations, fast)
                 if inside_image(to_image(loc, R1 @ Rd, t1)):
                     refined, best = (R1, t1), e_1
                 else:
-                    best = band_error(R0, t0, tb, I, origin)
+                    best = band_error(R0, t0, qb, Itb)
                 pick = None if refined is not None else pick
             if cont is not None and (cont[2] <= best or (
-                    lattice is not None and (force or cont[2] <= max_error * J.sum() * var2))):
+                    lattice is not None and (force or cont[2] <= max_error * nJ * var2))):
                 Pc = to_image(loc, cont[0] @ Rd, cont[1])
                 if inside_image(Pc):
                     best, pick, refined = cont[2], None, None
-            err = best / J.sum() / var2
+            err = best / nJ / var2
             if err > max_error:
                 if not force:
                     refuse(li, 'error')
@@ -1355,7 +1447,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                 if mm.size == 0:
                     return None
                 if proj:
-                    ok_ = not folded(verts, np.column_stack([moved[:, 0], -moved[:, 1]]),
+                    ok_ = not folded(verts, moved * FLIP_Y,
                                      faces) and not turns(moved, turn)
                     return moved if ok_ else None
                 if fixed is None:
@@ -1367,7 +1459,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                 _, v2, loc2, f2 = flatten(li, c, fixed, fixed_mask)
                 P2 = to_image(loc2, R_, t_)
                 P2[keep] = moved[keep]
-                if folded(verts, np.column_stack([P2[:, 0], -P2[:, 1]]), faces) or \
+                if folded(verts, P2 * FLIP_Y, faces) or \
                         turns(P2, turn):
                     fixed, fixed_mask = fx0, fm0
                     return None
@@ -1409,7 +1501,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                 P2 = spread_moves(moved, close)
                 if P2 is not None:
                     P = P2
-        vpos = np.zeros((V.shape[0], 2))
+        vpos = scratch_l
         vpos[verts] = P
         st.mark(F, faces, vpos[F[faces]], st.n_patch, li)
         st.n_patch += 1
@@ -1460,15 +1552,18 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
     if start is None:
         queues[li0] = list(range(Hc.levels[li0].n_clusters))
 
+    outside = {}                         # (level, cluster) -> the faces across its border
+
     def priority(li, c):
-        lv = Hc.levels[li]
-        lo, hi = Hc.descendants(li, c, L - 1)
-        faces = np.flatnonzero((Hc.levels[-1].labels >= lo) & (Hc.levels[-1].labels < hi))
-        nb = FF[faces]
-        ext = (nb >= 0) & (lv.labels[np.maximum(nb, 0)] != c)
-        if not ext.any():
-            return 0.0
-        return float(st.done[nb[ext]].mean())
+        """Share of the faces across the border of cluster ``c`` that are textured."""
+        nb = outside.get((li, c))
+        if nb is None:
+            lv = Hc.levels[li]
+            lo, hi = Hc.descendants(li, c, L - 1)
+            faces = np.flatnonzero((Hc.levels[-1].labels >= lo) & (Hc.levels[-1].labels < hi))
+            nb = FF[faces]
+            nb = outside[(li, c)] = nb[(nb >= 0) & (lv.labels[np.maximum(nb, 0)] != c)]
+        return np.count_nonzero(st.done[nb]) / nb.size if nb.size else 0.0
 
     for li in range(li0, L):
         if li == L - 1:
@@ -1496,29 +1591,45 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
     report(progress, "faces")
     lf = L - 1
     groups = _face_groups(FF, ~st.done, face_group) if face_match else []
+    # the frames of the groups and of their faces alone (a group that fails is retried
+    # face by face), computed once
+    if groups:
+        ge1, ge2 = group_frames(groups)
+        todo_f = np.concatenate(groups)
+        fe1, fe2 = group_frames([todo_f[i:i + 1] for i in range(todo_f.size)])
+        slot_f = np.full(m, -1, np.int64)
+        slot_f[todo_f] = np.arange(todo_f.size)
+        n_groups = len(groups)
 
-    def group_priority(g):
-        nb = FF[g].ravel()
-        nb = nb[nb >= 0]
-        nb = nb[~np.isin(nb, g)]
-        return float(st.done[nb].mean()) if nb.size else 0.0
+    around = {}                          # group -> the faces across its border
 
-    heap = [(-group_priority(g), i) for i, g in enumerate(groups)]
+    def group_priority(i):
+        """Share of the faces across the border of group ``i`` that are textured."""
+        nb = around.get(i)
+        if nb is None:
+            g = groups[i]
+            nb = FF[g].ravel()
+            nb = nb[nb >= 0]
+            nb = around[i] = nb[~np.isin(nb, g)]
+        return np.count_nonzero(st.done[nb]) / nb.size if nb.size else 0.0
+
+    heap = [(-group_priority(i), i) for i in range(len(groups))]
     heapq.heapify(heap)
     while heap:
         p, i = heapq.heappop(heap)
         g = groups[i]
-        q = -group_priority(g)
+        q = -group_priority(i)
         if q < p - 1e-12 and heap:
             heapq.heappush(heap, (q, i))
             continue
-        r = place(lf, None, group=g)
+        gfr = (ge1[i], ge2[i]) if i < n_groups else (fe1[slot_f[g[0]]], fe2[slot_f[g[0]]])
+        r = place(lf, None, group=g, gframe=gfr)
         if r is None or r < 0:
             if g.size > 1:               # retry face by face
                 levels[lf].subdivided += 1
                 for fc in g:
                     groups.append(np.array([fc]))
-                    heapq.heappush(heap, (-group_priority(groups[-1]), len(groups) - 1))
+                    heapq.heappush(heap, (-group_priority(len(groups) - 1), len(groups) - 1))
         else:
             levels[lf].placed += 1
             levels[lf].errors.append(r)
@@ -1725,7 +1836,9 @@ def _relax(P, verts, faces, movable, F, st, full, rng, f, fast=False):
     cnt = np.where(np.isnan(nb[:, 0]), 0.0, 1.0)
     # shared edges of the cluster (both ends with a neighbour position)
     e = np.concatenate([F[faces][:, [0, 1]], F[faces][:, [1, 2]], F[faces][:, [2, 0]]])
-    e = np.unique(np.sort(e, axis=1), axis=0)
+    e = np.sort(e, axis=1)
+    key = np.unique(e[:, 0] * n + e[:, 1])          # = np.unique(e, axis=0), without a
+    e = np.stack([key // n, key % n], axis=1)       # structured sort
     both = (cnt[e[:, 0]] > 0) & (cnt[e[:, 1]] > 0)
     e = e[both]
     if e.shape[0] == 0:
@@ -1747,7 +1860,12 @@ def _relax(P, verts, faces, movable, F, st, full, rng, f, fast=False):
     target = _sample(full, y.reshape(-1, 2), fast)   # the neighbour's texture along the edges
     b = pos[eb]
 
+    # compiled: three colour channels (the order of np.sum checked for them), no NaN
+    jit_err = fast and full.shape[2] == 3 and np.isfinite(b).all() and np.isfinite(target).all()
+
     def err(cand):                       # cand (k, 2) positions of the movable vertices
+        if jit_err and np.isfinite(cand).all():
+            return _relax_error_compiled(full, cand, owner, b, target, ts, vid.size)
         a = cand[owner]
         x = a[:, None, :] * (1 - ts)[None, :, None] + b[:, None, :] * ts[None, :, None]
         d = _sample(full, x.reshape(-1, 2), fast) - target
