@@ -41,8 +41,10 @@ def test_corner_density_tells_corners_from_the_rest():
 
 
 @pytest.fixture(scope="module")
-def iso_paste():
-    return build_tileset(studs(), colors=2, isotropic=True, seed=3, interior="paste")
+def iso_paste(shared_tileset):
+    # the same set as test_tiles.py's paste_iso_set, built once per run
+    return shared_tileset("studs-iso-2-seed3-paste", lambda: build_tileset(
+        studs(), colors=2, isotropic=True, seed=3, interior="paste"))
 
 
 def test_corner_squares_hold_as_much_relief_as_the_rest(iso_paste):
