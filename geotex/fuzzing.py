@@ -12,11 +12,15 @@ timeout, and :func:`verdict` says whether the outcome is an acceptable one:
 * exit 2 with exactly one stderr line ``geotex: error: ...``,
 
 within :data:`TIME_LIMIT` seconds and :data:`MEMORY_LIMIT` bytes of peak
-resident memory.  Ordinary cases are batched (``python -m geotex.fuzzing
-FILE...`` runs the command line on each file in turn, isolated by
-``try``/``except``, and prints one JSON line per file); hostile cases (huge
-counts, bombs, references, deep nesting, large polygons) each get their own
-``python -m geotex check FILE`` process.
+resident memory.  Cases are batched (``python -m geotex.fuzzing FILE...``
+runs the command line on each file in turn, isolated by ``try``/``except``,
+and prints one JSON line per file, with the case's own seconds and peak: the
+kernel's high-water mark is reset before each case, :func:`reset_peak_rss`).
+Hostile cases (huge counts, bombs, references, deep nesting, large polygons)
+go in small batches, or each in its own ``python -m geotex check FILE``
+process (``hostile_batch=1``, what the benchmark does, timing the whole
+process start-up included).  A case left unfinished by a batch (the batch was
+killed or died) is run again alone.
 
 The same seed gives the same files.
 """
@@ -45,7 +49,7 @@ from geotex.mesh.primitives import box
 from geotex.mesh.record import Mesh
 
 __all__ = ["FuzzCase", "Outcome", "make_cases", "run_cases", "verdict", "seed_files",
-           "TIME_LIMIT", "MEMORY_LIMIT", "ADDRESS_LIMIT", "run_batch"]
+           "TIME_LIMIT", "MEMORY_LIMIT", "ADDRESS_LIMIT", "run_batch", "peak_rss", "reset_peak_rss"]
 
 TIME_LIMIT = 10.0                 # seconds per case
 MEMORY_LIMIT = 1 << 30            # peak resident bytes per case (or batch)
@@ -56,7 +60,7 @@ FORMATS = ("stl", "stl-ascii", "obj", "ply", "ply-ascii", "off", "3mf", "glb")
 @dataclass
 class FuzzCase:
     """One mutated file: ``path``, the ``seed`` format, the ``mutation`` and
-    whether it is ``hostile`` (run alone in its own process)."""
+    whether it is ``hostile`` (run alone or in a small batch)."""
     path: Path
     seed: str
     mutation: str
@@ -70,7 +74,7 @@ class Outcome:
     stdout: str
     stderr: str
     seconds: float
-    maxrss: int                  # bytes (the batch's peak for batched cases)
+    maxrss: int                  # bytes (the case's own peak, see reset_peak_rss)
     notes: list = field(default_factory=list)
 
 
@@ -415,6 +419,21 @@ def peak_rss(pid="self") -> int | None:
     return None
 
 
+def reset_peak_rss() -> bool:
+    """Reset this process's ``VmHWM`` to its current size; False where the kernel cannot.
+
+    Writing ``5`` to ``/proc/self/clear_refs`` (Linux 4.0 and later) restarts
+    the high-water mark, so that :func:`peak_rss` after a case is that case's
+    peak (the memory the process already held included), not the batch's.
+    """
+    try:
+        with open("/proc/self/clear_refs", "w", encoding="ascii") as fh:
+            fh.write("5")
+        return True
+    except OSError:
+        return False
+
+
 def run_limited(cmd, timeout, env):
     """Run ``cmd``; return (code or None, stdout, stderr, seconds, maxrss bytes).
 
@@ -491,21 +510,24 @@ def run_batch(command, cases, env) -> tuple:
     return code, err, rss, rows
 
 
-def run_cases(cases, *, batch: int = 40, workers: int = 2) -> list[Outcome]:
-    """Run ``geotex check`` on every case (see the module notes); outcomes in order."""
+def run_cases(cases, *, batch: int = 40, hostile_batch: int = 1, workers: int = 2
+              ) -> list[Outcome]:
+    """Run ``geotex check`` on every case (see the module notes); outcomes in order.
+
+    ``batch`` ordinary cases share a process, and ``hostile_batch`` hostile
+    ones (1: each hostile case in its own ``python -m geotex check`` process).
+    """
     from concurrent.futures import ThreadPoolExecutor
 
     env = limited_env()
     jobs = []
+    hostile = [c for c in cases if c.hostile]
     ordinary = [c for c in cases if not c.hostile]
-    for c in cases:
-        if c.hostile:
-            jobs.append([c])
-    for i in range(0, len(ordinary), batch):
-        jobs.append(ordinary[i:i + batch])
+    for group, size in ((hostile, hostile_batch), (ordinary, batch)):
+        jobs += [group[i:i + size] for i in range(0, len(group), max(1, size))]
 
     def run_job(group):
-        if len(group) == 1 and group[0].hostile:
+        if len(group) == 1 and group[0].hostile and hostile_batch == 1:
             c = group[0]
             code, out, err, sec, rss = run_limited([sys.executable, "-m", "geotex", "check",
                                                    str(c.path)], TIME_LIMIT, env)
@@ -521,7 +543,8 @@ def run_cases(cases, *, batch: int = 40, workers: int = 2) -> list[Outcome]:
                 continue
             notes = [] if not err.strip() else [f"batch stderr: {err.strip()[:200]}"]
             results.append(Outcome(c, row["code"], row["stdout"], row["stderr"],
-                                   row["seconds"], rss, notes))
+                                   row["seconds"], row["maxrss"] if row["own_peak"] else rss,
+                                   notes))
         return results
 
     with ThreadPoolExecutor(max_workers=workers) as pool:
@@ -562,6 +585,7 @@ def _drive(files) -> int:  # pragma: no cover - runs in the batch subprocess
     real_stdout = sys.stdout
     for name in files:
         out, err = io.StringIO(), io.StringIO()
+        own_peak = reset_peak_rss()
         start = time.perf_counter()
         try:
             with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
@@ -571,6 +595,7 @@ def _drive(files) -> int:  # pragma: no cover - runs in the batch subprocess
             err.write(f"escaped: {type(exc).__name__}: {exc}\n")
         row = {"file": name, "code": code, "stdout": out.getvalue()[-4000:],
                "stderr": err.getvalue()[:4000], "seconds": time.perf_counter() - start,
+               "own_peak": own_peak and peak_rss() is not None,
                "maxrss": peak_rss()
                or resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024}
         print(json.dumps(row), file=real_stdout, flush=True)

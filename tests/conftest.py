@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import fcntl
+import os
 from pathlib import Path
 
 import numpy as np
@@ -11,6 +13,36 @@ from geotex.mesh.primitives import box, icosphere, torus
 
 DATA = Path(__file__).parent / "data"
 BROKEN = DATA / "broken"
+
+
+@pytest.fixture(scope="session")
+def shared_tileset(tmp_path_factory):
+    """``get(key, build)``: the tile set ``build()`` makes, built once per test run.
+
+    Several test files use the same tile sets (tens of seconds each to build).
+    The first xdist worker to ask builds the set and saves it
+    (:func:`geotex.tiles.tileset.save_tileset`, exact: tile sets hold float32
+    values) in the run's temporary folder, which the workers share; the others
+    wait for it on a lock and load it.  ``key`` names the set and must differ
+    whenever ``build`` does.
+    """
+    from geotex.tiles.tileset import load_tileset, save_tileset
+
+    root = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        root = root.parent                   # pytest-N/popen-gwK: pytest-N is this run's
+    folder = root / "shared-tilesets"
+    folder.mkdir(exist_ok=True)
+
+    def get(key, build):
+        path = folder / f"{key}.npz"
+        with open(folder / f"{key}.lock", "w") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)
+            if not path.exists():
+                save_tileset(path, build())
+        return load_tileset(path)
+
+    return get
 
 
 @pytest.fixture

@@ -195,7 +195,7 @@ def test_suites_pass_on_the_compiled_loops(tmp_path):
     root = Path(__file__).resolve().parents[1]
     env = dict(os.environ, GEOTEX_JIT_MIN_SIZE="0")
     proc = subprocess.run(
-        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "--no-header",
+        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "--no-header", "-n", "0",
          "tests/test_intersections.py", "tests/test_invariants.py", "tests/test_heighttilt.py",
          "tests/test_topology.py", "tests/test_io_formats.py", "tests/test_needles.py",
          "tests/test_check.py"],

@@ -23,9 +23,10 @@ from geotex.tiles import build_tileset, save_tileset
 
 
 @pytest.fixture(scope="module")
-def studs():
+def studs(shared_tileset):
     """A complete one-colour set (6 tiles)."""
-    return build_tileset(exemplar("studs", seed=1, resolution=6), colors=1, seed=0, interior="paste")
+    return shared_tileset("studs-res6-1-seed0-paste", lambda: build_tileset(
+        exemplar("studs", seed=1, resolution=6), colors=1, seed=0, interior="paste"))
 
 
 @pytest.fixture(scope="module")

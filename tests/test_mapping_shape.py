@@ -22,9 +22,9 @@ from geotex.tiles.tiling import planar_tiling, random_arrangement
 
 
 @pytest.fixture(scope="module")
-def studs():
-    return build_tileset(exemplar("studs", seed=1, resolution=6), colors=1, seed=0,
-                         interior="paste")
+def studs(shared_tileset):
+    return shared_tileset("studs-res6-1-seed0-paste", lambda: build_tileset(
+        exemplar("studs", seed=1, resolution=6), colors=1, seed=0, interior="paste"))
 
 
 @pytest.fixture(scope="module")

@@ -51,8 +51,9 @@ def iso_set():
 
 
 @pytest.fixture(scope="module")
-def paste_iso_set():
-    return build_tileset(studs(), colors=2, isotropic=True, seed=3, interior="paste")
+def paste_iso_set(shared_tileset):
+    return shared_tileset("studs-iso-2-seed3-paste", lambda: build_tileset(
+        studs(), colors=2, isotropic=True, seed=3, interior="paste"))
 
 
 # a side as a line: point at parameter t, and the inward direction (into the tile)

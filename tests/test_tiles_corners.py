@@ -41,8 +41,10 @@ def test_corner_density_tells_corners_from_the_rest():
 
 
 @pytest.fixture(scope="module")
-def iso_paste():
-    return build_tileset(studs(), colors=2, isotropic=True, seed=3, interior="paste")
+def iso_paste(shared_tileset):
+    # the same set as test_tiles.py's paste_iso_set, built once per run
+    return shared_tileset("studs-iso-2-seed3-paste", lambda: build_tileset(
+        studs(), colors=2, isotropic=True, seed=3, interior="paste"))
 
 
 def test_corner_squares_hold_as_much_relief_as_the_rest(iso_paste):
@@ -272,3 +274,32 @@ def test_corner_patch_of_scales_leaves_no_vertex_next_to_a_cut_line():
         xy = np.abs(np.concatenate([V[:, :2] for V, _ in p.pieces.values()]))
         assert xy[xy != 0.0].min() >= PATCH_SNAP
         assert (xy == 0.0).any(axis=0).all()      # cut vertices on both lines
+
+
+def test_compiled_place_search_follows_the_height_rule():
+    # _first_free gives the first candidate place where heights_touch holds for no
+    # placed image: random height images, some overlapping in projection
+    from geotex.tiles.fill import CLEAR, _first_free, _packed, heights_touch
+
+    rng = np.random.default_rng(5)
+
+    def image(a, b):
+        low = rng.uniform(0.0, 0.3, (a, b))
+        high = low + rng.uniform(0.0, 0.2, (a, b))
+        gone = rng.random((a, b)) < 0.2                  # absent pixels
+        low[gone], high[gone] = np.inf, -np.inf
+        return low, high
+
+    placed = [(rng.integers(0, 60, 2), *image(*rng.integers(3, 15, 2))) for _ in range(12)]
+    images = _packed(placed)
+    low, high = image(6, 9)
+    places = rng.integers(-5, 70, (400, 2))
+    touches = [any(heights_touch((at, low, high), h, CLEAR) for h in placed) for at in places]
+    assert any(touches) and not all(touches)
+    start = 0
+    free = []
+    while (c := _first_free(places, low, high, images, start)) >= 0:
+        free.append(c)
+        start = c + 1
+    assert free == [i for i, t in enumerate(touches) if not t]
+    assert _first_free(places, low, high, _packed([]), 0) == 0

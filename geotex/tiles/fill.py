@@ -21,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
+from geotex.jit import compiled
 from geotex.mesh.topology import compacted, concatenated, face_components
 
 __all__ = ["PIXEL", "CLEAR", "footprint_pixels", "ExemplarPixels", "fill_gaps", "fill_corners",
@@ -369,8 +370,7 @@ def fill_corners(V: np.ndarray, F: np.ndarray, ex: ExemplarPixels, rng: np.rando
     corner = np.zeros((n, n), dtype=bool)
     corner[np.ix_(np.r_[0:q, n - q:n], np.r_[0:q, n - q:n])] = True
     target = float(cover[~corner].mean())
-    boxes = np.array([[o[0], o[1], o[0] + lo.shape[0], o[1] + lo.shape[1]]
-                      for o, lo, _ in placed], dtype=np.int64).reshape(-1, 4)
+    images = _packed(placed)
     shapes = np.array([h[1].shape for h in ex.heights], dtype=np.int64).reshape(-1, 2)
     usable = np.flatnonzero((shapes > 0).all(axis=1) & (shapes <= n - 2 * c - 2).all(axis=1))
     parts, count = [], 0
@@ -398,22 +398,23 @@ def fill_corners(V: np.ndarray, F: np.ndarray, ex: ExemplarPixels, rng: np.rando
             ok = (free[lo_i:hi_i + 1, lo_j:hi_j + 1] >= FREE_SHARE * mine.sum() - 0.5) \
                 & (gain > 0.5)
             order = np.argsort(-np.where(ok, gain, 0.0), axis=None, kind="stable")
-            for flat in order[:CORNER_PLACES][ok.ravel()[order[:CORNER_PLACES]]].tolist():
-                at = np.array([lo_i + flat // gain.shape[1], lo_j + flat % gain.shape[1]])
-                if _touches((at, low, high), placed, boxes):
-                    continue
-                shift = (o - at) * PIXEL
+            flat = order[:CORNER_PLACES][ok.ravel()[order[:CORNER_PLACES]]]
+            places = np.c_[lo_i + flat // gain.shape[1], lo_j + flat % gain.shape[1]]
+            start = 0
+            while (hit := _first_free(places, low, high, images, start)) >= 0:
+                start = hit + 1
+                shift = (o - places[hit]) * PIXEL
                 Vk, Fk = ex.element(k, shift)   # check again on the moved mesh itself
                 real = element_heights(Vk, Fk, np.zeros(len(Fk), dtype=np.int64), 1)[0]
                 if (not real[1].size or (Vk[:, :2] < CLEAR).any()
-                        or (Vk[:, :2] > 1.0 - CLEAR).any() or _touches(real, placed, boxes)):
+                        or (Vk[:, :2] > 1.0 - CLEAR).any()
+                        or _first_free(real[0][None], real[1], real[2], images, 0) < 0):
                     continue
                 up = Vk[Fk][:, :, 2].mean(axis=1) > 0.0
                 ii, jj, _ = footprint_pixels(Vk, Fk[up], shape=(n, n))
                 cover[ii, jj] = True
                 placed.append(_grown_by_gap(real))
-                ro, rs = placed[-1][0], placed[-1][1].shape
-                boxes = np.vstack([boxes, [ro[0], ro[1], ro[0] + rs[0], ro[1] + rs[1]]])
+                images = _packed(placed)
                 parts.append((Vk, Fk))
                 count += 1
                 break
@@ -431,9 +432,58 @@ def _grown_by_gap(h):
     return (o - r, low, high)
 
 
-def _touches(cand, placed, boxes) -> bool:
-    """Whether a placed height image touches any placed element (:func:`heights_touch`)."""
-    o, low, _ = cand
-    near = np.flatnonzero((boxes[:, 0] < o[0] + low.shape[0]) & (boxes[:, 2] > o[0])
-                          & (boxes[:, 1] < o[1] + low.shape[1]) & (boxes[:, 3] > o[1]))
-    return any(heights_touch(cand, placed[i], CLEAR) for i in near.tolist())
+def _packed(placed):
+    """Placed height images in flat arrays: (origins (p, 2), shapes (p, 2), offsets (p,),
+    low, high (s,)), for :func:`_first_free`."""
+    origins = np.array([h[0] for h in placed], dtype=np.int64).reshape(-1, 2)
+    shapes = np.array([h[1].shape for h in placed], dtype=np.int64).reshape(-1, 2)
+    offsets = np.concatenate([[0], np.cumsum(shapes.prod(axis=1))])[:-1].astype(np.int64)
+    low = np.concatenate([h[1].ravel() for h in placed] + [np.zeros(0)])
+    high = np.concatenate([h[2].ravel() for h in placed] + [np.zeros(0)])
+    return origins, shapes, offsets, low, high
+
+
+def _first_free(places, low, high, images, start) -> int:
+    """The first of ``places`` (from ``start``) where the height image ``(low, high)``
+    touches none of the packed ``images`` (:func:`heights_touch` with :data:`CLEAR`), or -1.
+
+    Parameters
+    ----------
+    places : numpy.ndarray, (c, 2) int64
+        Candidate origins (tile pixels) of the image, in the order tried.
+    low, high : numpy.ndarray, (a, b) float64
+    images : tuple
+        :func:`_packed` placed images (each grown by the gap already).
+    start : int
+    """
+    return int(_first_free_compiled(np.ascontiguousarray(places, dtype=np.int64),
+                                    np.ascontiguousarray(low), np.ascontiguousarray(high),
+                                    *images, CLEAR, int(start)))
+
+
+@compiled
+def _first_free_compiled(places, low, high, origins, shapes, offsets, plow, phigh, clear,
+                         start):  # pragma: no cover - compiled
+    a, b = low.shape
+    for c in range(start, places.shape[0]):
+        oi, oj = places[c, 0], places[c, 1]
+        hit = False
+        for p in range(origins.shape[0]):
+            pi, pj, pa, pb = origins[p, 0], origins[p, 1], shapes[p, 0], shapes[p, 1]
+            i0, j0 = max(oi, pi), max(oj, pj)
+            i1, j1 = min(oi + a, pi + pa), min(oj + b, pj + pb)
+            for i in range(i0, i1):
+                row = offsets[p] + (i - pi) * pb - pj
+                for j in range(j0, j1):
+                    la, ha = low[i - oi, j - oj], high[i - oi, j - oj]
+                    lb, hb = plow[row + j], phigh[row + j]
+                    if max(la, lb) <= min(ha, hb) + clear:
+                        hit = True
+                        break
+                if hit:
+                    break
+            if hit:
+                break
+        if not hit:
+            return c
+    return -1
