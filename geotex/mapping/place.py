@@ -24,7 +24,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from geotex.check.intersections import self_intersecting_pairs
+from geotex.check.intersections import (self_intersecting_pairs,
+                                       self_intersecting_pairs_between)
 from geotex.mapping.seat import smoothed_folds
 from geotex.mapping.shape import SPREAD, shaped_positions
 from geotex.mesh.geometry import group_boxes
@@ -242,7 +243,8 @@ def _crowded_leaned(X, faces, element, leaned):
     """Leaned elements that cross an element standing as the map's offsets do.
 
     The exact test runs on the leaned elements and the elements whose boxes
-    overlap theirs, one part per element.
+    overlap theirs, one part per element, and examines only the pairs of a
+    leaned and an upright element (the rows of the whole test that decide).
     """
     n = leaned.size
     out = np.zeros(n, dtype=bool)
@@ -258,10 +260,10 @@ def _crowded_leaned(X, faces, element, leaned):
     cand = np.union1d(lean, j[overlap])
     label = element[faces[:, 0]]
     sub = np.flatnonzero(np.isin(label, cand))
-    pairs = sub[self_intersecting_pairs(X, faces[sub], parts=label[sub])]
+    pairs = sub[self_intersecting_pairs_between(X, faces[sub], label[sub],
+                                                side=leaned[label[sub]])]
     a, b = label[pairs[:, 0]], label[pairs[:, 1]]
-    mixed = (a != b) & (leaned[a] != leaned[b])
-    out[np.where(leaned[a], a, b)[mixed]] = True
+    out[np.where(leaned[a], a, b)] = True
     return out
 
 

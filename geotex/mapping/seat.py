@@ -33,7 +33,8 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from geotex.check.intersections import self_intersecting_pairs
+from geotex.check.intersections import (self_intersecting_pairs,
+                                       self_intersecting_pairs_between)
 from geotex.mapping.shape import shaped_positions
 from geotex.mesh.geometry import group_boxes
 from geotex.mesh.topology import compacted, concatenated, edge_topology
@@ -113,12 +114,14 @@ def _overlapping(lo, hi, box_lo, box_hi) -> np.ndarray:
 def _crossing_parts(parts_mesh, probe: int) -> tuple[np.ndarray, np.ndarray]:
     """Exact crossings of part ``probe`` of ``[(V, F), ...]``: with itself, with others.
 
-    Returns the sorted other parts met and whether the probe crosses itself.
+    Returns the sorted other parts met and whether the probe crosses itself
+    (only the probe's pairs are examined).
     """
     parts_mesh = [compacted(V, F) if len(F) else (V[:0], F) for V, F in parts_mesh]
     V, F = concatenated(parts_mesh)
     part = np.repeat(np.arange(len(parts_mesh)), [len(f) for _, f in parts_mesh])
-    pairs = self_intersecting_pairs(V, F, parts=part)
+    mine = part == probe
+    pairs = self_intersecting_pairs_between(V, F, part, side=mine, within=mine)
     a, b = part[pairs[:, 0]], part[pairs[:, 1]]
     mine = (a == probe) | (b == probe)
     other = np.where(a == probe, b, a)[mine]
