@@ -335,7 +335,7 @@ def self_intersecting_pairs_touching(V, F, faces) -> np.ndarray:
     return np.stack([near[keys // k], near[keys % k]], axis=1)   # ``near`` ascends: i < j
 
 
-def self_intersecting_pairs_between(V, F, parts, *, side, within=None) -> np.ndarray:
+def self_intersecting_pairs_between(V, F, parts, *, side=None, within=None) -> np.ndarray:
     """Return the intersecting pairs of :func:`self_intersecting_pairs` between sides of parts.
 
     Exactly the rows of ``self_intersecting_pairs(V, F)`` whose two faces lie
@@ -350,11 +350,14 @@ def self_intersecting_pairs_between(V, F, parts, *, side, within=None) -> np.nda
     F : array_like, (m, 3) int64
     parts : array_like, (m,) int
         Part of every face (for example its connected component).
-    side : array_like, (m,) int or bool
-        Side of every face's part (the same for every face of a part).
+    side : array_like, (m,) int or bool, optional
+        Side of every face's part (the same for every face of a part;
+        default: one side, no pairs between parts).
     within : array_like, (m,) bool, optional
         Whether the pairs within every face's part are wanted too (the same
-        for every face of a part; default: none).
+        for every face of a part; default: none). One part ``within`` is
+        the whole test of a small mesh (an element) without its grid and fan
+        stages.
 
     Returns
     -------
@@ -392,6 +395,8 @@ def self_intersecting_pairs_between(V, F, parts, *, side, within=None) -> np.nda
                              f"per face, shape ({m},), got {a.dtype} {a.shape}")
         arrays[name] = a
     parts, side, within = arrays["parts"], arrays["side"], arrays["within"]
+    if side is None:
+        side = np.zeros(m, dtype=np.int64)
     empty = np.zeros((0, 2), dtype=np.int64)
     if m < 2:
         return empty

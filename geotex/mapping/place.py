@@ -24,9 +24,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from geotex.check.intersections import (self_intersecting_pairs,
-                                       self_intersecting_pairs_between)
-from geotex.mapping.seat import smoothed_folds
+from geotex.check.intersections import self_intersecting_pairs_between
+from geotex.mapping.seat import _own_crossings, smoothed_folds
 from geotex.mapping.shape import SPREAD, shaped_positions
 from geotex.mesh.geometry import group_boxes
 from geotex.mesh.topology import vertex_components
@@ -380,7 +379,7 @@ def reseated_elements(shell, mapped: "MappedTiles", label: np.ndarray, elements,
         for j, e in enumerate(still):
             fj = local[fstart[j]:fstart[j] + counts[j]]
             vj, lj = np.unique(fj, return_inverse=True)
-            if self_intersecting_pairs(Xe[vj], lj.reshape(-1, 3), max_pairs=1).size == 0:
+            if _own_crossings(Xe[vj], lj.reshape(-1, 3)).size == 0:
                 X[verts[vj]] = Xe[vj]
             else:
                 left.append(e)

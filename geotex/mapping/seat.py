@@ -128,6 +128,17 @@ def _crossing_parts(parts_mesh, probe: int) -> tuple[np.ndarray, np.ndarray]:
     return np.unique(other[other != probe]), bool(np.any(other == probe))
 
 
+def _own_crossings(V: np.ndarray, F: np.ndarray) -> np.ndarray:
+    """Every crossing pair of faces of one small part (an element), sorted.
+
+    The rows of ``self_intersecting_pairs(V, F)``, found by sweeping the one
+    part (no grid, no fan stage: a few ms less per element).
+    """
+    m = len(F)
+    return self_intersecting_pairs_between(V, F, np.zeros(m, dtype=np.int64),
+                                           within=np.ones(m, dtype=bool))
+
+
 def _clean_move(X: np.ndarray, G: np.ndarray, moved: np.ndarray, fbox, pool: np.ndarray
                 ) -> bool:
     """Whether no face at a ``moved`` vertex crosses any face (exact test, local).
@@ -146,8 +157,10 @@ def _clean_move(X: np.ndarray, G: np.ndarray, moved: np.ndarray, fbox, pool: np.
     blo, bhi = P.min(axis=(0, 1)), P.max(axis=(0, 1))
     rows = np.flatnonzero(_overlapping(fbox[0][pool], fbox[1][pool], blo, bhi) | changed)
     V2, F2 = compacted(X, Gp[rows])
-    pairs = self_intersecting_pairs(V2, F2)
-    return not changed[rows[pairs.ravel()]].any()
+    mine = changed[rows]           # only the pairs with a moved face are examined
+    pairs = self_intersecting_pairs_between(V2, F2, mine.astype(np.int64), side=mine,
+                                            within=mine)
+    return not pairs.size
 
 
 def _pool(X: np.ndarray, G: np.ndarray, fbox, points: np.ndarray, margin: float) -> np.ndarray:
@@ -477,7 +490,7 @@ def smoothed_folds(X: np.ndarray, G: np.ndarray, label: np.ndarray, folded, *,
         local = local.reshape(-1, 3)
         n = verts.size
         Xe0 = X[verts]
-        pairs = self_intersecting_pairs(Xe0, local)
+        pairs = _own_crossings(Xe0, local)
         seed = np.zeros(n, dtype=bool)
         seed[local[pairs.ravel()].ravel()] = True
         E = edge_topology(local, n).edges
@@ -498,7 +511,7 @@ def smoothed_folds(X: np.ndarray, G: np.ndarray, label: np.ndarray, folded, *,
                 Xe[inner] = 0.5 * (Xe[inner] + mean[inner])
             if not inner.any():
                 continue
-            if self_intersecting_pairs(Xe, local, max_pairs=1).size:
+            if _own_crossings(Xe, local).size:
                 continue
             # tried in place, put back if the move crosses anything
             X[verts] = Xe
@@ -728,7 +741,7 @@ def remapped_folds(shell, mapped, X: np.ndarray, label: np.ndarray, folded, *, s
         faces = G[order[starts[e]:starts[e + 1]]]
         verts, local = np.unique(faces, return_inverse=True)
         local = local.reshape(-1, 3)
-        pairs = self_intersecting_pairs(X[verts], local)
+        pairs = _own_crossings(X[verts], local)
         seed = verts[np.unique(local[pairs.ravel()].ravel())]
         if seed.size == 0:
             # it crosses nothing of its own (the contact test counted it folded on
