@@ -98,6 +98,9 @@ _MAX_WORKERS = 4
 _FAN_SAFETY = 8.0
 # Largest part swept by parts= (a sweep is quadratic in the worst case).
 _PART_MAX_FACES = 4096
+# Meshes up to this many faces are searched by self_intersecting_pairs_between
+# in the calling thread.
+_SERIAL_FACES = 4096
 # Bits of the packed sort key (cell, level flag, face, corner flags).
 _KEY_BITS = 62
 # Largest grid whose occupied cells the compiled grid marks in a bit array (32 MB);
@@ -410,12 +413,16 @@ def self_intersecting_pairs_between(V, F, parts, *, side=None, within=None) -> n
 
     if _duplicate_classes(F) is not None:             # rare: the full search groups them
         return wanted(self_intersecting_pairs(V, F))
-    pool = ThreadPoolExecutor(max_workers=_workers())
+    # small meshes (an element and its surroundings) in this thread: starting
+    # the pool's threads costs more than they would save
+    pool = ThreadPoolExecutor(max_workers=_workers()) if m > _SERIAL_FACES else None
+    mapper = map if pool is None else pool.map
     try:
-        faces = _FaceData(_normalized(V, F), F, mapper=pool.map)
-        keys = _part_sweep(faces, parts, mapper=pool.map, side=side, within=within)
+        faces = _FaceData(_normalized(V, F), F, mapper=mapper)
+        keys = _part_sweep(faces, parts, mapper=mapper, side=side, within=within)
     finally:
-        pool.shutdown(wait=True, cancel_futures=True)
+        if pool is not None:
+            pool.shutdown(wait=True, cancel_futures=True)
     if keys is None:                                  # a part too large to sweep
         return wanted(self_intersecting_pairs(V, F))
     return np.stack([keys // m, keys % m], axis=1)
