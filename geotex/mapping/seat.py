@@ -87,7 +87,7 @@ def _seating_boxes(shell, X: np.ndarray, G: np.ndarray, label: np.ndarray):
     lo, hi = _element_boxes(X, G, label, n_el)
     order = np.argsort(label, kind="stable")
     starts = np.searchsorted(label[order], np.arange(n_el + 1))
-    return lo, hi, V0[F0].min(axis=1), V0[F0].max(axis=1), order, starts
+    return (lo, hi) + _face_boxes(V0, F0) + (order, starts)
 
 
 def _crossings_near(Xc, Fc, e: int, X, G, boxes, V0, F0) -> tuple[np.ndarray, bool]:
@@ -107,8 +107,17 @@ def _crossings_near(Xc, Fc, e: int, X, G, boxes, V0, F0) -> tuple[np.ndarray, bo
 
 
 def _overlapping(lo, hi, box_lo, box_hi) -> np.ndarray:
-    """Rows of ``(lo, hi)`` whose boxes overlap the box ``(box_lo, box_hi)``."""
-    return np.all((lo <= box_hi) & (hi >= box_lo), axis=1)
+    """Rows of ``(lo, hi)`` whose boxes overlap the box ``(box_lo, box_hi)`` (a mask)."""
+    out = (lo[:, 0] <= box_hi[0]) & (hi[:, 0] >= box_lo[0])
+    rows = np.flatnonzero(out)             # the other axes on the few that overlap on x
+    out[rows] = np.all((lo[rows, 1:] <= box_hi[1:]) & (hi[rows, 1:] >= box_lo[1:]), axis=1)
+    return out
+
+
+def _face_boxes(X: np.ndarray, G: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Bounding box ``(lo, hi)`` of every face, ``(m, 3)`` each."""
+    a, b, c = X[G[:, 0]], X[G[:, 1]], X[G[:, 2]]
+    return np.minimum(np.minimum(a, b), c), np.maximum(np.maximum(a, b), c)
 
 
 def _crossing_parts(parts_mesh, probe: int) -> tuple[np.ndarray, np.ndarray]:
@@ -168,7 +177,8 @@ def _pool(X: np.ndarray, G: np.ndarray, fbox, points: np.ndarray, margin: float)
     at = np.zeros(X.shape[0], dtype=bool)
     at[points] = True
     lo, hi = X[points].min(axis=0) - margin, X[points].max(axis=0) + margin
-    return np.flatnonzero(_overlapping(fbox[0], fbox[1], lo, hi) | at[G].any(axis=1))
+    return np.flatnonzero(_overlapping(fbox[0], fbox[1], lo, hi)
+                          | at[G[:, 0]] | at[G[:, 1]] | at[G[:, 2]])
 
 
 def floating_elements(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray, *,
@@ -243,7 +253,7 @@ def floating_elements(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray
         # wholly outside: their faces may still cross the base's (exact test)
         lo, hi = _element_boxes(X, G, label, n_el)
         pad = 1e-9 * float(np.linalg.norm(np.ptp(V, axis=0)))
-        fl, fh = V[F].min(axis=1), V[F].max(axis=1)
+        fl, fh = _face_boxes(V, F)
         near = np.zeros(len(F), dtype=bool)
         for e in cand:
             near |= np.all((fl <= hi[e] + pad) & (fh >= lo[e] - pad), axis=1)
@@ -481,8 +491,7 @@ def smoothed_folds(X: np.ndarray, G: np.ndarray, label: np.ndarray, folded, *,
     n_el = int(label.max()) + 1
     order = np.argsort(label, kind="stable")
     starts = np.searchsorted(label[order], np.arange(n_el + 1))
-    P = X[G]
-    fbox = [P.min(axis=1), P.max(axis=1)]
+    fbox = None                    # the faces' boxes, once a move is to be tested
     left = []
     for e in todo:
         faces = G[order[starts[e]:starts[e + 1]]]
@@ -513,6 +522,8 @@ def smoothed_folds(X: np.ndarray, G: np.ndarray, label: np.ndarray, folded, *,
                 continue
             if _own_crossings(Xe, local).size:
                 continue
+            if fbox is None:       # (no move kept yet: the boxes of X as given)
+                fbox = list(_face_boxes(X, G))
             # tried in place, put back if the move crosses anything
             X[verts] = Xe
             pool = _pool(X, G, fbox, verts[region], float(np.ptp(Xe0[region], axis=0).max()))
@@ -733,8 +744,7 @@ def remapped_folds(shell, mapped, X: np.ndarray, label: np.ndarray, folded, *, s
     uvw_all, quad_all = mapped.tile_points, mapped.quads
     w_all = np.where(uvw_all[:, 2] < 0, uvw_all[:, 2] * float(depth_scale),
                      uvw_all[:, 2] * float(scale))
-    P = X[G]
-    fbox = [P.min(axis=1), P.max(axis=1)]
+    fbox = list(_face_boxes(X, G))
     trials = [(float(r), 1.0) for r in radii] + [(float(radii[-1]), float(f)) for f in heights]
     left = []
     for e in todo:
