@@ -869,7 +869,7 @@ def test_parts_too_large_fall_back_to_the_grid(monkeypatch):
 def test_pairs_between_sides_are_the_filtered_full_search(case, jit, monkeypatch):
     V, F, parts = _parts_cases()[case]
     reference = self_intersecting_pairs(V, F)
-    monkeypatch.setattr(gi, "JIT_MIN_SIZE", 0 if jit else 10 ** 12)   # per-face data
+    monkeypatch.setattr(gi, "JIT_MIN_SIZE", 0 if jit else 10 ** 12)   # the reference's path
     rng = np.random.default_rng(case)
     n = int(parts.max()) + 1
     side_of = np.arange(n) % 3
@@ -890,6 +890,21 @@ def test_pairs_between_sides_are_the_filtered_full_search(case, jit, monkeypatch
         assert np.array_equal(got, reference)
         assert gi.self_intersecting_pairs_between(V, F, one).shape == (0, 2)
     assert reference[cross].size                     # the cases meet across sides
+
+
+def test_per_face_data_compiled_equal_numpy_bit_for_bit():
+    # self_intersecting_pairs_between takes the compiled per-face data at any size
+    rng = np.random.default_rng(4)
+    V, F = random_soup(3, m=400, sizes=(0.001, 0.9))
+    Vd = rng.normal(size=(300, 3)) * 1e3
+    Fd = rng.integers(0, 300, size=(800, 3))
+    Fd[:40, 1] = Fd[:40, 0]                          # degenerate rows too
+    for V, F in (icosphere(3), torus(40, 17), (V, F), (Vd, Fd)):
+        Vn = gi._normalized(V, F)
+        a = gi._FaceData(Vn, F, compiled=False)
+        b = gi._FaceData(Vn, F, compiled=True)
+        for name in ("plane", "tol", "E", "box32", "active"):
+            assert getattr(a, name).tobytes() == getattr(b, name).tobytes(), name
 
 
 def test_pairs_between_parts_too_large_fall_back_to_the_full_search(monkeypatch):

@@ -418,7 +418,8 @@ def self_intersecting_pairs_between(V, F, parts, *, side=None, within=None) -> n
     pool = ThreadPoolExecutor(max_workers=_workers()) if m > _SERIAL_FACES else None
     mapper = map if pool is None else pool.map
     try:
-        faces = _FaceData(_normalized(V, F), F, mapper=mapper)
+        # (the sweep is compiled: so are the per-face data, the same numbers)
+        faces = _FaceData(_normalized(V, F), F, mapper=mapper, compiled=True)
         keys = _part_sweep(faces, parts, mapper=mapper, side=side, within=within)
     finally:
         if pool is not None:
@@ -678,7 +679,8 @@ class _FaceData:
         (``(0, 3)`` until set).
     """
 
-    def __init__(self, Vn: np.ndarray, F: np.ndarray, *, mapper=map):
+    def __init__(self, Vn: np.ndarray, F: np.ndarray, *, mapper=map, compiled=None):
+        # compiled: the compiled loops whatever the size (default: from JIT_MIN_SIZE)
         m = F.shape[0]
         self.V = Vn
         self.F = np.ascontiguousarray(F)
@@ -688,7 +690,7 @@ class _FaceData:
         self.box32 = np.empty((m, 6), dtype=np.float32)
         bad = np.empty(m, dtype=bool)
         blocks = range(0, m, _FACE_BLOCK)
-        if F.size >= JIT_MIN_SIZE:
+        if F.size >= JIT_MIN_SIZE if compiled is None else compiled:
             fill = partial(_face_loops, Vn, self.F, self.plane, self.tol, self.E, self.box32, bad)
             for _ in mapper(lambda s: fill(s, min(s + _FACE_BLOCK, m)), blocks):
                 pass
