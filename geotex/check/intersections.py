@@ -53,6 +53,11 @@ From ``JIT_MIN_SIZE`` corner entries, steps 2-5 run as compiled loops
 terms with the vertices split between two threads, each level's grid
 (:func:`_level_grid`: entries, radix sort, pair counts, no stored cell
 ranges) and the pair tasks over its entries; the same pairs as the numpy path.
+
+:func:`self_intersecting_pairs_touching` (pairs with a face of a subset) and
+:func:`self_intersecting_pairs_between` (pairs between sides of parts, or
+within chosen parts) return rows of the same answer without computing the
+rest of it.
 """
 
 from __future__ import annotations
