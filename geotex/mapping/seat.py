@@ -129,11 +129,10 @@ def _crossing_parts(parts_mesh, probe: int) -> tuple[np.ndarray, np.ndarray]:
     parts_mesh = [compacted(V, F) if len(F) else (V[:0], F) for V, F in parts_mesh]
     V, F = concatenated(parts_mesh)
     part = np.repeat(np.arange(len(parts_mesh)), [len(f) for _, f in parts_mesh])
-    mine = part == probe
-    pairs = self_intersecting_pairs_between(V, F, part, side=mine, within=mine)
+    at_probe = part == probe
+    pairs = self_intersecting_pairs_between(V, F, part, side=at_probe, within=at_probe)
     a, b = part[pairs[:, 0]], part[pairs[:, 1]]
-    mine = (a == probe) | (b == probe)
-    other = np.where(a == probe, b, a)[mine]
+    other = np.where(a == probe, b, a)              # (every pair has a face of the probe)
     return np.unique(other[other != probe]), bool(np.any(other == probe))
 
 
