@@ -864,6 +864,72 @@ def test_parts_too_large_fall_back_to_the_grid(monkeypatch):
     assert np.array_equal(got, reference) and reference.size
 
 
+@pytest.mark.parametrize("jit", [True, False])
+@pytest.mark.parametrize("case", range(6))
+def test_pairs_between_sides_are_the_filtered_full_search(case, jit, monkeypatch):
+    V, F, parts = _parts_cases()[case]
+    reference = self_intersecting_pairs(V, F)
+    monkeypatch.setattr(gi, "JIT_MIN_SIZE", 0 if jit else 10 ** 12)   # the reference's path
+    rng = np.random.default_rng(case)
+    n = int(parts.max()) + 1
+    side_of = np.arange(n) % 3
+    within_of = rng.random(n) < 0.4
+    side, within = side_of[parts], within_of[parts]
+    i, j = reference[:, 0], reference[:, 1]
+    cross = side[i] != side[j]
+    own = (parts[i] == parts[j]) & within[i]
+    for serial in (0, 10 ** 6):                      # on the pool, and in this thread
+        monkeypatch.setattr(gi, "_SERIAL_FACES", serial)
+        got = gi.self_intersecting_pairs_between(V, F, parts, side=side)
+        assert got.dtype == np.int64 and np.array_equal(got, reference[cross])
+        got = gi.self_intersecting_pairs_between(V, F, parts, side=side, within=within)
+        assert np.array_equal(got, reference[cross | own])
+        # one part, every pair within it: the whole test
+        one = np.zeros(len(F), dtype=np.int64)
+        got = gi.self_intersecting_pairs_between(V, F, one, within=np.ones(len(F), bool))
+        assert np.array_equal(got, reference)
+        assert gi.self_intersecting_pairs_between(V, F, one).shape == (0, 2)
+    assert reference[cross].size                     # the cases meet across sides
+
+
+def test_per_face_data_compiled_equal_numpy_bit_for_bit():
+    # self_intersecting_pairs_between takes the compiled per-face data at any size
+    rng = np.random.default_rng(4)
+    V, F = random_soup(3, m=400, sizes=(0.001, 0.9))
+    Vd = rng.normal(size=(300, 3)) * 1e3
+    Fd = rng.integers(0, 300, size=(800, 3))
+    Fd[:40, 1] = Fd[:40, 0]                          # degenerate rows too
+    for V, F in (icosphere(3), torus(40, 17), (V, F), (Vd, Fd)):
+        Vn = gi._normalized(V, F)
+        a = gi._FaceData(Vn, F, compiled=False)
+        b = gi._FaceData(Vn, F, compiled=True)
+        for name in ("plane", "tol", "E", "box32", "active"):
+            assert getattr(a, name).tobytes() == getattr(b, name).tobytes(), name
+
+
+def test_pairs_between_parts_too_large_fall_back_to_the_full_search(monkeypatch):
+    V, F = icosphere(2)
+    V2, F2 = np.vstack([V, V + 0.3]), np.vstack([F, F + len(V)])
+    parts = np.repeat([0, 1], len(F))
+    reference = self_intersecting_pairs(V2, F2)
+    monkeypatch.setattr(gi, "_PART_MAX_FACES", 100)
+    monkeypatch.setattr(gi, "_part_loops", None)         # must not be reached
+    got = gi.self_intersecting_pairs_between(V2, F2, parts, side=parts)
+    cross = parts[reference[:, 0]] != parts[reference[:, 1]]
+    assert np.array_equal(got, reference[cross]) and got.size
+
+
+@pytest.mark.parametrize("bad", [dict(parts=np.zeros(3, int)), dict(side=np.zeros(3)),
+                                 dict(within=np.zeros(4, int))])
+def test_pairs_between_need_one_value_per_face(bad):
+    V, F = icosphere(0)
+    args = dict(parts=np.zeros(len(F), int), side=np.zeros(len(F), int),
+                within=np.zeros(len(F), bool))
+    args.update({k: np.resize(v, len(F) if k == "within" else len(v)) for k, v in bad.items()})
+    with pytest.raises(InputError):
+        gi.self_intersecting_pairs_between(V, F, args.pop("parts"), **args)
+
+
 @pytest.mark.parametrize("parts", [np.zeros(3, int), np.zeros((4, 1), int), np.zeros(4)])
 def test_parts_must_be_one_integer_per_face(parts):
     V, F = icosphere(0)

@@ -53,6 +53,11 @@ From ``JIT_MIN_SIZE`` corner entries, steps 2-5 run as compiled loops
 terms with the vertices split between two threads, each level's grid
 (:func:`_level_grid`: entries, radix sort, pair counts, no stored cell
 ranges) and the pair tasks over its entries; the same pairs as the numpy path.
+
+:func:`self_intersecting_pairs_touching` (pairs with a face of a subset) and
+:func:`self_intersecting_pairs_between` (pairs between sides of parts, or
+within chosen parts) return rows of the same answer without computing the
+rest of it.
 """
 
 from __future__ import annotations
@@ -70,7 +75,8 @@ from geotex.jit import JIT_MIN_SIZE, compiled, helper
 from geotex.mesh.arrays import as_mesh_arrays
 from geotex.mesh.topology import edge_topology, has_twin_faces, unpaired_edge_vertices
 
-__all__ = ["self_intersecting_pairs", "self_intersecting_pairs_touching", "REL_TOL", "ABS_TOL"]
+__all__ = ["self_intersecting_pairs", "self_intersecting_pairs_touching",
+           "self_intersecting_pairs_between", "REL_TOL", "ABS_TOL"]
 
 #: Tolerance of the geometric predicates relative to the local triangle size
 #: (the longest edge of the two triangles of a pair).
@@ -97,6 +103,9 @@ _MAX_WORKERS = 4
 _FAN_SAFETY = 8.0
 # Largest part swept by parts= (a sweep is quadratic in the worst case).
 _PART_MAX_FACES = 4096
+# Meshes up to this many faces are searched by self_intersecting_pairs_between
+# in the calling thread.
+_SERIAL_FACES = 4096
 # Bits of the packed sort key (cell, level flag, face, corner flags).
 _KEY_BITS = 62
 # Largest grid whose occupied cells the compiled grid marks in a bit array (32 MB);
@@ -332,6 +341,97 @@ def self_intersecting_pairs_touching(V, F, faces) -> np.ndarray:
     keys = np.sort(np.concatenate(found))
     k = sub.shape[0]
     return np.stack([near[keys // k], near[keys % k]], axis=1)   # ``near`` ascends: i < j
+
+
+def self_intersecting_pairs_between(V, F, parts, *, side=None, within=None) -> np.ndarray:
+    """Return the intersecting pairs of :func:`self_intersecting_pairs` between sides of parts.
+
+    Exactly the rows of ``self_intersecting_pairs(V, F)`` whose two faces lie
+    in parts on different sides (``side`` differs), and, with ``within``,
+    those whose two faces lie in one part marked ``within``; the pairs of
+    other parts (the whole of a mesh beside the few parts that matter, or
+    every element's own faces) are not examined.
+
+    Parameters
+    ----------
+    V : array_like, (n, 3) float64
+    F : array_like, (m, 3) int64
+    parts : array_like, (m,) int
+        Part of every face (for example its connected component).
+    side : array_like, (m,) int or bool, optional
+        Side of every face's part (the same for every face of a part;
+        default: one side, no pairs between parts).
+    within : array_like, (m,) bool, optional
+        Whether the pairs within every face's part are wanted too (the same
+        for every face of a part; default: none). One part ``within`` is
+        the whole test of a small mesh (an element) without its grid and fan
+        stages.
+
+    Returns
+    -------
+    numpy.ndarray, (p, 2) int64
+        Face index pairs ``(i, j)``, ``i < j``, sorted, without repetition.
+
+    Raises
+    ------
+    InputError
+        If ``V`` or ``F`` is malformed, or ``parts``, ``side`` or ``within``
+        is not one value per face.
+
+    Notes
+    -----
+    The predicates see the same numbers as in the full search (the same
+    normalised coordinates and per-face data), and the pairs are those of the
+    part sweep of ``self_intersecting_pairs(V, F, parts=parts)``, restricted
+    to the wanted pairs of parts.  Pairs around a vertex with a separated fan
+    (module docstring, step 3), which the full search never tests because
+    the narrow phase provably rejects them, are tested here, so no fan is
+    examined; the answer is the same.  With faces of the same vertex set, or
+    a part too large to sweep, the full search is run and its answer
+    filtered.
+    """
+    V, F = as_mesh_arrays(V, F)
+    m = F.shape[0]
+    arrays = {"parts": parts, "side": side, "within": within}
+    for name, value in arrays.items():
+        if value is None:
+            continue
+        a = np.asarray(value)
+        ok = a.dtype == bool or np.issubdtype(a.dtype, np.integer)
+        if a.shape != (m,) or not ok or (name == "within" and a.dtype != bool):
+            raise InputError(f"{name} must be one {'bool' if name == 'within' else 'integer'} "
+                             f"per face, shape ({m},), got {a.dtype} {a.shape}")
+        arrays[name] = a
+    parts, side, within = arrays["parts"], arrays["side"], arrays["within"]
+    if side is None:
+        side = np.zeros(m, dtype=np.int64)
+    empty = np.zeros((0, 2), dtype=np.int64)
+    if m < 2:
+        return empty
+
+    def wanted(pairs):
+        i, j = pairs[:, 0], pairs[:, 1]
+        keep = side[i] != side[j]
+        if within is not None:
+            keep |= (parts[i] == parts[j]) & within[i]
+        return pairs[keep]
+
+    if _duplicate_classes(F) is not None:             # rare: the full search groups them
+        return wanted(self_intersecting_pairs(V, F))
+    # small meshes (an element and its surroundings) in this thread: starting
+    # the pool's threads costs more than they would save
+    pool = ThreadPoolExecutor(max_workers=_workers()) if m > _SERIAL_FACES else None
+    mapper = map if pool is None else pool.map
+    try:
+        # (the sweep is compiled: so are the per-face data, the same numbers)
+        faces = _FaceData(_normalized(V, F), F, mapper=mapper, compiled=True)
+        keys = _part_sweep(faces, parts, mapper=mapper, side=side, within=within)
+    finally:
+        if pool is not None:
+            pool.shutdown(wait=True, cancel_futures=True)
+    if keys is None:                                  # a part too large to sweep
+        return wanted(self_intersecting_pairs(V, F))
+    return np.stack([keys // m, keys % m], axis=1)
 
 
 def _faces_near(Vn, F, sel):
@@ -584,7 +684,8 @@ class _FaceData:
         (``(0, 3)`` until set).
     """
 
-    def __init__(self, Vn: np.ndarray, F: np.ndarray, *, mapper=map):
+    def __init__(self, Vn: np.ndarray, F: np.ndarray, *, mapper=map, compiled=None):
+        # compiled: the compiled loops whatever the size (default: from JIT_MIN_SIZE)
         m = F.shape[0]
         self.V = Vn
         self.F = np.ascontiguousarray(F)
@@ -594,7 +695,7 @@ class _FaceData:
         self.box32 = np.empty((m, 6), dtype=np.float32)
         bad = np.empty(m, dtype=bool)
         blocks = range(0, m, _FACE_BLOCK)
-        if F.size >= JIT_MIN_SIZE:
+        if F.size >= JIT_MIN_SIZE if compiled is None else compiled:
             fill = partial(_face_loops, Vn, self.F, self.plane, self.tol, self.E, self.box32, bad)
             for _ in mapper(lambda s: fill(s, min(s + _FACE_BLOCK, m)), blocks):
                 pass
@@ -1203,7 +1304,7 @@ def _pair_task(faces, level, s, e):
 # broad phase by parts (many small parts: mapped texture elements)
 
 
-def _part_sweep(faces: _FaceData, parts: np.ndarray, *, mapper=map):
+def _part_sweep(faces: _FaceData, parts: np.ndarray, *, mapper=map, side=None, within=None):
     """The intersecting pairs as keys ``i * m + j``, found by sweeping parts.
 
     Every pair of active faces whose boxes overlap is examined once, as on the
@@ -1213,15 +1314,27 @@ def _part_sweep(faces: _FaceData, parts: np.ndarray, *, mapper=map):
     over the faces of each that overlap the other's box.  ``None`` when a part
     is too large for sweeping (the caller takes the grid).  The parts are
     swept in chunks (``mapper``: the thread pool); the keys come back sorted.
+
+    With ``side`` (per face, one value per part) only pairs of parts on
+    different sides are swept, and within-part pairs only in the parts whose
+    faces are ``within`` (per face; default none).
     """
     act = faces.active
     part = np.asarray(parts, dtype=np.int64)[act]
     if act.size == 0:
         return np.zeros(0, dtype=np.int64)
-    _, part, count = np.unique(part, return_inverse=True, return_counts=True)
+    _, first, part, count = np.unique(part, return_index=True, return_inverse=True,
+                                      return_counts=True)
     part = part.ravel()
     if count.max() > _PART_MAX_FACES:
         return None
+    if side is None:                            # every pair of parts, and within each
+        pside = np.arange(count.size, dtype=np.int64)
+        pwithin = np.ones(count.size, dtype=bool)
+    else:
+        pside = np.asarray(side, dtype=np.int64)[act[first]]
+        pwithin = (np.zeros(count.size, dtype=bool) if within is None
+                   else np.asarray(within, dtype=bool)[act[first]])
     box = faces.box32
     order = act[np.lexsort((box[act, 0], part))]          # by part, then low x
     pstart = np.concatenate([[0], np.cumsum(count)]).astype(np.int64)
@@ -1234,10 +1347,10 @@ def _part_sweep(faces: _FaceData, parts: np.ndarray, *, mapper=map):
     porder = np.argsort(pbox[:, 0], kind="stable").astype(np.int64)
     order = order.astype(np.int64)
     cuts = np.linspace(0, n_parts, min(n_parts, 16) + 1).astype(np.int64)
-    keys = list(mapper(lambda k: _part_loops(order, pstart, pbox, porder, int(cuts[k]),
-                                             int(cuts[k + 1]), box, faces.masked_rows,
-                                             faces.F, faces.V, faces.plane, faces.tol,
-                                             faces.E), range(cuts.size - 1)))
+    keys = list(mapper(lambda k: _part_loops(order, pstart, pbox, porder, pside, pwithin,
+                                             int(cuts[k]), int(cuts[k + 1]), box,
+                                             faces.masked_rows, faces.F, faces.V, faces.plane,
+                                             faces.tol, faces.E), range(cuts.size - 1)))
     return np.sort(np.concatenate(keys)) if keys else np.zeros(0, dtype=np.int64)
 
 
@@ -1252,12 +1365,14 @@ def _pushed(out, found, key):
 
 
 @compiled
-def _part_loops(order, pstart, pbox, porder, c0, c1, box, mrows, F, V, plane, tol, E):
+def _part_loops(order, pstart, pbox, porder, pside, pwithin, c0, c1, box, mrows, F, V, plane,
+                tol, E):
     """Sweeps of :func:`_part_sweep`: ``order`` holds the active faces by part,
     then low x; part ``p`` is ``order[pstart[p]:pstart[p + 1]]``; ``porder``
     lists the parts by the low x of their boxes ``pbox``.  Sweeps parts
-    ``c0 .. c1 - 1`` and the pairs of parts whose first (in ``porder``) is
-    ``porder[c0 .. c1 - 1]``.  Returns the keys."""
+    ``c0 .. c1 - 1`` (those with ``pwithin``) and the pairs of parts whose
+    first (in ``porder``) is ``porder[c0 .. c1 - 1]`` (those of different
+    ``pside``).  Returns the keys."""
     # the box and fan tests are written out in the loops: a call passing
     # arrays costs reference counting, which would cost more than the tests
     m = F.shape[0]
@@ -1266,6 +1381,8 @@ def _part_loops(order, pstart, pbox, porder, c0, c1, box, mrows, F, V, plane, to
     found = 0
     n_parts = pstart.shape[0] - 1
     for p in range(c0, c1):                      # within a part
+        if not pwithin[p]:
+            continue
         s, e = pstart[p], pstart[p + 1]
         for x in range(s, e):
             fa = order[x]
@@ -1297,6 +1414,8 @@ def _part_loops(order, pstart, pbox, porder, c0, c1, box, mrows, F, V, plane, to
             q = porder[ib]
             if pbox[q, 0] > pbox[p, 3]:
                 break
+            if pside[p] == pside[q]:
+                continue
             if (pbox[p, 1] > pbox[q, 4] or pbox[q, 1] > pbox[p, 4]
                     or pbox[p, 2] > pbox[q, 5] or pbox[q, 2] > pbox[p, 5]):
                 continue

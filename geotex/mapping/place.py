@@ -24,9 +24,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from geotex.check.intersections import self_intersecting_pairs
-from geotex.mapping.seat import smoothed_folds
-from geotex.mapping.shape import SPREAD, shaped_positions
+from geotex.check.intersections import self_intersecting_pairs_between
+from geotex.mapping.seat import _own_crossings, smoothed_folds
+from geotex.mapping.shape import SPREAD, map_jacobian, shaped_positions
 from geotex.mesh.geometry import group_boxes
 from geotex.mesh.topology import vertex_components
 from geotex.param.polycube_fit import SurfaceProjector
@@ -139,7 +139,7 @@ class MappedTiles:
 
 def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: float,
                  anchor: float | None = None, shaped: bool = True,
-                 projector: SurfaceProjector | None = None) -> MappedTiles:
+                 projector: SurfaceProjector | None = None, jacobian=None) -> MappedTiles:
     """Map the chosen tiles of every quad into the shell and weld them.
 
     Parameters
@@ -171,6 +171,9 @@ def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: floa
         Closest points on the shell's fitted surface, passed to
         :func:`~geotex.mapping.shape.shaped_positions` (built there when
         needed and not given).
+    jacobian : numpy.ndarray, (m, 3, 2) float64, optional
+        :func:`~geotex.mapping.shape.map_jacobian` of the shell's polycube,
+        passed on likewise (computed once here when not given).
 
     Returns
     -------
@@ -214,10 +217,12 @@ def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: floa
     _, element = vertex_components(faces, kept.size)
     below = depth_scale(tiles, scale, anchor)
     if shaped:
+        if jacobian is None:                                # once for both calls
+            jacobian = map_jacobian(pc)
         X, shift, leaned = shaped_positions(shell, quad_of_vertex[kept], uvw[kept], element,
                                             scale=scale, depth_scale=below, spread=SPREAD,
                                             return_shift=True, return_leaned=True,
-                                            projector=projector)
+                                            projector=projector, jacobian=jacobian)
         crowded = _crowded_leaned(X, faces, element, leaned)
         if crowded.any():
             vs = np.flatnonzero(crowded[element])
@@ -226,7 +231,7 @@ def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: floa
             X[vs] = shaped_positions(shell, quad_of_vertex[kept][vs], uvw[kept][vs], local,
                                      scale=scale, depth_scale=below, shift=shift[vs],
                                      lean=np.zeros(int(local.max()) + 1, dtype=bool),
-                                     projector=projector)
+                                     projector=projector, jacobian=jacobian)
             leaned = leaned & ~crowded
     else:
         X = shell_positions(shell, quad_of_vertex[kept], uvw[kept], scale=scale,
@@ -242,7 +247,8 @@ def _crowded_leaned(X, faces, element, leaned):
     """Leaned elements that cross an element standing as the map's offsets do.
 
     The exact test runs on the leaned elements and the elements whose boxes
-    overlap theirs, one part per element.
+    overlap theirs, one part per element, and examines only the pairs of a
+    leaned and an upright element (the rows of the whole test that decide).
     """
     n = leaned.size
     out = np.zeros(n, dtype=bool)
@@ -258,10 +264,10 @@ def _crowded_leaned(X, faces, element, leaned):
     cand = np.union1d(lean, j[overlap])
     label = element[faces[:, 0]]
     sub = np.flatnonzero(np.isin(label, cand))
-    pairs = sub[self_intersecting_pairs(X, faces[sub], parts=label[sub])]
+    pairs = sub[self_intersecting_pairs_between(X, faces[sub], label[sub],
+                                                side=leaned[label[sub]])]
     a, b = label[pairs[:, 0]], label[pairs[:, 1]]
-    mixed = (a != b) & (leaned[a] != leaned[b])
-    out[np.where(leaned[a], a, b)[mixed]] = True
+    out[np.where(leaned[a], a, b)] = True
     return out
 
 
@@ -303,7 +309,7 @@ def shell_positions(shell, quads: np.ndarray, uvw: np.ndarray, *, scale: float,
 
 def reseated_elements(shell, mapped: "MappedTiles", label: np.ndarray, elements, *,
                       scale: float, depth_scale: float, factors=None,
-                      projector: SurfaceProjector | None = None
+                      projector: SurfaceProjector | None = None, jacobian=None
                       ) -> tuple[np.ndarray, np.ndarray]:
     """Shrink folded elements about their centre and map them again.
 
@@ -337,6 +343,9 @@ def reseated_elements(shell, mapped: "MappedTiles", label: np.ndarray, elements,
         Closest points on the shell's fitted surface (the one
         :func:`mapped_tiles` used); built here, once for every size, if not
         given.
+    jacobian : numpy.ndarray, (m, 3, 2) float64, optional
+        :func:`~geotex.mapping.shape.map_jacobian` of the shell's polycube
+        (computed here, once for every size, if not given).
 
     Returns
     -------
@@ -356,6 +365,8 @@ def reseated_elements(shell, mapped: "MappedTiles", label: np.ndarray, elements,
     starts = np.searchsorted(label[order], np.arange(int(label.max()) + 2))
     if projector is None:                                   # one for every size
         projector = SurfaceProjector(shell.polycube.Y, shell.polycube.F)
+    if jacobian is None and mapped.shaped:
+        jacobian = map_jacobian(shell.polycube)
     for f in factors:
         if still.size == 0:
             break
@@ -372,13 +383,13 @@ def reseated_elements(shell, mapped: "MappedTiles", label: np.ndarray, elements,
                               shrink=np.full(still.size, float(f)), similar=mapped.shaped,
                               shift=None if mapped.shift is None else mapped.shift[verts],
                               lean=None if mapped.leaned is None else mapped.leaned[still],
-                              projector=projector, cast=mapped.shaped)
+                              projector=projector, cast=mapped.shaped, jacobian=jacobian)
         fstart = np.cumsum(counts) - counts
         left = []
         for j, e in enumerate(still):
             fj = local[fstart[j]:fstart[j] + counts[j]]
             vj, lj = np.unique(fj, return_inverse=True)
-            if self_intersecting_pairs(Xe[vj], lj.reshape(-1, 3), max_pairs=1).size == 0:
+            if _own_crossings(Xe[vj], lj.reshape(-1, 3)).size == 0:
                 X[verts[vj]] = Xe[vj]
             else:
                 left.append(e)

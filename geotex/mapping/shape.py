@@ -170,7 +170,7 @@ def shaped_positions(shell, quads, uvw, element, *, scale: float,
                      max_extent: float = MAX_EXTENT, shrink=None, similar: bool = True,
                      spread: int = 0, shift=None, return_shift: bool = False,
                      lean=None, return_leaned: bool = False, projector=None,
-                     cast: bool = False):
+                     cast: bool = False, jacobian=None):
     """Shell positions of tile points, every small element mapped as one similar shape.
 
     Parameters
@@ -229,6 +229,9 @@ def shaped_positions(shell, quads, uvw, element, *, scale: float,
         shapes are); an element whose points land farther than
         :data:`LEAN_MISS` from their lines keeps its closest points. Used to
         re-seat folded elements (:func:`~geotex.mapping.place.reseated_elements`).
+    jacobian : numpy.ndarray, (m, 3, 2) float64, optional
+        :func:`map_jacobian` of the shell's polycube, computed here when not
+        given (pass one to calls on the same shell to compute it once).
 
     Returns
     -------
@@ -241,10 +244,14 @@ def shaped_positions(shell, quads, uvw, element, *, scale: float,
     Raises
     ------
     InputError
-        Mismatched array lengths, ``evening`` outside ``[0, 1]``, or a
-        non-positive ``max_extent``.
+        Mismatched array lengths, ``evening`` outside ``[0, 1]``, a
+        non-positive ``max_extent``, or a ``jacobian`` not of the polycube's
+        faces.
     """
     pc = shell.polycube
+    if jacobian is not None and np.shape(jacobian) != (pc.F.shape[0], 3, 2):
+        raise InputError(f"jacobian must have shape ({pc.F.shape[0]}, 3, 2) (map_jacobian of "
+                         f"the shell's polycube), got {np.shape(jacobian)}")
     quads = np.asarray(quads, dtype=np.int64)
     uvw = np.asarray(uvw, dtype=np.float64)
     element = np.asarray(element, dtype=np.int64)
@@ -275,7 +282,7 @@ def shaped_positions(shell, quads, uvw, element, *, scale: float,
     # the shell's mean tile side (world): the size every element gets with evening = 1
     cross = np.cross(pc.Y[pc.F[:, 1]] - pc.Y[pc.F[:, 0]], pc.Y[pc.F[:, 2]] - pc.Y[pc.F[:, 0]])
     mean_side = float(np.sqrt(0.5 * np.linalg.norm(cross, axis=1).sum() / pc.layout.n_quads))
-    J = map_jacobian(pc)[face]                                       # (k, 3, 2)
+    J = (map_jacobian(pc) if jacobian is None else np.asarray(jacobian))[face]   # (k, 3, 2)
     home, uvh, unfolded = _home_frame(pc.layout, quads, uvw[:, :2], element, n_el)
     # the map's Jacobian in the home quad's frame, over the element's points there
     at_home = quads == home[element]

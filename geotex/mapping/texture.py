@@ -21,6 +21,7 @@ from geotex.mapping.assign import edge_colors, tiles_for_quads
 from geotex.mapping.place import MappedTiles, depth_scale, mapped_tiles, reseated_elements
 from geotex.mapping.seat import (floating_elements, lowered_elements, propped_elements,
                                  remapped_folds, rooted_elements, smoothed_folds)
+from geotex.mapping.shape import map_jacobian
 from geotex.mapping.union import (UNION_STAGES, ElementContacts, element_contacts,
                                   united_with_base)
 from geotex.mesh.topology import face_components
@@ -303,10 +304,13 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
     report(progress, "map")
     t = time.perf_counter()
     scale = h / tiles.height
-    # closest points on the fitted surface: built once for the map and the re-seating
+    # closest points on the fitted surface and the map's Jacobian: built once for
+    # the map and the re-seating
     projector = SurfaceProjector(pc.Y, pc.F) if shaped else None
+    jacobian = map_jacobian(pc) if shaped else None
     mapped = mapped_tiles(shell, tiles, tile_of_quad, scale=scale,
-                          anchor=ANCHOR * shell.tile_size, shaped=shaped, projector=projector)
+                          anchor=ANCHOR * shell.tile_size, shaped=shaped, projector=projector,
+                          jacobian=jacobian)
     times["map"] = time.perf_counter() - t
     report(progress, "union")
     t = time.perf_counter()
@@ -319,7 +323,7 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
     folded = contacts.folded
     below = depth_scale(tiles, scale, ANCHOR * shell.tile_size)
     X, still = reseated_elements(shell, mapped, contacts.label, folded, scale=scale,
-                                 depth_scale=below, projector=projector)
+                                 depth_scale=below, projector=projector, jacobian=jacobian)
     # shrunk elements may now meet others: the union judges them by their boxes
     moved = np.setdiff1d(folded, still)
     # strands and rings follow the point-by-point map (periodic and lattice sets):
