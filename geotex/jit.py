@@ -29,7 +29,7 @@ import os
 import threading
 import types
 
-__all__ = ["compiled", "helper", "preload", "JIT_MIN_SIZE"]
+__all__ = ["compiled", "helper", "preload", "on_first_compile", "JIT_MIN_SIZE"]
 
 #: Inputs from this many items (half-edges, edges, candidate pairs) up take a
 #: compiled path where a numpy path exists too: below it, loading numba and the
@@ -60,6 +60,51 @@ JIT_MIN_SIZE = _min_size()
 _LOCK = threading.Lock()
 #: Module name -> the compiled functions defined there (see :func:`preload`).
 _REGISTRY: dict[str, list] = {}
+#: Callbacks of :func:`on_first_compile` not called yet; the listener installed.
+_FIRST_COMPILE: list = []
+_LISTENING: list = []
+
+
+def on_first_compile(callback) -> None:
+    """Call ``callback(name)`` once, when numba starts compiling a geotex loop in this process.
+
+    Compiled code is cached on disk, so this happens only where the cache
+    lacks the code (the first runs on a machine, or after an upgrade), and a
+    command can say why a stage takes far longer than usual. ``name`` is the
+    qualified name of the function being compiled. Loading cached code does
+    not count.
+
+    Parameters
+    ----------
+    callback : callable
+        Called with one ``str``, from the thread that compiles, at most once.
+    """
+    with _LOCK:
+        _FIRST_COMPILE.append(callback)
+        if _LISTENING and not _LISTENING[0]:
+            _install_listener()
+
+
+def _install_listener() -> None:
+    """Register the numba compile-event listener behind :func:`on_first_compile` (lock held)."""
+    import numba.core.event as ev
+
+    class FirstCompile(ev.Listener):
+        def on_start(self, event):
+            fn = getattr(event.data.get("dispatcher"), "py_func", None)
+            if fn is None or not str(getattr(fn, "__module__", "")).startswith("geotex"):
+                return
+            with _LOCK:
+                todo = _FIRST_COMPILE[:]
+                _FIRST_COMPILE.clear()
+            for cb in todo:
+                cb(f"{fn.__module__}.{fn.__qualname__}")
+
+        def on_end(self, event):
+            pass
+
+    ev.register("numba:compile", FirstCompile())
+    _LISTENING[:] = [True]
 
 
 def compiled(fn):
@@ -83,6 +128,11 @@ def compiled(fn):
             with _LOCK:
                 if not holder:
                     import numba
+
+                    if not _LISTENING:             # numba is imported now
+                        _LISTENING.append(False)
+                        if _FIRST_COMPILE:
+                            _install_listener()
 
                     namespace = fn.__globals__
                     for name, obj in list(namespace.items()):

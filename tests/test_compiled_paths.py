@@ -512,3 +512,38 @@ def test_needle_free_region_and_splice_equal_numpy_path(monkeypatch):
     assert np.array_equal(fast[0], slow[0]) and np.array_equal(fast[1], slow[1])
     assert len(fast[0]) == len(V) - 1 - fast[2]          # the stray and the collapsed
     assert not np.any((fast[0] == 9.0).all(axis=1))
+
+
+_FIRST_COMPILE_SCRIPT = """
+import geotex.mesh.geometry as geometry
+from geotex.jit import on_first_compile
+from geotex.mesh.primitives import torus
+
+names = []
+on_first_compile(names.append)
+on_first_compile(names.append)          # two callbacks: each called once
+geometry.JIT_MIN_SIZE = 0
+V, F = torus(1.0, 0.3, n_major=30, n_minor=11)
+geometry.degenerate_faces(V, F)
+geometry.degenerate_faces(V, F)
+print(names)
+"""
+
+
+def test_first_compile_is_reported_once_and_never_for_cached_code(tmp_path):
+    """geotex.jit.on_first_compile: what the command line uses to say why a first run is slow."""
+    import os
+    import subprocess
+    import sys
+
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))     # a cache with nothing in it
+
+    def run():
+        proc = subprocess.run([sys.executable, "-c", _FIRST_COMPILE_SCRIPT], env=env,
+                              capture_output=True, text=True, timeout=600)
+        assert proc.returncode == 0, proc.stderr[-2000:]
+        return eval(proc.stdout.strip().splitlines()[-1])
+
+    first = run()
+    assert first == ["geotex.mesh.geometry._degenerate_loops"] * 2
+    assert run() == []                                          # loaded from the cache

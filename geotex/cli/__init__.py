@@ -27,6 +27,7 @@ from geotex.cli import (batch, check, convert, demo, displace, exemplar, field, 
                         tile_image, tiles, view)
 from geotex.cli._common import EXIT_INTERNAL, EXIT_USAGE, PRELOADS, Parser, fail
 from geotex.errors import GeotexError
+from geotex.jit import on_first_compile
 from geotex.malloc import keep_freed_memory
 
 COMMANDS = (demo, mapping, check, repair, render, convert, field, pgp, tile_image, heighttilt,
@@ -44,6 +45,14 @@ def build_parser() -> Parser:
     return parser
 
 
+def _compiling_note(name: str) -> None:
+    """Say on the terminal why this run is slow: numba compiles geotex's loops (first run only)."""
+    from tqdm import tqdm
+
+    tqdm.write("geotex: first run on this machine: compiling geotex's loops once "
+               "(up to a minute or two); later runs load them", file=sys.stderr)
+
+
 def main(argv=None) -> int:
     """Run the command line; returns the exit status (also used by the script).
 
@@ -56,6 +65,8 @@ def main(argv=None) -> int:
     living and keeps its collector as it was.
     """
     keep_freed_memory()
+    if sys.stderr.isatty():
+        on_first_compile(_compiling_note)
     try:
         args = build_parser().parse_args(argv)
         if not getattr(args, "run", None):
