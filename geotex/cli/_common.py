@@ -103,17 +103,22 @@ def guard_output(output, *inputs) -> Path:
 PRELOADS: list = []
 
 
-def preload_compiled() -> None:
+def preload_compiled(*, relief: bool = False) -> None:
     """Start loading the compiled loops of the main job (:func:`geotex.jit.preload`).
 
     The self-intersection test (input check, shell, union, final check), edge
     topology, degenerate faces, volumes, needle heights and the weld: a fresh
     process otherwise pays for numba (~0.4 s) at the input check, in the main
-    thread.
+    thread. ``relief``: also the relief refinement's loops (``geotex displace``).
     """
-    import geotex.check.intersections
-    import geotex.io
-    import geotex.mesh.needles
+    import importlib
+
     from geotex.jit import preload
 
-    PRELOADS.append(preload("geotex.check", "geotex.mesh", "geotex.io"))
+    modules = ["geotex.check.intersections", "geotex.io", "geotex.mesh.needles"]
+    if relief:
+        modules.append("geotex.relief.subdivide")
+    for name in modules:
+        importlib.import_module(name)
+    packages = ["geotex.check", "geotex.mesh", "geotex.io"] + (["geotex.relief"] if relief else [])
+    PRELOADS.append(preload(*packages))

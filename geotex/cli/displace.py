@@ -7,7 +7,8 @@ import math
 import sys
 from pathlib import Path
 
-from geotex.cli._common import EXIT_NOT_PRINTABLE, EXIT_OK, UsageError, flag_error, guard_output
+from geotex.cli._common import (EXIT_NOT_PRINTABLE, EXIT_OK, UsageError, flag_error, guard_output,
+                                preload_compiled)
 
 HELP = "displace a part by a height map (image file or library texture): printable STL/3MF"
 
@@ -177,6 +178,7 @@ def run(args) -> int:
         raise UsageError(f"--mask-tolerance {args.mask_tolerance}: give a number in 0-255")
     if args.mask_faces is not None and not Path(args.mask_faces).is_file():
         raise UsageError(f"--mask-faces {args.mask_faces}: no such file")
+    preload_compiled(relief=True)
     from geotex.displace import DISPLACE_STAGES, displace_file, mask_options
     from geotex.errors import InputError, NotPrintableError
     from geotex.progress import stage_bar
