@@ -781,6 +781,36 @@ def test_cli_hpm_relief_is_printable_and_refuses_a_textured_suffix(files, capsys
     assert "--displace" in capsys.readouterr().err and not (tmp / "x.glb").exists()
 
 
+def test_cli_hpm_refines_a_base_too_coarse_for_the_default_scale(tmp_path, capsys):
+    # a 12-triangle box: its faces are larger than the image at the default scale (a
+    # quarter of the diagonal); the command refines it instead of refusing
+    from PIL import Image
+
+    from geotex.check import check_mesh
+
+    V, F = box()
+    base = tmp_path / "box.stl"
+    write_mesh(base, Mesh(V, F))
+    img = tmp_path / "noise.png"
+    Image.fromarray(noise_image(64, 64)).save(img)
+    out, rep = tmp_path / "box.glb", tmp_path / "box.json"
+    assert main(["hpm", str(base), "--image", str(img), "-o", str(out), "--report", str(rep)]) == 0
+    assert "refined by exact edge splits" in capsys.readouterr().out
+    m = read_mesh(out)
+    assert m.has_uv and np.isfinite(m.uv).all()
+    doc = json.loads(rep.read_text())
+    assert doc["input_faces"] == 12 and doc["faces"] > 12 and m.n_faces == doc["faces"]
+    # the refined surface is the box's: every vertex on its boundary
+    on_side = np.isclose(m.vertices, 0.0) | np.isclose(m.vertices, 1.0)
+    assert on_side.any(axis=1).all()
+    # the relief goes through the same refined mesh
+    relief = tmp_path / "box.stl.out.stl"
+    assert main(["hpm", str(base), "--image", str(img), "--displace", "0.02", "--faces",
+                 "20000", "-o", str(relief)]) == 0
+    r = read_mesh(relief)
+    assert check_mesh(r.vertices, r.faces).printable
+
+
 # ---------------------------------------------------------------------------
 # face level and sub-pixel refinement
 # ---------------------------------------------------------------------------

@@ -13,6 +13,10 @@ HELP = ("texture a closed mesh with patches of one image, coarse to fine (hierar
         "pattern mapping): GLB or OBJ+MTL+PNG with the image itself as texture")
 
 
+#: Most faces the command refines a coarse base to (hpm takes about a second per 1000 faces).
+MAX_REFINED_FACES = 60_000
+
+
 def register(sub):
     p = sub.add_parser("hpm", help=HELP, description=HELP + ". Face clusters are flattened "
                        "and matched against the image by FFT correlation with the texture "
@@ -23,7 +27,9 @@ def register(sub):
                    "RGB or grey)")
     p.add_argument("--scale", type=float, default=None, metavar="S",
                    help="surface length (mm) covered by the image width (default: a quarter "
-                        "of the bounding-box diagonal)")
+                        "of the bounding-box diagonal); a base whose faces are too large for "
+                        "the image at this scale is refined by exact edge splits (up to "
+                        f"{MAX_REFINED_FACES} faces)")
     p.add_argument("--field", default=None, metavar="F.npz",
                    help="direction field from 'geotex field': every patch takes its "
                         "direction, neighbours' continuations within --field-tolerance of it")
@@ -118,11 +124,42 @@ def _spread(text: str) -> float | None:
     return value
 
 
+def _fine_enough(V, F, image, scale: float, args):
+    """``(V, F, note)``: the base refined so that a triangle fits in the image (note ''
+    when it already does), or a UsageError naming ``--scale`` when that takes too many faces.
+
+    Texture coordinates point into the one image, so a face must be smaller than the
+    image; hpm refuses edges averaging more than half of it. Refined to edges of at most
+    a quarter of the image's shorter side.
+    """
+    import numpy as np
+
+    from geotex.errors import InputError
+    from geotex.relief import refined_by_edge_splits
+
+    H_img, W_img = image.shape[:2]
+    side = scale * min(W_img, H_img) / W_img              # surface length of the shorter side
+    elen = float(np.linalg.norm(V[F] - V[np.roll(F, -1, axis=1)], axis=2).mean())
+    if not (math.isfinite(elen) and math.isfinite(side)) or elen <= 0.5 * side:
+        return V, F, ""
+    try:
+        r = refined_by_edge_splits(V, F, 0.25 * side, max_faces=MAX_REFINED_FACES)
+    except InputError:
+        given = "--scale" if args.scale is not None else "the default --scale"
+        raise UsageError(
+            f"{given} {scale:g} is too small for this mesh: its edges average {elen:.3g}, "
+            f"and refining them to fit the image would take more than {MAX_REFINED_FACES} "
+            f"faces; give a --scale of at least {2.0 * elen * W_img / min(W_img, H_img):.3g}"
+        ) from None
+    return r.vertices, r.faces, f"mean edge {elen:.3g}, image side {side:.3g}"
+
+
 def run(args) -> int:
     import numpy as np
 
     from geotex.image.hpm import hpm_mesh, hpm_texture, read_hpm_image
     from geotex.io import read_mesh, write_mesh
+    from geotex.mesh.record import Mesh
     from geotex.io.atomic import atomic_output
     from geotex.progress import stage_bar
 
@@ -154,6 +191,15 @@ def run(args) -> int:
     scale = args.scale
     if scale is None:
         scale = 0.25 * float(np.linalg.norm(np.ptp(V, axis=0)))
+    input_faces = int(F.shape[0])
+    V, F, refined = _fine_enough(V, F, image, scale, args)
+    if refined:
+        if field is not None:
+            raise UsageError(f"{args.base}: the mesh is refined to fit the pattern ({refined}); "
+                             "compute --field on a finer mesh, or give a larger --scale")
+        print(f"{args.base}: edges long for the pattern ({refined}): refined by exact edge "
+              f"splits (the same surface) to {F.shape[0]} faces")
+        mesh = Mesh(V, F, name=mesh.name)
     try:
         with stage_bar(8, "hpm") as bar:
             result = hpm_texture(V, F, image, scale=scale, field=field, angle=args.angle,
@@ -175,14 +221,15 @@ def run(args) -> int:
                                     "field_tolerance": "--field-tolerance"}) from None
         raise
     if args.displace is not None:
-        status = write_relief(args, args.base, args.image, out, result.uv[result.uv_faces])
+        status = write_relief(args, mesh if refined else args.base, args.image, out,
+                              result.uv[result.uv_faces])
         if status != EXIT_OK:
             return status
     else:
         write_mesh(out, hpm_mesh(V, F, result, image, name=mesh.name or out.stem))
     if args.report:
         rep = dict(result.report(), base=str(args.base), image=str(args.image),
-                   scale=scale, seed=args.seed, faces=int(F.shape[0]))
+                   scale=scale, seed=args.seed, faces=int(F.shape[0]), input_faces=input_faces)
         text = json.dumps(rep, indent=2)
         with atomic_output(args.report, "w", encoding="utf-8") as fh:
             fh.write(text + "\n")

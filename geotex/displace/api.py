@@ -22,6 +22,7 @@ from geotex.displace.masks import (PAINT_TOLERANCE, MaskOptions, face_selection,
 from geotex.errors import InputError
 from geotex.io import read_mesh
 from geotex.mesh.arrays import as_mesh_arrays
+from geotex.mesh.record import Mesh
 from geotex.options import finite_number, positive_number
 from geotex.printing import export_printable, printable_stored_solid, stored_form, stored_precision
 from geotex.progress import report
@@ -363,6 +364,12 @@ def displaced_mesh(V, F, image, *, depth: float, mapping: str = "triplanar", sca
 def _read_part(path, *, step_quality: str = "standard"):
     from pathlib import Path
 
+    if isinstance(path, Mesh):                       # a mesh a command already holds
+        mesh = path
+        uv = None
+        if mesh.uv is not None:
+            uv = np.asarray(mesh.uv, dtype=np.float64)[np.asarray(mesh.uv_faces)]
+        return mesh.vertices, mesh.faces, uv
     p = Path(path)
     if p.suffix.lower() in (".step", ".stp"):
         # lazy: STEP input pulls in gmsh and the repair steps (pymeshlab)
@@ -422,8 +429,9 @@ def displace_file(base, image, output, *, depth: float, size_mm: float | None = 
 
     Parameters
     ----------
-    base : str or os.PathLike
-        STL/OBJ/PLY/OFF/3MF/GLB (or STEP/STP through gmsh, when installed).
+    base : str, os.PathLike or geotex.mesh.record.Mesh
+        STL/OBJ/PLY/OFF/3MF/GLB (or STEP/STP through gmsh, when installed), or a
+        mesh already read.
     image : str, os.PathLike or array_like
         Library name, image file or array.
     output : str or os.PathLike
@@ -468,9 +476,10 @@ def displace_file(base, image, output, *, depth: float, size_mm: float | None = 
     t = time.perf_counter()
     report(progress, "read")
     V, F, uv = _read_part(base, step_quality=step_quality)
+    name = (base.name or "part") if isinstance(base, Mesh) else str(base)
     if F.shape[0] == 0:
-        raise InputError(f"{base}: the mesh has no faces")
-    refuse_broken_part(V, F, name=str(base))
+        raise InputError(f"{name}: the mesh has no faces")
+    refuse_broken_part(V, F, name=name)
     if mask_file is not None:
         sel = face_selection(mask_file, V, F, color=mask_color, tolerance=mask_tolerance)
         masks = options.get("masks") or MaskOptions()
@@ -488,7 +497,7 @@ def displace_file(base, image, output, *, depth: float, size_mm: float | None = 
     t = time.perf_counter()
     report(progress, "write")
     rep = export_printable(output, res.vertices, res.faces, report=res.report, force=force,
-                           name=Path(base).stem)
+                           name=base.name if isinstance(base, Mesh) else Path(base).stem)
     stats = dict(res.stats)
     stats["seconds"] = dict(stats["seconds"], read=round(read_s, 3),
                             write=round(time.perf_counter() - t, 3))
