@@ -5,7 +5,6 @@ from __future__ import annotations
 import itertools
 
 import igl
-import manifold3d
 import numpy as np
 import pytest
 from scipy.sparse import csr_matrix as sp_csr
