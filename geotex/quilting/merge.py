@@ -113,8 +113,7 @@ from geotex.quilting.icp import ClosestPoints, icp_translation
 from geotex.quilting.mincut import min_cut_keep
 from geotex.quilting.elements import caps_like, closed_element_ok
 from geotex.quilting.seam import (boundary_loops, closest_on_polyline, matched_on_loops,
-                                 pair_loops,
-                                 seam_normal_jumps, strip_between, zip_loops)
+                                 pair_loops, seam_normal_jumps, strip_between, zip_loops)
 
 __all__ = ["MergeResult", "merge_elements"]
 
@@ -250,7 +249,7 @@ def _corresponding_cut(VA, FA, VB, FB, NA, NB, fixA, out_b, eps, band_rings,
     ``crease_cost`` times the dihedral angle of ``A``'s edge (in the factor
     of the distances): a seam along a ring where the strand itself creases
     bends by that crease (one join of the weave quilt 2x1.5 -> 4x3, seed
-    3: 23 degrees on all twelve seam edges; 1.9 with ``crease_cost=0.5``).  ``B`` then
+    3: 23 degrees on all twelve seam edges; 1.7 with ``crease_cost=0.5``).  ``B`` then
     gives up every face whose counterpart on ``A`` was kept (except on
     ``A``'s seam itself, closer than ``tau``) and may cut only within
     ``band_rings`` of its mean edge lengths of ``A``'s seam, at the least
@@ -607,8 +606,9 @@ def _welded(Wa, Fa, loops_a, Wb, Fb, loops_b, pairs, a_held, weld_tol):
     corresponding point on the partner loop (``B``'s all the way onto
     ``A``'s when ``A`` is held), the point at the same arc-length parameter
     once the loops are lined up (:func:`geotex.quilting.seam.matched_on_loops`;
-    the closest point reorders vertices at the pointed ends of a flat
-    cross-section and the fans then fold), then
+    at the pointed ends of a flat cross-section the closest point slides
+    along the partner, the vertices there do not meet and their fans
+    fold), then
     :func:`geotex.quilting.seam.zip_loops` interleaves the two loops.
     Loop vertices that meet a vertex of the other loop (closer than
     ``weld_tol`` of the loop edges) become one vertex.  Returns

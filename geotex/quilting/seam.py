@@ -4,7 +4,9 @@ Used by :mod:`geotex.quilting.merge` after a graph cut opened two elements:
 each kept piece has boundary loops (traced along boundary half-edges, so a
 loop runs in the direction its faces use it), loops of the two pieces are
 paired by proximity, and every pair is closed by a triangle strip built with
-the shortest-diagonal rule (made globally optimal by dynamic programming).
+the shortest-diagonal rule (made globally optimal by dynamic programming), or
+welded into one seam (:func:`zip_loops`) after both loops were moved to the
+midpoints of corresponding points (:func:`matched_on_loops`).
 The strip uses every boundary half-edge in the
 opposite direction, so an outward-oriented piece stays outward-oriented.
 """
