@@ -29,7 +29,6 @@ from __future__ import annotations
 import argparse
 import json
 import time
-from collections import defaultdict
 
 import numpy as np
 
@@ -93,12 +92,15 @@ def summary(rows):
 
 
 def picture(path):
-    """Close-up of the worst seam of the 3x3 weave quilt: distance-only cut beside the tilt-aware one.
+    """Close-up of the join that main welded worst: strip fallback, crease seam, default weld.
 
-    The quilt (2x2 -> 3x3, seed 1) is made once with every merge's inputs
+    The quilt 2x1.5 -> 4x3 (seed 3) is made once with every merge's inputs
     recorded; the corresponding pair whose weld bends most with
-    ``tilt_cost=0`` (the paper's distance weight alone) is merged again
-    with the default cut and both results are drawn around the seam.
+    ``crease_cost=0`` is merged three ways: ``weld=False, crease_cost=0``
+    (the pulled strip that main fell back to when this weld folded: the
+    same cut, the same result), ``crease_cost=0`` (welded at points of equal
+    arc-length parameter, but the cut lies on a ring where the strand
+    creases) and the default.
     """
     from geotex.render import Panel, render_panels
     pairs = []
@@ -110,25 +112,28 @@ def picture(path):
         return r
 
     placement.merge_elements = keep
-    ex = exemplar("weave", size=(2.0, 2.0), seed=0)
-    quilt_texture(ex, out_size=(3.0, 3.0), seed=1, boundary="clip")
+    ex = exemplar("weave", size=(2.0, 1.5), seed=0)
+    quilt_texture(ex, out_size=(4.0, 3.0), seed=3, boundary="clip")
     placement.merge_elements = _merge
     worst = None
     for VA, FA, VB, FB, kw in pairs:
-        r = merge_elements(VA, FA, VB, FB, **{**kw, "tilt_cost": 0.0})
-        if worst is None or r.seam_normal_jump_mean > worst[0].seam_normal_jump_mean:
-            # the seam lies in the overlap of the two elements' boxes
-            lo = np.maximum(VA.min(axis=0), VB.min(axis=0))
-            hi = np.minimum(VA.max(axis=0), VB.max(axis=0))
-            worst = (r, merge_elements(VA, FA, VB, FB, **kw), 0.5 * (lo + hi))
+        r = merge_elements(VA, FA, VB, FB, **{**kw, "crease_cost": 0.0})
+        if worst is None or r.seam_normal_jump_mean > worst[0]:
+            worst = (r.seam_normal_jump_mean, (VA, FA, VB, FB, kw))
+    VA, FA, VB, FB, kw = worst[1]
+    # the seam lies in the overlap of the two elements' boxes
+    centre = 0.5 * (np.maximum(VA.min(axis=0), VB.min(axis=0))
+                    + np.minimum(VA.max(axis=0), VB.max(axis=0)))
+    runs = [(merge_elements(VA, FA, VB, FB, **{**kw, **opts}), what) for opts, what in (
+        ({"weld": False, "crease_cost": 0.0}, "strip (main: the weld folded)"),
+        ({"crease_cost": 0.0}, "weld, cut on a crease (crease_cost=0)"),
+        ({}, "weld (default)"))]
     render_panels([
-        Panel(r.vertices, r.faces, show_edges=True, closeup=worst[2], closeup_radius=0.35,
+        Panel(r.vertices, r.faces, show_edges=True, closeup=centre, closeup_radius=0.35,
               highlight={"bends of 12-60 degrees": _bent_edges(r.vertices, r.faces, 12, 60)},
-              title=f"{what}: {r.status}, gap {r.seam_gap:.2g}, normal jump "
+              title=f"{what}: gap {r.seam_gap:.2g}, seam jump "
                     f"{r.seam_normal_jump_mean:.1f} mean / {r.seam_normal_jump:.1f} max")
-        for r, what in zip(worst[:2], ("distance-only cut (tilt_cost=0)",
-                                       "tilt-aware cut (default)"))],
-        path, size=(800, 600), up="z")
+        for r, what in runs], path, size=(700, 520), up="z")
 
 
 def _bent_edges(V, F, lo, hi):
@@ -149,7 +154,7 @@ def main():
     ap.add_argument("--all", action="store_true")
     ap.add_argument("--only", default="")
     ap.add_argument("--json")
-    ap.add_argument("--picture", help="write a close-up of the worst weave-quilt seam (two cuts) here")
+    ap.add_argument("--picture", help="write a close-up of the join main welded worst (three ways) here")
     args = ap.parse_args()
     if args.picture:
         picture(args.picture)

@@ -50,8 +50,10 @@ Element ``A`` (already in the texture; may carry fixed vertices) and element
    paired by proximity; optionally (``zone > 0``) both pieces are first
    deformed toward the midpoints of corresponding points over the overlap
    zone (:func:`_toward_midpoints`, the paper's eqs. 6-7).  Every loop
-   vertex moves to the midpoint between itself and the partner loop (``B``
-   all the way when ``A`` is held), loop vertices that then meet become one
+   vertex moves to the midpoint between itself and its corresponding point
+   on the partner loop, the point at the same arc-length parameter
+   (:func:`geotex.quilting.seam.matched_on_loops`; ``B`` all the way when
+   ``A`` is held), loop vertices that then meet become one
    vertex, and the two loops are interleaved along the shortest-diagonal
    walk and zipped (:func:`geotex.quilting.seam.zip_loops`): the boundary
    faces become fans, the pieces share the seam, gap 0, no strip.
@@ -85,10 +87,11 @@ lower the normal jump (mean over seam edges 9.6 / 7.1 / 8.7 degrees with
 ``zone=1`` against 9.7 / 7.9 / 5.4 without, with the cut of that time) and
 shrank merged strands by 0.6-2 % of their volume.  The cut of ``A`` adds
 the angle between the two surfaces to eq. 8's distance (the paper uses the
-distance only), and ``B`` is cut on ``A``'s seam: then every join of the
-weave quilts welds (before, one in ten self-intersected: the two loops a
-ring apart and the strands sloping differently there) and the seams bend
-by 1.7-2.0 degrees on average (``benchmarks/results/quilting.md`` 4c).
+distance only) and a share of ``A``'s own dihedral angle at the cut
+edge (``crease_cost``), ``B`` is cut on ``A``'s seam, and the loops meet at
+points of equal arc-length parameter: then every join of 36 weave quilts
+(three sizes, seeds 0-11) welds, and the seams bend by 1.5-2.1 degrees on
+average, at most 3.1 (``benchmarks/results/quilting.md`` 4c, 4d).
 """
 
 from __future__ import annotations
@@ -109,8 +112,8 @@ from geotex.quilting.deform import laplacian_deformed
 from geotex.quilting.icp import ClosestPoints, icp_translation
 from geotex.quilting.mincut import min_cut_keep
 from geotex.quilting.elements import caps_like, closed_element_ok
-from geotex.quilting.seam import (boundary_loops, closest_on_polyline, pair_loops,
-                                 seam_normal_jumps, strip_between, zip_loops)
+from geotex.quilting.seam import (boundary_loops, closest_on_polyline, matched_on_loops,
+                                 pair_loops, seam_normal_jumps, strip_between, zip_loops)
 
 __all__ = ["MergeResult", "merge_elements"]
 
@@ -198,8 +201,13 @@ def _cut(V, F, covered, dist, fixed, force_sink, band_rings: int):
     return _dual_cut(V, F, dist, source, sink & ~source)
 
 
-def _dual_cut(V, F, dist, source, sink):
-    """Graph cut of the dual graph with the paper's weights; keep-mask of faces."""
+def _dual_cut(V, F, dist, source, sink, crease=0.0):
+    """Graph cut of the dual graph with the paper's weights; keep-mask of faces.
+
+    ``crease`` > 0 adds that many times the dihedral angle (radians) of the
+    mesh edge to the distance factor of its weight: a cut along a crease
+    makes a seam that bends as much.
+    """
     m = F.shape[0]
     if not sink.any():
         return np.ones(m, dtype=bool)
@@ -212,12 +220,17 @@ def _dual_cut(V, F, dist, source, sink):
     pairs = ef[inner]
     h = float(np.linalg.norm(V[topo.edges[:, 0]] - V[topo.edges[:, 1]], axis=1).mean()) or 1.0
     length = np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1) / h
-    w = (1.0 + length) * (1.0 + (dist[E[:, 0]] + dist[E[:, 1]]) / h)
+    extra = 0.0
+    if crease > 0:
+        N = face_normals(V, F)
+        c = np.einsum("ij,ij->i", N[pairs[:, 0]], N[pairs[:, 1]])
+        extra = crease * np.arccos(np.clip(c, -1.0, 1.0))
+    w = (1.0 + length) * (1.0 + (dist[E[:, 0]] + dist[E[:, 1]]) / h + extra)
     return min_cut_keep(m, pairs, w, source=source, sink=sink)
 
 
 def _corresponding_cut(VA, FA, VB, FB, NA, NB, fixA, out_b, eps, band_rings,
-                       tilt_cost=1.0):
+                       tilt_cost=1.0, crease_cost=0.5):
     """Keep-masks of faces for two elements that coincide where they overlap.
 
     The paper's rule for corresponding elements (copies of one element, or
@@ -232,7 +245,11 @@ def _corresponding_cut(VA, FA, VB, FB, NA, NB, fixA, out_b, eps, band_rings,
     ``tilt_cost`` mean edge lengths per radian between ``A``'s vertex normal
     and ``B``'s surface there: two strand pieces that coincide in position
     but slope differently (a strand of one copy running over, the other's
-    under) make a crease of 15-20 degrees at a seam cut there.  ``B`` then
+    under) make a crease of 15-20 degrees at a seam cut there; and
+    ``crease_cost`` times the dihedral angle of ``A``'s edge (in the factor
+    of the distances): a seam along a ring where the strand itself creases
+    bends by that crease (one join of the weave quilt 2x1.5 -> 4x3, seed
+    3: 23 degrees on all twelve seam edges; 1.7 with ``crease_cost=0.5``).  ``B`` then
     gives up every face whose counterpart on ``A`` was kept (except on
     ``A``'s seam itself, closer than ``tau``) and may cut only within
     ``band_rings`` of its mean edge lengths of ``A``'s seam, at the least
@@ -269,7 +286,7 @@ def _corresponding_cut(VA, FA, VB, FB, NA, NB, fixA, out_b, eps, band_rings,
         # coincide but slope differently creases the merged element
         cosang = np.einsum("ij,ij->i", NA, face_normals(VB, FB)[fA])
         costA = dA + tilt_cost * h * np.arccos(np.clip(cosang, -1.0, 1.0))
-    keep_a = _dual_cut(VA, FA, costA, sourceA, sinkA & ~sourceA)
+    keep_a = _dual_cut(VA, FA, costA, sourceA, sinkA & ~sourceA, crease=crease_cost)
     if keep_a.all() or not keep_a.any():
         return None
     # B: give up what A kept, cut next to A's seam (within band_rings
@@ -306,7 +323,8 @@ def merge_elements(VA, FA, VB, FB, *, fixed_a=None, domain=None, band_rings: int
                    same_tol: float = 0.04, match_tol: float = 0.05,
                    match_fraction: float = 0.85, corresponding_only: bool = False,
                    cap_a=None, weld: bool = True, zone: float = 0.0,
-                   weld_tol: float = 0.5, tilt_cost: float = 1.0) -> MergeResult:
+                   weld_tol: float = 0.5, tilt_cost: float = 1.0,
+                   crease_cost: float = 0.5) -> MergeResult:
     """Merge element ``B`` into element ``A`` (see the module docstring).
 
     Parameters
@@ -385,6 +403,14 @@ def merge_elements(VA, FA, VB, FB, *, fixed_a=None, domain=None, band_rings: int
     weld_tol : float, optional
         Loop vertices closer than this fraction of the loop edges to a vertex
         of the other loop become that vertex when welding.
+    crease_cost : float, optional
+        Corresponding pairs: the weight of a dual edge of ``A``'s cut grows
+        by this many times the dihedral angle (radians) at the mesh edge, so
+        the seam avoids rings where the element itself creases (0: off).
+        Measured on 36 weave quilts (``benchmarks/results/quilting.md`` 4d):
+        0.25 left one seam on a 69 degree crease, 0.5 none (largest seam
+        jump 3.1 degrees), 1 pulled two cuts where the loops no longer pair
+        up and two copies were dropped.
     tilt_cost : float, optional
         Corresponding pairs: the cut of ``A`` also pays this many mean edge
         lengths per radian of angle between the two surfaces, so the seam
@@ -449,7 +475,7 @@ def merge_elements(VA, FA, VB, FB, *, fixed_a=None, domain=None, band_rings: int
     if cov_a.all() and not fixA.any() and not capA.any() and not out_b.any():
         return MergeResult(VB, FB, fixB, "absorbed")
     kept = (_corresponding_cut(VA, FA, VB, FB, NA, NB, fixA, out_b, eps, band_rings,
-                                tilt_cost=tilt_cost)
+                                tilt_cost=tilt_cost, crease_cost=crease_cost)
             if shifted else None)
     if kept is None and corresponding_only:
         # the general cut would fuse them into one larger element
@@ -576,8 +602,13 @@ def _toward_midpoints(Va, Fa, fa, Vb, Fb, VA, FA, VB, FB, a_held, zone, radius, 
 def _welded(Wa, Fa, loops_a, Wb, Fb, loops_b, pairs, a_held, weld_tol):
     """Zip the paired loops of the two pieces into shared seams (no strip, no gap).
 
-    Each loop vertex moves to the midpoint between itself and the partner
-    loop (``B``'s all the way onto ``A``'s when ``A`` is held), then
+    Each loop vertex moves to the midpoint between itself and its
+    corresponding point on the partner loop (``B``'s all the way onto
+    ``A``'s when ``A`` is held), the point at the same arc-length parameter
+    once the loops are lined up (:func:`geotex.quilting.seam.matched_on_loops`;
+    at the pointed ends of a flat cross-section the closest point slides
+    along the partner, the vertices there do not meet and their fans
+    fold), then
     :func:`geotex.quilting.seam.zip_loops` interleaves the two loops.
     Loop vertices that meet a vertex of the other loop (closer than
     ``weld_tol`` of the loop edges) become one vertex.  Returns
@@ -592,9 +623,13 @@ def _welded(Wa, Fa, loops_a, Wb, Fb, loops_b, pairs, a_held, weld_tol):
     for i, j in pairs:
         a, b = loops_a[i], loops_b[j] + off
         Pa, Pb = V[a], V[b]
+        matched = matched_on_loops(Pa, Pb)
+        if matched is None:
+            return None
+        Qa, Qb = matched
         if not a_held:
-            W[a] = Pa + 0.5 * (closest_on_polyline(Pa, Pb) - Pa)
-        W[b] = Pb + (1.0 if a_held else 0.5) * (closest_on_polyline(Pb, Pa) - Pb)
+            W[a] = Pa + 0.5 * (Qa - Pa)
+        W[b] = Pb + (1.0 if a_held else 0.5) * (Qb - Pb)
     parent = np.arange(F.shape[0])
     gone = np.zeros(W.shape[0], bool)
     for i, j in pairs:

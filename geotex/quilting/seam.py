@@ -4,7 +4,9 @@ Used by :mod:`geotex.quilting.merge` after a graph cut opened two elements:
 each kept piece has boundary loops (traced along boundary half-edges, so a
 loop runs in the direction its faces use it), loops of the two pieces are
 paired by proximity, and every pair is closed by a triangle strip built with
-the shortest-diagonal rule (made globally optimal by dynamic programming).
+the shortest-diagonal rule (made globally optimal by dynamic programming), or
+welded into one seam (:func:`zip_loops`) after both loops were moved to the
+midpoints of corresponding points (:func:`matched_on_loops`).
 The strip uses every boundary half-edge in the
 opposite direction, so an outward-oriented piece stays outward-oriented.
 """
@@ -16,8 +18,8 @@ import numpy as np
 from geotex.mesh.geometry import face_normals
 from geotex.mesh.topology import edge_topology, half_edges
 
-__all__ = ["boundary_loops", "closest_on_polyline", "pair_loops", "strip_between",
-           "zip_loops", "seam_normal_jumps"]
+__all__ = ["boundary_loops", "closest_on_polyline", "matched_on_loops", "pair_loops",
+           "strip_between", "zip_loops", "seam_normal_jumps"]
 
 
 def boundary_loops(F: np.ndarray, n_vertices: int) -> list[np.ndarray] | None:
@@ -80,6 +82,76 @@ def closest_on_polyline(P: np.ndarray, Q: np.ndarray) -> np.ndarray:
     d = np.einsum("pij,pij->pi", C - P[:, None, :], C - P[:, None, :])
     best = np.argmin(d, axis=1)
     return C[np.arange(P.shape[0]), best]
+
+
+def _at_parameter(P: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Points of the closed polyline ``P`` (k, 3) at arc-length parameters ``t`` (in turns)."""
+    seg = np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1)
+    cum = np.r_[0.0, np.cumsum(seg)]
+    s = np.mod(t, 1.0) * cum[-1]
+    i = np.clip(np.searchsorted(cum, s, side="right") - 1, 0, P.shape[0] - 1)
+    f = np.where(seg[i] > 0, (s - cum[i]) / np.where(seg[i] > 0, seg[i], 1.0), 0.0)
+    return P[i] + f[:, None] * (np.roll(P, -1, axis=0)[i] - P[i])
+
+
+def matched_on_loops(Pa: np.ndarray, Pb: np.ndarray, *, samples: int = 8
+                     ) -> tuple[np.ndarray, np.ndarray] | None:
+    """Corresponding points of two loops that run opposite ways along one seam.
+
+    Each loop is parametrised by its arc length (in turns), ``b`` backwards
+    (the two pieces' boundary loops run in opposite directions); the offset
+    between the two parameters is the one that lines the loops up best once
+    their centroids are matched (least squares over ``samples`` points per
+    vertex of the longer loop, refined by a parabola through the best three
+    offsets).  A vertex of one loop then corresponds to the point of the
+    other loop at the same parameter.  Unlike the closest point, this keeps
+    the order: two copies of one cross-section offset sideways or along the
+    seam (e.g. a flat strand whose loops are half a ring apart) map onto
+    each other vertex after vertex, so points moved toward their partners
+    stay in the order of both loops.
+
+    Parameters
+    ----------
+    Pa : numpy.ndarray, (na, 3) float64
+        Loop of piece A, in its boundary half-edge order.
+    Pb : numpy.ndarray, (nb, 3) float64
+        Loop of piece B, in *its* boundary half-edge order.
+    samples : int, optional
+        Samples per vertex of the longer loop in the offset search.
+
+    Returns
+    -------
+    (Qa, Qb) : numpy.ndarray (na, 3) and (nb, 3) float64, or None
+        ``Qa[i]``: the point of loop ``b`` corresponding to ``Pa[i]``;
+        ``Qb[j]``: the point of loop ``a`` corresponding to ``Pb[j]``.
+        ``None`` when a loop has fewer than 3 vertices or no length.
+    """
+    na, nb = Pa.shape[0], Pb.shape[0]
+    if na < 3 or nb < 3:
+        return None
+    Rb = Pb[::-1]
+    la = np.linalg.norm(np.roll(Pa, -1, axis=0) - Pa, axis=1)
+    lb = np.linalg.norm(np.roll(Rb, -1, axis=0) - Rb, axis=1)
+    if not (la.sum() > 0 and lb.sum() > 0):
+        return None
+    ta = np.r_[0.0, np.cumsum(la)[:-1]] / la.sum()
+    tb = np.r_[0.0, np.cumsum(lb)[:-1]] / lb.sum()
+    k = samples * max(na, nb)
+    u = np.arange(k) / k
+    Sa = _at_parameter(Pa, u)
+    Sb = _at_parameter(Rb, u)
+    Sa -= Sa.mean(axis=0)
+    Sb -= Sb.mean(axis=0)
+    # cost of each cyclic offset of b's samples against a's (circular cross-correlation)
+    cost = -np.array([np.einsum("ij,ij->", Sa, np.roll(Sb, -m, axis=0)) for m in range(k)])
+    m = int(np.argmin(cost))
+    c0, c1, c2 = cost[m - 1], cost[m], cost[(m + 1) % k]
+    den = c0 - 2.0 * c1 + c2
+    frac = 0.5 * (c0 - c2) / den if den > 0 else 0.0
+    shift = (m + float(np.clip(frac, -0.5, 0.5))) / k
+    Qa = _at_parameter(Rb, ta + shift)
+    Qb = _at_parameter(Pa, tb - shift)[::-1]
+    return Qa, Qb
 
 
 def pair_loops(loops_a: list, VA: np.ndarray, loops_b: list, VB: np.ndarray
