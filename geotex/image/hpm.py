@@ -1306,6 +1306,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             nJ = float(np.count_nonzero(J))
             qb, Itb = mask_points(tb, origin), I[tb]     # the mask pixels and their colours
         K = K.reshape(hm, wm)
+        kpix = np.concatenate(drawn)     # the footprint's pixels (K > 0), for match_energy
         # face level with a field: a neighbour's continuation under the threshold is taken
         # without the FFT search (module docstring, 5.)
         quick = None if li == 0 or not nJ else \
@@ -1319,7 +1320,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                 which = [int(np.argmin(np.abs((spectra.angles - a0 + np.pi) % (2 * np.pi)
                                               - np.pi)))]
             Eg = match_energy(spectra, I.reshape(hm, wm, -1), J.reshape(hm, wm), K,
-                              which=which, fast=fast)
+                              which=which, fast=fast, footprint_pixels=kpix)
             okp = np.flatnonzero(np.isfinite(Eg.ravel()))
             if okp.size == 0:
                 refuse(li, 'no_position')
@@ -1348,7 +1349,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                 if which.size == 0:
                     which = np.array([int(np.argmin(dev))])
             Eg = match_energy(spectra, I.reshape(hm, wm, -1), J.reshape(hm, wm), K,
-                              which=which, fast=fast)
+                              which=which, fast=fast, footprint_pixels=kpix)
             flat = Eg.ravel()
             if not np.isfinite(flat).any():
                 refuse(li, 'no_position')
