@@ -6,7 +6,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
 from geotex.image.fftmatch import opponent_colors
-from geotex.image.hpm import _relax_error_compiled, _sample
+from geotex.image.hpm import _relax_error_compiled, _rigid_fit, _sample, _window_minima
 from geotex.image.hpm_faces import field_coefficients, textured_band, vertex_faces
 from geotex.mesh import edge_topology
 from geotex.mesh.primitives import torus
@@ -93,3 +93,53 @@ def test_compiled_relaxation_error_equals_the_numpy_path():
         ref = np.bincount(np.repeat(owner, ts.size), weights=per, minlength=nv)
         assert _relax_error_compiled(full, cand, owner, b, target, ts, nv).tobytes() == \
             ref.tobytes()
+
+
+def test_rigid_fit_is_the_svd_rotation():
+    # the closed-form 2 x 2 Kabsch rotation equals the SVD's V U^T where that is a
+    # rotation, and gives None where it is a reflection
+    rng = np.random.default_rng(7)
+    kept = refused = 0
+    for _ in range(300):
+        X = rng.normal(size=(int(rng.integers(3, 15)), 2))
+        th = rng.uniform(-np.pi, np.pi)
+        R0 = np.array([[np.cos(th), -np.sin(th)], [np.sin(th), np.cos(th)]])
+        Y = X @ R0.T + rng.normal(size=2) + 0.3 * rng.normal(size=X.shape)
+        if rng.random() < 0.3:
+            Y[:, 0] *= -1.0
+        xm, ym = X.mean(axis=0), Y.mean(axis=0)
+        U, _, Wt = np.linalg.svd((X - xm).T @ (Y - ym))
+        R = (U @ Wt).T
+        got = _rigid_fit(X, Y)
+        if np.linalg.det(R) > 0:
+            kept += 1
+            assert got is not None
+            assert np.allclose(got[0], R, atol=1e-12)
+            assert np.allclose(got[1], ym - R @ xm, atol=1e-12)
+        else:
+            refused += 1
+            assert got is None
+    assert kept > 100 and refused > 30
+    # no direction at all: None
+    assert _rigid_fit(np.zeros((4, 2)), np.ones((4, 2))) is None
+
+
+def test_window_minima_equal_argmin_of_each_window():
+    rng = np.random.default_rng(8)
+    E = rng.random((23, 31))
+    E[rng.random(E.shape) < 0.3] = np.inf
+    E[:8, :9] = np.inf                       # a corner with no finite value
+    E[15, 20] = E[16, 21] = 0.0              # a tie: the first in row-major order
+    ix = np.array([0, 5, 20, 30, 40, -6, 3, 21], np.int64)
+    iy = np.array([0, 3, 16, 22, 10, -6, 2, 15], np.int64)
+    for fn in (_window_minima, _window_minima.py_func):
+        for win in (0, 1, 3):
+            val, by, bx = fn(E, ix, iy, win)
+            for i in range(ix.size):
+                y0, x0 = max(iy[i] - win, 0), max(ix[i] - win, 0)
+                blk = E[y0:max(iy[i] + win + 1, 0), x0:max(ix[i] + win + 1, 0)]
+                if blk.size == 0 or not np.isfinite(blk).any():
+                    assert val[i] == np.inf
+                    continue
+                y, x = np.unravel_index(int(np.argmin(blk)), blk.shape)
+                assert (val[i], by[i], bx[i]) == (blk[y, x], y0 + y, x0 + x)
