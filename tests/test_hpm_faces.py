@@ -6,7 +6,8 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
 from geotex.image.fftmatch import opponent_colors
-from geotex.image.hpm import _relax_error_compiled, _rigid_fit, _sample, _window_minima
+from geotex.image.hpm import (_State, _relax, _relax_error_compiled, _rigid_fit, _sample,
+                              _window_minima)
 from geotex.image.hpm_faces import field_coefficients, textured_band, vertex_faces
 from geotex.mesh import edge_topology
 from geotex.mesh.primitives import torus
@@ -93,6 +94,30 @@ def test_compiled_relaxation_error_equals_the_numpy_path():
         ref = np.bincount(np.repeat(owner, ts.size), weights=per, minlength=nv)
         assert _relax_error_compiled(full, cand, owner, b, target, ts, nv).tobytes() == \
             ref.tobytes()
+
+
+def test_compiled_relaxation_search_equals_the_numpy_loop(mesh):
+    # the greedy search of the edge relaxation in one compiled loop: the same moves (and
+    # the same random stream) as the numpy loop, on a cluster next to a textured region
+    V, F = mesh
+    rng = np.random.default_rng(2)
+    full = opponent_colors(rng.random((64, 64, 3)))
+    m = len(F)
+    done = np.arange(m // 2)
+    corner = V[F[done]][:, :, :2] * 20.0 + 30.0
+    st = _State(V, F, m)
+    st.mark(F, done, corner, 0, 0)
+    faces = np.arange(m // 2, m // 2 + 60)
+    verts = np.unique(F[faces])
+    P = V[verts][:, :2] * 20.0 + 30.0 + rng.normal(scale=0.4, size=(verts.size, 2))
+    movable = st.vcnt[verts] > 0
+    assert movable.sum() >= 5
+    for f in (1.0, 3.0):
+        slow = _relax(P, verts, faces, movable, F, st, full, np.random.default_rng(5), f)
+        fast = _relax(P, verts, faces, movable, F, st, full, np.random.default_rng(5), f,
+                      fast=True)
+        assert fast.tobytes() == slow.tobytes()
+        assert not np.array_equal(slow, P) and np.array_equal(slow[~movable], P[~movable])
 
 
 def test_rigid_fit_is_the_svd_rotation():

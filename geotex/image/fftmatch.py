@@ -203,7 +203,8 @@ def match_energy(spectra: TextureSpectra, mask, support, footprint, *, which=Non
     J = np.asarray(support, dtype=np.float64)
     K = np.asarray(footprint, dtype=np.float64)
     idx = np.arange(spectra.angles.size) if which is None else np.asarray(which, np.int64)
-    fI, fJ = _mask_spectra(I, J)
+    rows = np.flatnonzero(J.any(axis=1))       # I is zero outside the support's rows
+    fI, fJ = _mask_spectra(I, J, rows)
     if which is None:
         St, St2 = spectra.spec_t, spectra.spec_t2
     elif idx.size == 1:                  # one orientation (hpm with a field): views, no copy
@@ -216,7 +217,8 @@ def match_energy(spectra: TextureSpectra, mask, support, footprint, *, which=Non
         fI[ch] *= 2.0
         spec -= np.multiply(fI[ch], St[:, ch], out=tmp)
     E = sfft.irfft2(spec, s=(h, w), axes=(-2, -1))
-    sum_i2 = float(np.sum(I * I))
+    Ir = I[rows[0]:rows[-1] + 1] if rows.size else I[:0]
+    sum_i2 = float(np.sum(Ir * Ir))
     if footprint_pixels is None:
         ys, xs = np.nonzero(K > 0)
     else:
@@ -280,7 +282,7 @@ def _admissible_energy(E, sum_i2, lo, hi, wx):
     return out
 
 
-def _mask_spectra(I, J):
+def _mask_spectra(I, J, rows=None):
     """Conjugate spectra of the mask's channels ``(c, h, w // 2 + 1)`` and of its support.
 
     The same values as ``rfft2`` of each plane (float32): the row transforms
@@ -292,7 +294,8 @@ def _mask_spectra(I, J):
     h, w = J.shape
     nc = I.shape[2]
     out = np.zeros((nc + 1, h, w // 2 + 1), np.complex64)
-    rows = np.flatnonzero(J.any(axis=1))
+    if rows is None:                     # the rows holding the support
+        rows = np.flatnonzero(J.any(axis=1))
     if rows.size:
         r0, r1 = int(rows[0]), int(rows[-1]) + 1
         X = np.empty((nc + 1, r1 - r0, w), np.float32)

@@ -471,8 +471,40 @@ def _relax_error_compiled(full, cand, owner, b, target, ts, nv):
     per sample along each shared edge the numpy path's operations in its order (the
     colour sum in channel order, as ``np.sum`` over fewer than 8 channels), accumulated
     per vertex in row order as ``np.bincount``: the same values."""
-    nt = ts.size
     out = np.zeros(nv)
+    _relax_error_into(full, cand, owner, b, target, ts, out)
+    return out
+
+
+@compiled
+def _relax_search_compiled(full, cur, off, owner, b, target, ts, e0):
+    """:func:`_relax`'s greedy search: for each offset block ``off[i]`` (k, 2) in turn,
+    the candidates ``cur + off[i]``, their errors (:func:`_relax_error_compiled`'s
+    values) and the moves of the vertices whose error falls, as the numpy loop does.
+    Returns the new positions (k, 2)."""
+    cur = cur.copy()
+    e0 = e0.copy()
+    n = cur.shape[0]
+    e1 = np.zeros(n)
+    cand = np.empty_like(cur)
+    for i in range(off.shape[0]):
+        for v in range(n):
+            cand[v, 0] = cur[v, 0] + off[i, v, 0]
+            cand[v, 1] = cur[v, 1] + off[i, v, 1]
+            e1[v] = 0.0
+        _relax_error_into(full, cand, owner, b, target, ts, e1)
+        for v in range(n):
+            if e1[v] < e0[v]:
+                cur[v, 0] = cand[v, 0]
+                cur[v, 1] = cand[v, 1]
+                e0[v] = e1[v]
+    return cur
+
+
+@helper
+def _relax_error_into(full, cand, owner, b, target, ts, out):
+    """Body of :func:`_relax_error_compiled`: adds the errors to ``out`` (zeros)."""
+    nt = ts.size
     s = np.empty((1, full.shape[2]))
     for e in range(owner.size):
         o = owner[e]
@@ -487,7 +519,6 @@ def _relax_error_compiled(full, cand, owner, b, target, ts, nv):
                 d = s[0, k] - target[r, k]
                 acc += d * d
             out[o] += acc * u
-    return out
 
 
 @compiled
@@ -1962,16 +1993,26 @@ def _relax(P, verts, faces, movable, F, st, full, rng, f, fast=False):
             - (t[:, 1, 1] - t[:, 0, 1]) * (t[:, 2, 0] - t[:, 0, 0])
 
     a_before = areas(P)
-    for _ in range(3):
-        for _k in range(6):
-            r = radius * np.sqrt(rng.random(vid.size))
-            t = rng.random(vid.size) * 2 * np.pi
-            cand = cur + np.stack([r * np.cos(t), r * np.sin(t)], 1)
-            e1 = err(cand)
-            better = e1 < e0
-            cur[better] = cand[better]
-            e0 = np.where(better, e1, e0)
-        radius = radius * 0.5
+    if jit_err and np.isfinite(cur).all() and np.isfinite(radius).all():
+        # the same draws (one (18, 2, k) block is the 36 calls' stream, in order), the
+        # same offsets (numpy's own sqrt, cos, sin of them) and the candidates' errors
+        # and greedy updates in one compiled loop
+        u = rng.random((3 * 6, 2, vid.size))
+        r = (radius * np.array([1.0, 0.5, 0.25]).repeat(6)[:, None]) * np.sqrt(u[:, 0])
+        t = u[:, 1] * 2 * np.pi
+        off = np.stack([r * np.cos(t), r * np.sin(t)], 2)
+        cur = _relax_search_compiled(full, cur, off, owner, b, target, ts, e0)
+    else:
+        for _ in range(3):
+            for _k in range(6):
+                r = radius * np.sqrt(rng.random(vid.size))
+                t = rng.random(vid.size) * 2 * np.pi
+                cand = cur + np.stack([r * np.cos(t), r * np.sin(t)], 1)
+                e1 = err(cand)
+                better = e1 < e0
+                cur[better] = cand[better]
+                e0 = np.where(better, e1, e0)
+            radius = radius * 0.5
     # undo moves that fold or crush a face of the cluster
     for _ in range(3):
         trial = P.copy()
