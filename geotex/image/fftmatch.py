@@ -185,7 +185,7 @@ def match_energy(spectra: TextureSpectra, mask, support, footprint, *, which=Non
         Orientations to evaluate (default all).
     fast : bool, optional
         Assemble the admissible block in the compiled loop
-        :func:`_admissible_energy` (the same values; loading numba costs
+        :func:`_admissible_slabs` (the same values; loading numba costs
         about a second once, worth it for thousands of calls).
     footprint_pixels : array_like of int, optional
         Flat indices (row-major) of the pixels where ``footprint > 0``, in any
@@ -234,6 +234,15 @@ def match_energy(spectra: TextureSpectra, mask, support, footprint, *, which=Non
     q = np.stack([xs + 0.5 - c[0], ys + 0.5 - c[1]], axis=1)
     a = spectra.angles[idx]
     co, si = np.cos(a), np.sin(a)
+    if fast:
+        # the footprint's extent along both slabs' directions as below, the intervals and
+        # the block in one compiled pass (the same operations on the same values)
+        ext = np.empty((2, 2, idx.size))
+        for j, (r0, r1) in enumerate(((co, si), (-si, co))):
+            proj = q @ np.stack([r0, r1])
+            ext[j, 0], ext[j, 1] = proj.min(axis=0), proj.max(axis=0)
+        return _admissible_slabs(E, sum_i2, ext, co, si, w / 2.0 - 1.0, h / 2.0 - 1.0,
+                                 hy, wx)
     dy = np.arange(hy, dtype=np.float64)[None, :]
     lo = np.full((idx.size, hy), -np.inf)
     hi = np.full((idx.size, hy), np.inf)
@@ -252,8 +261,6 @@ def match_energy(spectra: TextureSpectra, mask, support, footprint, *, which=Non
                         np.maximum(x1, x2))
         lo = np.maximum(lo, lo_k)
         hi = np.minimum(hi, hi_k)
-    if fast:
-        return _admissible_energy(E, sum_i2, lo, hi, wx)
     out = np.full(E.shape, np.inf)
     blk = np.maximum(E[:, :hy, :wx].astype(np.float64) + sum_i2, 0.0)
     dx = np.arange(wx, dtype=np.float64)[None, None, :]
@@ -263,18 +270,40 @@ def match_energy(spectra: TextureSpectra, mask, support, footprint, *, which=Non
 
 
 @compiled
-def _admissible_energy(E, sum_i2, lo, hi, wx):
-    """``max(E + sum_i2, 0)`` (in float64) where row ``dy < hy`` (``hy = lo.shape[1]``)
-    and column ``dx < wx`` lie in ``[lo, hi]`` of their orientation and row, ``inf``
-    elsewhere: :func:`match_energy`'s numpy assembly in one pass (the same values)."""
+def _admissible_slabs(E, sum_i2, ext, co, si, half_w, half_h, hy, wx):
+    """:func:`match_energy`'s admissible intervals and block in one pass: per
+    orientation ``a`` and row ``dy < hy`` the interval ``[lo, hi]`` of shifts ``dx``
+    cut by the two slabs (directions ``(co, si)`` and ``(-si, co)``, half widths
+    ``half_w`` and ``half_h``, the footprint's extent along them ``ext[slab, 0 / 1,
+    a]``), computed with the numpy lines' operations in their order, then
+    :func:`_admissible_energy`'s values: the same bytes."""
     k, h, w = E.shape
-    hy = lo.shape[1]
     out = np.empty((k, h, w))
     for a in range(k):
         for y in range(h):
+            lo = -np.inf
+            hi = np.inf
+            if y < hy:
+                for j in range(2):
+                    r0 = co[a] if j == 0 else -si[a]
+                    r1 = si[a] if j == 0 else co[a]
+                    half = half_w if j == 0 else half_h
+                    tmin = (-half - ext[j, 0, a]) - r1 * np.float64(y)
+                    tmax = (half - ext[j, 1, a]) - r1 * np.float64(y)
+                    if abs(r0) < 1e-12:
+                        inside = tmin <= 0 and tmax >= 0
+                        lo_k = -np.inf if inside else np.inf
+                        hi_k = np.inf if inside else -np.inf
+                    else:
+                        x1 = tmin / r0
+                        x2 = tmax / r0
+                        lo_k = min(x1, x2)
+                        hi_k = max(x1, x2)
+                    lo = max(lo, lo_k)
+                    hi = min(hi, hi_k)
             for x in range(w):
                 v = np.inf
-                if y < hy and x < wx and x >= lo[a, y] and x <= hi[a, y]:
+                if y < hy and x < wx and x >= lo and x <= hi:
                     v = np.float64(E[a, y, x]) + sum_i2
                     if v < 0.0:
                         v = 0.0
