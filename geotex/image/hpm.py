@@ -1525,7 +1525,8 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         has = np.isfinite(nb_uv[:, 0])
         if has.any():
             tri = np.searchsorted(verts, F[faces])
-            close = has & (np.linalg.norm(P - np.nan_to_num(nb_uv), axis=1) <= snap)
+            nb0 = np.where(has[:, None], nb_uv, 0.0)     # (rows are all nan or finite)
+            close = has & (np.linalg.norm(P - nb0, axis=1) <= snap)
             close = _snap(P, nb_uv, close, tri)
 
             def spread_moves(moved, keep, turn=FIELD_MOVE_TURN):
@@ -1575,13 +1576,13 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                 # periodic sample: a border vertex within ``snap_tol`` of a copy of the
                 # neighbour's position moved by whole periods takes that copy (the map
                 # jumps by a lattice vector there: same phase, no visible seam)
-                d = P - np.nan_to_num(nb_uv)
+                d = P - nb0
                 if stripes:            # one repeat: only the phase across the stripes
                     s_ = d @ basis[0] / (basis[0] @ basis[0])
                     target = P - (s_ - np.rint(s_))[:, None] * basis[0]
                 else:
                     k = np.rint(np.linalg.solve(basis.T, d.T).T)
-                    target = np.nan_to_num(nb_uv) + k @ basis
+                    target = nb0 + k @ basis
                 near_ = has & ~close & (np.linalg.norm(P - target, axis=1) <= snap_tol)
                 if near_.any():
                     moved = P.copy()
