@@ -276,7 +276,8 @@ def _admissible_slabs(E, sum_i2, ext, co, si, half_w, half_h, hy, wx):
     cut by the two slabs (directions ``(co, si)`` and ``(-si, co)``, half widths
     ``half_w`` and ``half_h``, the footprint's extent along them ``ext[slab, 0 / 1,
     a]``), computed with the numpy lines' operations in their order, then
-    :func:`_admissible_energy`'s values: the same bytes."""
+    ``max(E + sum_i2, 0)`` (in float64) inside the intervals and the block
+    ``dy < hy``, ``dx < wx``, ``inf`` elsewhere: the same bytes."""
     k, h, w = E.shape
     out = np.empty((k, h, w))
     for a in range(k):
