@@ -285,10 +285,14 @@ def test_compiled_energy_assembly_gives_the_same_bytes():
     I = rng.random((30, 26, 3)) * J[:, :, None]
     K = J.copy()
     K[8:14, 6:15] = 1.0
+    pixels = np.concatenate([np.flatnonzero(J), np.flatnonzero(K)])     # repeats, any order
     for which in (None, [2], [0, 4]):
         E = match_energy(spectra, I, J, K, which=which)
         assert np.isfinite(E).any() and not np.isfinite(E).all()
         assert match_energy(spectra, I, J, K, which=which, fast=True).tobytes() == E.tobytes()
+        # the footprint's pixels given instead of scanned: the same bytes
+        assert match_energy(spectra, I, J, K, which=which, fast=True,
+                            footprint_pixels=pixels[::-1]).tobytes() == E.tobytes()
 
 
 def test_bilinear_lookup_equals_map_coordinates():

@@ -6,7 +6,8 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
 from geotex.image.fftmatch import opponent_colors
-from geotex.image.hpm import _relax_error_compiled, _sample
+from geotex.image.hpm import (_State, _relax, _relax_error_compiled, _rigid_fit, _sample,
+                              _window_minima)
 from geotex.image.hpm_faces import field_coefficients, textured_band, vertex_faces
 from geotex.mesh import edge_topology
 from geotex.mesh.primitives import torus
@@ -93,3 +94,77 @@ def test_compiled_relaxation_error_equals_the_numpy_path():
         ref = np.bincount(np.repeat(owner, ts.size), weights=per, minlength=nv)
         assert _relax_error_compiled(full, cand, owner, b, target, ts, nv).tobytes() == \
             ref.tobytes()
+
+
+def test_compiled_relaxation_search_equals_the_numpy_loop(mesh):
+    # the greedy search of the edge relaxation in one compiled loop: the same moves (and
+    # the same random stream) as the numpy loop, on a cluster next to a textured region
+    V, F = mesh
+    rng = np.random.default_rng(2)
+    full = opponent_colors(rng.random((64, 64, 3)))
+    m = len(F)
+    done = np.arange(m // 2)
+    corner = V[F[done]][:, :, :2] * 20.0 + 30.0
+    st = _State(V, F, m)
+    st.mark(F, done, corner, 0, 0)
+    faces = np.arange(m // 2, m // 2 + 60)
+    verts = np.unique(F[faces])
+    P = V[verts][:, :2] * 20.0 + 30.0 + rng.normal(scale=0.4, size=(verts.size, 2))
+    movable = st.vcnt[verts] > 0
+    assert movable.sum() >= 5
+    for f in (1.0, 3.0):
+        slow = _relax(P, verts, faces, movable, F, st, full, np.random.default_rng(5), f)
+        fast = _relax(P, verts, faces, movable, F, st, full, np.random.default_rng(5), f,
+                      fast=True)
+        assert fast.tobytes() == slow.tobytes()
+        assert not np.array_equal(slow, P) and np.array_equal(slow[~movable], P[~movable])
+
+
+def test_rigid_fit_is_the_svd_rotation():
+    # the closed-form 2 x 2 Kabsch rotation equals the SVD's V U^T where that is a
+    # rotation, and gives None where it is a reflection
+    rng = np.random.default_rng(7)
+    kept = refused = 0
+    for _ in range(300):
+        X = rng.normal(size=(int(rng.integers(3, 15)), 2))
+        th = rng.uniform(-np.pi, np.pi)
+        R0 = np.array([[np.cos(th), -np.sin(th)], [np.sin(th), np.cos(th)]])
+        Y = X @ R0.T + rng.normal(size=2) + 0.3 * rng.normal(size=X.shape)
+        if rng.random() < 0.3:
+            Y[:, 0] *= -1.0
+        xm, ym = X.mean(axis=0), Y.mean(axis=0)
+        U, _, Wt = np.linalg.svd((X - xm).T @ (Y - ym))
+        R = (U @ Wt).T
+        got = _rigid_fit(X, Y)
+        if np.linalg.det(R) > 0:
+            kept += 1
+            assert got is not None
+            assert np.allclose(got[0], R, atol=1e-12)
+            assert np.allclose(got[1], ym - R @ xm, atol=1e-12)
+        else:
+            refused += 1
+            assert got is None
+    assert kept > 100 and refused > 30
+    # no direction at all: None
+    assert _rigid_fit(np.zeros((4, 2)), np.ones((4, 2))) is None
+
+
+def test_window_minima_equal_argmin_of_each_window():
+    rng = np.random.default_rng(8)
+    E = rng.random((23, 31))
+    E[rng.random(E.shape) < 0.3] = np.inf
+    E[:8, :9] = np.inf                       # a corner with no finite value
+    E[15, 20] = E[16, 21] = 0.0              # a tie: the first in row-major order
+    ix = np.array([0, 5, 20, 30, 40, -6, 3, 21], np.int64)
+    iy = np.array([0, 3, 16, 22, 10, -6, 2, 15], np.int64)
+    for fn in (_window_minima, _window_minima.py_func):
+        for win in (0, 1, 3):
+            val, by, bx = fn(E, ix, iy, win)
+            for i in range(ix.size):
+                y0, x0 = max(iy[i] - win, 0), max(ix[i] - win, 0)
+                blk = E[y0:max(iy[i] + win + 1, 0), x0:max(ix[i] + win + 1, 0)]
+                if blk.size == 0 or not np.isfinite(blk).any():
+                    assert val[i] == np.inf
+                    continue
+                y, x = np.unravel_index(int(np.argmin(blk)), blk.shape)
+                assert (val[i], by[i], bx[i]) == (blk[y, x], y0 + y, x0 + x)

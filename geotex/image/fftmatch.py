@@ -167,7 +167,7 @@ def texture_spectra(image, *, orientations: int = 24) -> TextureSpectra:
 
 
 def match_energy(spectra: TextureSpectra, mask, support, footprint, *, which=None,
-                 fast: bool = False):
+                 fast: bool = False, footprint_pixels=None):
     """Matching energy of a mask at every translation and orientation.
 
     Parameters
@@ -185,8 +185,12 @@ def match_energy(spectra: TextureSpectra, mask, support, footprint, *, which=Non
         Orientations to evaluate (default all).
     fast : bool, optional
         Assemble the admissible block in the compiled loop
-        :func:`_admissible_energy` (the same values; loading numba costs
+        :func:`_admissible_slabs` (the same values; loading numba costs
         about a second once, worth it for thousands of calls).
+    footprint_pixels : array_like of int, optional
+        Flat indices (row-major) of the pixels where ``footprint > 0``, in any
+        order, repeats allowed, when the caller has them (hpm: the rasterized
+        pixels); spares the scan of ``footprint``.  The same result.
 
     Returns
     -------
@@ -199,7 +203,8 @@ def match_energy(spectra: TextureSpectra, mask, support, footprint, *, which=Non
     J = np.asarray(support, dtype=np.float64)
     K = np.asarray(footprint, dtype=np.float64)
     idx = np.arange(spectra.angles.size) if which is None else np.asarray(which, np.int64)
-    fI, fJ = _mask_spectra(I, J)
+    rows = np.flatnonzero(J.any(axis=1))       # I is zero outside the support's rows
+    fI, fJ = _mask_spectra(I, J, rows)
     if which is None:
         St, St2 = spectra.spec_t, spectra.spec_t2
     elif idx.size == 1:                  # one orientation (hpm with a field): views, no copy
@@ -207,12 +212,17 @@ def match_energy(spectra: TextureSpectra, mask, support, footprint, *, which=Non
     else:
         St, St2 = spectra.spec_t[idx], spectra.spec_t2[idx]
     spec = fJ * St2
+    tmp = np.empty_like(spec)
     for ch in range(fI.shape[0]):
         fI[ch] *= 2.0
-        spec -= fI[ch] * St[:, ch]
+        spec -= np.multiply(fI[ch], St[:, ch], out=tmp)
     E = sfft.irfft2(spec, s=(h, w), axes=(-2, -1))
-    sum_i2 = float(np.sum(I * I))
-    ys, xs = np.nonzero(K > 0)
+    Ir = I[rows[0]:rows[-1] + 1] if rows.size else I[:0]
+    sum_i2 = float(np.sum(Ir * Ir))
+    if footprint_pixels is None:
+        ys, xs = np.nonzero(K > 0)
+    else:
+        ys, xs = np.divmod(np.asarray(footprint_pixels, np.int64), w)
     if ys.size == 0:
         return np.maximum(E.astype(np.float64) + sum_i2, 0.0)
     # admissible block: the footprint must not wrap around
@@ -224,6 +234,15 @@ def match_energy(spectra: TextureSpectra, mask, support, footprint, *, which=Non
     q = np.stack([xs + 0.5 - c[0], ys + 0.5 - c[1]], axis=1)
     a = spectra.angles[idx]
     co, si = np.cos(a), np.sin(a)
+    if fast:
+        # the footprint's extent along both slabs' directions as below, the intervals and
+        # the block in one compiled pass (the same operations on the same values)
+        ext = np.empty((2, 2, idx.size))
+        for j, (r0, r1) in enumerate(((co, si), (-si, co))):
+            proj = q @ np.stack([r0, r1])
+            ext[j, 0], ext[j, 1] = proj.min(axis=0), proj.max(axis=0)
+        return _admissible_slabs(E, sum_i2, ext, co, si, w / 2.0 - 1.0, h / 2.0 - 1.0,
+                                 hy, wx)
     dy = np.arange(hy, dtype=np.float64)[None, :]
     lo = np.full((idx.size, hy), -np.inf)
     hi = np.full((idx.size, hy), np.inf)
@@ -242,8 +261,6 @@ def match_energy(spectra: TextureSpectra, mask, support, footprint, *, which=Non
                         np.maximum(x1, x2))
         lo = np.maximum(lo, lo_k)
         hi = np.minimum(hi, hi_k)
-    if fast:
-        return _admissible_energy(E, sum_i2, lo, hi, wx)
     out = np.full(E.shape, np.inf)
     blk = np.maximum(E[:, :hy, :wx].astype(np.float64) + sum_i2, 0.0)
     dx = np.arange(wx, dtype=np.float64)[None, None, :]
@@ -253,18 +270,41 @@ def match_energy(spectra: TextureSpectra, mask, support, footprint, *, which=Non
 
 
 @compiled
-def _admissible_energy(E, sum_i2, lo, hi, wx):
-    """``max(E + sum_i2, 0)`` (in float64) where row ``dy < hy`` (``hy = lo.shape[1]``)
-    and column ``dx < wx`` lie in ``[lo, hi]`` of their orientation and row, ``inf``
-    elsewhere: :func:`match_energy`'s numpy assembly in one pass (the same values)."""
+def _admissible_slabs(E, sum_i2, ext, co, si, half_w, half_h, hy, wx):
+    """:func:`match_energy`'s admissible intervals and block in one pass: per
+    orientation ``a`` and row ``dy < hy`` the interval ``[lo, hi]`` of shifts ``dx``
+    cut by the two slabs (directions ``(co, si)`` and ``(-si, co)``, half widths
+    ``half_w`` and ``half_h``, the footprint's extent along them ``ext[slab, 0 / 1,
+    a]``), computed with the numpy lines' operations in their order, then
+    ``max(E + sum_i2, 0)`` (in float64) inside the intervals and the block
+    ``dy < hy``, ``dx < wx``, ``inf`` elsewhere: the same bytes."""
     k, h, w = E.shape
-    hy = lo.shape[1]
     out = np.empty((k, h, w))
     for a in range(k):
         for y in range(h):
+            lo = -np.inf
+            hi = np.inf
+            if y < hy:
+                for j in range(2):
+                    r0 = co[a] if j == 0 else -si[a]
+                    r1 = si[a] if j == 0 else co[a]
+                    half = half_w if j == 0 else half_h
+                    tmin = (-half - ext[j, 0, a]) - r1 * np.float64(y)
+                    tmax = (half - ext[j, 1, a]) - r1 * np.float64(y)
+                    if abs(r0) < 1e-12:
+                        inside = tmin <= 0 and tmax >= 0
+                        lo_k = -np.inf if inside else np.inf
+                        hi_k = np.inf if inside else -np.inf
+                    else:
+                        x1 = tmin / r0
+                        x2 = tmax / r0
+                        lo_k = min(x1, x2)
+                        hi_k = max(x1, x2)
+                    lo = max(lo, lo_k)
+                    hi = min(hi, hi_k)
             for x in range(w):
                 v = np.inf
-                if y < hy and x < wx and x >= lo[a, y] and x <= hi[a, y]:
+                if y < hy and x < wx and x >= lo and x <= hi:
                     v = np.float64(E[a, y, x]) + sum_i2
                     if v < 0.0:
                         v = 0.0
@@ -272,7 +312,7 @@ def _admissible_energy(E, sum_i2, lo, hi, wx):
     return out
 
 
-def _mask_spectra(I, J):
+def _mask_spectra(I, J, rows=None):
     """Conjugate spectra of the mask's channels ``(c, h, w // 2 + 1)`` and of its support.
 
     The same values as ``rfft2`` of each plane (float32): the row transforms
@@ -284,7 +324,8 @@ def _mask_spectra(I, J):
     h, w = J.shape
     nc = I.shape[2]
     out = np.zeros((nc + 1, h, w // 2 + 1), np.complex64)
-    rows = np.flatnonzero(J.any(axis=1))
+    if rows is None:                     # the rows holding the support
+        rows = np.flatnonzero(J.any(axis=1))
     if rows.size:
         r0, r1 = int(rows[0]), int(rows[-1]) + 1
         X = np.empty((nc + 1, r1 - r0, w), np.float32)

@@ -72,7 +72,8 @@ into the original image.
 5. At the face level (``face_match``, default), the faces still without
    texture (clusters of the finest level that matched badly or could not be
    flattened) are cut into groups of at most ``face_group`` adjacent faces
-   (runs of the breadth-first order of each connected gap).  Each group is
+   (runs of the breadth-first order of each connected gap; by default 4
+   without a field, single faces with one).  Each group is
    flattened by projection onto its mean plane and matched like a cluster
    (the constant-width band, the FFT search, the continuation of *every*
    textured neighbour placement as a candidate, not only the main one; the
@@ -160,7 +161,10 @@ the FFT search uses that one orientation (the grid turned onto it); the
 neighbours' continuations (and their whole-period moves) are turned onto it
 about their shared border when they need at most ``field_tolerance`` and
 then moved to the lowest matching error within ``CONTINUATION_WINDOW`` of a
-pattern size (their phase is corrected, the orientation kept), so a cluster
+pattern size (their phase is corrected, the orientation kept; every
+continuation and every whole-period move is so moved, on the FFT energies
+already computed, and the lowest is the candidate: before, the moves were
+ranked by bilinear band errors, a tenth of the CPU time on bricks), so a cluster
 whose FFT minimum is above ``max_error`` is refused before its continuations
 are evaluated (their lattice moves were a quarter of the CPU time on slate
 tiles, where most face-level fits fail; before, a continuation whose window
@@ -468,8 +472,40 @@ def _relax_error_compiled(full, cand, owner, b, target, ts, nv):
     per sample along each shared edge the numpy path's operations in its order (the
     colour sum in channel order, as ``np.sum`` over fewer than 8 channels), accumulated
     per vertex in row order as ``np.bincount``: the same values."""
-    nt = ts.size
     out = np.zeros(nv)
+    _relax_error_into(full, cand, owner, b, target, ts, out)
+    return out
+
+
+@compiled
+def _relax_search_compiled(full, cur, off, owner, b, target, ts, e0):
+    """:func:`_relax`'s greedy search: for each offset block ``off[i]`` (k, 2) in turn,
+    the candidates ``cur + off[i]``, their errors (:func:`_relax_error_compiled`'s
+    values) and the moves of the vertices whose error falls, as the numpy loop does.
+    Returns the new positions (k, 2)."""
+    cur = cur.copy()
+    e0 = e0.copy()
+    n = cur.shape[0]
+    e1 = np.zeros(n)
+    cand = np.empty_like(cur)
+    for i in range(off.shape[0]):
+        for v in range(n):
+            cand[v, 0] = cur[v, 0] + off[i, v, 0]
+            cand[v, 1] = cur[v, 1] + off[i, v, 1]
+            e1[v] = 0.0
+        _relax_error_into(full, cand, owner, b, target, ts, e1)
+        for v in range(n):
+            if e1[v] < e0[v]:
+                cur[v, 0] = cand[v, 0]
+                cur[v, 1] = cand[v, 1]
+                e0[v] = e1[v]
+    return cur
+
+
+@helper
+def _relax_error_into(full, cand, owner, b, target, ts, out):
+    """Body of :func:`_relax_error_compiled`: adds the errors to ``out`` (zeros)."""
+    nt = ts.size
     s = np.empty((1, full.shape[2]))
     for e in range(owner.size):
         o = owner[e]
@@ -484,7 +520,27 @@ def _relax_error_compiled(full, cand, owner, b, target, ts, nv):
                 d = s[0, k] - target[r, k]
                 acc += d * d
             out[o] += acc * u
-    return out
+
+
+@compiled
+def _window_minima(E, ix, iy, win):
+    """Per point ``(ix[i], iy[i])``: the lowest value of ``E`` (h, w) in the window of
+    ``win`` pixels around it (clipped to ``E``) and its row and column, the first in
+    row-major order among equal values (as ``np.argmin`` of the window); ``inf`` (and
+    row, column 0) where the window is empty or holds no finite value."""
+    n = ix.size
+    h, w = E.shape
+    val = np.full(n, np.inf)
+    by = np.zeros(n, np.int64)
+    bx = np.zeros(n, np.int64)
+    for i in range(n):
+        for y in range(max(iy[i] - win, 0), min(max(iy[i] + win + 1, 0), h)):
+            for x in range(max(ix[i] - win, 0), min(max(ix[i] + win + 1, 0), w)):
+                if E[y, x] < val[i]:
+                    val[i] = E[y, x]
+                    by[i] = y
+                    bx[i] = x
+    return val, by, bx
 
 
 class _State:
@@ -549,7 +605,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                 orientation_spread: float | None = 30.0,
                 band_mode: str = "distance", band_distance: float = 0.06,
                 match_size: int = 200, flattening: str = "mean_value",
-                snap: float = 1.5, relax: bool = True, face_group: int = 4,
+                snap: float = 1.5, relax: bool = True, face_group: int | None = None,
                 subpixel: bool = False, face_match: bool = True, structure: bool = True,
                 min_patch: float = 0.3, orientation_field: str = "auto",
                 field_tolerance: float = 25.0,
@@ -652,6 +708,15 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         before face-level matching).
     face_group : int, optional
         Largest number of adjacent faces matched together at the face level.
+        Default: 4 without a field, 1 (every face alone) with one.  With a
+        field the groups failed four times in five on Spot 10k (slate tiles,
+        rough metal) and were retried face by face anyway; alone
+        from the start, seeds 0-2, the seams (patch borders and where the map
+        jumps), stretch, rotation across borders and orientation breaks were
+        as good or better on slate tiles and rough metal and equal on bricks,
+        for 5-10 % less CPU.  Without a field 1 gave lower seams too but more
+        rotation across borders (75th percentile +2 to +5 degrees on gravel,
+        water and peppers) for 20-30 % more CPU.
     subpixel : bool, optional
         Refine the FFT minimum below the pixel and orientation grids
         (parabolas of the continuous mask error in x, y and the angle) and
@@ -725,7 +790,8 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         raise InputError(f"flattening must be 'mean_value' or 'stable_base', got "
                          f"{flattening!r}")
     snap = finite_number(snap, name="snap")
-    face_group = count(face_group, name="face_group")
+    if face_group is not None:
+        face_group = count(face_group, name="face_group")
     if angle is not None:
         angle = finite_number(angle, name="angle")
     H_img, W_img = img.shape[:2]
@@ -986,14 +1052,9 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             sets = [ok[pv == u[k]] for k in (order if every else order[:1]) if cn[k] >= 3]
         out = []
         for sel in sets:
-            X = pix(bl[bverts[sel]])
-            Y = A[sel]
-            xm, ym = X.mean(axis=0), Y.mean(axis=0)
-            Hm = (X - xm).T @ (Y - ym)
-            U, _, Wt = np.linalg.svd(Hm)
-            R = (U @ Wt).T
-            if R[0, 0] * R[1, 1] - R[0, 1] * R[1, 0] > 0:     # a rotation (det +-1)
-                out.append((R, ym - R @ xm))
+            fit_ = _rigid_fit(pix(bl[bverts[sel]]), A[sel])
+            if fit_ is not None:
+                out.append(fit_)
         return out
 
     def turn_centre(bverts, bl, in_c):
@@ -1057,6 +1118,43 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                 if ek < cont[2] or not cont_in:
                     cont, cont_in = (Rr, t2s[i], ek), True
         return cont
+
+    def field_continuation(fits, Rd, loc, Eg, origin, k_ref):
+        """With a field: the best continuation of the neighbours ``fits`` (already turned
+        onto the searched orientation ``k_ref``) as ``(R, t, error)`` in the turned raster
+        frame, or None.
+
+        Every neighbour's continuation and, for a periodic sample, its
+        ``LATTICE_CANDIDATES`` shortest moves by whole periods that keep the
+        cluster's bounding box inside the image (see :func:`lattice_continuation`)
+        is moved to the lowest energy of ``Eg`` (the FFT energies of the searched
+        orientation) within ``win`` matching pixels of it; the lowest of these
+        positions whose faces stay inside the image is returned, with that energy.
+        (Before, the moves were ranked by their bilinear band error and only the
+        best one was moved to its window's minimum.)
+        """
+        ts = []
+        lim = np.array([W_img, H_img], dtype=np.float64)
+        for Rk, tk in fits:
+            ts.append(tk[None])
+            if lattice is not None:
+                P0 = to_image(loc, Rk, tk)
+                lo, hi = P0.min(axis=0), P0.max(axis=0)
+                ok = np.all((lo + lattice >= 0) & (hi + lattice <= lim), axis=1)
+                ts.append(tk + lattice[np.flatnonzero(ok)[:LATTICE_CANDIDATES]] / f)
+        T = np.concatenate(ts)
+        rk = spectra.angles[k_ref]
+        Rk_ = np.array([[np.cos(rk), np.sin(rk)], [-np.sin(rk), np.cos(rk)]])
+        sxy = np.rint((T - center) @ Rk_ + center + origin).astype(np.int64)
+        wmin = _window_minima if fast else _window_minima.py_func
+        val, by, bx = wmin(Eg[0], sxy[:, 0], sxy[:, 1], win)
+        for i in np.argsort(val, kind="stable"):
+            if not np.isfinite(val[i]):
+                break
+            Rw, tw = fft_placement(k_ref, np.array([bx[i], by[i]], dtype=np.float64) - origin)
+            if inside_image(to_image(loc, Rw @ Rd, tw)):
+                return Rw, tw, float(val[i])
+        return None
 
     def quick_continuation(c, fits, Rd, loc, q, Itb, nJ):
         """At the face level with a field: the neighbours' continuations (already turned
@@ -1306,6 +1404,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             nJ = float(np.count_nonzero(J))
             qb, Itb = mask_points(tb, origin), I[tb]     # the mask pixels and their colours
         K = K.reshape(hm, wm)
+        kpix = np.concatenate(drawn)     # the footprint's pixels (K > 0), for match_energy
         # face level with a field: a neighbour's continuation under the threshold is taken
         # without the FFT search (module docstring, 5.)
         quick = None if li == 0 or not nJ else \
@@ -1319,7 +1418,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                 which = [int(np.argmin(np.abs((spectra.angles - a0 + np.pi) % (2 * np.pi)
                                               - np.pi)))]
             Eg = match_energy(spectra, I.reshape(hm, wm, -1), J.reshape(hm, wm), K,
-                              which=which, fast=fast)
+                              which=which, fast=fast, footprint_pixels=kpix)
             okp = np.flatnonzero(np.isfinite(Eg.ravel()))
             if okp.size == 0:
                 refuse(li, 'no_position')
@@ -1348,7 +1447,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                 if which.size == 0:
                     which = np.array([int(np.argmin(dev))])
             Eg = match_energy(spectra, I.reshape(hm, wm, -1), J.reshape(hm, wm), K,
-                              which=which, fast=fast)
+                              which=which, fast=fast, footprint_pixels=kpix)
             flat = Eg.ravel()
             if not np.isfinite(flat).any():
                 refuse(li, 'no_position')
@@ -1365,7 +1464,15 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                 refuse(li, 'error')
                 return -best / nJ / var2
             cont = None
-            if nfit is not None:
+            if fvec is not None and nfit is not None:
+                # with a field every continuation has the searched orientation: each
+                # (and, for a periodic sample, each of its lattice moves) is taken at
+                # the FFT minimum within ``CONTINUATION_WINDOW`` of a pattern size of it
+                # (its phase corrected, e.g. after whole-period moves of a sample that is
+                # not exactly periodic), and the lowest of these is the continuation
+                cont = field_continuation(fits if c is None else fits[:1], Rd, loc, Eg,
+                                          origin, k_ref)
+            elif nfit is not None:
                 # the neighbour's placement in the turned raster frame: R Rd^T q + t
                 Rc = nfit[0] @ Rd.T
                 cont = (Rc, nfit[1], band_error(Rc, nfit[1], qb, Itb))
@@ -1376,22 +1483,6 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                 if lattice is not None:
                     cont = lattice_continuation(cont, fits if c is None else fits[:1], Rd,
                                                 loc, qb, Itb, li)
-            if fvec is not None and cont is not None:
-                # with a field the continuation has the searched orientation: take the
-                # FFT minimum within ``CONTINUATION_WINDOW`` of a pattern size of it (its
-                # phase corrected, e.g. after whole-period moves of a sample that is not
-                # exactly periodic), the error of the exact pixel grid
-                rk = spectra.angles[k_ref]
-                Rk_ = np.array([[np.cos(rk), np.sin(rk)], [-np.sin(rk), np.cos(rk)]])
-                sxy = Rk_.T @ (cont[1] - center) + center + origin
-                ix, iy = int(np.rint(sxy[0])), int(np.rint(sxy[1]))
-                y0_, x0_ = max(iy - win, 0), max(ix - win, 0)
-                blk = Eg[0, y0_:max(iy + win + 1, 0), x0_:max(ix + win + 1, 0)]
-                if blk.size and np.isfinite(blk).any():
-                    by, bx = np.unravel_index(int(np.argmin(blk)), blk.shape)
-                    Rw, tw = fft_placement(k_ref, np.array([x0_ + bx, y0_ + by],
-                                                           dtype=np.float64) - origin)
-                    cont = (Rw, tw, float(blk[by, bx]))
             refined = None
             if subpixel:
                 # the FFT minimum lies on the pixel grid and on the orientation grid:
@@ -1434,7 +1525,8 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
         has = np.isfinite(nb_uv[:, 0])
         if has.any():
             tri = np.searchsorted(verts, F[faces])
-            close = has & (np.linalg.norm(P - np.nan_to_num(nb_uv), axis=1) <= snap)
+            nb0 = np.where(has[:, None], nb_uv, 0.0)     # (rows are all nan or finite)
+            close = has & (np.linalg.norm(P - nb0, axis=1) <= snap)
             close = _snap(P, nb_uv, close, tri)
 
             def spread_moves(moved, keep, turn=FIELD_MOVE_TURN):
@@ -1472,21 +1564,25 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
                 patches by 6 degrees (median) on a torus with stripes)."""
                 if fvec is None:
                     return False
-                a0 = field_angle(verts, P, faces)[0]
+                # the angle of the current positions: that of the last accepted moves
+                a0 = seen[1] if seen[0] is P else field_angle(verts, P, faces)[0]
                 a1 = field_angle(verts, P2, faces)[0]
+                seen[:] = [P2, a1]
                 return _angle_gap(a1, a0, sym) > np.radians(turn)
+
+            seen = [None, 0.0]               # (positions, their field angle) last computed
 
             if lattice is not None and (has & ~close).any():
                 # periodic sample: a border vertex within ``snap_tol`` of a copy of the
                 # neighbour's position moved by whole periods takes that copy (the map
                 # jumps by a lattice vector there: same phase, no visible seam)
-                d = P - np.nan_to_num(nb_uv)
+                d = P - nb0
                 if stripes:            # one repeat: only the phase across the stripes
                     s_ = d @ basis[0] / (basis[0] @ basis[0])
                     target = P - (s_ - np.rint(s_))[:, None] * basis[0]
                 else:
                     k = np.rint(np.linalg.solve(basis.T, d.T).T)
-                    target = np.nan_to_num(nb_uv) + k @ basis
+                    target = nb0 + k @ basis
                 near_ = has & ~close & (np.linalg.norm(P - target, axis=1) <= snap_tol)
                 if near_.any():
                     moved = P.copy()
@@ -1590,6 +1686,8 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
     # and a face that fails is unfolded from a textured neighbour
     report(progress, "faces")
     lf = L - 1
+    if face_group is None:               # with a field the faces alone (see face_group)
+        face_group = 1 if fvec is not None else 4
     groups = _face_groups(FF, ~st.done, face_group) if face_match else []
     # the frames of the groups and of their faces alone (a group that fails is retried
     # face by face), computed once
@@ -1730,6 +1828,26 @@ def _pattern_size(ps, shape) -> float:
     n = np.linalg.norm(ps.periods, axis=1)
     n_in = n[n <= min(shape[:2]) / 4.0]
     return float(n_in.max() if n_in.size else n.min())
+
+
+def _rigid_fit(X, Y):
+    """Least-squares rotation and translation ``Y ~ R X + t`` of 2D points (k, 2).
+
+    The rotation maximising ``sum y . (R x)`` over the centred points has the
+    angle of ``(a + e, b - d)`` for ``[[a, b], [d, e]] = sum x y^T`` (the
+    2 x 2 Kabsch solution in closed form: the rotation of the SVD's ``V U^T``).
+    Returns ``(R, t)``, or None when the best orthogonal map is a reflection
+    (``det < 0``, the SVD's ``V U^T`` has determinant -1) or the points give no
+    direction.
+    """
+    xm, ym = X.mean(axis=0), Y.mean(axis=0)
+    (a, b), (d, e) = ((X - xm).T @ (Y - ym)).tolist()
+    r = np.hypot(a + e, b - d)
+    if not (a * e - b * d > 0 and r > 0):
+        return None
+    co, si = (a + e) / r, (b - d) / r
+    R = np.array([[co, -si], [si, co]])
+    return R, ym - R @ xm
 
 
 def _refine_placement(img, R, t, q, target, angle_step, fast=False):
@@ -1893,16 +2011,26 @@ def _relax(P, verts, faces, movable, F, st, full, rng, f, fast=False):
             - (t[:, 1, 1] - t[:, 0, 1]) * (t[:, 2, 0] - t[:, 0, 0])
 
     a_before = areas(P)
-    for _ in range(3):
-        for _k in range(6):
-            r = radius * np.sqrt(rng.random(vid.size))
-            t = rng.random(vid.size) * 2 * np.pi
-            cand = cur + np.stack([r * np.cos(t), r * np.sin(t)], 1)
-            e1 = err(cand)
-            better = e1 < e0
-            cur[better] = cand[better]
-            e0 = np.where(better, e1, e0)
-        radius = radius * 0.5
+    if jit_err and np.isfinite(cur).all() and np.isfinite(radius).all():
+        # the same draws (one (18, 2, k) block is the 36 calls' stream, in order), the
+        # same offsets (numpy's own sqrt, cos, sin of them) and the candidates' errors
+        # and greedy updates in one compiled loop
+        u = rng.random((3 * 6, 2, vid.size))
+        r = (radius * np.array([1.0, 0.5, 0.25]).repeat(6)[:, None]) * np.sqrt(u[:, 0])
+        t = u[:, 1] * 2 * np.pi
+        off = np.stack([r * np.cos(t), r * np.sin(t)], 2)
+        cur = _relax_search_compiled(full, cur, off, owner, b, target, ts, e0)
+    else:
+        for _ in range(3):
+            for _k in range(6):
+                r = radius * np.sqrt(rng.random(vid.size))
+                t = rng.random(vid.size) * 2 * np.pi
+                cand = cur + np.stack([r * np.cos(t), r * np.sin(t)], 1)
+                e1 = err(cand)
+                better = e1 < e0
+                cur[better] = cand[better]
+                e0 = np.where(better, e1, e0)
+            radius = radius * 0.5
     # undo moves that fold or crush a face of the cluster
     for _ in range(3):
         trial = P.copy()
