@@ -62,6 +62,7 @@ from pathlib import Path
 
 import numpy as np
 
+from handkept import write_keeping_hand_sections
 from geotex.check.report import check_mesh
 from geotex.check.slicers import (admesh_report, admesh_verdict, prusaslicer_info,
                                    prusaslicer_verdict)
@@ -467,12 +468,7 @@ def write_markdown(path, meta, rows):
               "geotex check is "
               "the full `check_mesh` (self-intersections and manifold3d included) on the file "
               "as read back.", ""]
-    out_md = Path(path)
-    kept = ""
-    if out_md.exists():           # sections headed "... (written by hand ...)" stay below
-        hand = re.search(r"^## [^\n]*\(written by hand", out_md.read_text(), flags=re.M)
-        kept = out_md.read_text()[hand.start():] if hand else ""
-    out_md.write_text("\n".join(lines) + ("\n" + kept if kept else ""))
+    write_keeping_hand_sections(path, "\n".join(lines))
 
 
 if __name__ == "__main__":

@@ -35,12 +35,12 @@ import datetime
 import json
 import os
 import platform
-import re
 import time
 from pathlib import Path
 
 import numpy as np
 
+from handkept import write_keeping_hand_sections
 from geotex.image import lapped_texture, texture_patches, textured_mesh
 from geotex.image.hpm import hpm_texture, read_hpm_image
 from geotex.image.seams import seam_contrast
@@ -190,7 +190,7 @@ def all_images(repeat: int = 1) -> list:
                      f"{load:.1f} | {row['placed']} | {row['unfolded']} | {q50:.1f} ; {q75:.1f} "
                      f"| {row['breaks']:.3f} | {jump:.3f} | {row['md5']} |")
         print(lines[-1], flush=True)
-    (HERE / "results" / "hpm_images.md").write_text("\n".join(lines) + "\n")
+    write_keeping_hand_sections(HERE / "results" / "hpm_images.md", "\n".join(lines))
     (HERE / "results" / "hpm_images.json").write_text(json.dumps(rows, indent=1))
     return rows
 
@@ -331,12 +331,7 @@ def main():
               "vectors of a border edge seen from its two faces (how much the pattern turns "
               "there; hpm: placed patches, filled faces left out; lapped: top pastes).", ""]
     out = HERE / "results" / "hpm.md"
-    kept = ""
-    if out.exists():                # sections headed "... (written by hand)" stay below
-        old = out.read_text()
-        hand = re.search(r"^## [^\n]*\(written by hand\)", old, flags=re.M)
-        kept = old[hand.start():] if hand else ""
-    out.write_text("\n".join(lines) + ("\n" + kept if kept else ""))
+    write_keeping_hand_sections(out, "\n".join(lines))
     (HERE / "results" / "hpm.json").write_text(json.dumps(rec, indent=1))
     print(f"wrote {out}")
 

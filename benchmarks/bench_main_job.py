@@ -35,6 +35,8 @@ from pathlib import Path
 
 import numpy as np
 
+from handkept import write_keeping_hand_sections
+
 HERE = Path(__file__).resolve().parent
 GEOTEX = [sys.executable, "-m", "geotex"]
 
@@ -230,12 +232,7 @@ def main(argv=None) -> int:
               f"`geotex demo` (Spot at 80 mm, studs, STL + 3MF + picture + report): "
               f"**{demo[0]:.1f} s** wall, {demo[4]:.1f} s CPU (1-min load {demo[5]:.1f} "
               f"before it), peak {demo[1]:.0f} MB, exit {demo[2]}.", ""]
-    out_md = Path(args.out)
-    kept = ""
-    if out_md.exists():           # sections headed "... (written by hand ...)" stay below
-        hand = re.search(r"^## [^\n]*\(written by hand", out_md.read_text(), flags=re.M)
-        kept = out_md.read_text()[hand.start():] if hand else ""
-    out_md.write_text("\n".join(lines) + "\n" + ("\n" + kept if kept else ""))
+    write_keeping_hand_sections(args.out, "\n".join(lines) + "\n")
     print(f"wrote {args.out}")
     return 0
 

@@ -35,12 +35,12 @@ import datetime
 import json
 import os
 import platform
-import re
 import time
 from pathlib import Path
 
 import numpy as np
 
+from handkept import write_keeping_hand_sections
 from geotex.mapping import (edge_colors, mapped_tiles, texture_height, textured_solid,
                             tiles_for_quads)
 from geotex.mapping.shape import ElementFootprints, element_directions, element_footprints
@@ -173,12 +173,7 @@ def main() -> None:
             f"{r['open_faces_dropped']} | {r['folded']} | {r['floating']} | "
             f"{r['left_out_at_defects']} | {r['reseated']} | {r['printable']} | "
             f"{r['seconds_map']} ({r['cpu_map']}) | {r['seconds_job']} |")
-    kept = ""
-    if args.out.exists():           # sections headed "... (written by hand ...)" stay below
-        old = args.out.read_text()
-        hand = re.search(r"^## [^\n]*\(written by hand", old, flags=re.M)
-        kept = old[hand.start():] if hand else ""
-    args.out.write_text("\n".join(lines) + "\n" + ("\n" + kept if kept else ""))
+    write_keeping_hand_sections(args.out, "\n".join(lines) + "\n")
     args.out.with_suffix(".json").write_text(json.dumps({"planar": planar, "rows": rows},
                                                         indent=1) + "\n")
     print(f"wrote {args.out}")
