@@ -6,8 +6,10 @@ Runs the CLI as a user would, one subprocess at a time (timeout 300 s each):
   ``broken/`` with the bricks image: ``geotex hpm MESH --image
   t1_bricks.png -o OUT.glb --report R.json`` (everything else default: scale a
   quarter of the diagonal, seed 0). A written GLB is read back: as many
-  triangles as the input, finite texture coordinates, the input image as its
-  texture; the report's placed patches and unfolded faces are listed.
+  triangles as the input (or as the report's refined mesh, for a base too
+  coarse for the image, which the command refines), finite texture
+  coordinates, the input image as its texture; the report's placed patches
+  and unfolded faces are listed.
 * ``images``: every image of ``images/`` (recursively) on Bob (genus 1) and on
   the double torus (genus 2), judged the same way.
 * ``relief``: every closed base with the bricks image: ``... --displace 1
@@ -93,24 +95,30 @@ class Sweep:
         if self.failed(row, res, err, glb):
             self.add(row)
             return
-        bad = []
+        bad, notes = [], []
+        try:
+            doc = json.loads(rep.read_text())
+            levels = doc["levels"]
+            row.update(placed=sum(lv["placed"] for lv in levels),
+                       unfolded=levels[-1]["filled_faces"])
+        except (OSError, ValueError, KeyError):
+            doc = {}
+            bad.append("no report")
+        expected = facts.get("faces")
+        if doc.get("input_faces") == expected and doc.get("faces", expected) > expected:
+            expected = doc["faces"]                       # a coarse base, refined to fit
+            notes.append(f"refined from {facts.get('faces')} to {expected} faces")
         try:
             m = read_mesh(glb)
-            if m.faces.shape[0] != facts.get("faces"):
-                bad.append(f"{m.faces.shape[0]} triangles written for {facts.get('faces')}")
+            if m.faces.shape[0] != expected:
+                bad.append(f"{m.faces.shape[0]} triangles written for {expected}")
             if m.uv is None or not np.isfinite(m.uv).all():
                 bad.append("texture coordinates missing or not finite")
             if m.texture is None:
                 bad.append("no texture image in the GLB")
         except Exception as exc:                                     # noqa: BLE001
             bad.append(f"written GLB unreadable: {exc!r}")
-        try:
-            levels = json.loads(rep.read_text())["levels"]
-            row.update(placed=sum(lv["placed"] for lv in levels),
-                       unfolded=levels[-1]["filled_faces"])
-        except (OSError, ValueError, KeyError):
-            bad.append("no report")
-        row.update(result="FAIL" if bad else "ok", note="; ".join(bad))
+        row.update(result="FAIL" if bad else "ok", note="; ".join(bad + notes))
         self.add(row)
 
     def relief(self, path: Path, image: Path) -> None:
