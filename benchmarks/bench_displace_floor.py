@@ -124,7 +124,7 @@ def main(argv=None):
 def write_markdown(path, meta, rows):
     lines = [
         "# The least work of a verified `geotex displace`, beside Blender (issue #23)", "",
-        f"Run {meta['date']} on {meta['machine']}; {meta['blender']}; minimum of "
+        f"Run {meta['date']} on {meta['machine']}; Blender {meta['blender']}; minimum of "
         f"{meta['repeat']} runs each. Produced by `benchmarks/bench_displace_floor.py` "
         "(inputs and settings of `bench_displace.py`: bricks, 20 mm tile, 1 mm, planar-xy, "
         "~2M triangles). Seconds, wall.", "",
