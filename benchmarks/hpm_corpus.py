@@ -38,8 +38,9 @@ from pathlib import Path
 
 import numpy as np
 
-from corpus import REPO, TIMEOUT, geotex_check, geotex_cmd, run_measured
-from pgp_corpus import IMAGE_SUFFIXES, MESH_SUFFIXES, mesh_facts, stderr_verdict
+from corpus import REPO, TIMEOUT, geotex_cmd, run_measured
+from pgp_corpus import (IMAGE_SUFFIXES, MESH_SUFFIXES, check_verdict, mesh_facts,
+                        unsuccessful)
 
 HERE = Path(__file__).resolve().parent
 BRICKS = "images/quilting_classic/t1_bricks.png"
@@ -67,20 +68,6 @@ class Sweep:
         self.write()
         print(" | ".join(str(row.get(c, "")) for c in COLUMNS)[:300], flush=True)
 
-    def failed(self, row: dict, res: dict, err: str, out: Path) -> bool:
-        """Fill result/note for a run that did not succeed; False when it did."""
-        if res["timed_out"]:
-            row.update(result="FAIL", note=f"timeout after {TIMEOUT:g} s")
-        elif res["exit"] != 0:
-            row["result"], row["note"] = stderr_verdict(err, out, res["exit"])
-        elif "Traceback" in err:
-            row.update(result="FAIL", note="exit 0 with a traceback on stderr")
-        elif not out.exists():
-            row.update(result="FAIL", note="exit 0 but no output file")
-        else:
-            return False
-        return True
-
     def texture(self, path: Path, image: Path, facts: dict, step: str) -> None:
         from geotex.io import read_mesh
 
@@ -92,7 +79,7 @@ class Sweep:
         row = {"step": step, "file": str(path.relative_to(self.data)),
                "options": f"{image.relative_to(self.data)} -> .glb", "exit": res["exit"],
                "s": res["seconds"], "peak_mb": res["peak_mb"], "faces": facts.get("faces")}
-        if self.failed(row, res, err, glb):
+        if unsuccessful(row, res, err, glb):
             self.add(row)
             return
         bad, notes = [], []
@@ -130,12 +117,10 @@ class Sweep:
                "options": f"{image.relative_to(self.data)} --displace 1 --size-mm 80 "
                           "--faces 300000 -> .stl", "exit": res["exit"], "s": res["seconds"],
                "peak_mb": res["peak_mb"]}
-        if self.failed(row, res, err, stl):
+        if unsuccessful(row, res, err, stl):
             self.add(row)
             return
-        verdict, reason = geotex_check(stl, self.env)
-        row.update(result="ok" if verdict == "printable" else "FAIL",
-                   note=f"geotex check: {verdict}" + (f" ({reason})" if reason else ""))
+        row.update(check_verdict(stl, self.env))
         self.add(row)
 
     def write(self) -> None:

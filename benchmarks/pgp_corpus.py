@@ -91,6 +91,33 @@ def stderr_verdict(err: str, out: Path, code: int) -> tuple[str, str]:
     return ("FAIL", "; ".join(problems) + f": {msg}") if problems else ("refused", msg)
 
 
+def unsuccessful(row: dict, res: dict, err: str, out: Path) -> bool:
+    """Fill ``row``'s result and note for a run that did not succeed; False when it did.
+
+    A timeout, a refusal (judged by :func:`stderr_verdict`), a traceback or a
+    missing output file; the caller judges what a successful run wrote.
+    """
+    if res["timed_out"]:
+        row.update(result="FAIL", note=f"timeout after {TIMEOUT:g} s")
+    elif res["exit"] != 0:
+        row["result"], row["note"] = stderr_verdict(err, out, res["exit"])
+    elif "Traceback" in err:
+        row.update(result="FAIL", note="exit 0 with a traceback on stderr")
+    elif not out.exists():
+        row.update(result="FAIL", note="exit 0 but no output file")
+    else:
+        return False
+    return True
+
+
+def check_verdict(path: Path, env: dict) -> dict:
+    """``result`` ('ok' when ``geotex check`` calls the written file printable, else
+    'FAIL') and ``note`` (the verdict and its first reasons)."""
+    verdict, reason = geotex_check(path, env)
+    return {"result": "ok" if verdict == "printable" else "FAIL",
+            "note": f"geotex check: {verdict}" + (f" ({reason})" if reason else "")}
+
+
 class Sweep:
     def __init__(self, data: Path, workdir: Path, out: Path, env: dict, meta: dict):
         self.data, self.workdir, self.out, self.env, self.meta = data, workdir, out, env, meta
@@ -114,15 +141,7 @@ class Sweep:
 
     def failure(self, row: dict, res: dict, err: str, out: Path) -> bool:
         """Fill result/note for a run that did not succeed; False when it did."""
-        if res["timed_out"]:
-            row.update(result="FAIL", note=f"timeout after {TIMEOUT:g} s")
-        elif res["exit"] != 0:
-            row["result"], row["note"] = stderr_verdict(err, out, res["exit"])
-        elif "Traceback" in err:
-            row.update(result="FAIL", note="exit 0 with a traceback on stderr")
-        elif not out.exists():
-            row.update(result="FAIL", note="exit 0 but no output file")
-        else:
+        if not unsuccessful(row, res, err, out):
             return False
         row["note"] = row["note"].replace(str(self.data) + "/", "").replace(
             str(self.workdir) + "/", "")
@@ -197,9 +216,7 @@ class Sweep:
         if self.failure(row, res, err, stl):
             self.add(row)
             return
-        verdict, reason = geotex_check(stl, self.env)
-        row.update(result="ok" if verdict == "printable" else "FAIL",
-                   note=f"geotex check: {verdict}" + (f" ({reason})" if reason else ""))
+        row.update(check_verdict(stl, self.env))
         self.add(row)
 
     def bad_option(self, path: Path, argv: list[str], label: str) -> None:
