@@ -110,7 +110,7 @@ into the original image.
    mean-plane frames of every group and of each of its faces alone, the faces
    across each cluster's and group's border for the priorities), the band
    search and the relaxation's error are compiled
-   (:mod:`geotex.image.hpm_faces`, ``_relax_error_compiled``) and the mask
+   (:mod:`geotex.image.hpm_faces`, :mod:`geotex.image.hpm_kernels`) and the mask
    planes are kept between fits: the same uv bit for bit, CPU -23 to -33 % on
    slate tiles and -26 to -32 % on rough metal (Spot 10k, seeds 0-2; face
    level -27 / -31 %), -13 to -21 % on bricks, gravel and water
@@ -201,6 +201,16 @@ faces where the chosen corners change (``flattening``, see
 frame turned so that the main neighbour's orientation is one of the searched
 orientations, and its exact continuation is a candidate (the paper draws the
 mask at a random orientation to avoid such trivial solutions).
+
+Modules: this one holds the public entry point and the coarse-to-fine loop
+(:func:`hpm_texture`, whose steps share its state as closures) and re-exports
+the rest of the public API; :mod:`geotex.image.hpm_result` (the result, the
+image reader, the mesh record), :mod:`geotex.image.hpm_kernels` (compiled
+sampling, relaxation error and search, window minima, each beside its
+helpers), :mod:`geotex.image.hpm_pattern` (the sample's field and size),
+:mod:`geotex.image.hpm_fit` (rigid fits, placement refinement, crack snapping
+and relaxation), :mod:`geotex.image.hpm_gaps` (face-level groups, the last
+gaps) and :mod:`geotex.image.hpm_faces` (per-fit helpers of the face level).
 """
 
 from __future__ import annotations
@@ -407,7 +417,7 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
     orientation_field : {"auto", "always", "never"}, optional
         Without ``field``: ``"auto"`` (default) computes the smoothest line
         field of the surface (cross field for a sample that looks the same
-        after a quarter turn, see :func:`_pattern_field`) for a periodic or
+        after a quarter turn, see :func:`geotex.image.hpm_pattern._pattern_field`) for a periodic or
         anisotropic sample (``structure``) and uses it as ``field``, so that
         one orientation holds over the surface and breaks only at the
         field's singularities (the paper propagates the neighbour's
