@@ -6,7 +6,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
 from geotex.image.fftmatch import opponent_colors
-from geotex.image.hpm import _State
+from geotex.image.hpm_state import _State
 from geotex.image.hpm_fit import _relax, _rigid_fit
 from geotex.image.hpm_kernels import _relax_error_compiled, _sample, _window_minima
 from geotex.image.hpm_faces import field_coefficients, textured_band, vertex_faces

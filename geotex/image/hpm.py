@@ -205,9 +205,11 @@ mask at a random orientation to avoid such trivial solutions).
 Modules: this one holds the public entry point and the coarse-to-fine loop
 (:func:`hpm_texture`, whose steps share its state as closures) and re-exports
 the rest of the public API; :mod:`geotex.image.hpm_result` (the result, the
-image reader, the mesh record), :mod:`geotex.image.hpm_kernels` (compiled
-sampling, relaxation error and search, window minima, each beside its
-helpers), :mod:`geotex.image.hpm_pattern` (the sample's field and size),
+split-vertex uv output, the image reader, the mesh record),
+:mod:`geotex.image.hpm_state` (the mutable state of a run),
+:mod:`geotex.image.hpm_kernels` (compiled sampling, relaxation error and
+search, window minima, each beside its helpers),
+:mod:`geotex.image.hpm_pattern` (the sample's field and size),
 :mod:`geotex.image.hpm_fit` (rigid fits, placement refinement, crack snapping
 and relaxation), :mod:`geotex.image.hpm_gaps` (face-level groups, the last
 gaps) and :mod:`geotex.image.hpm_faces` (per-fit helpers of the face level).
@@ -232,7 +234,9 @@ from geotex.image.hpm_fit import _refine_placement, _relax, _rigid_fit, _snap
 from geotex.image.hpm_gaps import _face_groups, _fill_gaps
 from geotex.image.hpm_kernels import _block_mean, _sample, _window_minima
 from geotex.image.hpm_pattern import _angle_gap, _pattern_field, _pattern_size
-from geotex.image.hpm_result import HPMLevel, HPMResult, hpm_mesh, read_hpm_image
+from geotex.image.hpm_result import (HPMLevel, HPMResult, _median_patch_diameter, _split_uv,
+                                     hpm_mesh, read_hpm_image)
+from geotex.image.hpm_state import _State
 from geotex.mesh.arrays import as_mesh_arrays
 from geotex.mesh.geometry import face_areas
 from geotex.mesh.topology import edge_topology
@@ -319,62 +323,6 @@ def _image_arg(image) -> np.ndarray:
     if arr.dtype != np.uint8:
         raise InputError(f"image must be uint8, got dtype {arr.dtype}")
     return np.ascontiguousarray(arr[:, :, :3])
-
-
-class _State:
-    """Mutable state of one mapping run (corner texture positions in full-res pixels)."""
-
-    def __init__(self, V, F, m):
-        self.corner = np.zeros((m, 3, 2))
-        self.done = np.zeros(m, bool)
-        self.patch = np.full(m, -1, np.int64)
-        self.face_level = np.full(m, -1, np.int64)
-        self.n_patch = 0
-        n = V.shape[0]
-        self.vacc = np.zeros((n, 2))        # sum of textured corner positions per vertex
-        self.vcnt = np.zeros(n)             # number of textured corners per vertex
-        self.vsq = np.zeros(n)              # sum of squared norms (to detect disagreement)
-        self._agreed = None                 # cache of agreed()
-        self._dirty = None                  # vertices marked since, whose rows it updates
-        self.vpatch = np.full(n, -1, np.int64)  # last placement that textured each vertex
-
-    def _agreed_rows(self, idx):
-        c = np.maximum(self.vcnt[idx], 1.0)
-        mean = self.vacc[idx] / c[:, None]
-        spread = self.vsq[idx] / c - np.sum(mean * mean, axis=1)
-        ok = (self.vcnt[idx] > 0) & (spread < 1e-6 * (1.0 + self.vsq[idx] / c))
-        return np.where(ok[:, None], mean, np.nan)
-
-    def agreed(self) -> np.ndarray:
-        """Per-vertex mean textured position, nan where none or where corners disagree.
-
-        The returned array is read-only and valid until the next :meth:`mark`
-        (which updates it in place: do not keep it across one).
-        """
-        if self._agreed is None:
-            self._agreed = self._agreed_rows(slice(None))
-        elif self._dirty is not None:
-            self._agreed.setflags(write=True)
-            self._agreed[self._dirty] = self._agreed_rows(self._dirty)
-        self._agreed.setflags(write=False)
-        self._dirty = None
-        return self._agreed
-
-    def mark(self, F, faces, corner, patch, level):
-        """Record the corner positions of newly textured faces."""
-        self.corner[faces] = corner
-        self.done[faces] = True
-        self.patch[faces] = patch
-        self.face_level[faces] = level
-        cv = F[faces].ravel()
-        self._dirty = cv if self._dirty is None else np.concatenate([self._dirty, cv])
-        self.vpatch[cv] = patch
-        n = self.vcnt.size
-        self.vcnt += np.bincount(cv, minlength=n)
-        cu = corner.reshape(-1, 2)
-        self.vacc[:, 0] += np.bincount(cv, weights=cu[:, 0], minlength=n)
-        self.vacc[:, 1] += np.bincount(cv, weights=cu[:, 1], minlength=n)
-        self.vsq += np.bincount(cv, weights=np.sum(cu * cu, axis=1), minlength=n)
 
 
 def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = None,
@@ -1513,26 +1461,13 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
     report(progress, "gaps")
     levels[-1].filled_faces = _fill_gaps(V, F, FF, st)
     # output: split vertices only where the corner positions differ
-    uvpix = st.corner.reshape(-1, 2)
-    uv = np.stack([uvpix[:, 0] / W_img, 1.0 - uvpix[:, 1] / H_img], 1)
-    key = np.column_stack([F.ravel(), uv])
-    _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
-    order = np.argsort(first, kind="stable")
-    rank = np.empty_like(order)
-    rank[order] = np.arange(order.size)
-    uv_out = uv[first[order]]
-    uv_faces = rank[inv.ravel()].reshape(m, 3).astype(np.int64)
+    uv_out, uv_faces = _split_uv(st.corner, F, W_img, H_img)
     if min_patch > 0.0 or (structure and ps.periodic):
         # how many pattern periods the patches span (area-weighted median over the faces of
         # the equivalent-disc diameter of the placement that textured them): below 1 the
         # patches are smaller than the pattern, whose structure is then lost (paper §5.2)
-        placed_ = st.patch >= 0
-        if placed_.any():
-            pa = np.bincount(st.patch[placed_], weights=A[placed_])
-            dia = 2.0 * np.sqrt(pa[st.patch[placed_]] / np.pi)
-            o = np.argsort(dia, kind="stable")
-            cw = np.cumsum(A[placed_][o])
-            med = float(dia[o][np.searchsorted(cw, 0.5 * cw[-1])])
+        med = _median_patch_diameter(st.patch, A)
+        if med is not None:
             pattern_info["patch_periods"] = med * ppm / _pattern_size(ps, img.shape)
     fl = np.where(st.face_level < 0, L - 1, st.face_level)
     return HPMResult(uv=np.ascontiguousarray(uv_out), uv_faces=uv_faces, patch=st.patch,

@@ -104,6 +104,47 @@ class HPMResult:
                 "vertices_split": int(self.uv.shape[0]), "pattern": dict(self.pattern)}
 
 
+def _split_uv(corner, F, width, height):
+    """Split-vertex texture coordinates from per-corner pixel positions.
+
+    ``corner`` (m, 3, 2) full-resolution pixel positions of every face's
+    corners, ``F`` (m, 3) the faces, ``width`` and ``height`` the image's
+    size.  A vertex is split only where its corners' positions differ; the
+    uv rows come in the order of their first corner.
+
+    Returns
+    -------
+    uv : numpy.ndarray, (k, 2) float64
+        In ``[0, 1]``, v up (image rows grow downwards).
+    uv_faces : numpy.ndarray, (m, 3) int64
+    """
+    m = F.shape[0]
+    uvpix = corner.reshape(-1, 2)
+    uv = np.stack([uvpix[:, 0] / width, 1.0 - uvpix[:, 1] / height], 1)
+    key = np.column_stack([F.ravel(), uv])
+    _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    order = np.argsort(first, kind="stable")
+    rank = np.empty_like(order)
+    rank[order] = np.arange(order.size)
+    uv_out = uv[first[order]]
+    uv_faces = rank[inv.ravel()].reshape(m, 3).astype(np.int64)
+    return uv_out, uv_faces
+
+
+def _median_patch_diameter(patch, A):
+    """Area-weighted median, over the placed faces, of the equivalent-disc diameter of
+    the placement that textured each (``patch`` (m,) placement per face, -1 for none;
+    ``A`` (m,) face areas); None when no face was placed."""
+    placed_ = patch >= 0
+    if not placed_.any():
+        return None
+    pa = np.bincount(patch[placed_], weights=A[placed_])
+    dia = 2.0 * np.sqrt(pa[patch[placed_]] / np.pi)
+    o = np.argsort(dia, kind="stable")
+    cw = np.cumsum(A[placed_][o])
+    return float(dia[o][np.searchsorted(cw, 0.5 * cw[-1])])
+
+
 def read_hpm_image(path) -> np.ndarray:
     """Read the texture sample: a grey or RGB(A) picture, as ``(h, w, 3)`` uint8.
 
