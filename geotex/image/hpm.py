@@ -365,7 +365,8 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
     orientation_field : {"auto", "always", "never"}, optional
         Without ``field``: ``"auto"`` (default) computes the smoothest line
         field of the surface (cross field for a sample that looks the same
-        after a quarter turn, see :func:`geotex.image.hpm_pattern._pattern_field`) for a periodic or
+        after a quarter turn, see
+        :func:`geotex.image.hpm_pattern._pattern_field`) for a periodic or
         anisotropic sample (``structure``) and uses it as ``field``, so that
         one orientation holds over the surface and breaks only at the
         field's singularities (the paper propagates the neighbour's
