@@ -1,4 +1,4 @@
-"""Per-fit helpers of hierarchical pattern mapping (geotex.image.hpm_faces, hpm_kernels, hpm_fit)."""
+"""Per-fit helpers of hierarchical pattern mapping (hpm_faces, hpm_kernels, hpm_fit)."""
 
 import numpy as np
 import pytest
