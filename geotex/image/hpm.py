@@ -233,7 +233,7 @@ from geotex.image.hpm_faces import field_coefficients, textured_band, vertex_fac
 from geotex.image.hpm_fit import _refine_placement, _relax, _rigid_fit, _snap
 from geotex.image.hpm_gaps import _face_groups, _fill_gaps
 from geotex.image.hpm_kernels import _block_mean, _sample, _window_minima
-from geotex.image.hpm_pattern import _angle_gap, _pattern_field, _pattern_size
+from geotex.image.hpm_pattern import _angle_gap, _pattern_field, _pattern_size, _period_lattice
 from geotex.image.hpm_result import (HPMLevel, HPMResult, _median_patch_diameter, _split_uv,
                                      hpm_mesh, read_hpm_image)
 from geotex.image.hpm_state import _State
@@ -607,18 +607,9 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             min_patch = patch_factor * size / ppm
     lattice = None                       # whole-period moves of a periodic sample (pixels)
     if structure and ps.periodic:
-        p1 = ps.periods[0]
-        q = ps.periods[1] if ps.periods.shape[0] > 1 else \
-            np.array([-p1[1], p1[0]])           # stripes: along them, by one period
-        K = int(np.ceil(max(W_img, H_img) / max(min(np.linalg.norm(p1),
-                                                     np.linalg.norm(q)), 1.0)))
-        k1, k2 = np.meshgrid(np.arange(-K, K + 1), np.arange(-K, K + 1))
-        lattice = k1.reshape(-1, 1) * p1 + k2.reshape(-1, 1) * q
-        lattice = lattice[np.argsort(np.hypot(lattice[:, 0], lattice[:, 1]), kind="stable")]
-        lattice = lattice[1:]                # without the zero move
-        basis = np.array([p1, q], dtype=np.float64)          # rows: the two lattice vectors
+        lattice, basis, shortest = _period_lattice(ps.periods, W_img, H_img)
         stripes = ps.periods.shape[0] == 1
-        snap_tol = LATTICE_SNAP * min(np.linalg.norm(p1), np.linalg.norm(q))
+        snap_tol = LATTICE_SNAP * shortest
     # continuation window (matching pixels, with a field): a quarter of the pattern size
     win = max(1, int(round(CONTINUATION_WINDOW * (_pattern_size(ps, img.shape) if ps.periodic
                                                   else ps.correlation_length) / f)))

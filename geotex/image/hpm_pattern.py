@@ -2,8 +2,9 @@
 
 :func:`_pattern_field` (the smooth line or cross field a structured sample is
 aligned with), :func:`_pattern_size` (the repeat behind the band width and the
-minimal patch size) and :func:`_angle_gap` (angles between directions of a
-given symmetry).
+minimal patch size), :func:`_period_lattice` (the whole-period moves of a
+periodic sample) and :func:`_angle_gap` (angles between directions of a given
+symmetry).
 """
 
 from __future__ import annotations
@@ -88,3 +89,33 @@ def _pattern_size(ps, shape) -> float:
     n = np.linalg.norm(ps.periods, axis=1)
     n_in = n[n <= min(shape[:2]) / 4.0]
     return float(n_in.max() if n_in.size else n.min())
+
+
+def _period_lattice(periods, width, height):
+    """Whole-period moves of a periodic sample, shortest first.
+
+    ``periods`` (1 or 2, 2) the sample's repeats in pixels (one: stripes, moved
+    along them by one period as the second vector), ``width`` and ``height``
+    the image's size: every move ``k1 p1 + k2 p2`` with ``|k1|, |k2|`` up to
+    the image's size over the shorter vector, without the zero move.
+
+    Returns
+    -------
+    lattice : numpy.ndarray, (k, 2) float64
+        The moves (pixels), by increasing length (stable among equal ones).
+    basis : numpy.ndarray, (2, 2) float64
+        Rows: the two lattice vectors.
+    shortest : float
+        The shorter vector's length.
+    """
+    p1 = periods[0]
+    q = periods[1] if periods.shape[0] > 1 else \
+        np.array([-p1[1], p1[0]])           # stripes: along them, by one period
+    K = int(np.ceil(max(width, height) / max(min(np.linalg.norm(p1),
+                                                  np.linalg.norm(q)), 1.0)))
+    k1, k2 = np.meshgrid(np.arange(-K, K + 1), np.arange(-K, K + 1))
+    lattice = k1.reshape(-1, 1) * p1 + k2.reshape(-1, 1) * q
+    lattice = lattice[np.argsort(np.hypot(lattice[:, 0], lattice[:, 1]), kind="stable")]
+    lattice = lattice[1:]                # without the zero move
+    basis = np.array([p1, q], dtype=np.float64)
+    return lattice, basis, min(np.linalg.norm(p1), np.linalg.norm(q))
