@@ -301,14 +301,14 @@ def test_bilinear_lookup_equals_map_coordinates():
     # inside, on the border and far outside, on square and non-square images
     from scipy.ndimage import map_coordinates
 
-    from geotex.image import hpm as hpm_module
+    from geotex.image import hpm_kernels
     rng = np.random.default_rng(3)
     for h, w in ((17, 23), (9, 9), (2, 5)):
         img = rng.random((h, w, 3))
         xy = np.column_stack([rng.uniform(-4, w + 4, 400), rng.uniform(-4, h + 4, 400)])
         xy[:8] = [[0.5, 0.5], [w - 0.5, h - 0.5], [w, h], [0, 0], [w - 0.5, 0.5],
                   [0.5, h - 0.5], [w / 2, h - 0.5], [w - 1e-9, 1.0]]
-        got = hpm_module._sample(img, xy)
+        got = hpm_kernels._sample(img, xy)
         ref = np.stack([map_coordinates(img[:, :, k], [xy[:, 1] - 0.5, xy[:, 0] - 0.5],
                                         order=1, mode="nearest") for k in range(3)], 1)
         assert got.shape == (400, 3)
@@ -820,7 +820,8 @@ def test_cli_hpm_refines_a_base_too_coarse_for_the_default_scale(tmp_path, capsy
 # ---------------------------------------------------------------------------
 
 def test_refine_placement_recovers_a_subpixel_shift_and_angle():
-    from geotex.image.hpm import _refine_placement, _sample
+    from geotex.image.hpm_fit import _refine_placement
+    from geotex.image.hpm_kernels import _sample
     img = opponent_colors(noise_image(64, 64, seed=3).astype(np.float64) / 255.0)
     yy, xx = np.mgrid[0:14, 0:14]
     q = np.column_stack([xx.ravel() + 0.5, yy.ravel() + 0.5]) - 7.0
@@ -841,7 +842,7 @@ def test_refine_placement_recovers_a_subpixel_shift_and_angle():
 
 
 def test_compiled_sampling_equals_the_numpy_path_bit_for_bit():
-    from geotex.image.hpm import _sample
+    from geotex.image.hpm_kernels import _sample
     rng = np.random.default_rng(4)
     img = opponent_colors(noise_image(37, 53, seed=5).astype(np.float64) / 255.0)
     xy = np.vstack([rng.uniform(-5.0, 60.0, (5000, 2)),           # inside and clamped
@@ -991,7 +992,7 @@ def test_quarter_turn_symmetry_tells_a_grid_from_stripes():
 
 
 def test_pattern_field_symmetry_and_turn():
-    from geotex.image.hpm import _pattern_field
+    from geotex.image.hpm_pattern import _pattern_field
     V, F = icosphere(3)
     v2, s2 = _pattern_field(V, F, stripe_image(), None)
     v4, s4 = _pattern_field(V, F, checker_image(8, 96), None)
@@ -1008,7 +1009,7 @@ def test_hpm_field_keeps_one_orientation_on_a_torus():
     # stripes on a torus: the neighbours' orientation drifts from patch to patch and
     # separately grown regions meet turned; with the smooth line field (no singularity
     # on a torus) every patch follows it and the stripes turn little across borders
-    from geotex.image.hpm import _pattern_field
+    from geotex.image.hpm_pattern import _pattern_field
     V, F = torus(1.0, 0.4, n_major=96, n_minor=26)
     img = stripe_image()
     on = hpm_texture(V, F, img, scale=2.0, seed=1)
@@ -1079,7 +1080,7 @@ def test_hpm_user_field_is_followed_and_continued():
 def test_hpm_automatic_field_on_a_mesh_with_zero_area_faces():
     # simplified meshes have faces of zero area (Spot at 30k: 81), on which no field is
     # defined: the field is solved without them and they take a neighbour's vector
-    from geotex.image.hpm import _pattern_field
+    from geotex.image.hpm_pattern import _pattern_field
     V, F = torus(1.0, 0.4, n_major=48, n_minor=16)
     V = V.copy()
     V[F[0, 2]] = 0.5 * (V[F[0, 0]] + V[F[0, 1]])     # face 0 collapses onto its edge

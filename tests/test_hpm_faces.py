@@ -1,4 +1,4 @@
-"""Per-fit helpers of hierarchical pattern mapping (geotex.image.hpm_faces, hpm's kernels)."""
+"""Per-fit helpers of hierarchical pattern mapping (hpm_faces, hpm_kernels, hpm_fit)."""
 
 import numpy as np
 import pytest
@@ -6,8 +6,9 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
 from geotex.image.fftmatch import opponent_colors
-from geotex.image.hpm import (_State, _relax, _relax_error_compiled, _rigid_fit, _sample,
-                              _window_minima)
+from geotex.image.hpm_state import _State
+from geotex.image.hpm_fit import _relax, _rigid_fit
+from geotex.image.hpm_kernels import _relax_error_compiled, _sample, _window_minima
 from geotex.image.hpm_faces import field_coefficients, textured_band, vertex_faces
 from geotex.mesh import edge_topology
 from geotex.mesh.primitives import torus

@@ -110,7 +110,7 @@ into the original image.
    mean-plane frames of every group and of each of its faces alone, the faces
    across each cluster's and group's border for the priorities), the band
    search and the relaxation's error are compiled
-   (:mod:`geotex.image.hpm_faces`, ``_relax_error_compiled``) and the mask
+   (:mod:`geotex.image.hpm_faces`, :mod:`geotex.image.hpm_kernels`) and the mask
    planes are kept between fits: the same uv bit for bit, CPU -23 to -33 % on
    slate tiles and -26 to -32 % on rough metal (Spot 10k, seeds 0-2; face
    level -27 / -31 %), -13 to -21 % on bricks, gravel and water
@@ -201,30 +201,44 @@ faces where the chosen corners change (``flattening``, see
 frame turned so that the main neighbour's orientation is one of the searched
 orientations, and its exact continuation is a candidate (the paper draws the
 mask at a random orientation to avoid such trivial solutions).
+
+Modules: this one holds the public entry point and the coarse-to-fine loop
+(:func:`hpm_texture`, whose steps share its state as closures) and re-exports
+the rest of the public API; :mod:`geotex.image.hpm_result` (the result, the
+split-vertex uv output, the image reader, the mesh record),
+:mod:`geotex.image.hpm_state` (the mutable state of a run),
+:mod:`geotex.image.hpm_kernels` (compiled sampling, relaxation error and
+search, window minima, each beside its helpers),
+:mod:`geotex.image.hpm_pattern` (the sample's field and size),
+:mod:`geotex.image.hpm_fit` (rigid fits, placement refinement, crack snapping
+and relaxation), :mod:`geotex.image.hpm_gaps` (face-level groups, the last
+gaps) and :mod:`geotex.image.hpm_faces` (per-fit helpers of the face level).
 """
 
 from __future__ import annotations
 
 import heapq
-from dataclasses import dataclass, field
 
 import numpy as np
-from PIL import Image
 import scipy.sparse as sp
-from scipy.sparse.csgraph import breadth_first_order, connected_components, dijkstra
+from scipy.sparse.csgraph import dijkstra
 
-from geotex.errors import InputError, MissingFileError
+from geotex.errors import InputError
 from geotex.image.atlas import rasterize_triangles
-from geotex.jit import JIT_MIN_SIZE, compiled, helper
+from geotex.jit import JIT_MIN_SIZE
 from geotex.fields.combing import comb_direction_field
-from geotex.fields.directions import smooth_direction_field
 from geotex.image.fftmatch import (match_energy, opponent_colors, pattern_scale,
-                                   quarter_turn_symmetry, texture_spectra)
+                                   texture_spectra)
 from geotex.image.hpm_faces import field_coefficients, textured_band, vertex_faces
-from geotex.image.patches import load_image
+from geotex.image.hpm_fit import _refine_placement, _relax, _rigid_fit, _snap
+from geotex.image.hpm_gaps import _face_groups, _fill_gaps
+from geotex.image.hpm_kernels import _block_mean, _sample, _window_minima
+from geotex.image.hpm_pattern import _angle_gap, _pattern_field, _pattern_size, _period_lattice
+from geotex.image.hpm_result import (HPMLevel, HPMResult, _median_patch_diameter, _split_uv,
+                                     hpm_mesh, read_hpm_image)
+from geotex.image.hpm_state import _State
 from geotex.mesh.arrays import as_mesh_arrays
-from geotex.mesh.geometry import degenerate_faces, face_areas
-from geotex.mesh.record import Mesh
+from geotex.mesh.geometry import face_areas
 from geotex.mesh.topology import edge_topology
 from geotex.options import count, finite_number, positive_number
 from geotex.patches.clusters import cluster_hierarchy
@@ -262,10 +276,6 @@ FIELD_MOVE_TURN = 1.0
 #: The same for the lattice snapping (it keeps the pattern's phase across borders).
 FIELD_SNAP_TURN = 3.0
 
-#: Quarter-turn symmetry of a sample's autocorrelation from which its field is a cross
-#: field (4 directions) instead of a line field.
-QUARTER_TURN = 0.8
-
 #: Bases from this many faces up sample the image, rasterize the masks and assemble
 #: the matching energies with compiled loops (the same values; ``GEOTEX_JIT_MIN_SIZE``
 #: lower than this lowers it).  A mapping of 2000 faces does tens of thousands of
@@ -275,94 +285,8 @@ SAMPLE_JIT_FACES = 2000
 #: Multiplier that mirrors 2D positions (k, 2) in y: ``P * FLIP_Y`` is ``(x, -y)`` exactly.
 FLIP_Y = np.array([1.0, -1.0])
 
-#: Largest relaxation move, as a fraction of the shortest edge at the vertex (texture space).
-RELAX_EDGE_FRACTION = 0.2
-
 __all__ = ["HPMLevel", "HPMResult", "hpm_texture", "check_hpm_base", "read_hpm_image",
            "hpm_mesh"]
-
-
-@dataclass
-class HPMLevel:
-    """What happened on one level of the hierarchy."""
-
-    level: int
-    clusters: int
-    placed: int = 0
-    subdivided: int = 0
-    errors: list = field(default_factory=list)
-    filled_faces: int = 0
-    continued: int = 0
-    refused: dict = field(default_factory=dict)
-    projected: int = 0
-    free_border: int = 0
-    matched_faces: int = 0
-    forced: int = 0
-    lattice_snapped: int = 0
-    field_refused: int = 0
-    quick: int = 0
-
-    @property
-    def mean_error(self) -> float:
-        """Mean relative matching error of the placed clusters (nan if none)."""
-        return float(np.mean(self.errors)) if self.errors else float("nan")
-
-    def as_dict(self) -> dict:
-        """JSON-ready summary."""
-        return {"level": self.level, "clusters": self.clusters, "placed": self.placed,
-                "subdivided": self.subdivided,
-                "mean_error": None if not self.errors else self.mean_error,
-                "filled_faces": self.filled_faces, "continued": self.continued,
-                "refused": dict(sorted(self.refused.items())), "projected": self.projected,
-                "free_border": self.free_border, "matched_faces": self.matched_faces,
-                "forced": self.forced, "lattice_snapped": self.lattice_snapped,
-                "field_refused": self.field_refused, "quick": self.quick}
-
-
-@dataclass(frozen=True, eq=False)
-class HPMResult:
-    """Texture coordinates of a hierarchical pattern mapping.
-
-    Attributes
-    ----------
-    uv : numpy.ndarray, (k, 2) float64
-        Texture coordinates into the input image (``u`` right, ``v`` up,
-        ``[0, 1]`` over the image).
-    uv_faces : numpy.ndarray, (m, 3) int64
-        Per-corner indices into ``uv``; a vertex has several uv only where
-        the mapping jumps.
-    patch : numpy.ndarray, (m,) int64
-        Placement that textured every face (``-1``: filled at face level).
-    face_level : numpy.ndarray, (m,) int64
-        Hierarchy level of that placement (the last level for filled faces).
-    levels : list of HPMLevel
-    pattern : dict
-        The sample's pattern estimate and what was derived from it
-        (:func:`geotex.image.fftmatch.pattern_scale`): ``periodic``,
-        ``period_px``, ``correlation_length_px``, ``coherence``,
-        ``min_patch`` (surface units, 0 when not used), ``band_width``
-        (surface units) and, for a periodic sample, ``patch_periods``: the
-        area-weighted median equivalent-disc diameter of the placements, in
-        pattern periods (below 1 the patches are smaller than the pattern,
-        whose structure may then break at their borders, paper §5.2:
-        Fertility with the rope net 0.93 at 0.3 x its diagonal, where the
-        net is broken, 1.27 at 0.15, where it reads as a net; Bob with the
-        basket weave 1.11 at 0.35, 1.37 at 0.2; Spot (23k faces) with
-        bricks 0.87 at 0.35, where the rows still read as rows).
-    """
-
-    uv: np.ndarray
-    uv_faces: np.ndarray
-    patch: np.ndarray
-    face_level: np.ndarray
-    levels: list
-    pattern: dict = field(default_factory=dict)
-
-    def report(self) -> dict:
-        """Per-level counts and mean matching errors, JSON-ready."""
-        return {"levels": [lv.as_dict() for lv in self.levels],
-                "placements": int(self.patch.max() + 1) if self.patch.size else 0,
-                "vertices_split": int(self.uv.shape[0]), "pattern": dict(self.pattern)}
 
 
 def check_hpm_base(V, F) -> None:
@@ -399,204 +323,6 @@ def _image_arg(image) -> np.ndarray:
     if arr.dtype != np.uint8:
         raise InputError(f"image must be uint8, got dtype {arr.dtype}")
     return np.ascontiguousarray(arr[:, :, :3])
-
-
-def _block_mean(img: np.ndarray, f: int) -> np.ndarray:
-    if f == 1:
-        return img.copy()
-    h, w = (img.shape[0] // f) * f, (img.shape[1] // f) * f
-    x = img[:h, :w].reshape(h // f, f, w // f, f, img.shape[2])
-    return x.mean(axis=(1, 3))
-
-
-def _sample(img: np.ndarray, xy: np.ndarray, fast: bool = False) -> np.ndarray:
-    """Bilinear samples of ``img`` (h, w, c) at pixel positions ``xy`` (x, y), clamped.
-
-    With ``fast`` the compiled loop :func:`_sample_compiled` gives the same
-    values bit for bit without the numpy temporaries (positions with a NaN
-    keep the numpy path).
-    """
-    h, w = img.shape[:2]
-    if fast and h > 1 and w > 1 and not np.isnan(xy).any():
-        return _sample_compiled(img, np.ascontiguousarray(xy, dtype=np.float64))
-    x = np.clip(xy[:, 0] - 0.5, 0.0, w - 1.0)
-    y = np.clip(xy[:, 1] - 0.5, 0.0, h - 1.0)
-    x0 = np.minimum(np.floor(x).astype(np.int64), w - 2) if w > 1 else np.zeros(x.size, np.int64)
-    y0 = np.minimum(np.floor(y).astype(np.int64), h - 2) if h > 1 else np.zeros(y.size, np.int64)
-    fx = (x - x0)[:, None]
-    fy = (y - y0)[:, None]
-    # row gathers from the flattened image (np.take: cheaper than 2-d fancy indexing,
-    # the same values)
-    flat = img.reshape(h * w, -1)
-    i00 = y0 * w + x0
-    dx = np.minimum(x0 + 1, w - 1) - x0
-    dy = (np.minimum(y0 + 1, h - 1) - y0) * w
-    top = np.take(flat, i00, axis=0) * (1 - fx) + np.take(flat, i00 + dx, axis=0) * fx
-    bot = np.take(flat, i00 + dy, axis=0) * (1 - fx) + np.take(flat, i00 + dy + dx, axis=0) * fx
-    return top * (1 - fy) + bot * fy
-
-
-@helper
-def _bilinear(img, px, py, out, i):
-    """Row ``i`` of ``out``: the bilinear sample of ``img`` at ``(px, py)``, as
-    :func:`_sample` computes it (image of at least 2 x 2 pixels, no NaN)."""
-    h, w, nc = img.shape
-    x = min(max(px - 0.5, 0.0), w - 1.0)
-    y = min(max(py - 0.5, 0.0), h - 1.0)
-    x0 = min(int(np.floor(x)), w - 2)
-    y0 = min(int(np.floor(y)), h - 2)
-    fx = x - x0
-    fy = y - y0
-    x1 = min(x0 + 1, w - 1)
-    y1 = min(y0 + 1, h - 1)
-    for k in range(nc):
-        top = img[y0, x0, k] * (1 - fx) + img[y0, x1, k] * fx
-        bot = img[y1, x0, k] * (1 - fx) + img[y1, x1, k] * fx
-        out[i, k] = top * (1 - fy) + bot * fy
-
-
-@compiled
-def _sample_compiled(img, xy):
-    """:func:`_sample` for an image of at least 2 x 2 pixels and positions without NaN:
-    the same operations in the same order per sample, so the same values."""
-    n = xy.shape[0]
-    out = np.empty((n, img.shape[2]))
-    for i in range(n):
-        _bilinear(img, xy[i, 0], xy[i, 1], out, i)
-    return out
-
-
-@compiled
-def _relax_error_compiled(full, cand, owner, b, target, ts, nv):
-    """The error of :func:`_relax` per movable vertex (its ``err``) without temporaries:
-    per sample along each shared edge the numpy path's operations in its order (the
-    colour sum in channel order, as ``np.sum`` over fewer than 8 channels), accumulated
-    per vertex in row order as ``np.bincount``: the same values."""
-    out = np.zeros(nv)
-    _relax_error_into(full, cand, owner, b, target, ts, out)
-    return out
-
-
-@compiled
-def _relax_search_compiled(full, cur, off, owner, b, target, ts, e0):
-    """:func:`_relax`'s greedy search: for each offset block ``off[i]`` (k, 2) in turn,
-    the candidates ``cur + off[i]``, their errors (:func:`_relax_error_compiled`'s
-    values) and the moves of the vertices whose error falls, as the numpy loop does.
-    Returns the new positions (k, 2)."""
-    cur = cur.copy()
-    e0 = e0.copy()
-    n = cur.shape[0]
-    e1 = np.zeros(n)
-    cand = np.empty_like(cur)
-    for i in range(off.shape[0]):
-        for v in range(n):
-            cand[v, 0] = cur[v, 0] + off[i, v, 0]
-            cand[v, 1] = cur[v, 1] + off[i, v, 1]
-            e1[v] = 0.0
-        _relax_error_into(full, cand, owner, b, target, ts, e1)
-        for v in range(n):
-            if e1[v] < e0[v]:
-                cur[v, 0] = cand[v, 0]
-                cur[v, 1] = cand[v, 1]
-                e0[v] = e1[v]
-    return cur
-
-
-@helper
-def _relax_error_into(full, cand, owner, b, target, ts, out):
-    """Body of :func:`_relax_error_compiled`: adds the errors to ``out`` (zeros)."""
-    nt = ts.size
-    s = np.empty((1, full.shape[2]))
-    for e in range(owner.size):
-        o = owner[e]
-        for j in range(nt):
-            u = 1 - ts[j]
-            _bilinear(full, cand[o, 0] * u + b[e, 0] * ts[j], cand[o, 1] * u + b[e, 1] * ts[j],
-                      s, 0)
-            r = e * nt + j
-            d = s[0, 0] - target[r, 0]
-            acc = d * d
-            for k in range(1, s.shape[1]):
-                d = s[0, k] - target[r, k]
-                acc += d * d
-            out[o] += acc * u
-
-
-@compiled
-def _window_minima(E, ix, iy, win):
-    """Per point ``(ix[i], iy[i])``: the lowest value of ``E`` (h, w) in the window of
-    ``win`` pixels around it (clipped to ``E``) and its row and column, the first in
-    row-major order among equal values (as ``np.argmin`` of the window); ``inf`` (and
-    row, column 0) where the window is empty or holds no finite value."""
-    n = ix.size
-    h, w = E.shape
-    val = np.full(n, np.inf)
-    by = np.zeros(n, np.int64)
-    bx = np.zeros(n, np.int64)
-    for i in range(n):
-        for y in range(max(iy[i] - win, 0), min(max(iy[i] + win + 1, 0), h)):
-            for x in range(max(ix[i] - win, 0), min(max(ix[i] + win + 1, 0), w)):
-                if E[y, x] < val[i]:
-                    val[i] = E[y, x]
-                    by[i] = y
-                    bx[i] = x
-    return val, by, bx
-
-
-class _State:
-    """Mutable state of one mapping run (corner texture positions in full-res pixels)."""
-
-    def __init__(self, V, F, m):
-        self.corner = np.zeros((m, 3, 2))
-        self.done = np.zeros(m, bool)
-        self.patch = np.full(m, -1, np.int64)
-        self.face_level = np.full(m, -1, np.int64)
-        self.n_patch = 0
-        n = V.shape[0]
-        self.vacc = np.zeros((n, 2))        # sum of textured corner positions per vertex
-        self.vcnt = np.zeros(n)             # number of textured corners per vertex
-        self.vsq = np.zeros(n)              # sum of squared norms (to detect disagreement)
-        self._agreed = None                 # cache of agreed()
-        self._dirty = None                  # vertices marked since, whose rows it updates
-        self.vpatch = np.full(n, -1, np.int64)  # last placement that textured each vertex
-
-    def _agreed_rows(self, idx):
-        c = np.maximum(self.vcnt[idx], 1.0)
-        mean = self.vacc[idx] / c[:, None]
-        spread = self.vsq[idx] / c - np.sum(mean * mean, axis=1)
-        ok = (self.vcnt[idx] > 0) & (spread < 1e-6 * (1.0 + self.vsq[idx] / c))
-        return np.where(ok[:, None], mean, np.nan)
-
-    def agreed(self) -> np.ndarray:
-        """Per-vertex mean textured position, nan where none or where corners disagree.
-
-        The returned array is read-only and valid until the next :meth:`mark`
-        (which updates it in place: do not keep it across one).
-        """
-        if self._agreed is None:
-            self._agreed = self._agreed_rows(slice(None))
-        elif self._dirty is not None:
-            self._agreed.setflags(write=True)
-            self._agreed[self._dirty] = self._agreed_rows(self._dirty)
-        self._agreed.setflags(write=False)
-        self._dirty = None
-        return self._agreed
-
-    def mark(self, F, faces, corner, patch, level):
-        """Record the corner positions of newly textured faces."""
-        self.corner[faces] = corner
-        self.done[faces] = True
-        self.patch[faces] = patch
-        self.face_level[faces] = level
-        cv = F[faces].ravel()
-        self._dirty = cv if self._dirty is None else np.concatenate([self._dirty, cv])
-        self.vpatch[cv] = patch
-        n = self.vcnt.size
-        self.vcnt += np.bincount(cv, minlength=n)
-        cu = corner.reshape(-1, 2)
-        self.vacc[:, 0] += np.bincount(cv, weights=cu[:, 0], minlength=n)
-        self.vacc[:, 1] += np.bincount(cv, weights=cu[:, 1], minlength=n)
-        self.vsq += np.bincount(cv, weights=np.sum(cu * cu, axis=1), minlength=n)
 
 
 def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = None,
@@ -639,7 +365,8 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
     orientation_field : {"auto", "always", "never"}, optional
         Without ``field``: ``"auto"`` (default) computes the smoothest line
         field of the surface (cross field for a sample that looks the same
-        after a quarter turn, see :func:`_pattern_field`) for a periodic or
+        after a quarter turn, see
+        :func:`geotex.image.hpm_pattern._pattern_field`) for a periodic or
         anisotropic sample (``structure``) and uses it as ``field``, so that
         one orientation holds over the surface and breaks only at the
         field's singularities (the paper propagates the neighbour's
@@ -880,18 +607,9 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
             min_patch = patch_factor * size / ppm
     lattice = None                       # whole-period moves of a periodic sample (pixels)
     if structure and ps.periodic:
-        p1 = ps.periods[0]
-        q = ps.periods[1] if ps.periods.shape[0] > 1 else \
-            np.array([-p1[1], p1[0]])           # stripes: along them, by one period
-        K = int(np.ceil(max(W_img, H_img) / max(min(np.linalg.norm(p1),
-                                                     np.linalg.norm(q)), 1.0)))
-        k1, k2 = np.meshgrid(np.arange(-K, K + 1), np.arange(-K, K + 1))
-        lattice = k1.reshape(-1, 1) * p1 + k2.reshape(-1, 1) * q
-        lattice = lattice[np.argsort(np.hypot(lattice[:, 0], lattice[:, 1]), kind="stable")]
-        lattice = lattice[1:]                # without the zero move
-        basis = np.array([p1, q], dtype=np.float64)          # rows: the two lattice vectors
+        lattice, basis, shortest = _period_lattice(ps.periods, W_img, H_img)
         stripes = ps.periods.shape[0] == 1
-        snap_tol = LATTICE_SNAP * min(np.linalg.norm(p1), np.linalg.norm(q))
+        snap_tol = LATTICE_SNAP * shortest
     # continuation window (matching pixels, with a field): a quarter of the pattern size
     win = max(1, int(round(CONTINUATION_WINDOW * (_pattern_size(ps, img.shape) if ps.periodic
                                                   else ps.correlation_length) / f)))
@@ -1735,457 +1453,14 @@ def hpm_texture(V, F, image, *, scale: float, field=None, angle: float | None = 
     report(progress, "gaps")
     levels[-1].filled_faces = _fill_gaps(V, F, FF, st)
     # output: split vertices only where the corner positions differ
-    uvpix = st.corner.reshape(-1, 2)
-    uv = np.stack([uvpix[:, 0] / W_img, 1.0 - uvpix[:, 1] / H_img], 1)
-    key = np.column_stack([F.ravel(), uv])
-    _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
-    order = np.argsort(first, kind="stable")
-    rank = np.empty_like(order)
-    rank[order] = np.arange(order.size)
-    uv_out = uv[first[order]]
-    uv_faces = rank[inv.ravel()].reshape(m, 3).astype(np.int64)
+    uv_out, uv_faces = _split_uv(st.corner, F, W_img, H_img)
     if min_patch > 0.0 or (structure and ps.periodic):
         # how many pattern periods the patches span (area-weighted median over the faces of
         # the equivalent-disc diameter of the placement that textured them): below 1 the
         # patches are smaller than the pattern, whose structure is then lost (paper §5.2)
-        placed_ = st.patch >= 0
-        if placed_.any():
-            pa = np.bincount(st.patch[placed_], weights=A[placed_])
-            dia = 2.0 * np.sqrt(pa[st.patch[placed_]] / np.pi)
-            o = np.argsort(dia, kind="stable")
-            cw = np.cumsum(A[placed_][o])
-            med = float(dia[o][np.searchsorted(cw, 0.5 * cw[-1])])
+        med = _median_patch_diameter(st.patch, A)
+        if med is not None:
             pattern_info["patch_periods"] = med * ppm / _pattern_size(ps, img.shape)
     fl = np.where(st.face_level < 0, L - 1, st.face_level)
     return HPMResult(uv=np.ascontiguousarray(uv_out), uv_faces=uv_faces, patch=st.patch,
                      face_level=fl, levels=levels, pattern=pattern_info)
-
-
-def _angle_gap(a: float, b: float, sym: int) -> float:
-    """Smallest angle between direction ``a`` and the ``sym`` representatives of ``b``."""
-    step = 2 * np.pi / sym
-    return abs((a - b + 0.5 * step) % step - 0.5 * step)
-
-
-def _pattern_field(V, F, img, angle):
-    """Smooth direction field for a structured sample: (per-face vectors, symmetry).
-
-    The smoothest field of the surface (:func:`geotex.fields.smooth_direction_field`,
-    no constraint), with 4-fold symmetry when the sample looks the same turned by a
-    quarter turn (:func:`geotex.image.fftmatch.quarter_turn_symmetry` above
-    ``QUARTER_TURN``), 2-fold (lines) otherwise; turned by ``angle`` degrees about
-    the normals when given (the smoothest field is defined up to such a turn).  The
-    vectors are combed (:func:`geotex.fields.comb_direction_field`): a patch without a
-    textured neighbour to continue takes the representative nearest them, so that
-    separately started regions agree on the pattern's sign except across the
-    combing's cut edges.
-    """
-    sym = 4 if quarter_turn_symmetry(img) >= QUARTER_TURN else 2
-    # faces of zero area (simplified meshes have some) carry no direction: the field is
-    # solved without them (they weigh nothing in a cluster's direction) and they get a
-    # neighbour's vector, or the x axis
-    bad = degenerate_faces(V, F)
-    keep = np.setdiff1d(np.arange(F.shape[0]), bad)
-    fld = smooth_direction_field(V, F[keep], symmetry=sym)
-    sub = comb_direction_field(V, F[keep], fld).vectors
-    if angle is not None:
-        a = np.radians(angle)
-        sub = np.cos(a) * sub + np.sin(a) * np.cross(fld.normals, sub)
-    vec = np.zeros((F.shape[0], 3))
-    vec[keep] = sub
-    vec[bad] = (1.0, 0.0, 0.0)
-    if bad.size and keep.size:
-        FF = face_adjacency(V, F).face_neighbors
-        for _ in range(bad.size):            # waves: each bad face from a good neighbour
-            nb = FF[bad]
-            good = np.isin(nb, keep) & (nb >= 0)
-            has = good.any(axis=1)
-            if not has.any():
-                break
-            vec[bad[has]] = vec[nb[has, np.argmax(good[has], axis=1)]]
-            keep = np.union1d(keep, bad[has])
-            bad = bad[~has]
-            if bad.size == 0:
-                break
-    return np.ascontiguousarray(vec), sym
-
-
-def _pattern_size(ps, shape) -> float:
-    """Pattern size (pixels) behind the band width and the minimal patch size.
-
-    The longest repeat of ``ps`` within a quarter of the image (the repeats
-    confirmed at twice their length, see
-    :func:`geotex.image.fftmatch.pattern_scale`): a second repeat found
-    further (the basket weave's 61 px beside its 34 px) only enters the
-    lattice (continuations moved by whole periods, lattice snapping).  With it as the pattern
-    size, the wider band and the larger forced clusters made the seams and
-    the rotation across borders worse on Spot 10k (basket weave, seed 0:
-    where the map jumps 1.52 -> 1.81 times the jump within patches,
-    rotation median 7 -> 10 degrees); with the shorter repeat instead
-    (bricks 20 px instead of 35) bricks took 14 s CPU on Spot 10k, over the
-    10 s budget.
-    """
-    n = np.linalg.norm(ps.periods, axis=1)
-    n_in = n[n <= min(shape[:2]) / 4.0]
-    return float(n_in.max() if n_in.size else n.min())
-
-
-def _rigid_fit(X, Y):
-    """Least-squares rotation and translation ``Y ~ R X + t`` of 2D points (k, 2).
-
-    The rotation maximising ``sum y . (R x)`` over the centred points has the
-    angle of ``(a + e, b - d)`` for ``[[a, b], [d, e]] = sum x y^T`` (the
-    2 x 2 Kabsch solution in closed form: the rotation of the SVD's ``V U^T``).
-    Returns ``(R, t)``, or None when the best orthogonal map is a reflection
-    (``det < 0``, the SVD's ``V U^T`` has determinant -1) or the points give no
-    direction.
-    """
-    xm, ym = X.mean(axis=0), Y.mean(axis=0)
-    (a, b), (d, e) = ((X - xm).T @ (Y - ym)).tolist()
-    r = np.hypot(a + e, b - d)
-    if not (a * e - b * d > 0 and r > 0):
-        return None
-    co, si = (a + e) / r, (b - d) / r
-    R = np.array([[co, -si], [si, co]])
-    return R, ym - R @ xm
-
-
-def _refine_placement(img, R, t, q, target, angle_step, fast=False):
-    """Sub-pixel and sub-grid refinement of a mask placement ``x -> R q + t``.
-
-    The FFT search gives the best placement on the pixel grid and on the
-    orientation grid.  Around it, the continuous mask error
-    ``E = sum (target - img(R q + t))^2`` (bilinear samples of ``img`` at the
-    placed mask points ``q`` (k, 2), colours ``target`` (k, c)) is fitted by a
-    parabola in x, in y (steps of half a pixel) and in the angle (steps of
-    half the orientation grid, rotating about the mask's centroid), two
-    rounds with halved steps; the lowest evaluated placement is kept, so the
-    result is never worse than the start.  ``fast``: sample the image with the
-    compiled loop (same values).
-
-    Returns
-    -------
-    R, t : numpy.ndarray, (2, 2) and (2,) float64
-    error : float
-        ``E`` at the returned placement.
-    """
-    qc = q.mean(axis=0)
-
-    def place(p):
-        c, s = np.cos(p[2]), np.sin(p[2])
-        R1 = np.array([[c, s], [-s, c]]) @ R
-        return R1, R @ qc + t - R1 @ qc + p[:2]
-
-    def energy(p):
-        R1, t1 = place(p)
-        d = target - _sample(img, q @ R1.T + t1, fast)
-        return float(np.sum(d * d))
-
-    p = np.zeros(3)
-    e0 = energy(p)
-    steps = np.array([0.5, 0.5, 0.5 * angle_step])
-    for _ in range(2):
-        for j in range(3):
-            h = steps[j]
-            em = energy(p - h * np.eye(3)[j])
-            ep = energy(p + h * np.eye(3)[j])
-            cand = [(e0, 0.0), (em, -h), (ep, h)]
-            curv = em - 2.0 * e0 + ep
-            if curv > 0:
-                x = float(np.clip(0.5 * h * (em - ep) / curv, -h, h))
-                if 0.0 < abs(x) < h:
-                    cand.append((energy(p + x * np.eye(3)[j]), x))
-            e_best, x_best = min(cand, key=lambda z: z[0])
-            p[j] += x_best
-            e0 = e_best
-        steps *= 0.5
-    R1, t1 = place(p)
-    return R1, t1, e0
-
-
-def _signed_areas(P: np.ndarray, tri: np.ndarray) -> np.ndarray:
-    """Twice the signed areas of triangles ``tri`` (t, 3) over positions ``P`` (p, 2)."""
-    t = P[tri]
-    return (t[:, 1, 0] - t[:, 0, 0]) * (t[:, 2, 1] - t[:, 0, 1]) \
-        - (t[:, 1, 1] - t[:, 0, 1]) * (t[:, 2, 0] - t[:, 0, 0])
-
-
-def _snap(P, target, close, tri):
-    """Move the ``close`` rows of ``P`` (in place) onto ``target`` unless that folds a face.
-
-    ``tri`` (t, 3) are the cluster's faces as row indices of ``P``.  On fine
-    meshes the snapping distance is a sizeable part of an edge in pixels, and
-    snapping both ends of a short edge can reverse or crush a face: the
-    vertices of such faces keep their own position (a small crack instead of
-    a flipped face).  Returns the rows actually snapped.
-    """
-    close = close.copy()
-    a0 = _signed_areas(P, tri)
-    while close.any():                  # every round unsnaps at least one vertex
-        trial = P.copy()
-        trial[close] = target[close]
-        bad = _signed_areas(trial, tri) * np.sign(a0) < 0.3 * np.abs(a0)
-        if not bad.any():
-            break
-        close[np.unique(tri[bad])] = False
-    P[close] = target[close]
-    return close
-
-
-def _relax(P, verts, faces, movable, F, st, full, rng, f, fast=False):
-    """Local edge relaxation (Fig. 6): greedy random moves of shared border vertices.
-
-    ``P`` (p, 2) full-res positions of ``verts``; ``movable`` marks the shared
-    border vertices where the mapping jumps.  For each, the error is the
-    squared colour difference between this cluster's and the neighbour's
-    texture at samples along the shared edges around it, weighted by the
-    vertex's hat function; candidate moves are drawn in a disc of radius
-    ``f`` pixels halved at each of three rounds, and the best is kept.
-    ``fast``: sample the image with the compiled loop (same values).
-    """
-    mv = np.flatnonzero(movable)
-    if mv.size == 0:
-        return P
-    n = int(F.max()) + 1
-    pos = np.full((n, 2), np.nan)
-    pos[verts] = P
-    # neighbour positions per vertex (mean over textured corners)
-    nb = st.agreed()
-    cnt = np.where(np.isnan(nb[:, 0]), 0.0, 1.0)
-    # shared edges of the cluster (both ends with a neighbour position)
-    e = np.concatenate([F[faces][:, [0, 1]], F[faces][:, [1, 2]], F[faces][:, [2, 0]]])
-    e = np.sort(e, axis=1)
-    key = np.unique(e[:, 0] * n + e[:, 1])          # = np.unique(e, axis=0), without a
-    e = np.stack([key // n, key % n], axis=1)       # structured sort
-    both = (cnt[e[:, 0]] > 0) & (cnt[e[:, 1]] > 0)
-    e = e[both]
-    if e.shape[0] == 0:
-        return P
-    ts = np.array([0.0, 0.25, 0.5, 0.75])
-    vid = verts[mv]
-    # per movable vertex: its shared edges, oriented from it
-    ea = np.concatenate([e[:, 0], e[:, 1]])
-    eb = np.concatenate([e[:, 1], e[:, 0]])
-    slot = np.full(n, -1, np.int64)
-    slot[vid] = np.arange(vid.size)
-    sel = slot[ea] >= 0
-    ea, eb, owner = ea[sel], eb[sel], slot[ea[sel]]
-    if ea.size == 0:
-        return P
-
-    na, nbb = nb[ea], nb[eb]
-    y = na[:, None, :] * (1 - ts)[None, :, None] + nbb[:, None, :] * ts[None, :, None]
-    target = _sample(full, y.reshape(-1, 2), fast)   # the neighbour's texture along the edges
-    b = pos[eb]
-
-    # compiled: three colour channels (the order of np.sum checked for them), no NaN
-    jit_err = fast and full.shape[2] == 3 and np.isfinite(b).all() and np.isfinite(target).all()
-
-    def err(cand):                       # cand (k, 2) positions of the movable vertices
-        if jit_err and np.isfinite(cand).all():
-            return _relax_error_compiled(full, cand, owner, b, target, ts, vid.size)
-        a = cand[owner]
-        x = a[:, None, :] * (1 - ts)[None, :, None] + b[:, None, :] * ts[None, :, None]
-        d = _sample(full, x.reshape(-1, 2), fast) - target
-        w = np.broadcast_to((1 - ts)[None, :], x.shape[:2]).ravel()
-        per = np.sum(d * d, axis=1) * w
-        return np.bincount(np.repeat(owner, ts.size), weights=per, minlength=vid.size)
-
-    cur = pos[vid].copy()
-    e0 = err(cur)
-    # search radius: the paper's disc, capped by a fifth of the shortest edge at the vertex
-    elen = np.linalg.norm(pos[ea] - pos[eb], axis=1)
-    short = np.full(vid.size, np.inf)
-    np.minimum.at(short, owner, elen)
-    ff = F[faces]
-    loc = np.searchsorted(verts, ff)
-    for a_, b_ in ((0, 1), (1, 2), (2, 0)):
-        own = slot[ff[:, a_]]
-        ok_ = own >= 0
-        np.minimum.at(short, own[ok_], np.linalg.norm(P[loc[ok_, a_]] - P[loc[ok_, b_]], axis=1))
-    radius = np.minimum(float(f), RELAX_EDGE_FRACTION * np.where(np.isfinite(short), short, 0.0))
-
-    def areas(posv):
-        t = posv[loc]
-        return (t[:, 1, 0] - t[:, 0, 0]) * (t[:, 2, 1] - t[:, 0, 1]) \
-            - (t[:, 1, 1] - t[:, 0, 1]) * (t[:, 2, 0] - t[:, 0, 0])
-
-    a_before = areas(P)
-    if jit_err and np.isfinite(cur).all() and np.isfinite(radius).all():
-        # the same draws (one (18, 2, k) block is the 36 calls' stream, in order), the
-        # same offsets (numpy's own sqrt, cos, sin of them) and the candidates' errors
-        # and greedy updates in one compiled loop
-        u = rng.random((3 * 6, 2, vid.size))
-        r = (radius * np.array([1.0, 0.5, 0.25]).repeat(6)[:, None]) * np.sqrt(u[:, 0])
-        t = u[:, 1] * 2 * np.pi
-        off = np.stack([r * np.cos(t), r * np.sin(t)], 2)
-        cur = _relax_search_compiled(full, cur, off, owner, b, target, ts, e0)
-    else:
-        for _ in range(3):
-            for _k in range(6):
-                r = radius * np.sqrt(rng.random(vid.size))
-                t = rng.random(vid.size) * 2 * np.pi
-                cand = cur + np.stack([r * np.cos(t), r * np.sin(t)], 1)
-                e1 = err(cand)
-                better = e1 < e0
-                cur[better] = cand[better]
-                e0 = np.where(better, e1, e0)
-            radius = radius * 0.5
-    # undo moves that fold or crush a face of the cluster
-    for _ in range(3):
-        trial = P.copy()
-        trial[mv] = cur
-        a_after = areas(trial)
-        crushed = (a_after * np.sign(a_before) < 0.3 * np.abs(a_before))
-        if not crushed.any():
-            break
-        back = np.unique(ff[crushed])
-        back = back[slot[back] >= 0]
-        cur[slot[back]] = P[mv][slot[back]]
-    out = P.copy()
-    out[mv] = cur
-    return out
-
-
-def _face_groups(FF: np.ndarray, todo: np.ndarray, size: int) -> list:
-    """The faces ``todo`` (m,) bool cut into groups of at most ``size`` adjacent faces.
-
-    Connected components of the remaining faces (across shared edges), each
-    cut into consecutive runs of its breadth-first order (a run is connected
-    or nearly so; the projection flattening does not need more).
-    """
-    idx = np.flatnonzero(todo)
-    if idx.size == 0:
-        return []
-    slot = np.full(FF.shape[0], -1, np.int64)
-    slot[idx] = np.arange(idx.size)
-    nb = FF[idx]
-    a = np.repeat(np.arange(idx.size), 3)
-    b = np.where(nb >= 0, slot[np.maximum(nb, 0)], -1).ravel()
-    keep = b >= 0
-    G = sp.csr_matrix((np.ones(int(keep.sum())), (a[keep], b[keep])), shape=(idx.size,) * 2)
-    ncomp, lab = connected_components(G, directed=False)
-    first = np.full(ncomp, -1, np.int64)
-    first[lab[::-1]] = np.arange(idx.size)[::-1]
-    out = []
-    for k in range(ncomp):
-        order = breadth_first_order(G, int(first[k]), directed=False,
-                                    return_predecessors=False)
-        out.extend(idx[order[j:j + size]] for j in range(0, order.size, size))
-    return out
-
-
-def _fill_gaps(V, F, FF, st) -> int:
-    """Texture the remaining faces by unfolding them from a textured neighbour."""
-    filled = 0
-    while not st.done.all():
-        todo = np.flatnonzero(~st.done)
-        nb = FF[todo]
-        ok = (nb >= 0) & st.done[np.maximum(nb, 0)]
-        has = ok.any(axis=1)
-        if not has.any():
-            # a part with no texture at all: give it a flat projection at the origin
-            f0 = todo[0]
-            st.corner[f0] = 0.0
-            st.done[f0] = True
-            filled += 1
-            continue
-        fa = todo[has]
-        k = np.argmax(ok[has], axis=1)
-        g = nb[has, k]
-        a = F[fa, k]
-        b = F[fa, (k + 1) % 3]
-        c = F[fa, (k + 2) % 3]
-        # g's corner positions for a and b
-        ga = np.argmax(F[g] == a[:, None], axis=1)
-        gb = np.argmax(F[g] == b[:, None], axis=1)
-        gc = 3 - ga - gb
-        ua, ub, ug = st.corner[g, ga], st.corner[g, gb], st.corner[g, gc]
-        pa, pb = V[a], V[b]
-        ev = pb - pa
-        le = np.linalg.norm(ev, axis=1)
-        ex = ev / np.maximum(le, 1e-300)[:, None]
-        # coordinates of c and of g's third vertex in the edge frame (s along, t across)
-        def st_coords(p):
-            d = p - pa
-            s = np.sum(d * ex, axis=1)
-            t = np.linalg.norm(d - s[:, None] * ex, axis=1)
-            return s, t
-        sc, tc = st_coords(V[c])
-        # texture-space frame from g: along the edge, and toward g's third vertex
-        du = ub - ua
-        lu = np.linalg.norm(du, axis=1)
-        ux = du / np.maximum(lu, 1e-300)[:, None]
-        uy = np.stack([-ux[:, 1], ux[:, 0]], 1)
-        side = np.sign(np.sum((ug - ua) * uy, axis=1))
-        side[side == 0] = 1.0
-        k_scale = lu / np.maximum(le, 1e-300)
-        uc = ua + (sc * k_scale)[:, None] * ux - (side * tc * k_scale)[:, None] * uy
-        st.corner[fa, k] = ua
-        st.corner[fa, (k + 1) % 3] = ub
-        st.corner[fa, (k + 2) % 3] = uc
-        st.done[fa] = True
-        filled += fa.size
-    return filled
-
-
-
-
-
-def read_hpm_image(path) -> np.ndarray:
-    """Read the texture sample: a grey or RGB(A) picture, as ``(h, w, 3)`` uint8.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-
-    Returns
-    -------
-    numpy.ndarray, (h, w, 3) uint8
-
-    Raises
-    ------
-    MissingFileError
-        If the file does not exist.
-    InputError
-        If it is not a readable picture, or not grey/RGB (e.g. CMYK, float).
-    """
-    from pathlib import Path
-
-    p = Path(path)
-    if not p.is_file():
-        raise MissingFileError(f"{p}: no such image file")
-    try:
-        with Image.open(p) as im:
-            mode = im.mode
-    except Exception as exc:  # pillow raises many types for unreadable images
-        raise InputError(f"{p}: cannot read the image ({type(exc).__name__}); "
-                         "give a PNG or JPEG file") from None
-    if mode not in ("1", "L", "LA", "P", "PA", "RGB", "RGBA"):
-        raise InputError(f"{p}: the image is {mode}, not 8-bit RGB or grey; convert it to an "
-                         "8-bit RGB or grey PNG/JPEG first")
-    arr = load_image(p)
-    if min(arr.shape[:2]) < 8:
-        raise InputError(f"{p}: the image is {arr.shape[1]} x {arr.shape[0]} pixels; give one "
-                         "of at least 8 x 8")
-    return np.ascontiguousarray(arr[:, :, :3])
-
-
-def hpm_mesh(V, F, result: HPMResult, image, *, name: str = ""):
-    """The textured mesh record: the base with ``result``'s uv and the image itself.
-
-    Parameters
-    ----------
-    V : array_like, (n, 3) float64
-    F : array_like, (m, 3) int64
-    result : HPMResult
-    image : numpy.ndarray, (h, w, 3) uint8
-    name : str, optional
-
-    Returns
-    -------
-    geotex.mesh.record.Mesh
-    """
-    return Mesh(V, F, uv=result.uv, uv_faces=result.uv_faces,
-                texture=np.ascontiguousarray(image[:, :, :3]), name=name,
-                metadata={"hpm": result.report()})
