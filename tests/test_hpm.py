@@ -668,7 +668,7 @@ def test_cli_hpm_obj_writes_image_beside(files):
     assert (tmp / "out.mtl").exists() and (tmp / "out.png").exists()
 
 
-def test_cli_hpm_errors(files, capsys):
+def test_cli_hpm_errors(files, capsys, monkeypatch):
     from PIL import Image
     tmp, base, img = files
 
@@ -695,6 +695,22 @@ def test_cli_hpm_errors(files, capsys):
     write_mesh(fins, Mesh(Vf, Ff))
     assert "non-manifold" in err([str(fins), "--image", str(img), "-o", str(tmp / "a.glb")])
     assert ".glb or .obj" in err([str(base), "--image", str(img), "-o", str(tmp / "a.stl")])
+    # coordinates the output cannot store are refused before any work (were refused
+    # only when the finished texture was written)
+    import geotex.image.hpm
+
+    def no_work(*a, **k):
+        raise AssertionError("hpm ran before refusing the coordinates")
+
+    Vb, Fb = icosphere(1)
+    huge = tmp / "huge.obj"
+    write_mesh(huge, Mesh(Vb * 1e39, Fb))
+    monkeypatch.setattr(geotex.image.hpm, "hpm_texture", no_work)
+    assert "float32 range of glTF" in err([str(huge), "--image", str(img),
+                                           "-o", str(tmp / "a.glb")])
+    assert "1e+15 mm a relief" in err([str(huge), "--image", str(img), "--displace", "0.1",
+                                       "-o", str(tmp / "a.stl")])
+    monkeypatch.undo()
     assert "no such image" in err([str(base), "--image", str(tmp / "x.png"),
                                    "-o", str(tmp / "a.glb")])
     for bad in ("-5", "nan", "inf", "wide"):

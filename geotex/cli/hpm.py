@@ -111,6 +111,24 @@ def _outputs(args) -> list[Path]:
     return written
 
 
+def _refuse_unstorable(reach: float, out: Path, args) -> None:
+    """Refuse, before any work, coordinates the output cannot store.
+
+    A GLB stores float32 positions; a relief (``--displace``) is written and
+    checked in float32 and refused beyond 1e15 mm by ``geotex displace``'s rule.
+    An OBJ is text and takes any finite coordinate.
+    """
+    import numpy as np
+
+    if args.displace is not None and not reach <= 1e15:
+        raise UsageError(f"{args.base}: coordinates reach {reach:.3g} mm, beyond the 1e+15 mm "
+                         "a relief (--displace) handles; scale the part down")
+    if (args.displace is None and out.suffix.lower() == ".glb"
+            and not reach <= float(np.finfo(np.float32).max)):
+        raise UsageError(f"{args.base}: coordinates exceed the float32 range of glTF "
+                         "positions; scale the part down or write .obj")
+
+
 def _spread(text: str) -> float | None:
     """``--orientation-spread``: degrees (finite, >= 0) or 'any' (None)."""
     if text.strip().lower() == "any":
@@ -177,6 +195,7 @@ def run(args) -> int:
     if mesh.n_faces == 0:
         raise UsageError(f"{args.base}: the mesh has no faces")
     V, F = mesh.vertices, mesh.faces
+    _refuse_unstorable(float(np.abs(V).max()), out, args)
     image = read_hpm_image(args.image)
     field = None
     if args.field is not None:
