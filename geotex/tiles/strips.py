@@ -43,13 +43,14 @@ from geotex.tiles.clip import split_by_plane
 from geotex.tiles.fill import GAP, PIXEL, footprint_pixels, grown_heights, pixel_heights
 
 __all__ = ["Strip", "CornerPatch", "corner_patch", "empty_strip", "element_boxes", "pick_strips", "largest_footprint", "lattice_phase",
-           "lattice_corner", "corner_footprints", "corner_conflicts"]
+           "lattice_corner", "corner_footprints", "corner_conflicts", "corner_correspondences"]
 
 CLEAR = 0.5 * GAP   # clearance of strip elements from the perpendicular tile sides
 CANDIDATES = 96     # random segment positions tried per colour
 SHORTLIST = 24      # best candidates (by covered length) pruned and compared
 END = 0.3           # length near a segment end whose coverage counts twice
 EXACT = 12          # strips with at most this many elements in play are pruned exactly
+MATCH_BONUS = 0.1   # band strips: score per element pair lying on each other at a corner
 PATCH = 0.12        # corner patch: elements within this of the patch centre (both axes)
 PATCH_NUDGES = [(0.0, 0.0)] + [(r * np.cos(a), r * np.sin(a)) for r in (0.003, 0.006, 0.009)
                                for a in np.arange(8) * np.pi / 4 + 0.3]
@@ -72,6 +73,14 @@ class Strip:
         Footprints ``(t0, s0, t1, s1)`` of the strip's elements.
     corners : dict
         :func:`corner_footprints` of the strip's elements.
+    band : tuple of (V, F), optional
+        With ``band`` of :func:`pick_strips` (the paper's strip of height
+        ``h_E``): the whole exemplar elements beside the line near the
+        segment ends, ``(below, above)`` (``s < 0`` and ``s > 0``), which the
+        corner merge (:mod:`geotex.tiles.corners`) matches with the other
+        side's strip in the corner squares; None without.
+    band_boxes : numpy.ndarray, (b, 4) float64, optional
+        Footprints ``(t0, s0, t1, s1)`` of the band elements (both sides).
     """
 
     below: tuple
@@ -80,6 +89,8 @@ class Strip:
     along: int
     boxes: np.ndarray
     corners: dict
+    band: tuple | None = None
+    band_boxes: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -390,7 +401,8 @@ def lattice_corner(lo: np.ndarray, hi: np.ndarray, pitch: float, phase) -> tuple
 def pick_strips(V: np.ndarray, F: np.ndarray, size, *, count: int, along: int,
                 rng: np.random.Generator, taken=(), lattice=None,
                 chosen_before=(), meets_itself: bool = True,
-                corner_patch: CornerPatch | None = None) -> tuple[list[Strip], set]:
+                corner_patch: CornerPatch | None = None, band: float = 0.0
+                ) -> tuple[list[Strip], set]:
     """Choose ``count`` distinct edge strips from an exemplar.
 
     Every candidate segment keeps its crossing elements that stay
@@ -502,6 +514,13 @@ def pick_strips(V: np.ndarray, F: np.ndarray, size, *, count: int, along: int,
             if not key or key in used:
                 continue
             score = float(value[np.isin(cand, members)].sum())
+            if band > 0:
+                # the paper's "pick them so that the overlaps hold corresponding
+                # elements": a bonus per element pair lying on each other at a corner
+                mine = np.stack([t0[c], s0[c], t1[c], s1[c]], 1)
+                mine = np.r_[mine[members], mine[np.concatenate(_band_of(mine, band))]]
+                score += MATCH_BONUS * _correspondences(mine, before + strips if meets_itself
+                                                        else before, along, meets_itself)
             if best is None or score > best[0]:
                 best = (score, c, key)
         if best is None:
@@ -510,8 +529,9 @@ def pick_strips(V: np.ndarray, F: np.ndarray, size, *, count: int, along: int,
         order.remove(c)
         used.add(key)
         boxes = np.stack([t0[c], s0[c], t1[c], s1[c]], 1)
+        ends = _band_of(boxes, band) if band > 0 else None
         strips.append(_make_strip(V, F, labels, sorted(key), tuple(origin[c]), along,
-                                  boxes[sorted(key)]))
+                                  boxes[sorted(key)], ends, boxes))
     if len(strips) < count:
         raise InputError(f"the exemplar has only {len(strips)} distinct edge strips along "
                          f"{'xy'[along]} for {count} colours; use fewer colours or a larger "
@@ -567,7 +587,8 @@ def _without_corner_conflicts(V, F, labels, members, origin, along, others, own=
     return members[alive]
 
 
-def _make_strip(V, F, labels, members, origin, along, boxes) -> Strip:
+def _make_strip(V, F, labels, members, origin, along, boxes, ends=None,
+                all_boxes=None) -> Strip:
     keep = np.isin(labels, members)
     Fs = F[keep]
     used = np.unique(Fs)
@@ -577,4 +598,88 @@ def _make_strip(V, F, labels, members, origin, along, boxes) -> Strip:
     corners = corner_footprints(Vs, remap[Fs], np.searchsorted(members, labels[keep]),
                                 len(members))
     below, above = split_by_plane(Vs, remap[Fs], axis=1, value=0.0, snap=1e-4)
-    return Strip(below, above, tuple(float(o) for o in origin), along, boxes, corners)
+    band = band_boxes = None
+    if ends is not None:
+        band = tuple(_element_subset(V, F, labels, sel, origin, along) for sel in ends)
+        band_boxes = all_boxes[np.concatenate(ends)]
+    return Strip(below, above, tuple(float(o) for o in origin), along, boxes, corners, band,
+                 band_boxes)
+
+
+def _band_of(boxes: np.ndarray, band: float) -> tuple[np.ndarray, np.ndarray]:
+    """Band elements (below, above the line) among element boxes ``(t0, s0, t1, s1)``."""
+    t0, s0, t1, s1 = boxes.T
+    inside = (t0 >= CLEAR) & (t1 <= 1.0 - CLEAR) & ((t0 < band) | (t1 > 1.0 - band))
+    return (np.flatnonzero(inside & (s1 <= -CLEAR) & (s0 >= -band)),
+            np.flatnonzero(inside & (s0 >= CLEAR) & (s1 <= band)))
+
+
+def _quadrant_boxes(boxes: np.ndarray, key: str) -> np.ndarray:
+    """Element boxes in a corner quadrant image's coordinates (see :func:`corner_footprints`).
+
+    ``(a0, b0, a1, b1)``: distance from the strip end along ``t``, distance
+    from the line on the key's side (clipped at the line: the half there);
+    boxes with nothing on that side within :data:`CORNER_WINDOW` of the end
+    are left out.
+    """
+    t0, s0, t1, s1 = boxes.T
+    a0, a1 = (t0, t1) if key.endswith("start") else (1.0 - t1, 1.0 - t0)
+    b0, b1 = (s0, s1) if key.startswith("above") else (-s1, -s0)
+    keep = (b1 > 0) & (a0 < CORNER_WINDOW)
+    return np.stack([a0, np.maximum(b0, 0.0), a1, b1], 1)[keep]
+
+
+def corner_correspondences(x: np.ndarray, y: np.ndarray) -> int:
+    """Element pairs of two strips that lie on each other at a tile corner.
+
+    Strip ``x`` along a horizontal side, ``y`` along a vertical one (their
+    element boxes, crossing and band elements); in every quadrant
+    (:data:`QUADRANTS`) the footprints of ``x``'s elements and the
+    transposed ones of ``y``'s are compared, and a pair counts when every
+    box side of one lies within a quarter of the pair's narrow width of the
+    other's (the shift :func:`geotex.quilting.merge.merge_elements` accepts
+    for corresponding elements).
+
+    Parameters
+    ----------
+    x, y : numpy.ndarray, (k, 4) float64
+        Boxes ``(t0, s0, t1, s1)`` in strip coordinates.
+
+    Returns
+    -------
+    int
+    """
+    count = 0
+    for kx, ky in QUADRANTS:
+        X = _quadrant_boxes(x, kx)
+        Y = _quadrant_boxes(y, ky)[:, [1, 0, 3, 2]]
+        if not len(X) or not len(Y):
+            continue
+        wx = np.minimum(X[:, 2] - X[:, 0], X[:, 3] - X[:, 1])
+        wy = np.minimum(Y[:, 2] - Y[:, 0], Y[:, 3] - Y[:, 1])
+        diff = np.abs(X[:, None, :] - Y[None, :, :]).max(axis=2)
+        count += int((diff <= 0.25 * np.minimum(wx[:, None], wy[None, :])).sum())
+    return count
+
+
+def _correspondences(mine: np.ndarray, others, along: int, own: bool) -> int:
+    """:func:`corner_correspondences` of a candidate strip with the strips it meets."""
+    def boxes(st):
+        return st.boxes if st.band_boxes is None else np.r_[st.boxes, st.band_boxes]
+    total = corner_correspondences(mine, mine) if own else 0
+    for other in others:
+        theirs = boxes(other)
+        if own or along == 0:
+            total += corner_correspondences(mine, theirs)
+        if own or along == 1:
+            total += corner_correspondences(theirs, mine)
+    return total
+
+
+def _element_subset(V, F, labels, members, origin, along):
+    """The whole elements ``members`` of the exemplar, in strip coordinates."""
+    Fk = F[np.isin(labels, members)]
+    used = np.unique(Fk)
+    remap = np.full(len(V), -1, dtype=np.int64)
+    remap[used] = np.arange(len(used))
+    return _to_strip(V[used], origin, along), remap[Fk]
