@@ -103,11 +103,13 @@ def merged_corners(frame, bands) -> tuple[tuple[np.ndarray, np.ndarray], np.ndar
         (merged, then too near a side); ``seams``: ``(gap, jump_max,
         jump_mean)`` of every stitched merge (gap in tile units, angles in
         degrees); ``kept_unmerged`` 1 when the merged frame's sides differed
-        and the frame was returned as given.
+        and the frame was returned as given; ``moved``: how far (tile units)
+        the kept element of every absorbed pair moved (half the alignment
+        shift; 0 for a copy in place or when it is a held crossing half).
     """
     V0, F0 = frame
     stats = {k: 0 for k in STATUSES}
-    stats.update(seams=[], kept_unmerged=0)
+    stats.update(seams=[], moved=[], kept_unmerged=0)
     elements, cut = [], []
     for e in (split_elements(V0, F0, prefilled=True) if len(F0) else []):
         F2, cap, on_cut = capped(e.V, e.F, DOMAIN)
@@ -122,7 +124,9 @@ def merged_corners(frame, bands) -> tuple[tuple[np.ndarray, np.ndarray], np.ndar
         for p in split_elements(Vb, Fb):
             status, seam = _placed(p, elements, cut)
             stats[status] += 1
-            if seam is not None:
+            if seam is not None and seam[0] == "moved":
+                stats["moved"].append(seam[1])
+            elif seam is not None:
                 stats["seams"].append(seam)
     V, F, _, _ = concatenate_elements(elements)
     V, F = compacted(V, F)
@@ -163,7 +167,7 @@ def _placed(p: Element, elements: list, cut: list):
     k = partners[0]
     e = elements[k]
     if coincides(e, p):
-        return "absorbed", None
+        return "absorbed", ("moved", 0.0)
     r = merge_elements(e.V, e.F, p.V, p.F, fixed_a=e.fixed, domain=DOMAIN,
                        corresponding_only=True, cap_a=e.cap)
     if r.status not in ("stitched", "union", "absorbed"):
@@ -175,10 +179,13 @@ def _placed(p: Element, elements: list, cut: list):
     if any(touching(o, merged) for o in others):
         return "undone", None
     elements[k] = merged
-    seam = None
     if r.status == "stitched":
-        seam = (float(r.seam_gap), float(r.seam_normal_jump), float(r.seam_normal_jump_mean))
-    return r.status, seam
+        return r.status, (float(r.seam_gap), float(r.seam_normal_jump),
+                          float(r.seam_normal_jump_mean))
+    if r.status == "absorbed" and r.vertices.shape == e.V.shape:
+        # no seam: the element kept moved half way toward its partner (or not at all)
+        return r.status, ("moved", float(np.linalg.norm(r.vertices - e.V, axis=1).max()))
+    return r.status, None
 
 
 def _footprints(V: np.ndarray, F: np.ndarray) -> np.ndarray:
@@ -195,7 +202,8 @@ def merge_totals(stats: list) -> dict:
     -------
     dict
         The counts of :data:`STATUSES`, ``merged`` (absorbed + stitched +
-        union), ``kept_unmerged``, and over the stitched merges
+        union), ``kept_unmerged``, ``absorbed_moved_max`` (largest move of
+        an absorbed pair's kept element, tile units), and over the stitched merges
         ``seam_gap_max`` (tile units), ``seam_normal_jump_mean`` (mean of
         the per-merge mean angle) and ``seam_normal_jump_max`` (degrees),
         None without stitches.
@@ -208,4 +216,6 @@ def merge_totals(stats: list) -> dict:
     out["seam_gap_max"] = round(float(np.nanmax(seams[:, 0])), 6) if has else None
     out["seam_normal_jump_mean"] = round(float(np.nanmean(seams[:, 2])), 3) if has else None
     out["seam_normal_jump_max"] = round(float(np.nanmax(seams[:, 1])), 3) if has else None
+    moved = [x for s in stats for x in s.get("moved", [])]
+    out["absorbed_moved_max"] = round(float(max(moved)), 6) if moved else None
     return out

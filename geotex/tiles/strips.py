@@ -50,7 +50,7 @@ CANDIDATES = 96     # random segment positions tried per colour
 SHORTLIST = 24      # best candidates (by covered length) pruned and compared
 END = 0.3           # length near a segment end whose coverage counts twice
 EXACT = 12          # strips with at most this many elements in play are pruned exactly
-MATCH_BONUS = 0.1   # band strips: score per element pair lying on each other at a corner
+MATCH_BONUS = 0.25  # band strips: score per element pair lying on each other at a corner
 PATCH = 0.12        # corner patch: elements within this of the patch centre (both axes)
 PATCH_NUDGES = [(0.0, 0.0)] + [(r * np.cos(a), r * np.sin(a)) for r in (0.003, 0.006, 0.009)
                                for a in np.arange(8) * np.pi / 4 + 0.3]
@@ -479,6 +479,11 @@ def pick_strips(V: np.ndarray, F: np.ndarray, size, *, count: int, along: int,
         a0 = ph_along + K.ravel()[pick] * p
         a1 = ph_across + J.ravel()[pick] * p
     origin = np.stack([a0, a1], 1) if along == 0 else np.stack([a1, a0], 1)
+    if band > 0 and lattice is None and chosen_before:
+        origin = _in_phase(origin, lo, hi, [st.origin for st in chosen_before], rng,
+                           np.array([0.0, half] if along == 0 else [half, 0.0]),
+                           np.array([span - 1.0, width - half] if along == 0
+                                    else [width - half, span - 1.0]))
     if along == 0:
         t0 = lo[None, :, 0] - origin[:, 0:1]
         t1 = hi[None, :, 0] - origin[:, 0:1]
@@ -491,7 +496,16 @@ def pick_strips(V: np.ndarray, F: np.ndarray, size, *, count: int, along: int,
         s1 = origin[:, 0:1] - lo[None, :, 0]
     crossing = (s0 < -GAP / 4) & (s1 > GAP / 4) & (t0 >= CLEAR) & (t1 <= 1.0 - CLEAR)
     cover = np.where(crossing, t1 - t0, 0.0).sum(axis=1)
-    order = [int(c) for c in np.argsort(-cover, kind="stable") if cover[c] > 0]
+    rank = cover
+    if band > 0 and chosen_before:
+        # shortlist candidates whose corners lie on those of the strips before
+        match = np.zeros(len(cover))
+        for c in np.flatnonzero(cover > 0):
+            b = np.stack([t0[c], s0[c], t1[c], s1[c]], 1)
+            mine = np.r_[b[crossing[c]], b[np.concatenate(_band_of(b, band))]]
+            match[c] = _correspondences(mine, list(chosen_before), along, False)
+        rank = cover + MATCH_BONUS * match
+    order = [int(c) for c in np.argsort(-rank, kind="stable") if cover[c] > 0]
     strips: list[Strip] = []
     used = set(taken)
     before = list(chosen_before)
@@ -604,6 +618,31 @@ def _make_strip(V, F, labels, members, origin, along, boxes, ends=None,
         band_boxes = all_boxes[np.concatenate(ends)]
     return Strip(below, above, tuple(float(o) for o in origin), along, boxes, corners, band,
                  band_boxes)
+
+
+def _in_phase(origin, lo, hi, others, rng, lo_bound, hi_bound) -> np.ndarray:
+    """Candidate origins, every second one moved in phase with a strip chosen before.
+
+    The paper picks strips "so that the overlaps hold corresponding
+    elements".  An exemplar repeats (nearly) where a translation maps one
+    element onto another, so a candidate starting at another strip's origin
+    moved by the offset between the element nearest that origin and a random
+    element sees the same neighbourhood at the corners, wherever the
+    exemplar has that translation as a (near) period.  Moved origins outside
+    ``[lo_bound, hi_bound]`` keep their random draw.
+    """
+    centre = 0.5 * (lo[:, :2] + hi[:, :2])
+    O = np.asarray([o for o in others if np.isfinite(o).all()], dtype=np.float64)
+    if not len(O):
+        return origin
+    m = len(origin) // 2
+    which = O[rng.integers(len(O), size=m)]
+    near = np.argmin(((which[:, None, :] - centre[None]) ** 2).sum(axis=2), axis=1)
+    moved = which + centre[rng.integers(len(centre), size=m)] - centre[near]
+    ok = ((moved >= lo_bound) & (moved <= hi_bound)).all(axis=1)
+    out = origin.copy()
+    out[1::2][:m][ok] = moved[ok]
+    return out
 
 
 def _band_of(boxes: np.ndarray, band: float) -> tuple[np.ndarray, np.ndarray]:
