@@ -71,11 +71,16 @@ def corner_merged_frame(strips_ab, colors) -> tuple[tuple[np.ndarray, np.ndarray
     stats : dict
         :func:`merged_corners` counts and seams.
     """
-    frame, _ = frame_of(strips_ab, colors)
+    frame, boxes = frame_of(strips_ab, colors)
     sn, we = strips_ab
     bands = [placed_band(strip, side) for side, strip in
              ((SOUTH, sn[colors[0]]), (EAST, we[colors[1]]), (NORTH, sn[colors[2]]),
               (WEST, we[colors[3]]))]
+    if not any(len(F) for _, F in bands):
+        # nothing beside the lines (a lattice whose next row is beyond h_E): the plain frame
+        stats = {k: 0 for k in STATUSES}
+        stats.update(seams=[], moved=[], kept_unmerged=0)
+        return frame, boxes, stats
     return merged_corners(frame, bands)
 
 
