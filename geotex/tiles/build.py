@@ -740,8 +740,8 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
     planned = plan_tileset(exemplar, colors=colors, planar=planar, isotropic=isotropic,
                            lattice=lattice, seed=seed, interior=interior,
                            directional=directional, corner_patch=corner_patch,
-                           corner_merge=corner_merge, quilt_attempts=quilt_attempts, quilt_best_of=quilt_best_of,
-                           progress=progress)
+                           corner_merge=corner_merge, quilt_attempts=quilt_attempts,
+                           quilt_best_of=quilt_best_of, progress=progress)
     plan, groups, cols = planned.plan, planned.groups, planned.cols
     n_colors, grid, recipe = planned.n_colors, plan.lattice, planned.recipe
     frames = plan.frames

@@ -41,7 +41,7 @@ from geotex.quilting.merge import merge_elements
 from geotex.quilting.placement import coincides, touching
 from geotex.tiles.colors import EAST, NORTH, SOUTH, WEST
 from geotex.tiles.frame import frame_of, placed_band
-from geotex.tiles.strips import CLEAR
+from geotex.tiles.strips import CLEAR, element_boxes
 from geotex.tiles.verify import side_boundaries
 
 __all__ = ["BAND", "corner_merged_frame", "merged_corners", "merge_totals"]
@@ -197,7 +197,8 @@ def _footprints(V: np.ndarray, F: np.ndarray) -> np.ndarray:
     """Footprint boxes ``(u0, v0, u1, v1)`` of the connected elements of a mesh."""
     if not len(F):
         return np.zeros((0, 4), dtype=np.float64)
-    return np.array([np.r_[e.lo[:2], e.hi[:2]] for e in split_elements(V, F)])
+    _, lo, hi = element_boxes(V, F)
+    return np.c_[lo[:, :2], hi[:, :2]]
 
 
 def merge_totals(stats: list) -> dict:

@@ -40,7 +40,7 @@ def placed_half(strip: Strip, side: int) -> tuple[tuple[np.ndarray, np.ndarray],
 
 
 def placed_band(strip: Strip, side: int) -> tuple[np.ndarray, np.ndarray]:
-    """The band elements of ``strip`` (:attr:`~geotex.tiles.strips.Strip.band`) inside a tile on ``side``.
+    """The band elements of ``strip`` (its ``band``) inside a tile, placed on ``side``.
 
     The same placement as :func:`placed_half`: the ``s > 0`` band on the
     south and east sides, the ``s < 0`` band on the north and west sides.

@@ -38,12 +38,13 @@ import numpy as np
 
 from geotex.errors import InputError
 from geotex.mesh.geometry import group_boxes
-from geotex.mesh.topology import face_components
+from geotex.mesh.topology import compacted, face_components
 from geotex.tiles.clip import split_by_plane
 from geotex.tiles.fill import GAP, PIXEL, footprint_pixels, grown_heights, pixel_heights
 
 __all__ = ["Strip", "CornerPatch", "corner_patch", "empty_strip", "element_boxes", "pick_strips", "largest_footprint", "lattice_phase",
-           "lattice_corner", "corner_footprints", "corner_conflicts", "corner_correspondences"]
+           "lattice_corner", "corner_footprints", "corner_conflicts",
+           "corner_correspondences"]
 
 CLEAR = 0.5 * GAP   # clearance of strip elements from the perpendicular tile sides
 CANDIDATES = 96     # random segment positions tried per colour
@@ -717,8 +718,5 @@ def _correspondences(mine: np.ndarray, others, along: int, own: bool) -> int:
 
 def _element_subset(V, F, labels, members, origin, along):
     """The whole elements ``members`` of the exemplar, in strip coordinates."""
-    Fk = F[np.isin(labels, members)]
-    used = np.unique(Fk)
-    remap = np.full(len(V), -1, dtype=np.int64)
-    remap[used] = np.arange(len(used))
-    return _to_strip(V[used], origin, along), remap[Fk]
+    Vk, Fk = compacted(V, F[np.isin(labels, members)])
+    return _to_strip(Vk, origin, along), Fk
