@@ -303,3 +303,57 @@ def test_compiled_place_search_follows_the_height_rule():
         start = c + 1
     assert free == [i for i, t in enumerate(touches) if not t]
     assert _first_free(places, low, high, _packed([]), 0) == 0
+
+
+def _small_studs():
+    from geotex.exemplars import exemplar
+    return exemplar("studs", size=(3, 3), pitch=0.25, radius=0.08, jitter=0.3)
+
+
+def test_corner_merge_merges_corresponding_corner_elements_and_stays_seamless():
+    from geotex.quilting import split_elements
+    from geotex.tiles.build import plan_tileset
+    from geotex.tiles.frame import frame_of, placed_band
+
+    ex = _small_studs()
+    tiles = build_tileset(ex, colors=1, isotropic=True, interior="paste", corner_merge=True)
+    assert check_seams(tiles).ok
+    cm = tiles.metadata["corner_merge"]
+    assert tiles.metadata["recipe"]["corner_merge"] is True
+    assert cm["merged"] >= 1 and cm["kept_unmerged"] == 0
+    assert cm["added"] + cm["merged"] + cm["dropped"] + cm["undone"] >= cm["merged"] + 1
+    # the merged frame holds one element per corresponding pair: fewer elements
+    # than the crossing halves and band elements placed side by side
+    plan = plan_tileset(ex, colors=1, isotropic=True, interior="paste", corner_merge=True)
+    sn, we = plan.strips[0], plan.strips[1]
+    halves, _ = frame_of((sn, we), (0, 0, 0, 0))
+    band = sum(len(split_elements(*placed_band(sn[0], side))) for side in range(4))
+    (Vm, Fm), boxes = plan.plan.frames[0]
+    merged = len(split_elements(Vm, Fm))
+    assert merged == len(split_elements(*halves)) + band - cm["merged"] - cm["dropped"] \
+        - cm["undone"]
+    assert len(boxes) == merged
+    # the side cuts of the frame are those of the halves, bit for bit
+    from geotex.tiles.verify import side_boundaries
+    for a, b in zip(side_boundaries(*halves)[0], side_boundaries(Vm, Fm)[0]):
+        assert np.array_equal(a, b)
+
+
+def test_corner_merge_options_are_checked():
+    with pytest.raises(InputError, match="corner_merge"):
+        build_tileset(_small_studs(), colors=2, planar=True, interior="paste",
+                      corner_patch=True, corner_merge=True)
+    for bad in (0.5, -0.1, "yes"):
+        with pytest.raises(InputError, match="corner_merge"):
+            build_tileset(_small_studs(), colors=1, isotropic=True, interior="paste",
+                          corner_merge=bad)
+
+
+def test_corner_correspondences_count_boxes_lying_on_each_other_at_a_corner():
+    from geotex.tiles.strips import corner_correspondences
+    # x: an element beside its line near the start (t 0.1..0.2, s 0.05..0.15);
+    # y meets it at the NE quadrant as its below-start image transposed
+    x = np.array([[0.1, 0.05, 0.2, 0.15]])
+    y = np.array([[0.05, -0.2, 0.15, -0.1]])
+    assert corner_correspondences(x, y) == 1
+    assert corner_correspondences(x, y + [0.0, -0.1, 0.0, -0.1]) == 0

@@ -29,6 +29,7 @@ from geotex.mesh.topology import compacted
 from geotex.progress import report
 from geotex.quilting import coverage_fraction, quilt_texture, split_elements
 from geotex.tiles.colors import COMPLETE_GROUPS, PLANAR_GROUPS, parse_colors, tile_keys
+from geotex.tiles.corners import BAND, corner_merged_frame, merge_totals
 from geotex.tiles.fill import ExemplarPixels, fill_corners, fill_gaps
 from geotex.tiles.frame import concatenated, frame_of
 from geotex.tiles.periodic import periodic_tileset
@@ -345,6 +346,19 @@ def _accepted(res, want, frame_elements, max_foot):
     return (Vt, Ft), "", {"dropped": int(drop.sum()), "reverted": int(grown.sum())}
 
 
+def _band_height(corner_merge) -> float:
+    """Strip band height ``h_E`` of the ``corner_merge`` option (0: no corner merge)."""
+    if corner_merge is True:
+        return BAND
+    if corner_merge is False or corner_merge is None:
+        return 0.0
+    if isinstance(corner_merge, (int, float, np.integer, np.floating)) \
+            and 0.0 < float(corner_merge) < 0.5:
+        return float(corner_merge)
+    raise InputError(f"corner_merge: True, False or a strip height between 0 and 0.5 tile, "
+                     f"got {corner_merge!r}")
+
+
 def _lattice(src: Source) -> tuple[float, float, float]:
     """``(pitch, phase_x, phase_y)`` of the exemplar lattice (``lattice=True``)."""
     p = src.params.get("pitch")
@@ -459,6 +473,9 @@ class PlannedSet:
         Exemplar relief height and base depth.
     recipe : dict
         Exemplar name and parameters.
+    corner_merges : list of dict or None
+        With ``corner_merge``: the :func:`geotex.tiles.corners.merged_corners`
+        stats of every tile's frame.
     """
 
     plan: TilePlan
@@ -469,11 +486,13 @@ class PlannedSet:
     height: float
     depth: float
     recipe: dict
+    corner_merges: list | None = None
 
 
 def plan_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool = False,
                  lattice: bool = False, seed: int = 0, interior: str = "quilt",
                  directional: bool = False, corner_patch: bool = False,
+                 corner_merge: bool | float = False,
                  quilt_attempts: int = QUILT_ATTEMPTS, quilt_best_of: int = 1,
                  progress=None) -> PlannedSet:
     """Draw the strips of a set and place them into the frame of every tile.
@@ -516,6 +535,10 @@ def plan_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool = 
         # isotropic, complete and directional sets turn strips or tiles by
         # quarter turns: the patch would have to be symmetric
         raise InputError("corner_patch is for planar sets without a lattice")
+    band = _band_height(corner_merge)
+    if band and corner_patch:
+        raise InputError("corner_merge and corner_patch exclude each other: the patch "
+                         "replaces what the strips bring to a corner")
     rng = np.random.default_rng(seed)
     report(progress, "strips")
     largest_footprint(src.lo, src.hi)
@@ -524,7 +547,8 @@ def plan_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool = 
     strips, taken = {}, set()
     if isotropic:
         strips[0], taken = pick_strips(src.V, src.F, src.size, count=n_colors[0],
-                                       along=STRIP_AXIS[0], rng=rng, lattice=grid)
+                                       along=STRIP_AXIS[0], rng=rng, lattice=grid,
+                                       band=band)
     else:
         # colour by colour, the classes in turn: a strip meets only the other
         # classes' strips at a corner, and the first strips chosen keep their
@@ -537,7 +561,8 @@ def plan_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool = 
                     new, taken = pick_strips(src.V, src.F, src.size, count=1,
                                              along=STRIP_AXIS[cls], rng=rng, taken=taken,
                                              lattice=grid, chosen_before=before,
-                                             meets_itself=False, corner_patch=patch)
+                                             meets_itself=False, corner_patch=patch,
+                                             band=band)
                     strips[cls] += new
     if isotropic:
         strips[1] = strips[2] = strips[0]
@@ -549,19 +574,32 @@ def plan_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool = 
         groups, cols = tile_keys(n_colors, PLANAR_GROUPS if planar or isotropic
                                  else COMPLETE_GROUPS)
 
-    frames = [frame_of((strips[a], strips[b]), c, patch)
-              for (a, b), c in zip(groups.tolist(), cols.tolist())]
+    merges = None
+    if band:
+        # the merge depends on the tile's four strips only: one per colour combination
+        done = {}
+        for (a, b), c in zip(groups.tolist(), cols.tolist()):
+            key = (a, b, *c)
+            if key not in done:
+                done[key] = corner_merged_frame((strips[a], strips[b]), c)
+        merged = [done[(a, b, *c)] for (a, b), c in zip(groups.tolist(), cols.tolist())]
+        frames = [(mesh, boxes) for mesh, boxes, _ in merged]
+        merges = [m[2] for m in merged]
+    else:
+        frames = [frame_of((strips[a], strips[b]), c, patch)
+                  for (a, b), c in zip(groups.tolist(), cols.tolist())]
     plan = TilePlan(src=src, frames=frames, interior=interior, lattice=grid, seed=int(seed),
                     pixels=ExemplarPixels(src.V, src.F, src.labels, src.lo, src.hi),
                     attempts=int(quilt_attempts), best_of=int(quilt_best_of))
     return PlannedSet(plan=plan, strips=strips, groups=groups, cols=cols,
-                      n_colors=tuple(n_colors), height=height, depth=depth, recipe=recipe)
+                      n_colors=tuple(n_colors), height=height, depth=depth, recipe=recipe,
+                      corner_merges=merges)
 
 
 def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool = False,
                   lattice: bool = False, seed: int = 0, interior: str = "quilt",
                   directional: bool = False, name: str | None = None, progress=None,
-                  map_tiles=None, corner_patch: bool = False,
+                  map_tiles=None, corner_patch: bool = False, corner_merge: bool | float = False,
                   quilt_attempts: int = QUILT_ATTEMPTS, quilt_best_of: int = 1) -> TileSet:
     """Build a planar, complete or isotropic geometric Wang tile set.
 
@@ -601,6 +639,18 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
         one corner colour), and the strips are pruned against it instead of
         leaving the corners to the strips' ends.  Planar sets without a
         lattice (not directional).
+    corner_merge : bool or float
+        The paper's corner merge (:mod:`geotex.tiles.corners`): every strip
+        also keeps the whole exemplar elements beside its line near its ends
+        (within the strip height ``h_E`` of the line and of an end: the value
+        given, in tile units, below 0.5; True means
+        :data:`~geotex.tiles.corners.BAND`), and in each tile frame
+        those of the horizontal and vertical sides' strips are added where
+        free, merged with the element they touch where the two correspond
+        (the crossing halves' boundary triangles held fixed) and dropped
+        otherwise.  ``metadata["corner_merge"]`` counts them
+        (:func:`~geotex.tiles.corners.merge_totals`).  Not with
+        ``corner_patch``.
     quilt_attempts : int
         Quilting tries per tile (interior ``"quilt"``) before the paste
         fallback; default :data:`QUILT_ATTEMPTS`. Recorded in
@@ -657,7 +707,8 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
     ------
     InputError
         Unknown interior method, bad colours (or unequal colours for an
-        isotropic set, or ``planar`` with ``isotropic``), elements too large
+        isotropic set, or ``planar`` with ``isotropic``), ``corner_merge``
+        with ``corner_patch`` or not a height in ``(0, 0.5)``, elements too large
         for a tile, an exemplar with too few distinct strips, or ``quilt_attempts``
         or ``quilt_best_of`` below 1.
     GeotexError
@@ -689,8 +740,8 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
     planned = plan_tileset(exemplar, colors=colors, planar=planar, isotropic=isotropic,
                            lattice=lattice, seed=seed, interior=interior,
                            directional=directional, corner_patch=corner_patch,
-                           quilt_attempts=quilt_attempts, quilt_best_of=quilt_best_of,
-                           progress=progress)
+                           corner_merge=corner_merge, quilt_attempts=quilt_attempts,
+                           quilt_best_of=quilt_best_of, progress=progress)
     plan, groups, cols = planned.plan, planned.groups, planned.cols
     n_colors, grid, recipe = planned.n_colors, plan.lattice, planned.recipe
     frames = plan.frames
@@ -736,6 +787,10 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
         meta["recipe"]["directional"] = True
     if corner_patch:
         meta["recipe"]["corner_patch"] = True
+    if corner_merge:
+        meta["recipe"]["corner_merge"] = corner_merge if corner_merge is True \
+            else float(corner_merge)
+        meta["corner_merge"] = merge_totals(planned.corner_merges)
     if quilt_attempts != QUILT_ATTEMPTS:
         meta["recipe"]["quilt_attempts"] = int(quilt_attempts)
     if quilt_best_of != 1:

@@ -94,6 +94,7 @@ def rebuild(name: str, *, progress=None, table: dict | None = None, map_tiles=No
                          isotropic=r.get("isotropic", False), lattice=r.get("lattice", False),
                          directional=r.get("directional", False),
                          corner_patch=r.get("corner_patch", False),
+                         corner_merge=r.get("corner_merge", False),
                          quilt_attempts=r.get("quilt_attempts", QUILT_ATTEMPTS),
                          quilt_best_of=r.get("quilt_best_of", 1),
                          seed=r["seed"], interior=r.get("interior", "paste"), name=name,

@@ -9,7 +9,7 @@ from geotex.mesh.topology import concatenated, face_components
 from geotex.tiles.colors import EAST, NORTH, SOUTH, WEST
 from geotex.tiles.strips import CornerPatch, Strip
 
-__all__ = ["placed_half", "frame_of", "concatenated"]
+__all__ = ["placed_half", "placed_band", "frame_of", "concatenated"]
 
 
 def placed_half(strip: Strip, side: int) -> tuple[tuple[np.ndarray, np.ndarray], np.ndarray]:
@@ -26,24 +26,52 @@ def placed_half(strip: Strip, side: int) -> tuple[tuple[np.ndarray, np.ndarray],
         Footprints ``(u0, v0, u1, v1)`` of the placed elements.
     """
     (V, F) = strip.above if side in (SOUTH, EAST) else strip.below
-    t, s = V[:, 0], V[:, 1]
     b = strip.boxes
+    out = _on_side(V, side)
+    if side == SOUTH:
+        boxes = np.stack([b[:, 0], np.zeros(len(b)), b[:, 2], b[:, 3]], 1)
+    elif side == NORTH:
+        boxes = np.stack([b[:, 0], 1.0 + b[:, 1], b[:, 2], np.ones(len(b))], 1)
+    elif side == WEST:
+        boxes = np.stack([np.zeros(len(b)), b[:, 0], -b[:, 1], b[:, 2]], 1)
+    else:
+        boxes = np.stack([1.0 - b[:, 3], b[:, 0], np.ones(len(b)), b[:, 2]], 1)
+    return (out, F), boxes
+
+
+def placed_band(strip: Strip, side: int) -> tuple[np.ndarray, np.ndarray]:
+    """The band elements of ``strip`` (its ``band``) inside a tile, placed on ``side``.
+
+    The same placement as :func:`placed_half`: the ``s > 0`` band on the
+    south and east sides, the ``s < 0`` band on the north and west sides.
+
+    Returns
+    -------
+    V : numpy.ndarray, (n, 3) float64
+    F : numpy.ndarray, (m, 3) int64
+        Whole closed elements; empty without a band.
+    """
+    if strip.band is None:
+        return np.zeros((0, 3), dtype=np.float64), np.zeros((0, 3), dtype=np.int64)
+    (V, F) = strip.band[1] if side in (SOUTH, EAST) else strip.band[0]
+    return _on_side(V, side), F
+
+
+def _on_side(V: np.ndarray, side: int) -> np.ndarray:
+    """Strip coordinates ``(t, s, w)`` -> tile coordinates for a strip on ``side``."""
+    t, s = V[:, 0], V[:, 1]
     out = V.copy()
     if side == SOUTH:
         out[:, 0], out[:, 1] = t, s
-        boxes = np.stack([b[:, 0], np.zeros(len(b)), b[:, 2], b[:, 3]], 1)
     elif side == NORTH:
         out[:, 0], out[:, 1] = t, 1.0 + s
-        boxes = np.stack([b[:, 0], 1.0 + b[:, 1], b[:, 2], np.ones(len(b))], 1)
     elif side == WEST:
         out[:, 0], out[:, 1] = 0.0 - s, t
-        boxes = np.stack([np.zeros(len(b)), b[:, 0], -b[:, 1], b[:, 2]], 1)
     elif side == EAST:
         out[:, 0], out[:, 1] = 1.0 - s, t
-        boxes = np.stack([1.0 - b[:, 3], b[:, 0], np.ones(len(b)), b[:, 2]], 1)
     else:
         raise InputError(f"side must be 0..3, got {side}")
-    return (out, F), boxes
+    return out
 
 
 def frame_of(strips_ab, colors, patch: CornerPatch | None = None

@@ -38,18 +38,20 @@ import numpy as np
 
 from geotex.errors import InputError
 from geotex.mesh.geometry import group_boxes
-from geotex.mesh.topology import face_components
+from geotex.mesh.topology import compacted, face_components
 from geotex.tiles.clip import split_by_plane
 from geotex.tiles.fill import GAP, PIXEL, footprint_pixels, grown_heights, pixel_heights
 
 __all__ = ["Strip", "CornerPatch", "corner_patch", "empty_strip", "element_boxes", "pick_strips", "largest_footprint", "lattice_phase",
-           "lattice_corner", "corner_footprints", "corner_conflicts"]
+           "lattice_corner", "corner_footprints", "corner_conflicts",
+           "corner_correspondences"]
 
 CLEAR = 0.5 * GAP   # clearance of strip elements from the perpendicular tile sides
 CANDIDATES = 96     # random segment positions tried per colour
 SHORTLIST = 24      # best candidates (by covered length) pruned and compared
 END = 0.3           # length near a segment end whose coverage counts twice
 EXACT = 12          # strips with at most this many elements in play are pruned exactly
+MATCH_BONUS = 0.25  # band strips: score per element pair lying on each other at a corner
 PATCH = 0.12        # corner patch: elements within this of the patch centre (both axes)
 PATCH_NUDGES = [(0.0, 0.0)] + [(r * np.cos(a), r * np.sin(a)) for r in (0.003, 0.006, 0.009)
                                for a in np.arange(8) * np.pi / 4 + 0.3]
@@ -72,6 +74,14 @@ class Strip:
         Footprints ``(t0, s0, t1, s1)`` of the strip's elements.
     corners : dict
         :func:`corner_footprints` of the strip's elements.
+    band : tuple of (V, F), optional
+        With ``band`` of :func:`pick_strips` (the paper's strip of height
+        ``h_E``): the whole exemplar elements beside the line near the
+        segment ends, ``(below, above)`` (``s < 0`` and ``s > 0``), which the
+        corner merge (:mod:`geotex.tiles.corners`) matches with the other
+        side's strip in the corner squares; None without.
+    band_boxes : numpy.ndarray, (b, 4) float64, optional
+        Footprints ``(t0, s0, t1, s1)`` of the band elements (both sides).
     """
 
     below: tuple
@@ -80,6 +90,8 @@ class Strip:
     along: int
     boxes: np.ndarray
     corners: dict
+    band: tuple | None = None
+    band_boxes: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -390,7 +402,8 @@ def lattice_corner(lo: np.ndarray, hi: np.ndarray, pitch: float, phase) -> tuple
 def pick_strips(V: np.ndarray, F: np.ndarray, size, *, count: int, along: int,
                 rng: np.random.Generator, taken=(), lattice=None,
                 chosen_before=(), meets_itself: bool = True,
-                corner_patch: CornerPatch | None = None) -> tuple[list[Strip], set]:
+                corner_patch: CornerPatch | None = None, band: float = 0.0
+                ) -> tuple[list[Strip], set]:
     """Choose ``count`` distinct edge strips from an exemplar.
 
     Every candidate segment keeps its crossing elements that stay
@@ -467,6 +480,11 @@ def pick_strips(V: np.ndarray, F: np.ndarray, size, *, count: int, along: int,
         a0 = ph_along + K.ravel()[pick] * p
         a1 = ph_across + J.ravel()[pick] * p
     origin = np.stack([a0, a1], 1) if along == 0 else np.stack([a1, a0], 1)
+    if band > 0 and lattice is None and chosen_before:
+        origin = _in_phase(origin, lo, hi, [st.origin for st in chosen_before], rng,
+                           np.array([0.0, half] if along == 0 else [half, 0.0]),
+                           np.array([span - 1.0, width - half] if along == 0
+                                    else [width - half, span - 1.0]))
     if along == 0:
         t0 = lo[None, :, 0] - origin[:, 0:1]
         t1 = hi[None, :, 0] - origin[:, 0:1]
@@ -479,7 +497,16 @@ def pick_strips(V: np.ndarray, F: np.ndarray, size, *, count: int, along: int,
         s1 = origin[:, 0:1] - lo[None, :, 0]
     crossing = (s0 < -GAP / 4) & (s1 > GAP / 4) & (t0 >= CLEAR) & (t1 <= 1.0 - CLEAR)
     cover = np.where(crossing, t1 - t0, 0.0).sum(axis=1)
-    order = [int(c) for c in np.argsort(-cover, kind="stable") if cover[c] > 0]
+    rank = cover
+    if band > 0 and chosen_before:
+        # shortlist candidates whose corners lie on those of the strips before
+        match = np.zeros(len(cover))
+        for c in np.flatnonzero(cover > 0):
+            b = np.stack([t0[c], s0[c], t1[c], s1[c]], 1)
+            mine = np.r_[b[crossing[c]], b[np.concatenate(_band_of(b, band))]]
+            match[c] = _correspondences(mine, list(chosen_before), along, False)
+        rank = cover + MATCH_BONUS * match
+    order = [int(c) for c in np.argsort(-rank, kind="stable") if cover[c] > 0]
     strips: list[Strip] = []
     used = set(taken)
     before = list(chosen_before)
@@ -502,6 +529,13 @@ def pick_strips(V: np.ndarray, F: np.ndarray, size, *, count: int, along: int,
             if not key or key in used:
                 continue
             score = float(value[np.isin(cand, members)].sum())
+            if band > 0:
+                # the paper's "pick them so that the overlaps hold corresponding
+                # elements": a bonus per element pair lying on each other at a corner
+                mine = np.stack([t0[c], s0[c], t1[c], s1[c]], 1)
+                mine = np.r_[mine[members], mine[np.concatenate(_band_of(mine, band))]]
+                score += MATCH_BONUS * _correspondences(mine, before + strips if meets_itself
+                                                        else before, along, meets_itself)
             if best is None or score > best[0]:
                 best = (score, c, key)
         if best is None:
@@ -510,8 +544,9 @@ def pick_strips(V: np.ndarray, F: np.ndarray, size, *, count: int, along: int,
         order.remove(c)
         used.add(key)
         boxes = np.stack([t0[c], s0[c], t1[c], s1[c]], 1)
+        ends = _band_of(boxes, band) if band > 0 else None
         strips.append(_make_strip(V, F, labels, sorted(key), tuple(origin[c]), along,
-                                  boxes[sorted(key)]))
+                                  boxes[sorted(key)], ends, boxes))
     if len(strips) < count:
         raise InputError(f"the exemplar has only {len(strips)} distinct edge strips along "
                          f"{'xy'[along]} for {count} colours; use fewer colours or a larger "
@@ -567,7 +602,8 @@ def _without_corner_conflicts(V, F, labels, members, origin, along, others, own=
     return members[alive]
 
 
-def _make_strip(V, F, labels, members, origin, along, boxes) -> Strip:
+def _make_strip(V, F, labels, members, origin, along, boxes, ends=None,
+                all_boxes=None) -> Strip:
     keep = np.isin(labels, members)
     Fs = F[keep]
     used = np.unique(Fs)
@@ -577,4 +613,110 @@ def _make_strip(V, F, labels, members, origin, along, boxes) -> Strip:
     corners = corner_footprints(Vs, remap[Fs], np.searchsorted(members, labels[keep]),
                                 len(members))
     below, above = split_by_plane(Vs, remap[Fs], axis=1, value=0.0, snap=1e-4)
-    return Strip(below, above, tuple(float(o) for o in origin), along, boxes, corners)
+    band = band_boxes = None
+    if ends is not None:
+        band = tuple(_element_subset(V, F, labels, sel, origin, along) for sel in ends)
+        band_boxes = all_boxes[np.concatenate(ends)]
+    return Strip(below, above, tuple(float(o) for o in origin), along, boxes, corners, band,
+                 band_boxes)
+
+
+def _in_phase(origin, lo, hi, others, rng, lo_bound, hi_bound) -> np.ndarray:
+    """Candidate origins, every second one moved in phase with a strip chosen before.
+
+    The paper picks strips "so that the overlaps hold corresponding
+    elements".  An exemplar repeats (nearly) where a translation maps one
+    element onto another, so a candidate starting at another strip's origin
+    moved by the offset between the element nearest that origin and a random
+    element sees the same neighbourhood at the corners, wherever the
+    exemplar has that translation as a (near) period.  Moved origins outside
+    ``[lo_bound, hi_bound]`` keep their random draw.
+    """
+    centre = 0.5 * (lo[:, :2] + hi[:, :2])
+    O = np.asarray([o for o in others if np.isfinite(o).all()], dtype=np.float64)
+    if not len(O):
+        return origin
+    m = len(origin) // 2
+    which = O[rng.integers(len(O), size=m)]
+    near = np.argmin(((which[:, None, :] - centre[None]) ** 2).sum(axis=2), axis=1)
+    moved = which + centre[rng.integers(len(centre), size=m)] - centre[near]
+    ok = ((moved >= lo_bound) & (moved <= hi_bound)).all(axis=1)
+    out = origin.copy()
+    out[1::2][:m][ok] = moved[ok]
+    return out
+
+
+def _band_of(boxes: np.ndarray, band: float) -> tuple[np.ndarray, np.ndarray]:
+    """Band elements (below, above the line) among element boxes ``(t0, s0, t1, s1)``."""
+    t0, s0, t1, s1 = boxes.T
+    inside = (t0 >= CLEAR) & (t1 <= 1.0 - CLEAR) & ((t0 < band) | (t1 > 1.0 - band))
+    return (np.flatnonzero(inside & (s1 <= -CLEAR) & (s0 >= -band)),
+            np.flatnonzero(inside & (s0 >= CLEAR) & (s1 <= band)))
+
+
+def _quadrant_boxes(boxes: np.ndarray, key: str) -> np.ndarray:
+    """Element boxes in a corner quadrant image's coordinates (see :func:`corner_footprints`).
+
+    ``(a0, b0, a1, b1)``: distance from the strip end along ``t``, distance
+    from the line on the key's side (clipped at the line: the half there);
+    boxes with nothing on that side within :data:`CORNER_WINDOW` of the end
+    are left out.
+    """
+    t0, s0, t1, s1 = boxes.T
+    a0, a1 = (t0, t1) if key.endswith("start") else (1.0 - t1, 1.0 - t0)
+    b0, b1 = (s0, s1) if key.startswith("above") else (-s1, -s0)
+    keep = (b1 > 0) & (a0 < CORNER_WINDOW)
+    return np.stack([a0, np.maximum(b0, 0.0), a1, b1], 1)[keep]
+
+
+def corner_correspondences(x: np.ndarray, y: np.ndarray) -> int:
+    """Element pairs of two strips that lie on each other at a tile corner.
+
+    Strip ``x`` along a horizontal side, ``y`` along a vertical one (their
+    element boxes, crossing and band elements); in every quadrant
+    (:data:`QUADRANTS`) the footprints of ``x``'s elements and the
+    transposed ones of ``y``'s are compared, and a pair counts when every
+    box side of one lies within a quarter of the pair's narrow width of the
+    other's (the shift :func:`geotex.quilting.merge.merge_elements` accepts
+    for corresponding elements).
+
+    Parameters
+    ----------
+    x, y : numpy.ndarray, (k, 4) float64
+        Boxes ``(t0, s0, t1, s1)`` in strip coordinates.
+
+    Returns
+    -------
+    int
+    """
+    count = 0
+    for kx, ky in QUADRANTS:
+        X = _quadrant_boxes(x, kx)
+        Y = _quadrant_boxes(y, ky)[:, [1, 0, 3, 2]]
+        if not len(X) or not len(Y):
+            continue
+        wx = np.minimum(X[:, 2] - X[:, 0], X[:, 3] - X[:, 1])
+        wy = np.minimum(Y[:, 2] - Y[:, 0], Y[:, 3] - Y[:, 1])
+        diff = np.abs(X[:, None, :] - Y[None, :, :]).max(axis=2)
+        count += int((diff <= 0.25 * np.minimum(wx[:, None], wy[None, :])).sum())
+    return count
+
+
+def _correspondences(mine: np.ndarray, others, along: int, own: bool) -> int:
+    """:func:`corner_correspondences` of a candidate strip with the strips it meets."""
+    def boxes(st):
+        return st.boxes if st.band_boxes is None else np.r_[st.boxes, st.band_boxes]
+    total = corner_correspondences(mine, mine) if own else 0
+    for other in others:
+        theirs = boxes(other)
+        if own or along == 0:
+            total += corner_correspondences(mine, theirs)
+        if own or along == 1:
+            total += corner_correspondences(theirs, mine)
+    return total
+
+
+def _element_subset(V, F, labels, members, origin, along):
+    """The whole elements ``members`` of the exemplar, in strip coordinates."""
+    Vk, Fk = compacted(V, F[np.isin(labels, members)])
+    return _to_strip(Vk, origin, along), Fk
