@@ -971,36 +971,6 @@ def test_compiled_level_grid_matches_brute_force(monkeypatch, occ_cells):
     assert all(ok for ok, _ in calls) and sum(n > 0 for _, n in calls) >= 3
 
 
-def test_finest_grid_built_beside_the_fan_test_is_used_once(monkeypatch):
-    # the finest level's compiled grid is built in its own thread while the fans
-    # are judged: each level's grid is built once, and the pairs are the brute force's
-    monkeypatch.setattr(gi, "JIT_MIN_SIZE", 0)
-    built, early = [], []
-    grid, start = gi._level_grid, gi._early_grid
-
-    def spy_grid(*args):
-        built.append(args[4])                   # the level's cell side
-        return grid(*args)
-
-    def spy_early(faces, plan):
-        out = start(faces, plan)
-        early.append(out is not None)
-        return out
-
-    monkeypatch.setattr(gi, "_level_grid", spy_grid)
-    monkeypatch.setattr(gi, "_early_grid", spy_early)
-    for seed in range(2):
-        Vs, Fs = random_soup(seed, m=400, sizes=(0.002, 0.01))
-        Vb, Fb = random_soup(seed + 100, m=30, sizes=(0.01, 1.0))
-        V = np.concatenate([Vs, Vb])
-        F = np.concatenate([Fs, Fb + len(Vs)])
-        built.clear()
-        out = self_intersecting_pairs(V, F)
-        assert out.shape[0] > 0 and np.array_equal(out, brute_force(V, F))
-        assert len(built) >= 3 and len(set(built)) == len(built)
-    assert early == [True, True]
-
-
 def test_compiled_level_grid_gives_the_numpy_pairs_on_an_overlapping_solid(monkeypatch):
     # two interpenetrating copies of a torus, shifted and scaled: many hits on the
     # compiled grid, the same pairs as the numpy grid (and max_pairs a subset of them)

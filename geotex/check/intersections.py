@@ -482,16 +482,10 @@ def _distinct_pairs(V, F, max_pairs, *, unpaired=None, parts=None):
     empty = np.zeros((0, 2), dtype=np.int64)
     workers = _workers()
     pool = ThreadPoolExecutor(max_workers=workers)
-    faces = None
     try:
         faces = _FaceData(_normalized(V, F), F, mapper=pool.map)
         if faces.active.size < 2:
             return empty
-        # the finest level's compiled grid reads only the faces' boxes: it is
-        # built in a thread of its own while the fans are judged (the serial
-        # parts of both then share the cores); the grid is the same either way
-        plan = _level_plan(faces) if parts is None else None
-        faces.early_grid = _early_grid(faces, plan)
         faces.separated = _separated_fans(faces, mapper=pool.map, unpaired=unpaired)
         faces.mask_unseparated()
         faces.corner_columns = None             # not read again: 12 bytes per face less
@@ -503,7 +497,7 @@ def _distinct_pairs(V, F, max_pairs, *, unpaired=None, parts=None):
             found.append(swept)
             count = swept.size
         for hits in (() if swept is not None else
-                     _in_order(pool, _pair_tasks(faces, plan=plan), window=2 * workers)):
+                     _in_order(pool, _pair_tasks(faces), window=2 * workers)):
             if hits.size:
                 found.append(hits)
                 count += hits.size
@@ -511,8 +505,6 @@ def _distinct_pairs(V, F, max_pairs, *, unpaired=None, parts=None):
                     break
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
-        if faces is not None and faces.early_grid is not None:
-            faces.early_grid[1].result()         # not left running (unused on an early stop)
     if not found:
         return empty
     keys = np.sort(np.concatenate(found))
@@ -690,9 +682,6 @@ class _FaceData:
     masked_rows : (m, 3) int array
         Per corner the vertex id, negative where the fan is not separated
         (``(0, 3)`` until set).
-    early_grid : tuple or None
-        ``(cell, future)``: the compiled grid of the finest level (cell side
-        ``cell``), started before the fan test (:func:`_early_grid`).
     """
 
     def __init__(self, Vn: np.ndarray, F: np.ndarray, *, mapper=map, compiled=None):
@@ -719,7 +708,6 @@ class _FaceData:
         self.corner_columns = [F[:, k].astype(dtype) for k in range(3)]
         self.masked = False
         self.masked_rows = np.empty((0, 3), dtype=np.int32)
-        self.early_grid = None
 
     def active_mask(self) -> np.ndarray:
         """Boolean over the faces: non-degenerate (``active`` as a mask)."""
@@ -970,53 +958,17 @@ def _corner_terms(faces: _FaceData, vcols, N, unit, s: int, e: int):
 # broad phase
 
 
-def _level_plan(faces: _FaceData) -> list:
-    """The grid levels of :func:`_pair_tasks`, finest first: per level ``(cell,
-    cur, low)``, ``cell`` its cell side, ``cur`` the rows of ``faces.active``
-    on it and ``low`` those on finer levels."""
-    cell0, level = _grid_levels(faces)
-    return [(cell0 * _LEVEL_RATIO ** lev, np.flatnonzero(level == lev),
-             np.flatnonzero(level < lev)) for lev in np.unique(level)]
-
-
-def _compiled_grid_applies(faces: _FaceData) -> bool:
-    """Whether :func:`_level_tasks` builds its grid by the compiled loops."""
-    return 3 * faces.active.size >= JIT_MIN_SIZE and faces.active.size < 2 ** 31
-
-
-def _compiled_grid(faces: _FaceData, cell, cur, low):
-    """:func:`_level_grid` of one level (rows ``cur``, finer faces ``low``)."""
-    row_bits = max(1, int(faces.active.size - 1).bit_length())
-    return _level_grid(faces.box32, faces.active, cur, low, cell, row_bits, _KEY_BITS,
-                       _PAIR_CHUNK, _OCC_CELLS)
-
-
-def _early_grid(faces: _FaceData, plan):
-    """``(cell, future)``: the finest level's compiled grid, started in a thread
-    of its own; ``None`` where the compiled grid does not apply.
-
-    That level has no finer faces, and its grid reads only the boxes and
-    the active faces, which the fan test does not change: it is the grid
-    :func:`_level_tasks` would build.
-    """
-    if not plan or not _compiled_grid_applies(faces):
-        return None
-    cell, cur, low = plan[0]
-    one = ThreadPoolExecutor(max_workers=1)
-    try:
-        return cell, one.submit(_compiled_grid, faces, cell, cur, low)
-    finally:
-        one.shutdown(wait=False)
-
-
-def _pair_tasks(faces: _FaceData, *, plan=None):
+def _pair_tasks(faces: _FaceData):
     """Yield callables; each returns the intersecting pairs of one chunk as keys.
 
     Over all tasks, every pair of active faces whose boxes overlap is
-    examined exactly once.  A key is ``i * m + j`` with ``i < j``.  ``plan``:
-    :func:`_level_plan` of ``faces`` when known.
+    examined exactly once.  A key is ``i * m + j`` with ``i < j``.
     """
-    for cell, cur, low in (_level_plan(faces) if plan is None else plan):
+    cell0, level = _grid_levels(faces)
+    for lev in np.unique(level):
+        cell = cell0 * _LEVEL_RATIO ** lev
+        cur = np.flatnonzero(level == lev)
+        low = np.flatnonzero(level < lev)
         yield from _level_tasks(faces, cell, cur, _near(faces, cur, low))
 
 
@@ -1156,16 +1108,11 @@ def _level_tasks(faces, cell, cur, low):
     act = faces.active
     row_bits = max(1, int(act.size - 1).bit_length())
     shift = row_bits + 3
-    if _compiled_grid_applies(faces):
+    if 3 * act.size >= JIT_MIN_SIZE and act.size < 2 ** 31:
         # compiled: the entries, their sort and the pair counts in loops (the
-        # numpy path below spends most of its time in temporaries); the finest
-        # level's grid may be built already (_early_grid)
-        early = faces.early_grid
-        if early is not None and early[0] == cell and low.size == 0:
-            faces.early_grid = None
-            ok, first, face, counts, cuts = early[1].result()
-        else:
-            ok, first, face, counts, cuts = _compiled_grid(faces, cell, cur, low)
+        # numpy path below spends most of its time in temporaries)
+        ok, first, face, counts, cuts = _level_grid(faces.box32, act, cur, low, cell, row_bits,
+                                                    _KEY_BITS, _PAIR_CHUNK, _OCC_CELLS)
         if ok:
             level = (counts, first, face)
             for k in range(cuts.size - 1):
