@@ -314,8 +314,8 @@ def numbered_by_first_use(F: np.ndarray, n_vertices: int) -> bool:
     """Whether every vertex is used and the vertices are numbered by first use in ``F``.
 
     That is, :func:`first_use_order` of ``F`` is the identity and no vertex
-    is unreferenced.  Two passes over the corners (a running maximum), no
-    sort.
+    is unreferenced.  A running maximum over the corners (compiled, one
+    pass without temporaries, from ``JIT_MIN_SIZE`` corners), no sort.
 
     Parameters
     ----------
@@ -340,6 +340,9 @@ def numbered_by_first_use(F: np.ndarray, n_vertices: int) -> bool:
         return n_vertices == 0
     if flat[0] != 0:
         return False
+    if flat.size >= JIT_MIN_SIZE:
+        return bool(_first_use_numbered_loops(np.ascontiguousarray(flat, dtype=np.int64),
+                                              int(n_vertices)))
     # a corner either repeats a vertex already seen (at most the running
     # maximum: all of 0 .. maximum were seen) or is the next new one
     top = np.maximum.accumulate(flat)
@@ -347,6 +350,19 @@ def numbered_by_first_use(F: np.ndarray, n_vertices: int) -> bool:
         return False
     top += 1
     return bool(np.all(flat[1:] <= top[:-1]))
+
+
+@compiled
+def _first_use_numbered_loops(flat, n):
+    """:func:`numbered_by_first_use` as one pass over the corners."""
+    top = -1
+    for c in range(flat.shape[0]):
+        v = flat[c]
+        if v > top + 1:
+            return False
+        if v > top:
+            top = v
+    return top == n - 1
 
 
 @compiled
