@@ -327,6 +327,26 @@ def test_first_use_order_equals_numpy_path(monkeypatch):
         assert np.array_equal(fast[:start], np.arange(start))
 
 
+def test_numbered_by_first_use_equals_numpy_path(monkeypatch):
+    rng = np.random.default_rng(6)
+    F = rng.integers(0, 120, size=(200, 3))
+    order = topology.first_use_order(F, 120)
+    rank = np.empty(120, dtype=np.int64)
+    rank[order] = np.arange(120)
+    G = rank[F]
+    n = int(np.unique(G).size)
+    cases = [(G, n), (G, n + 1), (G[::-1].copy(), n), (G[:, [0, 2, 1]].copy(), n)]
+    H = G.copy()
+    H[50, 1] = H.max() + 1                          # a vertex that skips the next number
+    cases.append((H, n + 1))
+    seen = set()
+    for Fx, k in cases:
+        fast, slow = _both(monkeypatch, topology, lambda: topology.numbered_by_first_use(Fx, k))
+        assert fast == slow
+        seen.add(fast)
+    assert seen == {True, False}
+
+
 def test_relief_vertex_normals_equal_numpy_path(monkeypatch):
     import geotex.relief.core as core
     from geotex.mesh.primitives import closed_cylinder

@@ -213,3 +213,49 @@ def test_stored_form_is_the_corner_weld_in_order_of_first_appearance(precision):
     assert Vs.tobytes() == unique.astype(np.float64).tobytes()    # bit for bit (+0.0)
     Ve, Fe = stored_form(np.zeros((4, 3)), np.zeros((0, 3), dtype=np.int64))
     assert Ve.shape == (0, 3) and Fe.shape == (0, 3)
+
+
+@pytest.mark.parametrize("precision", [np.float32, np.float64])
+def test_stored_form_of_a_mesh_already_in_stored_order_is_the_corner_weld(precision):
+    from geotex.io import weld_exact
+    from geotex.mesh.topology import first_use_order
+
+    rng = np.random.default_rng(7)
+    V = rng.normal(size=(200, 3))
+    V[4] = [-0.0, 0.5, -0.0]                              # stored as +0.0
+    F = rng.integers(0, 200, size=(500, 3))
+    order = first_use_order(F, 200)
+    rank = np.empty(200, dtype=np.int64)
+    rank[order] = np.arange(200)
+    V, F = V[order], rank[F]                              # numbered by first use, all used
+    Vs, Fs = stored_form(V, F, precision=precision)
+    unique, inverse = weld_exact(V.astype(precision)[F].reshape(-1, 3))
+    assert np.array_equal(Fs, inverse.reshape(-1, 3)) and np.array_equal(Fs, F)
+    assert Vs.tobytes() == unique.astype(np.float64).tobytes()    # bit for bit (+0.0)
+    V[7] = V[3]                                           # now two vertices weld
+    Vs, Fs = stored_form(V, F, precision=precision)
+    unique, inverse = weld_exact(V.astype(precision)[F].reshape(-1, 3))
+    assert Vs.shape[0] == 199 and np.array_equal(Fs, inverse.reshape(-1, 3))
+    assert Vs.tobytes() == unique.astype(np.float64).tobytes()
+
+
+def test_numbered_by_first_use_is_an_identity_first_use_order():
+    from geotex.mesh.topology import first_use_order, numbered_by_first_use
+
+    rng = np.random.default_rng(11)
+    hits = 0
+    for trial in range(300):
+        n = int(rng.integers(1, 9))
+        F = rng.integers(0, n, size=(int(rng.integers(1, 5)), 3))
+        if trial % 2:                                     # half of them renumbered
+            order = first_use_order(F, n)
+            rank = np.empty(n, dtype=np.int64)
+            rank[order] = np.arange(n)
+            F = rank[F]
+        expected = (np.array_equal(first_use_order(F, n), np.arange(n))
+                    and np.unique(F).size == n)
+        assert numbered_by_first_use(F, n) == expected
+        hits += expected
+    assert 0 < hits < 300
+    assert numbered_by_first_use(np.zeros((0, 3), dtype=np.int64), 0)
+    assert not numbered_by_first_use(np.zeros((0, 3), dtype=np.int64), 2)

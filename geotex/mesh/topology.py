@@ -31,6 +31,7 @@ __all__ = [
     "has_twin_faces",
     "repeated_positions",
     "referenced_vertices",
+    "numbered_by_first_use",
     "position_welded_faces",
     "neighbour_mean",
     "compacted",
@@ -307,6 +308,61 @@ def first_use_order(F: np.ndarray, n_vertices: int, *, start: int = 0) -> np.nda
     rest[:start] = False
     rest[used] = False
     return np.concatenate([np.arange(start, dtype=np.int64), used, np.flatnonzero(rest)])
+
+
+def numbered_by_first_use(F: np.ndarray, n_vertices: int) -> bool:
+    """Whether every vertex is used and the vertices are numbered by first use in ``F``.
+
+    That is, :func:`first_use_order` of ``F`` is the identity and no vertex
+    is unreferenced.  A running maximum over the corners (compiled, one
+    pass without temporaries, from ``JIT_MIN_SIZE`` corners), no sort.
+
+    Parameters
+    ----------
+    F : numpy.ndarray, (m, 3) int64
+        Indices in ``0 .. n_vertices - 1``.
+    n_vertices : int
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> numbered_by_first_use(np.array([[0, 1, 2], [2, 1, 3]]), 4)
+    True
+    >>> numbered_by_first_use(np.array([[0, 2, 1], [2, 1, 3]]), 4)
+    False
+    """
+    flat = np.asarray(F).ravel()
+    if flat.size == 0:
+        return n_vertices == 0
+    if flat[0] != 0:
+        return False
+    if flat.size >= JIT_MIN_SIZE:
+        return bool(_first_use_numbered_loops(np.ascontiguousarray(flat, dtype=np.int64),
+                                              int(n_vertices)))
+    # a corner either repeats a vertex already seen (at most the running
+    # maximum: all of 0 .. maximum were seen) or is the next new one
+    top = np.maximum.accumulate(flat)
+    if int(top[-1]) != n_vertices - 1:
+        return False
+    top += 1
+    return bool(np.all(flat[1:] <= top[:-1]))
+
+
+@compiled
+def _first_use_numbered_loops(flat, n):
+    """:func:`numbered_by_first_use` as one pass over the corners."""
+    top = -1
+    for c in range(flat.shape[0]):
+        v = flat[c]
+        if v > top + 1:
+            return False
+        if v > top:
+            top = v
+    return top == n - 1
 
 
 @compiled

@@ -26,6 +26,7 @@ from geotex.errors import InputError
 from geotex.io import weld_exact
 from geotex.mesh.arrays import as_mesh_arrays
 from geotex.mesh.solid import arrays_of_manifold, manifold_of
+from geotex.mesh.topology import numbered_by_first_use
 
 __all__ = ["stored_precision", "stored_form", "printable_stored_solid", "StoredSolid"]
 
@@ -69,6 +70,8 @@ def stored_form(V, F, *, precision=np.float32) -> tuple[np.ndarray, np.ndarray]:
     V2 : numpy.ndarray, (p, 3) float64
         Values exactly representable in ``precision``.
     F2 : numpy.ndarray, (m, 3) int64
+        ``F`` itself (not a copy) when nothing welds and its vertices are
+        already numbered by first use.
 
     Raises
     ------
@@ -86,6 +89,11 @@ def stored_form(V, F, *, precision=np.float32) -> tuple[np.ndarray, np.ndarray]:
     # by first appearance in F gives the same arrays, bit for bit, at a third
     # of the cost: equal corners are corners of equal vertices
     unique, welded = weld_exact(V.astype(precision))
+    if unique.shape[0] == V.shape[0] and numbered_by_first_use(F, V.shape[0]):
+        # nothing welded (``welded`` is the identity) and the vertices already
+        # in order of first use: the faces stay as they are (the relief's
+        # solids, numbered by first use before they are judged)
+        return unique.astype(np.float64), F
     W = welded[F]
     first = np.full(unique.shape[0], W.size, dtype=np.int64)
     np.minimum.at(first, W.ravel(), np.arange(W.size))
