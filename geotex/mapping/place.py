@@ -26,7 +26,7 @@ from scipy.spatial import cKDTree
 
 from geotex.check.intersections import self_intersecting_pairs_between
 from geotex.mapping.seat import _own_crossings, smoothed_folds
-from geotex.mapping.shape import SPREAD, map_jacobian, shaped_positions
+from geotex.mapping.shape import LEAN_FRACTIONS, LEAN_SLIDES, SPREAD, map_jacobian, shaped_positions
 from geotex.mesh.geometry import group_boxes
 from geotex.mesh.topology import vertex_components
 from geotex.param.polycube_fit import SurfaceProjector
@@ -34,7 +34,11 @@ from geotex.shells.locate import interpolated
 from geotex.tiles.tileset import TileSet
 
 __all__ = ["gathered_tiles", "side_keys", "MappedTiles", "mapped_tiles", "shell_positions",
-           "reseated_elements", "depth_scale"]
+           "reseated_elements", "depth_scale", "RESEAT_SLIDES"]
+
+#: Slides (tile sides) along the surface tried by :func:`reseated_elements`
+#: for a folded shaped element at full size, before it is shrunk.
+RESEAT_SLIDES = (0.05, 0.1)
 
 
 def _ranges(starts: np.ndarray, counts: np.ndarray) -> np.ndarray:
@@ -122,6 +126,12 @@ class MappedTiles:
     shift : numpy.ndarray, (N, 3) float64
         World move of every vertex's element by the spreading of overlapping
         shaped elements (zero with the plain map).
+    leaned : numpy.ndarray, (e,) bool
+        Elements laid across their leaning offset direction.
+    lean_fraction : numpy.ndarray, (e,) float64
+        How much of its lean every leaned element keeps (1, or one of
+        :data:`~geotex.mapping.shape.LEAN_FRACTIONS`; see
+        :func:`~geotex.mapping.shape.shaped_positions`).
     """
 
     vertices: np.ndarray
@@ -135,6 +145,7 @@ class MappedTiles:
     shaped: bool = True
     shift: np.ndarray | None = None
     leaned: np.ndarray | None = None
+    lean_fraction: np.ndarray | None = None
 
 
 def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: float,
@@ -217,43 +228,161 @@ def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: floa
     _, element = vertex_components(faces, kept.size)
     below = depth_scale(tiles, scale, anchor)
     if shaped:
-        if jacobian is None:                                # once for both calls
+        if jacobian is None:                                # once for every call
             jacobian = map_jacobian(pc)
-        X, shift, leaned = shaped_positions(shell, quad_of_vertex[kept], uvw[kept], element,
-                                            scale=scale, depth_scale=below, spread=SPREAD,
-                                            return_shift=True, return_leaned=True,
-                                            projector=projector, jacobian=jacobian)
-        crowded = _crowded_leaned(X, faces, element, leaned)
-        if crowded.any():
-            vs = np.flatnonzero(crowded[element])
-            _, local = np.unique(element[vs], return_inverse=True)
-            X = X.copy()
-            X[vs] = shaped_positions(shell, quad_of_vertex[kept][vs], uvw[kept][vs], local,
-                                     scale=scale, depth_scale=below, shift=shift[vs],
-                                     lean=np.zeros(int(local.max()) + 1, dtype=bool),
-                                     projector=projector, jacobian=jacobian)
-            leaned = leaned & ~crowded
+        if projector is None:
+            projector = SurfaceProjector(pc.Y, pc.F)
+        X, shift, leaned = shaped_positions(
+            shell, quad_of_vertex[kept], uvw[kept], element, scale=scale, depth_scale=below,
+            spread=SPREAD, return_shift=True, return_leaned=True, projector=projector,
+            jacobian=jacobian)
+        X, shift, leaned, fraction = _seated_leaned(
+            shell, X, quad_of_vertex[kept], uvw[kept], element, faces, leaned,
+            scale=scale, depth_scale=below, shift=shift, projector=projector,
+            jacobian=jacobian)
     else:
         X = shell_positions(shell, quad_of_vertex[kept], uvw[kept], scale=scale,
                             depth_scale=below)
         shift = np.zeros_like(X)
         leaned = np.zeros(int(element.max()) + 1 if element.size else 0, dtype=bool)
+        fraction = np.ones(leaned.size)
     return MappedTiles(X, faces, int(on.sum() - start.sum()), int((~keep_face).sum()),
                        quad_of_vertex[kept], uvw[kept], tile_faces, element, bool(shaped),
-                       shift, leaned)
+                       shift, leaned, fraction)
 
 
-def _crowded_leaned(X, faces, element, leaned):
+def _seated_leaned(shell, X, quads, uvw, element, faces, leaned, *, scale,
+                   depth_scale, shift, projector, jacobian):
+    """Leaned elements that cross upright ones slid or narrowed, else stood upright.
+
+    A leaned element that crosses an upright one (exact test) is slid along
+    the surface away from the upright ones it crosses by each of
+    :data:`~geotex.mapping.shape.LEAN_SLIDES` in turn, then laid with each
+    of :data:`~geotex.mapping.shape.LEAN_FRACTIONS` of its lean, and kept at
+    the first that crosses no upright element; one no trial seats is mapped
+    upright (on the main job's Spot these are the studs on the top of the
+    head, where the offset directions lean 40-65 degrees from the surface:
+    upright, their cross-section across their axis is squashed by the
+    cosine: half the median footprint). The upright elements are those not
+    ``leaned`` on entry.
+
+    Returns
+    -------
+    X : numpy.ndarray, (N, 3) float64
+    shift : numpy.ndarray, (N, 3) float64
+        ``shift`` with the slides added.
+    leaned : numpy.ndarray, (e,) bool
+    fraction : numpy.ndarray, (e,) float64
+        Fraction of its lean every leaned element keeps (1 for the others).
+    """
+    n = leaned.size
+    fraction = np.ones(n)
+    crowded, away = _crowded_leaned(X, faces, element, leaned, away=True)
+    if not crowded.any():
+        return X, shift, leaned, fraction
+    trials = ([(1.0, float(t)) for t in LEAN_SLIDES]
+              + [(float(g), 0.0) for g in LEAN_FRACTIONS])
+    upright = ~leaned
+    label = element[faces[:, 0]]
+    forder = np.argsort(label, kind="stable")
+    fstarts = np.searchsorted(label[forder], np.arange(n + 1))
+    lo, hi = group_boxes(X, element, n)
+    for g, t in trials:
+        if not crowded.any():
+            break
+        Xt, landed, St = _remapped(shell, X, quads, uvw, element, crowded, scale=scale,
+                                   depth_scale=depth_scale, shift=shift, lean=True,
+                                   fraction=g, slide=t * shell.tile_size * away[crowded],
+                                   projector=projector, jacobian=jacobian)
+        # (one whose narrowed shape lands off its lines was laid upright: not kept)
+        probe = np.flatnonzero(crowded & landed)
+        ok = np.zeros(n, dtype=bool)
+        ok[probe[~_crossing_upright(Xt, faces, element, probe, upright, lo, hi, forder,
+                                    fstarts)]] = True
+        vs = np.flatnonzero(ok[element])
+        X, shift = X.copy(), shift.copy()
+        X[vs], shift[vs] = Xt[vs], St[vs]
+        fraction[ok] = g
+        crowded &= ~ok
+    if crowded.any():
+        X, _, _ = _remapped(shell, X, quads, uvw, element, crowded, scale=scale,
+                            depth_scale=depth_scale, shift=shift, lean=False,
+                            projector=projector, jacobian=jacobian)
+        leaned = leaned & ~crowded
+    return X, shift, leaned, fraction
+
+
+def _crossing_upright(X, faces, element, probe, upright, lo, hi, forder, fstarts):
+    """Which elements of ``probe`` cross an ``upright`` one (exact test), ``(p,)`` bool.
+
+    ``lo, hi`` are the boxes of the upright elements (other rows unused);
+    the faces of element ``e`` are ``faces[forder[fstarts[e]:fstarts[e + 1]]]``.
+    Only the probe's faces and those of the upright elements whose boxes
+    overlap a probe's box are tested.
+    """
+    out = np.zeros(probe.size, dtype=bool)
+    if probe.size == 0:
+        return out
+    plo, phi = _boxes_of(X, faces, probe, forder, fstarts)
+    up = np.flatnonzero(upright)
+    near = np.all((plo[:, None, :] <= hi[None, up, :]) & (lo[None, up, :] <= phi[:, None, :]),
+                  axis=2).any(axis=0)
+    cand = np.concatenate([probe, up[near]])
+    counts = fstarts[cand + 1] - fstarts[cand]
+    rows = forder[_ranges(fstarts[cand], counts)]
+    part = np.repeat(np.arange(cand.size), counts)
+    mine = part < probe.size
+    pairs = self_intersecting_pairs_between(X, faces[rows], part, side=mine)
+    a, b = part[pairs[:, 0]], part[pairs[:, 1]]
+    hit = np.where(mine[pairs[:, 0]], a, b)
+    out[hit[hit < probe.size]] = True
+    return out
+
+
+def _boxes_of(X, faces, which, forder, fstarts):
+    """Bounding boxes ``(lo, hi)`` of the elements ``which``, ``(p, 3)`` each."""
+    counts = fstarts[which + 1] - fstarts[which]
+    P = X[faces[forder[_ranges(fstarts[which], counts)]]].reshape(-1, 3)
+    idx = np.repeat(np.arange(which.size), 3 * counts)
+    return group_boxes(P, idx, which.size)
+
+
+def _remapped(shell, X, quads, uvw, element, which, *, scale, depth_scale, shift, lean,
+              fraction=None, slide=None, projector=None, jacobian=None):
+    """``X`` with the elements ``which`` (a mask) mapped again, leaned or upright.
+
+    Also returns which elements (a mask over all) were laid leaned, and the
+    shift of every point (``shift`` with the slide added for those mapped).
+    """
+    vs = np.flatnonzero(which[element])
+    ids, local = np.unique(element[vs], return_inverse=True)
+    n = ids.size
+    X, S = X.copy(), shift.copy()
+    X[vs], S[vs], leaned = shaped_positions(
+        shell, quads[vs], uvw[vs], local, scale=scale, depth_scale=depth_scale, shift=shift[vs],
+        lean=np.full(n, bool(lean)), return_shift=True, return_leaned=True, slide=slide,
+        lean_fraction=None if fraction is None else np.full(n, float(fraction)),
+        projector=projector, jacobian=jacobian)
+    out = np.zeros(which.size, dtype=bool)
+    out[ids[leaned]] = True
+    return X, out, S
+
+
+def _crowded_leaned(X, faces, element, leaned, *, away=False):
     """Leaned elements that cross an element standing as the map's offsets do.
 
     The exact test runs on the leaned elements and the elements whose boxes
     overlap theirs, one part per element, and examines only the pairs of a
     leaned and an upright element (the rows of the whole test that decide).
+    With ``away``, also the unit direction (world, ``(n, 3)``) from the
+    centres of the upright elements each one crosses to its own centre
+    (their boxes' centres; zero for the others).
     """
     n = leaned.size
     out = np.zeros(n, dtype=bool)
+    far = np.zeros((n, 3))
     if not leaned.any():
-        return out
+        return (out, far) if away else out
     lo, hi = group_boxes(X, element, n)
     lean = np.flatnonzero(leaned)
     near = cKDTree(0.5 * (lo + hi)).query_ball_point(
@@ -267,8 +396,21 @@ def _crowded_leaned(X, faces, element, leaned):
     pairs = sub[self_intersecting_pairs_between(X, faces[sub], label[sub],
                                                 side=leaned[label[sub]])]
     a, b = label[pairs[:, 0]], label[pairs[:, 1]]
-    out[np.where(leaned[a], a, b)] = True
-    return out
+    mine, other = np.where(leaned[a], a, b), np.where(leaned[a], b, a)
+    out[mine] = True
+    if not away:
+        return out
+    ends = np.unique(np.stack([mine, other], axis=1), axis=0)
+    centre = 0.5 * (lo + hi)
+    v = _unit_rows(centre[ends[:, 0]] - centre[ends[:, 1]])
+    far = _unit_rows(np.stack([np.bincount(ends[:, 0], weights=v[:, c], minlength=n)
+                               for c in range(3)], axis=1))
+    return out, far
+
+
+def _unit_rows(A: np.ndarray) -> np.ndarray:
+    n = np.linalg.norm(A, axis=1, keepdims=True)
+    return np.divide(A, n, out=np.zeros_like(A), where=n > 0)
 
 
 def depth_scale(tiles: TileSet, scale: float, anchor) -> float:
@@ -308,7 +450,7 @@ def shell_positions(shell, quads: np.ndarray, uvw: np.ndarray, *, scale: float,
 
 
 def reseated_elements(shell, mapped: "MappedTiles", label: np.ndarray, elements, *,
-                      scale: float, depth_scale: float, factors=None,
+                      scale: float, depth_scale: float, factors=None, slides=RESEAT_SLIDES,
                       projector: SurfaceProjector | None = None, jacobian=None
                       ) -> tuple[np.ndarray, np.ndarray]:
     """Shrink folded elements about their centre and map them again.
@@ -339,6 +481,11 @@ def reseated_elements(shell, mapped: "MappedTiles", label: np.ndarray, elements,
         Shrink factors tried; default 1, 0.75, 0.55, 0.4, 0.3 with
         ``mapped.shaped`` (size 1 is cast), else without 1 (the plain map
         again).
+    slides : sequence of float, optional
+        With ``mapped.shaped``, after size 1 the element is tried at full
+        size slid along the surface by each of these distances (tile sides)
+        six ways (the world axes laid in its tangent plane), before it is
+        shrunk (default :data:`RESEAT_SLIDES`).
     projector : SurfaceProjector, optional
         Closest points on the shell's fitted surface (the one
         :func:`mapped_tiles` used); built here, once for every size, if not
@@ -367,7 +514,14 @@ def reseated_elements(shell, mapped: "MappedTiles", label: np.ndarray, elements,
         projector = SurfaceProjector(shell.polycube.Y, shell.polycube.F)
     if jacobian is None and mapped.shaped:
         jacobian = map_jacobian(shell.polycube)
-    for f in factors:
+    trials = [(float(f), None) for f in factors]
+    if mapped.shaped and slides and 1.0 in factors:
+        # at full size slid along the surface (six ways, the world axes laid in
+        # its tangent plane) before it is shrunk
+        at = [float(f) for f in factors].index(1.0) + 1
+        ways = np.vstack([np.eye(3), -np.eye(3)])
+        trials[at:at] = [(1.0, float(t) * shell.tile_size * w) for t in slides for w in ways]
+    for f, way in trials:
         if still.size == 0:
             break
         # every still folded element at once, numbered 0 .. len(still) - 1
@@ -383,6 +537,9 @@ def reseated_elements(shell, mapped: "MappedTiles", label: np.ndarray, elements,
                               shrink=np.full(still.size, float(f)), similar=mapped.shaped,
                               shift=None if mapped.shift is None else mapped.shift[verts],
                               lean=None if mapped.leaned is None else mapped.leaned[still],
+                              lean_fraction=(None if mapped.lean_fraction is None
+                                             else mapped.lean_fraction[still]),
+                              slide=None if way is None else np.tile(way, (still.size, 1)),
                               projector=projector, cast=mapped.shaped, jacobian=jacobian)
         fstart = np.cumsum(counts) - counts
         left = []

@@ -64,7 +64,7 @@ from geotex.shells.locate import interpolated
 
 __all__ = ["map_jacobian", "element_directions", "shaped_positions", "spread_centres", "ElementFootprints",
            "element_footprints", "MAX_EXTENT", "EVENING", "SPREAD", "GAP", "TILE_SLACK",
-           "LEAN_MISS", "MIN_LEAN"]
+           "LEAN_MISS", "MIN_LEAN", "LEAN_FRACTIONS", "LEAN_SLIDES"]
 
 #: Elements wider than this (tile sides, in ``u`` or ``v``) keep the plain
 #: point-by-point map.
@@ -96,6 +96,27 @@ LEAN_MISS = 0.1
 #: Spot 1.32 and Blub 1.48 at 20, Blub 1.49 at 25 and 1.41 at 15, where 778 of
 #: its studs lean and 1,297 meet another).
 MIN_LEAN = 20.0
+
+#: Fractions of its lean (``lean_fraction`` of :func:`shaped_positions`)
+#: tried, in order, for a leaned element that crosses an upright neighbour
+#: before it is stood upright (:func:`~geotex.mapping.place.mapped_tiles`).
+LEAN_FRACTIONS = (0.67, 0.33)
+
+#: Slides (tile sides) tried, in order, for a leaned element that crosses an
+#: upright neighbour, along the surface away from it, before
+#: :data:`LEAN_FRACTIONS`.
+LEAN_SLIDES = (0.03, 0.06, 0.1, 0.15)
+
+#: Largest lean (degrees) of the axis a leaned shape rises along, from the
+#: map's tangent plane normal: steeper mean offset directions are turned
+#: towards that normal. On the 80 mm Spot of the main job (338 tiles, the
+#: offsets smoothed over several of them) they lean up to 85 degrees on the
+#: top of the head, where studs raised along them lay nearly flat on the
+#: surface (upright: footprint 0.02-0.1 of the median) or their shapes,
+#: carried along them, landed on triangles they graze and were laid upright
+#: (:data:`LEAN_MISS`). 50: printed footprint CV 1.48 x the planar tiling
+#: there, 1.66 x at 65, 1.55 x at 40 (more studs tilted off their offsets).
+MAX_AXIS_LEAN = 50.0
 
 #: Rounds of carrying a leaned shape's points along its axis onto the fitted
 #: surface (:func:`_cast_feet`; 0: closest points of the tangent plane's
@@ -170,7 +191,7 @@ def shaped_positions(shell, quads, uvw, element, *, scale: float,
                      max_extent: float = MAX_EXTENT, shrink=None, similar: bool = True,
                      spread: int = 0, shift=None, return_shift: bool = False,
                      lean=None, return_leaned: bool = False, projector=None,
-                     cast: bool = False, jacobian=None):
+                     cast: bool = False, jacobian=None, lean_fraction=None, slide=None):
     """Shell positions of tile points, every small element mapped as one similar shape.
 
     Parameters
@@ -216,6 +237,16 @@ def shaped_positions(shell, quads, uvw, element, *, scale: float,
         in the map's tangent plane, raised along the offsets point by point.
     return_leaned : bool, optional
         Also return which elements were laid across their offset direction.
+    lean_fraction : array_like, (e,) float64, optional
+        Per element, how far a leaned shape's cross-section across its axis
+        keeps its width along the lean (default 1: all of it). ``g`` in
+        ``[0, 1]`` scales that width by ``c + g (1 - c)``, ``c`` the cosine
+        of the lean: at 0 the shape covers on the surface what an upright
+        one does (its cross-section squashed by the cosine, as the upright
+        one's is), at 1 it is round seen along its axis and stretched by
+        ``1 / c`` on the surface. Used to lay a leaned element that crosses
+        an upright neighbour part of the way
+        (:func:`~geotex.mapping.place.mapped_tiles`).
     projector : SurfaceProjector, optional
         Closest points on the fitted surface ``(pc.Y, pc.F)``
         (:class:`geotex.param.polycube_fit.SurfaceProjector`), for points
@@ -245,8 +276,8 @@ def shaped_positions(shell, quads, uvw, element, *, scale: float,
     ------
     InputError
         Mismatched array lengths, ``evening`` outside ``[0, 1]``, a
-        non-positive ``max_extent``, or a ``jacobian`` not of the polycube's
-        faces.
+        non-positive ``max_extent``, a ``lean_fraction`` outside ``[0, 1]``,
+        or a ``jacobian`` not of the polycube's faces.
     """
     pc = shell.polycube
     if jacobian is not None and np.shape(jacobian) != (pc.F.shape[0], 3, 2):
@@ -275,6 +306,10 @@ def shaped_positions(shell, quads, uvw, element, *, scale: float,
     may_lean = np.ones(n_el, dtype=bool) if lean is None else np.asarray(lean, dtype=bool)
     if may_lean.shape != (n_el,):
         raise InputError(f"lean must have one flag per element ({n_el}), got {may_lean.shape}")
+    g = None if lean_fraction is None else np.asarray(lean_fraction, dtype=np.float64)
+    if g is not None and (g.shape != (n_el,) or not np.all((g >= 0.0) & (g <= 1.0))):
+        raise InputError(f"lean_fraction must have one value in [0, 1] per element ({n_el}), "
+                         f"got shape {g.shape}")
     lean = np.zeros(n_el, dtype=bool)
     face, bary = pc.locate(quads, uvw[:, :2])
     YD = interpolated(np.hstack([pc.Y, shell.D]), pc.F, face, bary)
@@ -307,6 +342,12 @@ def shaped_positions(shell, quads, uvw, element, *, scale: float,
         if sh.shape != (k, 3):
             raise InputError(f"shift must have shape ({k}, 3), got {sh.shape}")
         offset[element] = sh
+    if slide is not None:
+        sl = np.asarray(slide, dtype=np.float64)
+        if sl.shape != (n_el, 3):
+            raise InputError(f"slide must have shape ({n_el}, 3), got {sl.shape}")
+        tn = _unit(np.cross(R[:, :, 0], R[:, :, 1]))
+        offset += sl - np.einsum("ij,ij->i", sl, tn)[:, None] * tn
     offset[~ok] = 0.0
     if spread and ok.any():
         # footprint radius of every element, world
@@ -342,12 +383,31 @@ def shaped_positions(shell, quads, uvw, element, *, scale: float,
         # axis (followed point by point, the directions, turning by up to 15
         # degrees across a stud where the base curves, flared its top)
         axis = _unit(_group_mean(d, element, n_el))
+        if MAX_AXIS_LEAN < 90.0:
+            # offsets lying nearly along the surface (smoothed over several tiles
+            # on a coarse shell: up to 85 degrees on the top of the 80 mm Spot's
+            # head) turned towards the map's normal, to at most MAX_AXIS_LEAN
+            tn = _unit(np.cross(R[:, :, 0], R[:, :, 1]))
+            ca = np.einsum("ij,ij->i", tn, axis)
+            cmax = np.cos(np.radians(MAX_AXIS_LEAN))
+            steep = ca < cmax
+            if steep.any():
+                side = _unit(axis[steep] - ca[steep, None] * tn[steep])
+                axis[steep] = cmax * tn[steep] + np.sqrt(1.0 - cmax * cmax) * side
         Rl, lift = _leaned_frames(R, axis, min_lean=MIN_LEAN)
         lean[e_s] = True
         lean &= lift[:, 1].any(axis=1) & may_lean
         j1 = np.flatnonzero(lean[el])
         flat_l = (f[el[j1]] * scl[el[j1]])[:, None] * np.einsum(
             "ijk,ik->ij", Rl[el[j1]], uvh[idx[j1]] - uv_mean[el[j1]])
+        if g is not None:
+            # part of the way: the width along the lean kept by c + g (1 - c)
+            nrm = _unit(np.cross(R[:, :, 0], R[:, :, 1]))
+            c = np.einsum("ij,ij->i", nrm, axis)
+            along = _unit(nrm - c[:, None] * axis)
+            keep = np.clip(c + g * (1.0 - c), 0.0, 1.0)
+            a_j = along[el[j1]]
+            flat_l -= ((1.0 - keep[el[j1]]) * np.einsum("ij,ij->i", flat_l, a_j))[:, None] * a_j
         flat_l -= np.einsum("ij,ij->i", flat_l, lift[el[j1], 0])[:, None] * lift[el[j1], 1]
         target = centre + flat
         target[j1] += flat_l - flat[j1]
