@@ -26,9 +26,9 @@ from scipy.spatial import cKDTree
 
 from geotex.check.intersections import self_intersecting_pairs_between
 from geotex.mapping.seat import _own_crossings, smoothed_folds
-from geotex.mapping.shape import LEAN_FRACTIONS, LEAN_SLIDES, SPREAD, map_jacobian, shaped_positions
+from geotex.mapping.shape import LEAN_SLIDES, SPREAD, _unit, map_jacobian, shaped_positions
 from geotex.mesh.geometry import group_boxes
-from geotex.mesh.topology import vertex_components
+from geotex.mesh.topology import compacted, concatenated, vertex_components
 from geotex.param.polycube_fit import SurfaceProjector
 from geotex.shells.locate import interpolated
 from geotex.tiles.tileset import TileSet
@@ -128,10 +128,6 @@ class MappedTiles:
         shaped elements (zero with the plain map).
     leaned : numpy.ndarray, (e,) bool
         Elements laid across their leaning offset direction.
-    lean_fraction : numpy.ndarray, (e,) float64
-        How much of its lean every leaned element keeps (1, or one of
-        :data:`~geotex.mapping.shape.LEAN_FRACTIONS`; see
-        :func:`~geotex.mapping.shape.shaped_positions`).
     """
 
     vertices: np.ndarray
@@ -145,7 +141,6 @@ class MappedTiles:
     shaped: bool = True
     shift: np.ndarray | None = None
     leaned: np.ndarray | None = None
-    lean_fraction: np.ndarray | None = None
 
 
 def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: float,
@@ -236,7 +231,7 @@ def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: floa
             shell, quad_of_vertex[kept], uvw[kept], element, scale=scale, depth_scale=below,
             spread=SPREAD, return_shift=True, return_leaned=True, projector=projector,
             jacobian=jacobian)
-        X, shift, leaned, fraction = _seated_leaned(
+        X, shift, leaned = _seated_leaned(
             shell, X, quad_of_vertex[kept], uvw[kept], element, faces, leaned,
             scale=scale, depth_scale=below, shift=shift, projector=projector,
             jacobian=jacobian)
@@ -245,26 +240,26 @@ def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: floa
                             depth_scale=below)
         shift = np.zeros_like(X)
         leaned = np.zeros(int(element.max()) + 1 if element.size else 0, dtype=bool)
-        fraction = np.ones(leaned.size)
     return MappedTiles(X, faces, int(on.sum() - start.sum()), int((~keep_face).sum()),
                        quad_of_vertex[kept], uvw[kept], tile_faces, element, bool(shaped),
-                       shift, leaned, fraction)
+                       shift, leaned)
 
 
-def _seated_leaned(shell, X, quads, uvw, element, faces, leaned, *, scale,
-                   depth_scale, shift, projector, jacobian):
-    """Leaned elements that cross upright ones slid or narrowed, else stood upright.
+def _seated_leaned(shell, X, quads, uvw, element, faces, leaned, *, scale, depth_scale, shift,
+                   projector, jacobian):
+    """Leaned elements that cross upright ones slid off them, else stood upright.
 
-    A leaned element that crosses an upright one (exact test) is slid along
-    the surface away from the upright ones it crosses by each of
-    :data:`~geotex.mapping.shape.LEAN_SLIDES` in turn, then laid with each
-    of :data:`~geotex.mapping.shape.LEAN_FRACTIONS` of its lean, and kept at
-    the first that crosses no upright element; one no trial seats is mapped
-    upright (on the main job's Spot these are the studs on the top of the
-    head, where the offset directions lean 40-65 degrees from the surface:
-    upright, their cross-section across their axis is squashed by the
-    cosine: half the median footprint). The upright elements are those not
-    ``leaned`` on entry.
+    A leaned element that crosses an upright one (exact test) is tried slid
+    along the surface away from the upright ones it crosses by each of
+    :data:`~geotex.mapping.shape.LEAN_SLIDES` (every try of every such
+    element mapped in one call and tested in one exact test), and kept at
+    the first try that crosses no upright element; one no try seats
+    is mapped upright (on the main job's Spot, studs on the top of the head,
+    where the offset directions lean 40-65 degrees from the surface: upright,
+    their cross-section across their axis is squashed by the cosine, to half
+    the median footprint). The upright elements are those not ``leaned`` on
+    entry; tries are not tested against each other (leaned elements may
+    meet).
 
     Returns
     -------
@@ -272,87 +267,76 @@ def _seated_leaned(shell, X, quads, uvw, element, faces, leaned, *, scale,
     shift : numpy.ndarray, (N, 3) float64
         ``shift`` with the slides added.
     leaned : numpy.ndarray, (e,) bool
-    fraction : numpy.ndarray, (e,) float64
-        Fraction of its lean every leaned element keeps (1 for the others).
     """
     n = leaned.size
-    fraction = np.ones(n)
     crowded, away = _crowded_leaned(X, faces, element, leaned, away=True)
-    if not crowded.any():
-        return X, shift, leaned, fraction
-    trials = ([(1.0, float(t)) for t in LEAN_SLIDES]
-              + [(float(g), 0.0) for g in LEAN_FRACTIONS])
-    upright = ~leaned
+    trials = np.asarray(LEAN_SLIDES, dtype=np.float64)
+    if not crowded.any() or trials.size == 0:
+        if crowded.any():
+            X, _, _ = _remapped(shell, X, quads, uvw, element, crowded, scale=scale,
+                                depth_scale=depth_scale, shift=shift, lean=False,
+                                projector=projector, jacobian=jacobian)
+        return X, shift, leaned & ~crowded
+    ids = np.flatnonzero(crowded)
+    p, k = ids.size, trials.size
+    vs = np.flatnonzero(crowded[element])
+    local = np.searchsorted(ids, element[vs])
+    # every try of every crowded element, as elements of their own
+    copy_el = (local[None, :] + p * np.arange(k)[:, None]).ravel()
+    slide = np.repeat(trials, p)[:, None] * float(shell.tile_size) * np.tile(away[ids], (k, 1))
+    Xc, Sc, landed = shaped_positions(
+        shell, np.tile(quads[vs], k), np.tile(uvw[vs], (k, 1)), copy_el, scale=scale,
+        depth_scale=depth_scale, shift=np.tile(shift[vs], (k, 1)),
+        lean=np.ones(p * k, dtype=bool), slide=slide, return_shift=True, return_leaned=True,
+        projector=projector, jacobian=jacobian)
+    # their faces, and those of the upright elements whose boxes overlap theirs
     label = element[faces[:, 0]]
-    forder = np.argsort(label, kind="stable")
-    fstarts = np.searchsorted(label[forder], np.arange(n + 1))
+    mine = np.flatnonzero(crowded[label])
+    at = np.full(X.shape[0], -1, dtype=np.int64)
+    at[vs] = np.arange(vs.size)
+    Fc = (at[faces[mine]][None, :, :] + vs.size * np.arange(k)[:, None, None]).reshape(-1, 3)
+    part_c = np.tile(local[at[faces[mine, 0]]], k) + p * np.repeat(np.arange(k), mine.size)
+    clo, chi = group_boxes(Xc, copy_el, p * k)
     lo, hi = group_boxes(X, element, n)
-    for g, t in trials:
-        if not crowded.any():
-            break
-        Xt, landed, St = _remapped(shell, X, quads, uvw, element, crowded, scale=scale,
-                                   depth_scale=depth_scale, shift=shift, lean=True,
-                                   fraction=g, slide=t * shell.tile_size * away[crowded],
-                                   projector=projector, jacobian=jacobian)
-        # (one whose narrowed shape lands off its lines was laid upright: not kept)
-        probe = np.flatnonzero(crowded & landed)
-        ok = np.zeros(n, dtype=bool)
-        ok[probe[~_crossing_upright(Xt, faces, element, probe, upright, lo, hi, forder,
-                                    fstarts)]] = True
-        vs = np.flatnonzero(ok[element])
-        X, shift = X.copy(), shift.copy()
-        X[vs], shift[vs] = Xt[vs], St[vs]
-        fraction[ok] = g
-        crowded &= ~ok
+    up = np.flatnonzero(~leaned)
+    up = up[np.all((lo[up] <= chi.max(axis=0)) & (hi[up] >= clo.min(axis=0)), axis=1)]
+    near = np.zeros(n, dtype=bool)
+    for c0 in range(0, p * k, 256):                 # (tries x upright boxes, in slices)
+        sl = slice(c0, c0 + 256)
+        near[up[np.all((clo[sl, None, :] <= hi[None, up, :])
+                       & (lo[None, up, :] <= chi[sl, None, :]), axis=2).any(axis=0)]] = True
+    theirs = np.flatnonzero(near[label])
+    V2, F2 = concatenated([(Xc, Fc), compacted(X, faces[theirs])])
+    part = np.concatenate([part_c, p * k + label[theirs]])
+    side = part < p * k
+    pairs = self_intersecting_pairs_between(V2, F2, part, side=side)
+    hit = np.zeros(p * k, dtype=bool)
+    a, b = part[pairs[:, 0]], part[pairs[:, 1]]
+    hit[np.where(side[pairs[:, 0]], a, b)] = True
+    # the first try of each that crosses no upright element (one whose slid
+    # shape landed off its lines was laid upright: not kept)
+    ok = (landed & ~hit).reshape(k, p)
+    first = np.argmax(ok, axis=0)
+    seated = ok[first, np.arange(p)]
+    X, shift = X.copy(), shift.copy()
+    rows = first[local] * vs.size + np.arange(vs.size)
+    take = seated[local]
+    X[vs[take]], shift[vs[take]] = Xc[rows[take]], Sc[rows[take]]
+    crowded[ids[seated]] = False
     if crowded.any():
         X, _, _ = _remapped(shell, X, quads, uvw, element, crowded, scale=scale,
                             depth_scale=depth_scale, shift=shift, lean=False,
                             projector=projector, jacobian=jacobian)
         leaned = leaned & ~crowded
-    return X, shift, leaned, fraction
-
-
-def _crossing_upright(X, faces, element, probe, upright, lo, hi, forder, fstarts):
-    """Which elements of ``probe`` cross an ``upright`` one (exact test), ``(p,)`` bool.
-
-    ``lo, hi`` are the boxes of the upright elements (other rows unused);
-    the faces of element ``e`` are ``faces[forder[fstarts[e]:fstarts[e + 1]]]``.
-    Only the probe's faces and those of the upright elements whose boxes
-    overlap a probe's box are tested.
-    """
-    out = np.zeros(probe.size, dtype=bool)
-    if probe.size == 0:
-        return out
-    plo, phi = _boxes_of(X, faces, probe, forder, fstarts)
-    up = np.flatnonzero(upright)
-    near = np.all((plo[:, None, :] <= hi[None, up, :]) & (lo[None, up, :] <= phi[:, None, :]),
-                  axis=2).any(axis=0)
-    cand = np.concatenate([probe, up[near]])
-    counts = fstarts[cand + 1] - fstarts[cand]
-    rows = forder[_ranges(fstarts[cand], counts)]
-    part = np.repeat(np.arange(cand.size), counts)
-    mine = part < probe.size
-    pairs = self_intersecting_pairs_between(X, faces[rows], part, side=mine)
-    a, b = part[pairs[:, 0]], part[pairs[:, 1]]
-    hit = np.where(mine[pairs[:, 0]], a, b)
-    out[hit[hit < probe.size]] = True
-    return out
-
-
-def _boxes_of(X, faces, which, forder, fstarts):
-    """Bounding boxes ``(lo, hi)`` of the elements ``which``, ``(p, 3)`` each."""
-    counts = fstarts[which + 1] - fstarts[which]
-    P = X[faces[forder[_ranges(fstarts[which], counts)]]].reshape(-1, 3)
-    idx = np.repeat(np.arange(which.size), 3 * counts)
-    return group_boxes(P, idx, which.size)
+    return X, shift, leaned
 
 
 def _remapped(shell, X, quads, uvw, element, which, *, scale, depth_scale, shift, lean,
-              fraction=None, slide=None, projector=None, jacobian=None):
+              projector=None, jacobian=None):
     """``X`` with the elements ``which`` (a mask) mapped again, leaned or upright.
 
     Also returns which elements (a mask over all) were laid leaned, and the
-    shift of every point (``shift`` with the slide added for those mapped).
+    shift of every point.
     """
     vs = np.flatnonzero(which[element])
     ids, local = np.unique(element[vs], return_inverse=True)
@@ -360,8 +344,7 @@ def _remapped(shell, X, quads, uvw, element, which, *, scale, depth_scale, shift
     X, S = X.copy(), shift.copy()
     X[vs], S[vs], leaned = shaped_positions(
         shell, quads[vs], uvw[vs], local, scale=scale, depth_scale=depth_scale, shift=shift[vs],
-        lean=np.full(n, bool(lean)), return_shift=True, return_leaned=True, slide=slide,
-        lean_fraction=None if fraction is None else np.full(n, float(fraction)),
+        lean=np.full(n, bool(lean)), return_shift=True, return_leaned=True,
         projector=projector, jacobian=jacobian)
     out = np.zeros(which.size, dtype=bool)
     out[ids[leaned]] = True
@@ -402,15 +385,10 @@ def _crowded_leaned(X, faces, element, leaned, *, away=False):
         return out
     ends = np.unique(np.stack([mine, other], axis=1), axis=0)
     centre = 0.5 * (lo + hi)
-    v = _unit_rows(centre[ends[:, 0]] - centre[ends[:, 1]])
-    far = _unit_rows(np.stack([np.bincount(ends[:, 0], weights=v[:, c], minlength=n)
-                               for c in range(3)], axis=1))
+    v = _unit(centre[ends[:, 0]] - centre[ends[:, 1]])
+    far = _unit(np.stack([np.bincount(ends[:, 0], weights=v[:, c], minlength=n)
+                          for c in range(3)], axis=1).astype(np.float64))
     return out, far
-
-
-def _unit_rows(A: np.ndarray) -> np.ndarray:
-    n = np.linalg.norm(A, axis=1, keepdims=True)
-    return np.divide(A, n, out=np.zeros_like(A), where=n > 0)
 
 
 def depth_scale(tiles: TileSet, scale: float, anchor) -> float:
@@ -537,8 +515,6 @@ def reseated_elements(shell, mapped: "MappedTiles", label: np.ndarray, elements,
                               shrink=np.full(still.size, float(f)), similar=mapped.shaped,
                               shift=None if mapped.shift is None else mapped.shift[verts],
                               lean=None if mapped.leaned is None else mapped.leaned[still],
-                              lean_fraction=(None if mapped.lean_fraction is None
-                                             else mapped.lean_fraction[still]),
                               slide=None if way is None else np.tile(way, (still.size, 1)),
                               projector=projector, cast=mapped.shaped, jacobian=jacobian)
         fstart = np.cumsum(counts) - counts

@@ -332,9 +332,7 @@ def lowered_elements(shell, mapped, label: np.ndarray, elements, *, scale: float
                                   np.zeros(verts.size, dtype=np.int64), scale=scale,
                                   depth_scale=depth_scale, similar=mapped.shaped,
                                   shift=None if mapped.shift is None else mapped.shift[verts],
-                                  lean=None if mapped.leaned is None else mapped.leaned[[e]],
-                                  lean_fraction=(None if mapped.lean_fraction is None
-                                                 else mapped.lean_fraction[[e]]))
+                                  lean=None if mapped.leaned is None else mapped.leaned[[e]])
             met, folded = _crossings_near(Xe, local, e, X, G, boxes, V0, F0)
             if not folded and met.size == 1 and met[0] == 1:
                 X[verts] = Xe
