@@ -105,10 +105,11 @@ MIN_LEAN = 20.0
 #: upright neighbour, along the surface away from it, before it is stood
 #: upright (:func:`~geotex.mapping.place.mapped_tiles`). On the main job's
 #: Spot 53 leaned studs crossed an upright one; most seat slid (printed
-#: footprint CV 1.48 x the planar tiling). Laying them with their
-#: cross-section narrowed along the lean instead (the width kept by 0.67 or
-#: 0.33 of the way from the cosine to 1) seated 1-2 more: 1.48 as well.
-LEAN_SLIDES = (0.05, 0.1, 0.15)
+#: footprint CV 1.48 x the planar tiling; 0.05, 0.1, 0.15 the same, 0.1
+#: alone 1.53). Laying them with their cross-section narrowed along the lean
+#: instead (the width kept by 0.67 or 0.33 of the way from the cosine to 1)
+#: seated 1-2 more: 1.48 as well.
+LEAN_SLIDES = (0.05, 0.15)
 
 #: Largest lean (degrees) of the axis a leaned shape rises along, from the
 #: map's tangent plane normal: steeper mean offset directions are turned
