@@ -104,7 +104,7 @@ MIN_LEAN = 20.0
 #: Slides (tile sides) tried, in order, for a leaned element that crosses an
 #: upright neighbour, along the surface away from it, before it is stood
 #: upright (:func:`~geotex.mapping.place.mapped_tiles`). On the main job's
-#: Spot 53 leaned studs crossed an upright one; most seat slid (printed
+#: Spot 41 of the 48 leaned studs that cross an upright one seat slid (printed
 #: footprint CV 1.48 x the planar tiling; 0.05, 0.1, 0.15 the same, 0.1
 #: alone 1.53). Laying them with their cross-section narrowed along the lean
 #: instead (the width kept by 0.67 or 0.33 of the way from the cosine to 1)
