@@ -269,7 +269,7 @@ def _seated_leaned(shell, X, quads, uvw, element, faces, leaned, *, scale, depth
     leaned : numpy.ndarray, (e,) bool
     """
     n = leaned.size
-    crowded, away = _crowded_leaned(X, faces, element, leaned, away=True)
+    crowded, away, lo, hi = _crowded_leaned(X, faces, element, leaned, away=True)
     trials = np.asarray(LEAN_SLIDES, dtype=np.float64)
     if not crowded.any() or trials.size == 0:
         if crowded.any():
@@ -297,7 +297,6 @@ def _seated_leaned(shell, X, quads, uvw, element, faces, leaned, *, scale, depth
     Fc = (at[faces[mine]][None, :, :] + vs.size * np.arange(k)[:, None, None]).reshape(-1, 3)
     part_c = np.tile(local[at[faces[mine, 0]]], k) + p * np.repeat(np.arange(k), mine.size)
     clo, chi = group_boxes(Xc, copy_el, p * k)
-    lo, hi = group_boxes(X, element, n)
     up = np.flatnonzero(~leaned)
     up = up[np.all((lo[up] <= chi.max(axis=0)) & (hi[up] >= clo.min(axis=0)), axis=1)]
     near = np.zeros(n, dtype=bool)
@@ -359,13 +358,14 @@ def _crowded_leaned(X, faces, element, leaned, *, away=False):
     leaned and an upright element (the rows of the whole test that decide).
     With ``away``, also the unit direction (world, ``(n, 3)``) from the
     centres of the upright elements each one crosses to its own centre
-    (their boxes' centres; zero for the others).
+    (their boxes' centres; zero for the others) and the elements' boxes
+    ``lo, hi`` (``(n, 3)`` each; None when nothing leans).
     """
     n = leaned.size
     out = np.zeros(n, dtype=bool)
     far = np.zeros((n, 3))
     if not leaned.any():
-        return (out, far) if away else out
+        return (out, far, None, None) if away else out
     lo, hi = group_boxes(X, element, n)
     lean = np.flatnonzero(leaned)
     near = cKDTree(0.5 * (lo + hi)).query_ball_point(
@@ -388,7 +388,7 @@ def _crowded_leaned(X, faces, element, leaned, *, away=False):
     v = _unit(centre[ends[:, 0]] - centre[ends[:, 1]])
     far = _unit(np.stack([np.bincount(ends[:, 0], weights=v[:, c], minlength=n)
                           for c in range(3)], axis=1).astype(np.float64))
-    return out, far
+    return out, far, lo, hi
 
 
 def depth_scale(tiles: TileSet, scale: float, anchor) -> float:
