@@ -25,7 +25,14 @@ Each shell is run twice: ``plain`` maps every tile point through the quad map
 (what main did before), ``shaped`` maps every small element as one shape
 (``textured_solid(..., shaped=True)``, the default).
 
+Main-job rows (``spot 15k``, ``kitten 15k``, ``bob 15k``; shaped only): the
+shells ``geotex texture BASE --tiles studs --size-mm 80`` builds on the
+~15k-face decimations of ``bench_main_job.py`` (the first thing a new user
+sees; ``--data`` points at the shared data folder, ``--no-main-job`` skips
+them).
+
 Run:  python benchmarks/bench_shell_shape.py [--out FILE.md] [--only NAME ...]
+      [--data DIR] [--no-main-job]
 """
 
 from __future__ import annotations
@@ -52,6 +59,8 @@ from geotex.tiles.catalog import load_named as load_tiles
 from geotex.tiles.tiling import planar_tiling, random_arrangement
 
 SHELLS = ("spot", "bob", "torus", "blub")
+MAIN_JOB = (("spot 15k", "spot_odedstein.obj"), ("kitten 15k", "kitten_gpjs.obj"),
+            ("bob 15k", "bob_uv/bob_tri.obj"))
 SET = "studs"
 RESULTS = Path(__file__).parent / "results"
 
@@ -101,8 +110,17 @@ def printed_footprints(shell, res) -> dict:
     return {"printed_" + k: v for k, v in out.items()} | {"left_out": int(res.left_out.sum())}
 
 
-def run_shell(name: str, tiles, *, shaped: bool) -> dict:
-    shell = load_shell(name)
+def main_job_shell(src: Path, work: Path):
+    """The shell ``geotex texture SRC_15k.obj --size-mm 80`` builds (as bench_main_job.py)."""
+    from bench_main_job import _decimated
+    from geotex.cli.shell import shell_of_file
+
+    base = _decimated(src, 15000, work / f"{src.stem}_15k.obj")
+    return shell_of_file(str(base), None, name=base.stem, size_mm=80.0)
+
+
+def run_shell(name: str, tiles, *, shaped: bool, shell=None) -> dict:
+    shell = load_shell(name) if shell is None else shell
     row = {"shell": name, "map": "shaped" if shaped else "plain", "quads": shell.n_quads,
            "tile_size": shell.tile_size}
     row.update(object_footprints(shell, tiles, shaped=shaped))
@@ -123,6 +141,9 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=RESULTS / "shell_shape.md")
     ap.add_argument("--only", nargs="*", default=None)
+    ap.add_argument("--data", type=Path,
+                    default=Path(__file__).resolve().parents[2] / "shared" / "data")
+    ap.add_argument("--no-main-job", action="store_true")
     args = ap.parse_args()
     tiles = load_tiles(SET)
     planar = planar_figures(tiles)
@@ -137,6 +158,19 @@ def main() -> None:
             row["printed_cv_ratio"] = round(row["printed_cv"] / planar["cv"], 2)
             print(row, flush=True)
             rows.append(row)
+    if not args.no_main_job:
+        import tempfile
+
+        with tempfile.TemporaryDirectory() as tmp:
+            for name, rel in MAIN_JOB:
+                if args.only and name.split()[0] not in args.only and name not in args.only:
+                    continue
+                shell = main_job_shell(args.data / "base" / rel, Path(tmp))
+                row = run_shell(name, tiles, shaped=True, shell=shell)
+                row["cv_ratio"] = round(row["cv"] / planar["cv"], 2)
+                row["printed_cv_ratio"] = round(row["printed_cv"] / planar["cv"], 2)
+                print(row, flush=True)
+                rows.append(row)
     lines = [
         "# Element shape on objects (issue 14, item 5)", "",
         f"Run {datetime.date.today()} on {platform.machine()}, 2 cores shared with other jobs, "
@@ -157,7 +191,9 @@ def main() -> None:
         "best of 3); *job s*: the whole `textured_solid` with its check. "
         "*plain*: every tile point through the quad map (main before this change); "
         "*shaped*: every small element mapped as one similar shape of one size "
-        "(`geotex.mapping.shape`).", "",
+        "(`geotex.mapping.shape`). *X 15k*: the main job's shells (`geotex texture "
+        "X_15k.obj --tiles studs --size-mm 80` on `bench_main_job.py`'s decimations), "
+        "shaped only.", "",
         f"Planar 6 x 6 tiling: {planar['elements']} elements, CV {planar['cv']}, elongation "
         f"{planar['aspect_mean']} / {planar['aspect_p95']} / {planar['aspect_max']}.", "",
         "| shell | map | elements | CV | x planar | CV printed | x planar printed | left out | "

@@ -263,3 +263,60 @@ def test_leaned_studs_do_not_cross_upright_neighbours(torus_shell, studs):
     el_of = np.zeros(n, dtype=np.int64)
     el_of[fl] = label
     assert np.percentile(fp.aspect[m.leaned[el_of]], 95) < 1.15
+
+
+def test_leaned_studs_that_cross_an_upright_one_are_slid_off_it_not_stood_upright(
+        torus_shell, studs):
+    # where leaned and upright studs meet, a leaned stud that crosses an upright
+    # one was stood upright (its cross-section across its axis squashed by the
+    # cosine: on the top of the main job's Spot's head, half the median
+    # footprint); it is now slid along the surface away from the ones it
+    # crosses, and kept leaned where that clears them
+    pts = torus_shell.polycube.Y
+    leaned = _leaned_offsets(torus_shell, 25.0 + 25.0 * np.sin(np.arctan2(pts[:, 1], pts[:, 0])))
+    _, _, m = _footprints(leaned, studs, shaped=True)
+    scale = 0.2 * leaned.tile_size / studs.height
+    X0, shift0, first = shaped_positions(leaned, m.quads, m.tile_points, m.element,
+                                         scale=scale, spread=SPREAD, return_shift=True,
+                                         return_leaned=True)
+    label = m.element[m.faces[:, 0]]
+    moved = np.flatnonzero(np.abs(m.shift - shift0).max(axis=1) > 0)
+    slid = np.unique(m.element[moved])
+    # (before: 3 of the 433 leaned studs stood upright here, none slid)
+    assert slid.size >= 3 and m.leaned[slid].all()
+    assert m.leaned.sum() == first.sum()
+    # slid by a few hundredths of a tile, along the surface
+    step = np.linalg.norm(m.shift[moved] - shift0[moved], axis=1)
+    assert step.max() <= 0.15 * leaned.tile_size * (1 + 1e-9)
+    # and they cross no upright stud
+    after = element_contacts(m.vertices, m.faces, label=label)
+    a, b = after.touching[:, 0], after.touching[:, 1]
+    crossing = element_contacts(X0, m.faces, label=label).touching
+    assert (first[crossing[:, 0]] != first[crossing[:, 1]]).any()
+    assert not ((m.leaned[a] & ~first[b]) | (m.leaned[b] & ~first[a])).any()
+    assert after.folded.size == 0
+
+
+def test_studs_stand_up_where_the_offsets_lie_nearly_along_the_surface(torus_shell, studs):
+    # offsets leaning 80 degrees from the surface (smoothed over several tiles
+    # of a coarse shell they lean up to 85 on the top of the main job's Spot's
+    # head): raised along them a stud lay nearly flat on the surface (its top
+    # 0.19 of its height above it) and was not laid across them (beyond 70
+    # degrees); now it rises along its offset turned to 50 degrees from the
+    # map's normal, laid across that axis
+    from geotex.param.polycube_fit import SurfaceProjector
+    from geotex.mesh.geometry import face_normals
+
+    leaned = _leaned_offsets(torus_shell, 80.0)
+    fp, _, m = _footprints(leaned, studs, shaped=True)
+    assert m.leaned.mean() > 0.95
+    pc = leaned.polycube
+    w = m.tile_points[:, 2]
+    top = w >= w.max() - 1e-9
+    face, _ = pc.locate(m.quads[top], m.tile_points[top, :2])
+    foot, _ = SurfaceProjector(pc.Y, pc.F).project(m.vertices[top],
+                                                   face_normals(pc.Y, pc.F[face]))
+    height = np.linalg.norm(m.vertices[top] - foot, axis=1) / (0.2 * leaned.tile_size)
+    # cos 50 = 0.64 of the stud's height above the surface
+    assert np.median(height) > 0.6
+    assert element_contacts(m.vertices, m.faces).folded.size == 0

@@ -26,15 +26,19 @@ from scipy.spatial import cKDTree
 
 from geotex.check.intersections import self_intersecting_pairs_between
 from geotex.mapping.seat import _own_crossings, smoothed_folds
-from geotex.mapping.shape import SPREAD, map_jacobian, shaped_positions
+from geotex.mapping.shape import LEAN_SLIDES, SPREAD, _unit, map_jacobian, shaped_positions
 from geotex.mesh.geometry import group_boxes
-from geotex.mesh.topology import vertex_components
+from geotex.mesh.topology import compacted, concatenated, vertex_components
 from geotex.param.polycube_fit import SurfaceProjector
 from geotex.shells.locate import interpolated
 from geotex.tiles.tileset import TileSet
 
 __all__ = ["gathered_tiles", "side_keys", "MappedTiles", "mapped_tiles", "shell_positions",
-           "reseated_elements", "depth_scale"]
+           "reseated_elements", "depth_scale", "RESEAT_SLIDES"]
+
+#: Slides (tile sides) along the surface tried by :func:`reseated_elements`
+#: for a folded shaped element at full size, before it is shrunk.
+RESEAT_SLIDES = (0.05, 0.1)
 
 
 def _ranges(starts: np.ndarray, counts: np.ndarray) -> np.ndarray:
@@ -122,6 +126,8 @@ class MappedTiles:
     shift : numpy.ndarray, (N, 3) float64
         World move of every vertex's element by the spreading of overlapping
         shaped elements (zero with the plain map).
+    leaned : numpy.ndarray, (e,) bool
+        Elements laid across their leaning offset direction.
     """
 
     vertices: np.ndarray
@@ -217,22 +223,18 @@ def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: floa
     _, element = vertex_components(faces, kept.size)
     below = depth_scale(tiles, scale, anchor)
     if shaped:
-        if jacobian is None:                                # once for both calls
+        if jacobian is None:                                # once for every call
             jacobian = map_jacobian(pc)
-        X, shift, leaned = shaped_positions(shell, quad_of_vertex[kept], uvw[kept], element,
-                                            scale=scale, depth_scale=below, spread=SPREAD,
-                                            return_shift=True, return_leaned=True,
-                                            projector=projector, jacobian=jacobian)
-        crowded = _crowded_leaned(X, faces, element, leaned)
-        if crowded.any():
-            vs = np.flatnonzero(crowded[element])
-            _, local = np.unique(element[vs], return_inverse=True)
-            X = X.copy()
-            X[vs] = shaped_positions(shell, quad_of_vertex[kept][vs], uvw[kept][vs], local,
-                                     scale=scale, depth_scale=below, shift=shift[vs],
-                                     lean=np.zeros(int(local.max()) + 1, dtype=bool),
-                                     projector=projector, jacobian=jacobian)
-            leaned = leaned & ~crowded
+        if projector is None:
+            projector = SurfaceProjector(pc.Y, pc.F)
+        X, shift, leaned = shaped_positions(
+            shell, quad_of_vertex[kept], uvw[kept], element, scale=scale, depth_scale=below,
+            spread=SPREAD, return_shift=True, return_leaned=True, projector=projector,
+            jacobian=jacobian)
+        X, shift, leaned = _seated_leaned(
+            shell, X, quad_of_vertex[kept], uvw[kept], element, faces, leaned,
+            scale=scale, depth_scale=below, shift=shift, projector=projector,
+            jacobian=jacobian)
     else:
         X = shell_positions(shell, quad_of_vertex[kept], uvw[kept], scale=scale,
                             depth_scale=below)
@@ -243,17 +245,127 @@ def mapped_tiles(shell, tiles: TileSet, tile_of_quad: np.ndarray, *, scale: floa
                        shift, leaned)
 
 
-def _crowded_leaned(X, faces, element, leaned):
+def _seated_leaned(shell, X, quads, uvw, element, faces, leaned, *, scale, depth_scale, shift,
+                   projector, jacobian):
+    """Leaned elements that cross upright ones slid off them, else stood upright.
+
+    A leaned element that crosses an upright one (exact test) is tried slid
+    along the surface away from the upright ones it crosses by each of
+    :data:`~geotex.mapping.shape.LEAN_SLIDES` (every try of every such
+    element mapped in one call and tested in one exact test), and kept at
+    the first try that crosses no upright element; one no try seats
+    is mapped upright (on the main job's Spot, studs on the top of the head,
+    where the offset directions lean 40-65 degrees from the surface: upright,
+    their cross-section across their axis is squashed by the cosine, to half
+    the median footprint). The upright elements are those not ``leaned`` on
+    entry; tries are not tested against each other (leaned elements may
+    meet).
+
+    Returns
+    -------
+    X : numpy.ndarray, (N, 3) float64
+    shift : numpy.ndarray, (N, 3) float64
+        ``shift`` with the slides added.
+    leaned : numpy.ndarray, (e,) bool
+    """
+    n = leaned.size
+    crowded, away, lo, hi = _crowded_leaned(X, faces, element, leaned, away=True)
+    trials = np.asarray(LEAN_SLIDES, dtype=np.float64)
+    if not crowded.any() or trials.size == 0:
+        if crowded.any():
+            X, _, _ = _remapped(shell, X, quads, uvw, element, crowded, scale=scale,
+                                depth_scale=depth_scale, shift=shift, lean=False,
+                                projector=projector, jacobian=jacobian)
+        return X, shift, leaned & ~crowded
+    ids = np.flatnonzero(crowded)
+    p, k = ids.size, trials.size
+    vs = np.flatnonzero(crowded[element])
+    local = np.searchsorted(ids, element[vs])
+    # every try of every crowded element, as elements of their own
+    copy_el = (local[None, :] + p * np.arange(k)[:, None]).ravel()
+    slide = np.repeat(trials, p)[:, None] * float(shell.tile_size) * np.tile(away[ids], (k, 1))
+    Xc, Sc, landed = shaped_positions(
+        shell, np.tile(quads[vs], k), np.tile(uvw[vs], (k, 1)), copy_el, scale=scale,
+        depth_scale=depth_scale, shift=np.tile(shift[vs], (k, 1)),
+        lean=np.ones(p * k, dtype=bool), slide=slide, return_shift=True, return_leaned=True,
+        projector=projector, jacobian=jacobian)
+    # their faces, and those of the upright elements whose boxes overlap theirs
+    label = element[faces[:, 0]]
+    mine = np.flatnonzero(crowded[label])
+    at = np.full(X.shape[0], -1, dtype=np.int64)
+    at[vs] = np.arange(vs.size)
+    Fc = (at[faces[mine]][None, :, :] + vs.size * np.arange(k)[:, None, None]).reshape(-1, 3)
+    part_c = np.tile(local[at[faces[mine, 0]]], k) + p * np.repeat(np.arange(k), mine.size)
+    clo, chi = group_boxes(Xc, copy_el, p * k)
+    up = np.flatnonzero(~leaned)
+    up = up[np.all((lo[up] <= chi.max(axis=0)) & (hi[up] >= clo.min(axis=0)), axis=1)]
+    near = np.zeros(n, dtype=bool)
+    for c0 in range(0, p * k, 256):                 # (tries x upright boxes, in slices)
+        sl = slice(c0, c0 + 256)
+        near[up[np.all((clo[sl, None, :] <= hi[None, up, :])
+                       & (lo[None, up, :] <= chi[sl, None, :]), axis=2).any(axis=0)]] = True
+    theirs = np.flatnonzero(near[label])
+    V2, F2 = concatenated([(Xc, Fc), compacted(X, faces[theirs])])
+    part = np.concatenate([part_c, p * k + label[theirs]])
+    side = part < p * k
+    pairs = self_intersecting_pairs_between(V2, F2, part, side=side)
+    hit = np.zeros(p * k, dtype=bool)
+    a, b = part[pairs[:, 0]], part[pairs[:, 1]]
+    hit[np.where(side[pairs[:, 0]], a, b)] = True
+    # the first try of each that crosses no upright element (one whose slid
+    # shape landed off its lines was laid upright: not kept)
+    ok = (landed & ~hit).reshape(k, p)
+    first = np.argmax(ok, axis=0)
+    seated = ok[first, np.arange(p)]
+    X, shift = X.copy(), shift.copy()
+    rows = first[local] * vs.size + np.arange(vs.size)
+    take = seated[local]
+    X[vs[take]], shift[vs[take]] = Xc[rows[take]], Sc[rows[take]]
+    crowded[ids[seated]] = False
+    if crowded.any():
+        X, _, _ = _remapped(shell, X, quads, uvw, element, crowded, scale=scale,
+                            depth_scale=depth_scale, shift=shift, lean=False,
+                            projector=projector, jacobian=jacobian)
+        leaned = leaned & ~crowded
+    return X, shift, leaned
+
+
+def _remapped(shell, X, quads, uvw, element, which, *, scale, depth_scale, shift, lean,
+              projector=None, jacobian=None):
+    """``X`` with the elements ``which`` (a mask) mapped again, leaned or upright.
+
+    Also returns which elements (a mask over all) were laid leaned, and the
+    shift of every point.
+    """
+    vs = np.flatnonzero(which[element])
+    ids, local = np.unique(element[vs], return_inverse=True)
+    n = ids.size
+    X, S = X.copy(), shift.copy()
+    X[vs], S[vs], leaned = shaped_positions(
+        shell, quads[vs], uvw[vs], local, scale=scale, depth_scale=depth_scale, shift=shift[vs],
+        lean=np.full(n, bool(lean)), return_shift=True, return_leaned=True,
+        projector=projector, jacobian=jacobian)
+    out = np.zeros(which.size, dtype=bool)
+    out[ids[leaned]] = True
+    return X, out, S
+
+
+def _crowded_leaned(X, faces, element, leaned, *, away=False):
     """Leaned elements that cross an element standing as the map's offsets do.
 
     The exact test runs on the leaned elements and the elements whose boxes
     overlap theirs, one part per element, and examines only the pairs of a
     leaned and an upright element (the rows of the whole test that decide).
+    With ``away``, also the unit direction (world, ``(n, 3)``) from the
+    centres of the upright elements each one crosses to its own centre
+    (their boxes' centres; zero for the others) and the elements' boxes
+    ``lo, hi`` (``(n, 3)`` each; None when nothing leans).
     """
     n = leaned.size
     out = np.zeros(n, dtype=bool)
+    far = np.zeros((n, 3))
     if not leaned.any():
-        return out
+        return (out, far, None, None) if away else out
     lo, hi = group_boxes(X, element, n)
     lean = np.flatnonzero(leaned)
     near = cKDTree(0.5 * (lo + hi)).query_ball_point(
@@ -267,8 +379,16 @@ def _crowded_leaned(X, faces, element, leaned):
     pairs = sub[self_intersecting_pairs_between(X, faces[sub], label[sub],
                                                 side=leaned[label[sub]])]
     a, b = label[pairs[:, 0]], label[pairs[:, 1]]
-    out[np.where(leaned[a], a, b)] = True
-    return out
+    mine, other = np.where(leaned[a], a, b), np.where(leaned[a], b, a)
+    out[mine] = True
+    if not away:
+        return out
+    ends = np.unique(np.stack([mine, other], axis=1), axis=0)
+    centre = 0.5 * (lo + hi)
+    v = _unit(centre[ends[:, 0]] - centre[ends[:, 1]])
+    far = _unit(np.stack([np.bincount(ends[:, 0], weights=v[:, c], minlength=n)
+                          for c in range(3)], axis=1).astype(np.float64))
+    return out, far, lo, hi
 
 
 def depth_scale(tiles: TileSet, scale: float, anchor) -> float:
@@ -308,7 +428,7 @@ def shell_positions(shell, quads: np.ndarray, uvw: np.ndarray, *, scale: float,
 
 
 def reseated_elements(shell, mapped: "MappedTiles", label: np.ndarray, elements, *,
-                      scale: float, depth_scale: float, factors=None,
+                      scale: float, depth_scale: float, factors=None, slides=RESEAT_SLIDES,
                       projector: SurfaceProjector | None = None, jacobian=None
                       ) -> tuple[np.ndarray, np.ndarray]:
     """Shrink folded elements about their centre and map them again.
@@ -339,6 +459,11 @@ def reseated_elements(shell, mapped: "MappedTiles", label: np.ndarray, elements,
         Shrink factors tried; default 1, 0.75, 0.55, 0.4, 0.3 with
         ``mapped.shaped`` (size 1 is cast), else without 1 (the plain map
         again).
+    slides : sequence of float, optional
+        With ``mapped.shaped``, after size 1 the element is tried at full
+        size slid along the surface by each of these distances (tile sides)
+        six ways (the world axes laid in its tangent plane), before it is
+        shrunk (default :data:`RESEAT_SLIDES`).
     projector : SurfaceProjector, optional
         Closest points on the shell's fitted surface (the one
         :func:`mapped_tiles` used); built here, once for every size, if not
@@ -367,7 +492,14 @@ def reseated_elements(shell, mapped: "MappedTiles", label: np.ndarray, elements,
         projector = SurfaceProjector(shell.polycube.Y, shell.polycube.F)
     if jacobian is None and mapped.shaped:
         jacobian = map_jacobian(shell.polycube)
-    for f in factors:
+    trials = [(float(f), None) for f in factors]
+    if mapped.shaped and slides and 1.0 in factors:
+        # at full size slid along the surface (six ways, the world axes laid in
+        # its tangent plane) before it is shrunk
+        at = [float(f) for f in factors].index(1.0) + 1
+        ways = np.vstack([np.eye(3), -np.eye(3)])
+        trials[at:at] = [(1.0, float(t) * shell.tile_size * w) for t in slides for w in ways]
+    for f, way in trials:
         if still.size == 0:
             break
         # every still folded element at once, numbered 0 .. len(still) - 1
@@ -383,6 +515,7 @@ def reseated_elements(shell, mapped: "MappedTiles", label: np.ndarray, elements,
                               shrink=np.full(still.size, float(f)), similar=mapped.shaped,
                               shift=None if mapped.shift is None else mapped.shift[verts],
                               lean=None if mapped.leaned is None else mapped.leaned[still],
+                              slide=None if way is None else np.tile(way, (still.size, 1)),
                               projector=projector, cast=mapped.shaped, jacobian=jacobian)
         fstart = np.cumsum(counts) - counts
         left = []

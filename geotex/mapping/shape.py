@@ -28,7 +28,11 @@ plane it stood sheared, squashed by the cosine); ``cast`` does the same for
 upright shapes where the surface curves away from the tangent plane (to
 re-seat folded elements); ``lean`` keeps chosen
 elements in the tangent plane (:func:`~geotex.mapping.place.mapped_tiles`
-stands leaned elements that cross an upright neighbour upright again). ``s`` is ``sqrt(s1 s2)`` (the map's own area
+slides leaned elements that cross an upright neighbour off it along the
+surface, ``slide``, and stands those it cannot upright again). A mean offset
+direction leaning more than :data:`MAX_AXIS_LEAN` from the map's normal is
+turned towards it first (on a coarse shell the smoothed offsets can lie
+nearly along the surface). ``s`` is ``sqrt(s1 s2)`` (the map's own area
 scale) blended with the shell's mean tile side by ``evening`` (1, the
 default: every element gets the same size; 0: sizes follow the quads' areas,
 as with the plain map). Where quads are squashed the elements keep their
@@ -64,7 +68,7 @@ from geotex.shells.locate import interpolated
 
 __all__ = ["map_jacobian", "element_directions", "shaped_positions", "spread_centres", "ElementFootprints",
            "element_footprints", "MAX_EXTENT", "EVENING", "SPREAD", "GAP", "TILE_SLACK",
-           "LEAN_MISS", "MIN_LEAN"]
+           "LEAN_MISS", "MIN_LEAN", "LEAN_SLIDES", "MAX_AXIS_LEAN"]
 
 #: Elements wider than this (tile sides, in ``u`` or ``v``) keep the plain
 #: point-by-point map.
@@ -96,6 +100,27 @@ LEAN_MISS = 0.1
 #: Spot 1.32 and Blub 1.48 at 20, Blub 1.49 at 25 and 1.41 at 15, where 778 of
 #: its studs lean and 1,297 meet another).
 MIN_LEAN = 20.0
+
+#: Slides (tile sides) tried, in order, for a leaned element that crosses an
+#: upright neighbour, along the surface away from it, before it is stood
+#: upright (:func:`~geotex.mapping.place.mapped_tiles`). On the main job's
+#: Spot 41 of the 48 leaned studs that cross an upright one seat slid (printed
+#: footprint CV 1.48 x the planar tiling; 0.05, 0.1, 0.15 the same, 0.1
+#: alone 1.53). Laying them with their cross-section narrowed along the lean
+#: instead (the width kept by 0.67 or 0.33 of the way from the cosine to 1)
+#: seated 1-2 more: 1.48 as well.
+LEAN_SLIDES = (0.05, 0.15)
+
+#: Largest lean (degrees) of the axis a leaned shape rises along, from the
+#: map's tangent plane normal: steeper mean offset directions are turned
+#: towards that normal. On the 80 mm Spot of the main job (338 tiles, the
+#: offsets smoothed over several of them) they lean up to 85 degrees on the
+#: top of the head, where studs raised along them lay nearly flat on the
+#: surface (upright: footprint 0.02-0.1 of the median) or their shapes,
+#: carried along them, landed on triangles they graze and were laid upright
+#: (:data:`LEAN_MISS`). 50: printed footprint CV 1.48 x the planar tiling
+#: there, 1.66 x at 65, 1.55 x at 40 (more studs tilted off their offsets).
+MAX_AXIS_LEAN = 50.0
 
 #: Rounds of carrying a leaned shape's points along its axis onto the fitted
 #: surface (:func:`_cast_feet`; 0: closest points of the tangent plane's
@@ -170,7 +195,7 @@ def shaped_positions(shell, quads, uvw, element, *, scale: float,
                      max_extent: float = MAX_EXTENT, shrink=None, similar: bool = True,
                      spread: int = 0, shift=None, return_shift: bool = False,
                      lean=None, return_leaned: bool = False, projector=None,
-                     cast: bool = False, jacobian=None):
+                     cast: bool = False, jacobian=None, slide=None):
     """Shell positions of tile points, every small element mapped as one similar shape.
 
     Parameters
@@ -216,6 +241,12 @@ def shaped_positions(shell, quads, uvw, element, *, scale: float,
         in the map's tangent plane, raised along the offsets point by point.
     return_leaned : bool, optional
         Also return which elements were laid across their offset direction.
+    slide : array_like, (e, 3) float64, optional
+        World move of every element along the map's tangent plane (its part
+        along the plane's normal is dropped), added to ``shift`` (returned in
+        it); used to slide a leaned element off an upright neighbour it
+        crosses (:func:`~geotex.mapping.place.mapped_tiles`) and a folded
+        one off the fold (:func:`~geotex.mapping.place.reseated_elements`).
     projector : SurfaceProjector, optional
         Closest points on the fitted surface ``(pc.Y, pc.F)``
         (:class:`geotex.param.polycube_fit.SurfaceProjector`), for points
@@ -245,8 +276,8 @@ def shaped_positions(shell, quads, uvw, element, *, scale: float,
     ------
     InputError
         Mismatched array lengths, ``evening`` outside ``[0, 1]``, a
-        non-positive ``max_extent``, or a ``jacobian`` not of the polycube's
-        faces.
+        non-positive ``max_extent``, a ``slide`` not of one row per
+        element, or a ``jacobian`` not of the polycube's faces.
     """
     pc = shell.polycube
     if jacobian is not None and np.shape(jacobian) != (pc.F.shape[0], 3, 2):
@@ -307,6 +338,12 @@ def shaped_positions(shell, quads, uvw, element, *, scale: float,
         if sh.shape != (k, 3):
             raise InputError(f"shift must have shape ({k}, 3), got {sh.shape}")
         offset[element] = sh
+    if slide is not None:
+        sl = np.asarray(slide, dtype=np.float64)
+        if sl.shape != (n_el, 3):
+            raise InputError(f"slide must have shape ({n_el}, 3), got {sl.shape}")
+        tn = _unit(np.cross(R[:, :, 0], R[:, :, 1]))
+        offset += sl - np.einsum("ij,ij->i", sl, tn)[:, None] * tn
     offset[~ok] = 0.0
     if spread and ok.any():
         # footprint radius of every element, world
@@ -342,6 +379,17 @@ def shaped_positions(shell, quads, uvw, element, *, scale: float,
         # axis (followed point by point, the directions, turning by up to 15
         # degrees across a stud where the base curves, flared its top)
         axis = _unit(_group_mean(d, element, n_el))
+        if MAX_AXIS_LEAN < 90.0:
+            # offsets lying nearly along the surface (smoothed over several tiles
+            # on a coarse shell: up to 85 degrees on the top of the 80 mm Spot's
+            # head) turned towards the map's normal, to at most MAX_AXIS_LEAN
+            tn = _unit(np.cross(R[:, :, 0], R[:, :, 1]))
+            ca = np.einsum("ij,ij->i", tn, axis)
+            cmax = np.cos(np.radians(MAX_AXIS_LEAN))
+            steep = ca < cmax
+            if steep.any():
+                side = _unit(axis[steep] - ca[steep, None] * tn[steep])
+                axis[steep] = cmax * tn[steep] + np.sqrt(1.0 - cmax * cmax) * side
         Rl, lift = _leaned_frames(R, axis, min_lean=MIN_LEAN)
         lean[e_s] = True
         lean &= lift[:, 1].any(axis=1) & may_lean
