@@ -60,7 +60,7 @@ def _timed(argv, cwd) -> tuple[float, float, int, str, float, float]:
     return wall, peak, proc.returncode, (err[-1] if err else ""), cpu, load
 
 
-def _decimated(src: Path, target: int, out: Path) -> Path:
+def decimated_base(src: Path, target: int, out: Path) -> Path:
     """A copy of ``src`` decimated to about ``target`` faces (fast-simplification)."""
     import fast_simplification
 
@@ -129,7 +129,7 @@ def main(argv=None) -> int:
         bases = bases[:1]
     rows_texture, rows_map = [], []
     for label, src in bases:
-        base = _decimated(src, 15000, work / f"{src.stem}_15k.obj")
+        base = decimated_base(src, 15000, work / f"{src.stem}_15k.obj")
         for tile in ([None] if args.quick else [None, "small"]):
             out = work / f"{src.stem}_{tile}.stl"
             rep = work / f"{src.stem}_{tile}.json"

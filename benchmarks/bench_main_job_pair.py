@@ -64,7 +64,7 @@ def main(argv=None) -> int:
     ap.add_argument("--work", default=None)
     args = ap.parse_args(argv)
     sys.path.insert(0, str(HERE))
-    from bench_main_job import _decimated  # noqa: E402  (the same bases)
+    from bench_main_job import decimated_base  # noqa: E402  (the same bases)
 
     data = Path(args.data)
     work = Path(args.work or tempfile.mkdtemp(prefix="geotex-bench-pair-"))
@@ -74,7 +74,7 @@ def main(argv=None) -> int:
     for name, src in bases.items():
         base = work / f"{name}_15k.obj"
         if not base.exists():
-            _decimated(src, 15000, base)
+            decimated_base(src, 15000, base)
         shell = work / f"{name}_shell.npz"
         if not shell.exists():
             _run(args.a, ["texture", str(base), "--tiles", "studs", "-o",

@@ -112,10 +112,10 @@ def printed_footprints(shell, res) -> dict:
 
 def main_job_shell(src: Path, work: Path):
     """The shell ``geotex texture SRC_15k.obj --size-mm 80`` builds (as bench_main_job.py)."""
-    from bench_main_job import _decimated
+    from bench_main_job import decimated_base
     from geotex.cli.shell import shell_of_file
 
-    base = _decimated(src, 15000, work / f"{src.stem}_15k.obj")
+    base = decimated_base(src, 15000, work / f"{src.stem}_15k.obj")
     return shell_of_file(str(base), None, name=base.stem, size_mm=80.0)
 
 
