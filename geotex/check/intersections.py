@@ -1793,24 +1793,21 @@ def _cell_of(x, cell):
 
 
 @helper
-def _cell_range(box32, f, cell, cmin, cmax, clip):
-    """Cells ``lo .. hi`` (3 each) covered by face ``f``'s box and its corner
-    bits: on which axes ``lo`` is the box's true lowest cell; with ``clip``
-    the range is clipped to ``cmin .. cmax`` (empty: some ``lo > hi``)."""
-    lo = np.empty(3, np.int64)
-    hi = np.empty(3, np.int64)
-    bits = 7
-    for a in range(3):
-        x = _cell_of(box32[f, a], cell)
-        y = _cell_of(box32[f, 3 + a], cell)
-        if clip:
-            if x < cmin[a]:
-                bits &= ~(1 << a)
-                x = cmin[a]
-            y = min(y, cmax[a])
-        lo[a] = x
-        hi[a] = y
-    return lo, hi, bits
+def _cell_span(box32, f, a, cell, cmin, cmax, clip):
+    """Cells ``lo .. hi`` covered on axis ``a`` by face ``f``'s box and the
+    axis's corner bit (``1 << a`` when ``lo`` is the box's true lowest cell,
+    else 0); with ``clip`` the range is clipped to ``cmin[a] .. cmax[a]``
+    (empty: ``lo > hi``).  Scalars: no array per face (two small arrays per
+    face were most of the grid's time)."""
+    lo = _cell_of(box32[f, a], cell)
+    hi = _cell_of(box32[f, 3 + a], cell)
+    bit = 1 << a
+    if clip:
+        if lo < cmin[a]:
+            bit = 0
+            lo = cmin[a]
+        hi = min(hi, cmax[a])
+    return lo, hi, bit
 
 
 @helper
@@ -1824,16 +1821,20 @@ def _emit_entries(box32, act, rows, cell, cmin, cmax, size, clip, flag, shift, o
     write = keys.shape[0] > 0
     use_occ = occ.shape[0] > 0
     for r in range(rows.shape[0]):
-        lo, hi, bits = _cell_range(box32, act[rows[r]], cell, cmin, cmax, clip)
-        for x in range(lo[0], hi[0] + 1):
-            for y in range(lo[1], hi[1] + 1):
-                for z in range(lo[2], hi[2] + 1):
+        f = act[rows[r]]
+        lx, hx, bx = _cell_span(box32, f, 0, cell, cmin, cmax, clip)
+        ly, hy, by = _cell_span(box32, f, 1, cell, cmin, cmax, clip)
+        lz, hz, bz = _cell_span(box32, f, 2, cell, cmin, cmax, clip)
+        bits = bx | by | bz
+        for x in range(lx, hx + 1):
+            for y in range(ly, hy + 1):
+                for z in range(lz, hz + 1):
                     c = ((x - cmin[0]) * size[1] + (y - cmin[1])) * size[2] + (z - cmin[2])
                     if use_occ and not occ[c >> 6] & (np.uint64(1) << np.uint64(c & 63)):
                         continue
                     if write:
-                        corner = ((1 if x == lo[0] else 0) | (2 if y == lo[1] else 0)
-                                  | (4 if z == lo[2] else 0))
+                        corner = ((1 if x == lx else 0) | (2 if y == ly else 0)
+                                  | (4 if z == lz else 0))
                         keys[w] = (((c * 2 + flag) << shift) | (np.int64(rows[r]) << 3)
                                    | (bits & corner))
                     w += 1
@@ -1860,10 +1861,11 @@ def _level_grid(box32, act, cur, low, cell, row_bits, key_bits, chunk, occ_cells
     cmin = np.full(3, np.iinfo(np.int64).max, np.int64)
     cmax = np.full(3, np.iinfo(np.int64).min, np.int64)
     for r in range(n):
-        lo, hi, _ = _cell_range(box32, act[cur[r]], cell, cmin, cmax, False)
+        f = act[cur[r]]
         for a in range(3):
-            cmin[a] = min(cmin[a], lo[a])
-            cmax[a] = max(cmax[a], hi[a])
+            lo, hi, _ = _cell_span(box32, f, a, cell, cmin, cmax, False)
+            cmin[a] = min(cmin[a], lo)
+            cmax[a] = max(cmax[a], hi)
     size = cmax - cmin + 1
     if not (float(size[0]) * size[1] * size[2] * 2 < 2.0 ** (key_bits - shift)):
         return False, np.empty(0, np.uint8), np.empty(0, np.int32), np.empty(0, np.int32), \
