@@ -61,6 +61,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from geotex.errors import InputError
+from geotex.jit import JIT_MIN_SIZE, compiled
 from geotex.mesh.geometry import clamped_barycentric, face_normals
 from geotex.param.polycube_fit import SurfaceProjector
 from geotex.param.polycube_quads import chart_axes
@@ -647,6 +648,18 @@ def _walked_feet(pc, quads, uv, target, *, steps: int = 4):
     """
     r = pc.res
     k = quads.size
+    if 3 * k >= JIT_MIN_SIZE:
+        # one pass per point without temporaries: the same operations in the same order
+        face = np.zeros(k, dtype=np.int64)
+        bary = np.zeros((k, 3))
+        lost = np.ones(k, dtype=bool)
+        _walk_loops(np.ascontiguousarray(quads, dtype=np.int64),
+                    np.ascontiguousarray(uv, dtype=np.float64),
+                    np.ascontiguousarray(target, dtype=np.float64),
+                    np.ascontiguousarray(pc.Y, dtype=np.float64),
+                    np.ascontiguousarray(pc.F, dtype=np.int64), int(r),
+                    int(steps), face, bary, lost)
+        return face, bary, lost
     face = np.zeros(k, dtype=np.int64)
     bary = np.zeros((k, 3))
     lost = np.ones(k, dtype=bool)
@@ -685,6 +698,63 @@ def _walked_feet(pc, quads, uv, target, *, steps: int = 4):
         cur[todo[within]] = np.stack([nu, nv], axis=1)[within]
         todo = todo[within]
     return face, bary, lost
+
+
+@compiled
+def _walk_loops(quads, uv, target, Y, F, r, steps, face, bary, lost):
+    """Compiled :func:`_walked_feet` (fills ``face``, ``bary``, ``lost``), point by point.
+
+    Every point takes the numpy path's steps with the same floating-point
+    operations in the same order (``pc.locate``'s face; the 3-term dot
+    products in ``np.einsum``'s order, ``(x0 y0 + x2 y2) + x1 y1``, as numpy
+    2.x sums three terms), so the results are equal bit for bit
+    (``tests/test_compiled_paths.py`` compares them).
+    """
+    rr = r * r
+    for k in range(quads.shape[0]):
+        cu = min(max(uv[k, 0], 0.0), 1.0)
+        cv = min(max(uv[k, 1], 0.0), 1.0)
+        for _ in range(steps):
+            # pc.locate's face of (cu, cv)
+            xu = min(max(cu, 0.0), 1.0) * r
+            xv = min(max(cv, 0.0), 1.0) * r
+            c0 = min(np.int64(np.floor(xu)), r - 1)
+            c1 = min(np.int64(np.floor(xv)), r - 1)
+            up = 1 if (xv - c1) > (xu - c0) else 0
+            f = quads[k] * (2 * rr) + c0 * r + c1 + up * rr
+            i0, i1, i2 = F[f, 0], F[f, 1], F[f, 2]
+            y0, y1, y2 = Y[i0, 0], Y[i0, 1], Y[i0, 2]
+            e10, e11, e12 = Y[i1, 0] - y0, Y[i1, 1] - y1, Y[i1, 2] - y2
+            e20, e21, e22 = Y[i2, 0] - y0, Y[i2, 1] - y1, Y[i2, 2] - y2
+            g0, g1, g2 = target[k, 0] - y0, target[k, 1] - y1, target[k, 2] - y2
+            a = e10 * e10 + e12 * e12 + e11 * e11
+            b = e10 * e20 + e12 * e22 + e11 * e21
+            c = e20 * e20 + e22 * e22 + e21 * e21
+            det = a * c - b * b
+            if not abs(det) > 0:
+                det = 1.0
+            p = e10 * g0 + e12 * g2 + e11 * g1
+            q = e20 * g0 + e22 * g2 + e21 * g1
+            b1 = (c * p - b * q) / det
+            b2 = (a * q - b * p) / det
+            if b1 >= -1e-9 and b2 >= -1e-9 and b1 + b2 <= 1.0 + 1e-9:
+                face[k] = f
+                bary[k, 0] = 1.0 - b1 - b2
+                bary[k, 1] = b1
+                bary[k, 2] = b2
+                lost[k] = False
+                break
+            local = f % (2 * rr)
+            upper = local >= rr
+            cell = local % rr
+            ci, cj = cell // r, cell % r
+            du1, dv1 = 1.0, (1.0 if upper else 0.0)
+            du2, dv2 = (0.0 if upper else 1.0), 1.0
+            nu = (ci + b1 * du1 + b2 * du2) / r
+            nv = (cj + b1 * dv1 + b2 * dv2) / r
+            if not (nu >= 0.0 and nu <= 1.0 and nv >= 0.0 and nv <= 1.0):
+                break
+            cu, cv = nu, nv
 
 
 def _home_frame(layout, quads, uv, element, n_el):
