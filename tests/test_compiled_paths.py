@@ -630,3 +630,32 @@ def test_shaped_map_equals_numpy_path(monkeypatch, torus_shell_small, shared_til
     fast, slow = runs
     assert fast.vertices.tobytes() == slow.vertices.tobytes()
     assert np.array_equal(fast.faces, slow.faces) and np.array_equal(fast.leaned, slow.leaned)
+
+
+@pytest.mark.parametrize("n", [2, 400])
+@pytest.mark.parametrize("layout", ["none", "c", "across"])
+def test_spread_rounds_equal_numpy_path(monkeypatch, layout, n):
+    # np.einsum's order of summing follows the layout of the ideal maps: both
+    # layouts the compiled round takes (C order, and the one shaped_positions makes)
+    import geotex.mapping.shape as shape
+
+    rng = np.random.default_rng(11)
+    centre = rng.uniform(0, 10, (n, 3)) * [1, 1, 0.1]
+    centre[1] = centre[0] + [0.1, 0.05, 0.0]
+    if n > 2:
+        centre[3] = centre[2]                             # a pair at distance zero
+    normal = rng.normal(size=(n, 3)) * 0.1 + [0, 0, 1]
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    radius = rng.uniform(0.2, 0.5, n)
+    M = rng.uniform(1.2, 1.6, (n, 1, 1)) * np.eye(2, 3)[None] + rng.normal(size=(n, 2, 3)) * 0.05
+    ideal = {"none": None, "c": M,
+             "across": np.transpose(np.ascontiguousarray(np.transpose(M, (0, 2, 1))), (0, 2, 1))
+             }[layout]
+    if layout == "across":
+        assert not ideal.flags.c_contiguous and np.array_equal(ideal, M)
+    runs = []
+    for size in (0, 10 ** 12):
+        monkeypatch.setattr(shape, "JIT_MIN_SIZE", size)
+        runs.append(shape.spread_centres(centre, radius, normal, rounds=20, ideal=ideal))
+    assert runs[0].tobytes() == runs[1].tobytes()
+    assert np.abs(runs[0]).max() > 0.01                   # discs were pushed
