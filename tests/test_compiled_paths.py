@@ -567,3 +567,95 @@ def test_first_compile_is_reported_once_and_never_for_cached_code(tmp_path):
     first = run()
     assert first == ["geotex.mesh.geometry._degenerate_loops"] * 2
     assert run() == []                                          # loaded from the cache
+
+
+@pytest.fixture(scope="module")
+def torus_shell_small():
+    from geotex.shells import build_shell
+
+    V, F = torus(1.0, 0.4, n_major=48, n_minor=24)
+    return build_shell(V, F, tile_size=0.4, name="torus")
+
+
+def test_walked_feet_and_interpolation_equal_numpy_path(monkeypatch, torus_shell_small):
+    import geotex.mapping.shape as shape
+    import geotex.shells.locate as locate
+
+    pc = torus_shell_small.polycube
+    rng = np.random.default_rng(5)
+    k = 4000
+    quads = rng.integers(0, pc.layout.n_quads, k)
+    uv = rng.uniform(-0.1, 1.1, (k, 2))                    # some outside the quad: clamped
+    face, bary = pc.locate(quads, np.clip(uv, 0, 1))
+    base = locate.interpolated(pc.Y, pc.F, face, bary)
+    # targets near their quad's surface (walks that settle or leave the quad) and far
+    # from it (lost); one exactly on a vertex
+    target = base + rng.normal(size=(k, 3)) * np.where(rng.random(k) < 0.8, 0.05, 0.5)[:, None]
+    target[0] = pc.Y[pc.F[face[0], 0]]
+    values = np.hstack([pc.Y, torus_shell_small.D])
+    monkeypatch.setattr(shape, "JIT_MIN_SIZE", 0)
+    monkeypatch.setattr(locate, "JIT_MIN_SIZE", 0)
+    fast = shape._walked_feet(pc, quads, uv, target)
+    fast_i = locate.interpolated(values, pc.F, face, bary)
+    monkeypatch.setattr(shape, "JIT_MIN_SIZE", 10 ** 12)
+    monkeypatch.setattr(locate, "JIT_MIN_SIZE", 10 ** 12)
+    slow = shape._walked_feet(pc, quads, uv, target)
+    slow_i = locate.interpolated(values, pc.F, face, bary)
+    for a, b in zip(fast, slow):
+        assert a.dtype == b.dtype and a.tobytes() == b.tobytes()
+    assert fast_i.dtype == slow_i.dtype and fast_i.tobytes() == slow_i.tobytes()
+    lost = slow[2]
+    assert lost.any() and (~lost).any()
+
+
+def test_shaped_map_equals_numpy_path(monkeypatch, torus_shell_small, shared_tileset):
+    # the whole shaped map (spread, leaned and cast shapes, re-seating) through the
+    # compiled walk and interpolation gives the same positions bit for bit
+    import geotex.mapping.shape as shape
+    import geotex.shells.locate as locate
+    from geotex.exemplars import exemplar
+    from geotex.mapping import edge_colors, mapped_tiles, tiles_for_quads
+    from geotex.tiles import build_tileset
+
+    tiles = shared_tileset("studs-res6-1-seed0-paste", lambda: build_tileset(
+        exemplar("studs", seed=1, resolution=6), colors=1, seed=0, interior="paste"))
+    pc = torus_shell_small.polycube
+    colors = edge_colors(pc.layout.edge_axis, tiles.n_colors, seed=0)
+    toq = tiles_for_quads(tiles, pc.layout.quad_axes, pc.layout.quad_edge, colors)
+    runs = []
+    for size in (0, 10 ** 12):
+        monkeypatch.setattr(shape, "JIT_MIN_SIZE", size)
+        monkeypatch.setattr(locate, "JIT_MIN_SIZE", size)
+        runs.append(mapped_tiles(torus_shell_small, tiles, toq, scale=0.1, anchor=0.05))
+    fast, slow = runs
+    assert fast.vertices.tobytes() == slow.vertices.tobytes()
+    assert np.array_equal(fast.faces, slow.faces) and np.array_equal(fast.leaned, slow.leaned)
+
+
+@pytest.mark.parametrize("n", [2, 400])
+@pytest.mark.parametrize("layout", ["none", "c", "across"])
+def test_spread_rounds_equal_numpy_path(monkeypatch, layout, n):
+    # np.einsum's order of summing follows the layout of the ideal maps: both
+    # layouts the compiled round takes (C order, and the one shaped_positions makes)
+    import geotex.mapping.shape as shape
+
+    rng = np.random.default_rng(11)
+    centre = rng.uniform(0, 10, (n, 3)) * [1, 1, 0.1]
+    centre[1] = centre[0] + [0.1, 0.05, 0.0]
+    if n > 2:
+        centre[3] = centre[2]                             # a pair at distance zero
+    normal = rng.normal(size=(n, 3)) * 0.1 + [0, 0, 1]
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    radius = rng.uniform(0.2, 0.5, n)
+    M = rng.uniform(1.2, 1.6, (n, 1, 1)) * np.eye(2, 3)[None] + rng.normal(size=(n, 2, 3)) * 0.05
+    ideal = {"none": None, "c": M,
+             "across": np.transpose(np.ascontiguousarray(np.transpose(M, (0, 2, 1))), (0, 2, 1))
+             }[layout]
+    if layout == "across":
+        assert not ideal.flags.c_contiguous and np.array_equal(ideal, M)
+    runs = []
+    for size in (0, 10 ** 12):
+        monkeypatch.setattr(shape, "JIT_MIN_SIZE", size)
+        runs.append(shape.spread_centres(centre, radius, normal, rounds=20, ideal=ideal))
+    assert runs[0].tobytes() == runs[1].tobytes()
+    assert np.abs(runs[0]).max() > 0.01                   # discs were pushed

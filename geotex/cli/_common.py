@@ -109,16 +109,18 @@ def preload_compiled(*, relief: bool = False) -> None:
     The self-intersection test (input check, shell, union, final check), edge
     topology, degenerate faces, volumes, needle heights and the weld: a fresh
     process otherwise pays for numba (~0.4 s) at the input check, in the main
-    thread. ``relief``: also the relief refinement's loops (``geotex displace``).
+    thread. ``relief``: also the relief refinement's loops (``geotex displace``);
+    otherwise also the tile mapping's (the shaped map's walk to the fitted
+    surface, interpolation over the shell's faces).
     """
     import importlib
 
     from geotex.jit import preload
 
     modules = ["geotex.check.intersections", "geotex.io", "geotex.mesh.needles"]
-    if relief:
-        modules.append("geotex.relief.subdivide")
+    modules += ["geotex.relief.subdivide"] if relief else ["geotex.mapping.shape"]
     for name in modules:
         importlib.import_module(name)
-    packages = ["geotex.check", "geotex.mesh", "geotex.io"] + (["geotex.relief"] if relief else [])
+    packages = ["geotex.check", "geotex.mesh", "geotex.io"] + (
+        ["geotex.relief"] if relief else ["geotex.mapping", "geotex.shells"])
     PRELOADS.append(preload(*packages))

@@ -61,6 +61,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from geotex.errors import InputError
+from geotex.jit import JIT_MIN_SIZE, compiled
 from geotex.mesh.geometry import clamped_barycentric, face_normals
 from geotex.param.polycube_fit import SurfaceProjector
 from geotex.param.polycube_quads import chart_axes
@@ -534,10 +535,33 @@ def spread_centres(centre, radius, normal, *, rounds: int = SPREAD, gap: float =
     if c.shape[0] < 2:
         return np.zeros_like(c)
     reach = 2.0 * gap * float(radius.max())
+    normal = np.asarray(normal, dtype=np.float64)
+    # from JIT_MIN_SIZE coordinates moved over all rounds, each round's pushes are
+    # summed by a compiled loop over the pairs (the same operations in the same
+    # order). np.einsum sums three products in an order that follows the memory
+    # layout of its operands (x0 y0 + x2 y2 first where the summed axis is the
+    # innermost, left to right where it is not: the layout of the ideal maps
+    # shaped_positions makes), so the loop takes only the layouts it knows
+    ideal_a = None if ideal is None else np.asarray(ideal)
+    across = ideal_a is not None and ideal_a.dtype == np.float64 and ideal_a.ndim == 3 and (
+        np.transpose(ideal_a, (0, 2, 1)).flags.c_contiguous)
+    fast = (3 * c.shape[0] * int(rounds) >= JIT_MIN_SIZE and normal.flags.c_contiguous
+            and (ideal_a is None or across or (ideal_a.dtype == np.float64
+                                                and ideal_a.flags.c_contiguous)))
+    if fast:
+        nrm_c = normal
+        rad_c = np.ascontiguousarray(radius)
+        ideal_c = np.zeros((1, 2, 3)) if ideal is None else ideal_a
     for _ in range(int(rounds)):
         pairs = cKDTree(c).query_pairs(reach, output_type="ndarray")
         if pairs.size == 0:
             break
+        if fast:
+            if not _spread_round(c, start, rad_c, nrm_c, ideal_c, ideal is not None, across,
+                                 float(gap), TILE_SLACK, 2.0 - TILE_SLACK,
+                                 np.ascontiguousarray(pairs, dtype=np.int64)):
+                break
+            continue
         i, j = pairs[:, 0], pairs[:, 1]
         v = c[j] - c[i]
         nrm = _unit(normal[i] + normal[j])
@@ -567,6 +591,88 @@ def spread_centres(centre, radius, normal, *, rounds: int = SPREAD, gap: float =
         move -= np.einsum("ij,ij->i", move, normal)[:, None] * normal
         c += move
     return c - start
+
+
+@compiled
+def _spread_round(c, start, radius, normal, ideal, with_ideal, across, gap, slack, beyond,
+                  pairs):
+    """One round of :func:`spread_centres` over its ``pairs``, moving ``c`` in place.
+
+    The numpy round's operations in its order: the 3-term dot products as
+    ``np.einsum`` sums them on C-ordered operands (``(x0 y0 + x2 y2) + x1
+    y1``; left to right for ``ideal`` stored ``across``, its rows innermost,
+    as :func:`shaped_positions` makes it), the norms as
+    ``np.linalg.norm`` (``(x0^2 + x1^2) + x2^2``), the pushes summed per
+    element as ``np.bincount`` sums them (every pair's ``i`` end in pair
+    order, then every ``j`` end). Returns False (and moves nothing) when no
+    pair is pushed.
+    """
+    m = pairs.shape[0]
+    push = np.zeros((m, 3))
+    hit = np.zeros(m, dtype=np.bool_)
+    any_hit = False
+    for p in range(m):
+        i, j = pairs[p, 0], pairs[p, 1]
+        v0, v1, v2 = c[j, 0] - c[i, 0], c[j, 1] - c[i, 1], c[j, 2] - c[i, 2]
+        s0, s1, s2 = normal[i, 0] + normal[j, 0], normal[i, 1] + normal[j, 1], \
+            normal[i, 2] + normal[j, 2]
+        n = np.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
+        if n > 0:
+            s0, s1, s2 = s0 / n, s1 / n, s2 / n
+        else:
+            s0, s1, s2 = 0.0, 0.0, 0.0
+        dot = v0 * s0 + v2 * s2 + v1 * s1
+        v0, v1, v2 = v0 - dot * s0, v1 - dot * s1, v2 - dot * s2
+        dist = np.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
+        want = gap * (radius[i] + radius[j])
+        h = dist > 0
+        if with_ideal:
+            d0, d1, d2 = start[j, 0] - start[i, 0], start[j, 1] - start[i, 1], \
+                start[j, 2] - start[i, 2]
+            if across:
+                ti0 = ideal[i, 0, 0] * d0 + ideal[i, 0, 1] * d1 + ideal[i, 0, 2] * d2
+                ti1 = ideal[i, 1, 0] * d0 + ideal[i, 1, 1] * d1 + ideal[i, 1, 2] * d2
+                tj0 = ideal[j, 0, 0] * d0 + ideal[j, 0, 1] * d1 + ideal[j, 0, 2] * d2
+                tj1 = ideal[j, 1, 0] * d0 + ideal[j, 1, 1] * d1 + ideal[j, 1, 2] * d2
+            else:
+                ti0 = ideal[i, 0, 0] * d0 + ideal[i, 0, 2] * d2 + ideal[i, 0, 1] * d1
+                ti1 = ideal[i, 1, 0] * d0 + ideal[i, 1, 2] * d2 + ideal[i, 1, 1] * d1
+                tj0 = ideal[j, 0, 0] * d0 + ideal[j, 0, 2] * d2 + ideal[j, 0, 1] * d1
+                tj1 = ideal[j, 1, 0] * d0 + ideal[j, 1, 2] * d2 + ideal[j, 1, 1] * d1
+            tile = 0.5 * (np.sqrt(ti0 * ti0 + ti1 * ti1) + np.sqrt(tj0 * tj0 + tj1 * tj1))
+            cap = beyond * tile
+            if np.isnan(want) or np.isnan(cap):
+                want = np.nan
+            elif cap < want:
+                want = cap
+            h = h and dist < slack * tile
+        short = want - dist
+        h = h and short > 0
+        if h:
+            f = 0.25 * short / dist
+            push[p, 0], push[p, 1], push[p, 2] = f * v0, f * v1, f * v2
+            hit[p] = True
+            any_hit = True
+    if not any_hit:
+        return False
+    move = np.zeros(c.shape)
+    for p in range(m):
+        if hit[p]:
+            i = pairs[p, 0]
+            for a in range(3):
+                move[i, a] += -push[p, a]
+    for p in range(m):
+        if hit[p]:
+            j = pairs[p, 1]
+            for a in range(3):
+                move[j, a] += push[p, a]
+    for e in range(c.shape[0]):
+        m0, m1, m2 = move[e, 0], move[e, 1], move[e, 2]
+        dot = m0 * normal[e, 0] + m2 * normal[e, 2] + m1 * normal[e, 1]
+        c[e, 0] += m0 - dot * normal[e, 0]
+        c[e, 1] += m1 - dot * normal[e, 1]
+        c[e, 2] += m2 - dot * normal[e, 2]
+    return True
 
 
 def _cast_feet(pc, quads, uv, target, direction, face, bary, projector, *, rounds: int):
@@ -647,6 +753,18 @@ def _walked_feet(pc, quads, uv, target, *, steps: int = 4):
     """
     r = pc.res
     k = quads.size
+    if 3 * k >= JIT_MIN_SIZE:
+        # one pass per point without temporaries: the same operations in the same order
+        face = np.zeros(k, dtype=np.int64)
+        bary = np.zeros((k, 3))
+        lost = np.ones(k, dtype=bool)
+        _walk_loops(np.ascontiguousarray(quads, dtype=np.int64),
+                    np.ascontiguousarray(uv, dtype=np.float64),
+                    np.ascontiguousarray(target, dtype=np.float64),
+                    np.ascontiguousarray(pc.Y, dtype=np.float64),
+                    np.ascontiguousarray(pc.F, dtype=np.int64), int(r),
+                    int(steps), face, bary, lost)
+        return face, bary, lost
     face = np.zeros(k, dtype=np.int64)
     bary = np.zeros((k, 3))
     lost = np.ones(k, dtype=bool)
@@ -685,6 +803,63 @@ def _walked_feet(pc, quads, uv, target, *, steps: int = 4):
         cur[todo[within]] = np.stack([nu, nv], axis=1)[within]
         todo = todo[within]
     return face, bary, lost
+
+
+@compiled
+def _walk_loops(quads, uv, target, Y, F, r, steps, face, bary, lost):
+    """Compiled :func:`_walked_feet` (fills ``face``, ``bary``, ``lost``), point by point.
+
+    Every point takes the numpy path's steps with the same floating-point
+    operations in the same order (``pc.locate``'s face; the 3-term dot
+    products in ``np.einsum``'s order, ``(x0 y0 + x2 y2) + x1 y1``, as numpy
+    2.x sums three terms), so the results are equal bit for bit
+    (``tests/test_compiled_paths.py`` compares them).
+    """
+    rr = r * r
+    for k in range(quads.shape[0]):
+        cu = min(max(uv[k, 0], 0.0), 1.0)
+        cv = min(max(uv[k, 1], 0.0), 1.0)
+        for _ in range(steps):
+            # pc.locate's face of (cu, cv)
+            xu = min(max(cu, 0.0), 1.0) * r
+            xv = min(max(cv, 0.0), 1.0) * r
+            c0 = min(np.int64(np.floor(xu)), r - 1)
+            c1 = min(np.int64(np.floor(xv)), r - 1)
+            up = 1 if (xv - c1) > (xu - c0) else 0
+            f = quads[k] * (2 * rr) + c0 * r + c1 + up * rr
+            i0, i1, i2 = F[f, 0], F[f, 1], F[f, 2]
+            y0, y1, y2 = Y[i0, 0], Y[i0, 1], Y[i0, 2]
+            e10, e11, e12 = Y[i1, 0] - y0, Y[i1, 1] - y1, Y[i1, 2] - y2
+            e20, e21, e22 = Y[i2, 0] - y0, Y[i2, 1] - y1, Y[i2, 2] - y2
+            g0, g1, g2 = target[k, 0] - y0, target[k, 1] - y1, target[k, 2] - y2
+            a = e10 * e10 + e12 * e12 + e11 * e11
+            b = e10 * e20 + e12 * e22 + e11 * e21
+            c = e20 * e20 + e22 * e22 + e21 * e21
+            det = a * c - b * b
+            if not abs(det) > 0:
+                det = 1.0
+            p = e10 * g0 + e12 * g2 + e11 * g1
+            q = e20 * g0 + e22 * g2 + e21 * g1
+            b1 = (c * p - b * q) / det
+            b2 = (a * q - b * p) / det
+            if b1 >= -1e-9 and b2 >= -1e-9 and b1 + b2 <= 1.0 + 1e-9:
+                face[k] = f
+                bary[k, 0] = 1.0 - b1 - b2
+                bary[k, 1] = b1
+                bary[k, 2] = b2
+                lost[k] = False
+                break
+            local = f % (2 * rr)
+            upper = local >= rr
+            cell = local % rr
+            ci, cj = cell // r, cell % r
+            du1, dv1 = 1.0, (1.0 if upper else 0.0)
+            du2, dv2 = (0.0 if upper else 1.0), 1.0
+            nu = (ci + b1 * du1 + b2 * du2) / r
+            nv = (cj + b1 * dv1 + b2 * dv2) / r
+            if not (nu >= 0.0 and nu <= 1.0 and nv >= 0.0 and nv <= 1.0):
+                break
+            cu, cv = nu, nv
 
 
 def _home_frame(layout, quads, uv, element, n_el):
