@@ -18,10 +18,11 @@ the exemplar offers fewer than :data:`MIN_SEGMENTS` distinct candidate
 segments per strip needed there (:func:`~geotex.tiles.strips.distinct_segments`:
 distinct sets of crossing elements over a 32 x 32 lattice of segment
 starts), which includes an exemplar shorter than a tile; never for a
-lattice set (quilted copies are moved off the lattice by ICP).  Every
-catalog exemplar (4 x 4 tiles) offers 104 (studs) to 469 such segments, so
-their sets are built from the exemplar as before; a 1.3 x 1.3 studs
-exemplar offers 10 along x for the 2 strips of a 2-colour isotropic set.
+lattice set (quilted copies are moved off the lattice by ICP).  The
+catalog's exemplars cut into strips (4 x 4 tiles) offer 106 (studs) to 711
+(scales) such segments, so their sets are built from the exemplar as
+before; the catalog studs exemplar cropped to 1.3 x 1.3 offers 4 along x
+for the 2 strips of a 2-colour isotropic set.
 """
 
 from __future__ import annotations
