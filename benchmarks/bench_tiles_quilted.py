@@ -2,7 +2,7 @@
 
 Issue 14 item 2 (``quilted_source`` of ``build_tileset``, ``geotex/tiles/source.py``):
 catalog exemplars cropped to a small square (``Exemplar.cropped``: the
-elements lying wholly inside), each built twice in the same run, one right
+elements lying wholly inside) or made that small (same parameters), each built twice in the same run, one right
 after the other: *before*, strips and interiors cut from the crop itself
 (``quilted_source=False``, what main does), and *after*, from a 4 x 4 tile
 texture quilted from it first (``quilted_source=True``; ``"auto"``, the
@@ -42,18 +42,24 @@ from bench_tiles_corners import measure  # noqa: E402
 
 RESULTS = Path(__file__).parent / "results"
 
-# (catalog recipe whose exemplar is cropped, crop side, build options)
+# (catalog recipe, side, "crop" its exemplar or "make" one of that size, build options)
 CASES = (
-    ("studs", 1.3, dict(colors=2, isotropic=True, seed=4)),
-    ("studs", 0.9, dict(colors=1, isotropic=True, seed=4)),
-    ("scales-planar", 1.3, dict(colors=2, planar=True, seed=2)),
-    ("studs", 1.1, dict(colors=2, planar=True, seed=0)),
+    ("studs", 1.3, "crop", dict(colors=2, isotropic=True, seed=4)),
+    ("studs", 0.9, "crop", dict(colors=1, isotropic=True, seed=4)),
+    ("scales-planar", 1.3, "crop", dict(colors=2, planar=True, seed=2)),
+    ("studs", 1.1, "crop", dict(colors=2, planar=True, seed=0)),
+    ("studs", 1.1, "make", dict(colors=2, seed=0)),
+    ("scales-planar", 1.3, "make", dict(colors=2, planar=True, seed=2)),
 )
 
 
-def cropped(name: str, side: float):
+def small(name: str, side: float, how: str):
+    """The recipe's exemplar cropped to ``side`` (or made that size, same parameters)."""
     r = CATALOG.recipe(name)
-    return exemplar(r["exemplar"]["name"], **r["exemplar"].get("params", {})).cropped((side, side))
+    params = dict(r["exemplar"].get("params", {}))
+    if how == "make":
+        return exemplar(r["exemplar"]["name"], **{**params, "size": [side, side]})
+    return exemplar(r["exemplar"]["name"], **params).cropped((side, side))
 
 
 def run(ex, options: dict, quilted) -> dict:
@@ -80,13 +86,13 @@ def run(ex, options: dict, quilted) -> dict:
 
 def main() -> None:
     rows = []
-    for name, side, options in CASES:
-        ex = cropped(name, side)
-        row = {"recipe": name, "crop": side, "elements": ex.n_elements,
+    for name, side, how, options in CASES:
+        ex = small(name, side, how)
+        row = {"recipe": name, "crop": side, "how": how, "elements": ex.n_elements,
                "options": options}
         for label, quilted in (("before", False), ("after", True)):
             row[label] = run(ex, options, quilted)
-            print(name, side, label, row[label], flush=True)
+            print(name, side, how, label, row[label], flush=True)
         rows.append(row)
     load = os.getloadavg()
     RESULTS.mkdir(exist_ok=True)
@@ -100,13 +106,16 @@ def main() -> None:
           "distinct segments x / y | seamless | coverage | corner ratio | side edges | CPU s |")
     print("|---|---|---|---|---|---|---|---|---|---|---|")
     for row in rows:
-        kind = ("isotropic" if row["options"].get("isotropic") else "planar") + \
+        kind = ("isotropic" if row["options"].get("isotropic") else
+                "planar" if row["options"].get("planar") else "complete") + \
             f" {row['options']['colors']} col., seed {row['options']['seed']}"
         for label in ("before", "after"):
             r = row[label]
             src = "crop" if label == "before" else "quilted 4 x 4"
             built = "yes" if r["builds"] else f"no: {r['error'][:60]}"
-            print(f"| {row['recipe']} {row['crop']} x {row['crop']} ({row['elements']} el.) | "
+            what = "cropped to" if row["how"] == "crop" else "made"
+            print(f"| {row['recipe']} {what} {row['crop']} x {row['crop']} "
+                  f"({row['elements']} el.) | "
                   f"{kind} | {src} | {built} | "
                   f"{cell(r, 'strips')} ({cell(r, 'elements_per_strip')}) | "
                   f"{'/'.join(map(str, r['segments'])) if r['builds'] else '-'} | "
