@@ -10,7 +10,11 @@ finds fewer distinct strips than colours and the build fails.  Here the
 exemplar is first quilted (:func:`geotex.quilting.quilt_texture`, the one
 quilter of geotex) into a square of side :data:`SOURCE_SIDE` tile units, and
 that texture replaces the exemplar for the strips, the corner patch, the
-interior quilting windows and the gap fills.
+interior quilting windows and the gap fills.  That last part differs from
+the paper, which synthesizes the tile interiors from ``M_in`` itself: a
+small exemplar's quilting window (2 x 2 tiles) would be the whole exemplar
+for every tile, and the frames' elements, being quilted copies, match the
+windows of ``M_out`` as well as the exemplar's.
 
 When (``quilted_source`` of :func:`geotex.tiles.build.build_tileset`):
 ``"auto"`` (the default) quilts when, along an axis strips are cut along,
