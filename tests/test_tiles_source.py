@@ -132,3 +132,16 @@ def test_cli_quilted_source(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "--quilted-source maybe" in err
     assert not (tmp_path / "n.npz").exists() and not (tmp_path / "m.npz").exists()
+
+
+def test_cropped_exemplar_keeps_whole_elements_only():
+    ex = exemplar("studs", size=(4.0, 4.0), seed=0)
+    c = ex.cropped((1.3, 1.3))
+    assert c.size == (1.3, 1.3) and c.params["cropped"] == [1.3, 1.3]
+    assert 0 < c.n_elements < ex.n_elements
+    assert c.vertices[:, :2].min() >= 0.0 and c.vertices[:, :2].max() <= 1.3
+    assert (c.height, c.depth, c.name) == (ex.height, ex.depth, ex.name)
+    with pytest.raises(InputError, match="no element"):
+        ex.cropped((0.05, 0.05))
+    with pytest.raises(InputError, match="positive"):
+        ex.cropped((0.0, 1.0))
