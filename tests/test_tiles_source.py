@@ -115,6 +115,9 @@ def test_quilted_source_option_errors():
             source_side(bad, *args)
     with pytest.raises(InputError, match="lattice"):
         source_side(True, *args, lattice=True)
+    with pytest.raises(InputError, match="periodic"):
+        build_tileset(small(1.3), colors=2, isotropic=True, interior="periodic",
+                      quilted_source=True)
 
 
 def test_cli_quilted_source(tmp_path, capsys):

@@ -750,7 +750,8 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
         with ``corner_patch`` or not a height in ``(0, 0.5)``, elements too large
         for a tile, an exemplar with too few distinct strips, ``quilt_attempts``
         or ``quilt_best_of`` below 1, or a ``quilted_source`` that is not
-        ``"auto"``, a bool or a side in range (or given with ``lattice``).
+        ``"auto"``, a bool or a side in range (or given with ``lattice`` or
+        interior ``"periodic"``).
     GeotexError
         ``map_tiles`` left out a tile, or the quilted source has invalid
         elements.
@@ -769,6 +770,10 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
         raise InputError("isotropic and planar exclude each other: an isotropic set is "
                          "already the n^4 tiles of the plane, usable on a closed polycube")
     if interior == "periodic":
+        if quilted_source is True or (isinstance(quilted_source, (int, float, np.number))
+                                      and not isinstance(quilted_source, bool)):
+            raise InputError("quilted_source: interior 'periodic' cuts no strips from the "
+                             "exemplar; leave quilted_source at 'auto' or False")
         if not isotropic:
             raise InputError("interior 'periodic' (--interior periodic) builds isotropic "
                              "sets only; use isotropic=True (--isotropic)")
