@@ -38,6 +38,11 @@ def register(sub):
     b.add_argument("--lattice", action="store_true",
                    help="keep the exemplar's lattice (period = its pitch, which must divide "
                    "the tile) in every tile: for regular textures such as knurl")
+    b.add_argument("--quilted-source", default="auto", metavar="auto|yes|no|SIDE",
+                   help="cut the strips and interiors from a larger texture quilted from "
+                   "the exemplar first: yes (a 4 x 4 tile square), SIDE (its side in tile "
+                   "units, 2 to 12), no, or auto (the default: only when the exemplar "
+                   "offers too few distinct edge strips; never with --lattice)")
     b.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     b.add_argument("--name", help="set name (default: the exemplar's)")
     b.add_argument("--workers", type=int, default=None, metavar="N",
@@ -113,6 +118,22 @@ def _tile_mapper(workers, scheduler):
     return map_tiles
 
 
+def _quilted_source(text: str):
+    """``quilted_source`` of :func:`~geotex.tiles.build.build_tileset` from --quilted-source."""
+    word = text.strip().lower()
+    if word == "auto":
+        return "auto"
+    if word in ("yes", "on", "true"):
+        return True
+    if word in ("no", "off", "false"):
+        return False
+    try:
+        return float(word)
+    except ValueError:
+        raise UsageError(f"--quilted-source {text}: give auto, yes, no or a side in tile "
+                         "units") from None
+
+
 def run_build(args) -> int:
     import time
 
@@ -125,6 +146,7 @@ def run_build(args) -> int:
     if out.suffix.lower() != ".npz":
         raise UsageError(f"{out}: tile sets are written as .npz files")
     map_tiles = _tile_mapper(args.workers, args.scheduler)
+    quilted = _quilted_source(args.quilted_source)
     ex = _exemplar(args.exemplar, args.seed)
     n_colors = parse_colors(args.colors, planar=args.planar or args.directional)
     n = ((n_colors[0] + 1) ** 2 * (n_colors[1] + 1) ** 2 if args.directional else
@@ -134,13 +156,17 @@ def run_build(args) -> int:
         tiles = build_tileset(ex, colors=args.colors, planar=args.planar,
                               isotropic=args.isotropic, lattice=args.lattice,
                               interior=args.interior, directional=args.directional,
-                              seed=args.seed, name=args.name,
+                              seed=args.seed, name=args.name, quilted_source=quilted,
                               progress=bar, map_tiles=map_tiles)
     elapsed = time.perf_counter() - start
     save_tileset(out, tiles)
     extra = ""
+    if tiles.metadata.get("quilted_source"):
+        q = tiles.metadata["quilted_source"]
+        extra += (f", strips cut from a {q['side']:g} x {q['side']:g} texture quilted from "
+                  f"the exemplar ({q['elements']} elements)")
     if tiles.metadata.get("paste_fallbacks"):
-        extra = f", {tiles.metadata['paste_fallbacks']} tiles pasted after quilting failed"
+        extra += f", {tiles.metadata['paste_fallbacks']} tiles pasted after quilting failed"
     print(f"{out}: {tiles.kind} set, {len(tiles)} tiles, colours X/Y/Z {tiles.n_colors}, "
           f"height {tiles.height:.3g}, coverage {tiles.metadata['coverage_mean']:.0%}{extra}, "
           f"{elapsed:.2f} s ({1000 * elapsed / len(tiles):.0f} ms per tile)")

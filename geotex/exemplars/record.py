@@ -11,7 +11,8 @@ from geotex.errors import InputError
 
 from geotex.mesh.arrays import as_faces, as_vertices
 from geotex.mesh.record import Mesh
-from geotex.mesh.topology import face_components
+from geotex.mesh.geometry import group_boxes
+from geotex.mesh.topology import compacted, face_components
 
 __all__ = ["Exemplar"]
 
@@ -104,6 +105,52 @@ class Exemplar:
         """Return the elements as a :class:`~geotex.mesh.Mesh` (recipe in ``metadata``)."""
         return Mesh(self.vertices, self.faces, name=self.name,
                     metadata={"exemplar": self.name, "params": dict(self.params)})
+
+    def cropped(self, extent) -> "Exemplar":
+        """The elements lying wholly in ``[0, ex] x [0, ey]``, as a smaller exemplar.
+
+        Parameters
+        ----------
+        extent : tuple of 2 float
+            ``(ex, ey)``, the new ``size``.
+
+        Returns
+        -------
+        Exemplar
+            Same name, height, depth and period; ``params`` gain
+            ``"cropped": [ex, ey]`` (the procedural recipe alone no longer
+            rebuilds it).
+
+        Raises
+        ------
+        InputError
+            A non-positive extent, or no element lies wholly inside it.
+
+        Examples
+        --------
+        >>> from geotex.exemplars import exemplar
+        >>> small = exemplar("studs", size=(4, 4)).cropped((1.3, 1.3))
+        >>> small.size, small.n_elements
+        ((1.3, 1.3), 4)
+        """
+        try:
+            ex, ey = (float(e) for e in extent)
+        except (TypeError, ValueError):
+            raise InputError(f"extent must be two numbers (ex, ey), got {extent!r}") from None
+        if not (ex > 0 and ey > 0 and math.isfinite(ex) and math.isfinite(ey)):
+            raise InputError(f"extent must be positive, got {extent!r}")
+        V, F = self.vertices, self.faces
+        n, labels = face_components(F, V.shape[0])
+        vlab = np.full(V.shape[0], -1, dtype=np.int64)
+        vlab[F.ravel()] = np.repeat(labels, 3)
+        lo, hi = group_boxes(V, vlab, n)
+        inside = ((lo[:, :2] >= 0.0) & (hi[:, :2] <= [ex, ey])).all(axis=1)
+        if not inside.any():
+            raise InputError(f"no element of the exemplar lies wholly in [0, {ex:g}] x "
+                             f"[0, {ey:g}]")
+        Vk, Fk = compacted(V, F[inside[labels]])
+        return Exemplar(Vk, Fk, (ex, ey), self.height, self.depth, self.name,
+                        {**self.params, "cropped": [ex, ey]}, self.period)
 
     def __repr__(self) -> str:
         return (f"Exemplar({self.name!r}, size={self.size}, {self.n_elements} elements, "

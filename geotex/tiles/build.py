@@ -33,6 +33,7 @@ from geotex.tiles.corners import BAND, corner_merged_frame, merge_totals
 from geotex.tiles.fill import ExemplarPixels, fill_corners, fill_gaps
 from geotex.tiles.frame import concatenated, frame_of
 from geotex.tiles.periodic import periodic_tileset
+from geotex.tiles.source import quilted_texture, source_side, strips_along
 from geotex.tiles.strips import (GAP, element_boxes, empty_strip, largest_footprint,
                                  lattice_corner, lattice_phase, pick_strips)
 from geotex.tiles.strips import corner_patch as cut_corner_patch
@@ -476,6 +477,12 @@ class PlannedSet:
     corner_merges : list of dict or None
         With ``corner_merge``: the :func:`geotex.tiles.corners.merged_corners`
         stats of every tile's frame.
+    source : dict or None
+        When the strips and interiors come from a texture quilted from the
+        exemplar (``quilted_source``): the
+        :func:`geotex.tiles.source.quilted_texture` stats (``side``,
+        ``elements``, ``coverage``, ``placements``, ``auto``); None when they
+        come from the exemplar itself.
     """
 
     plan: TilePlan
@@ -487,6 +494,7 @@ class PlannedSet:
     depth: float
     recipe: dict
     corner_merges: list | None = None
+    source: dict | None = None
 
 
 def plan_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool = False,
@@ -494,7 +502,7 @@ def plan_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool = 
                  directional: bool = False, corner_patch: bool = False,
                  corner_merge: bool | float = False,
                  quilt_attempts: int = QUILT_ATTEMPTS, quilt_best_of: int = 1,
-                 progress=None) -> PlannedSet:
+                 quilted_source="auto", progress=None) -> PlannedSet:
     """Draw the strips of a set and place them into the frame of every tile.
 
     The first half of :func:`build_tileset` (same options, same random
@@ -520,6 +528,8 @@ def plan_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool = 
                          "already the n^4 tiles of the plane, usable on a closed polycube")
     if directional and isotropic:
         raise InputError("directional and isotropic exclude each other")
+    if isinstance(exemplar, str):
+        exemplar = make(exemplar)
     src, height, depth, recipe = _exemplar_arrays(exemplar)
     n_colors = parse_colors(colors, planar=planar or directional)
     if directional and n_colors[0] != n_colors[1]:
@@ -539,6 +549,17 @@ def plan_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool = 
     if band and corner_patch:
         raise InputError("corner_merge and corner_patch exclude each other: the patch "
                          "replaces what the strips bring to a corner")
+    largest_footprint(src.lo, src.hi)
+    side = source_side(quilted_source, src.lo, src.hi, src.size,
+                       strips_along(n_colors, isotropic=isotropic), lattice=lattice)
+    source = None
+    if side:
+        # the paper's M_out: a larger texture quilted from the exemplar (geotex.tiles.source)
+        Vq, Fq, source = quilted_texture(exemplar, side, seed)
+        source["auto"] = isinstance(quilted_source, str)
+        labels, lo, hi = element_boxes(Vq, Fq)
+        src = Source(Vq, Fq, labels, lo, hi, (side, side), src.params)
+        height = float(Vq[:, 2].max())
     rng = np.random.default_rng(seed)
     report(progress, "strips")
     largest_footprint(src.lo, src.hi)
@@ -593,14 +614,15 @@ def plan_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool = 
                     attempts=int(quilt_attempts), best_of=int(quilt_best_of))
     return PlannedSet(plan=plan, strips=strips, groups=groups, cols=cols,
                       n_colors=tuple(n_colors), height=height, depth=depth, recipe=recipe,
-                      corner_merges=merges)
+                      corner_merges=merges, source=source)
 
 
 def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool = False,
                   lattice: bool = False, seed: int = 0, interior: str = "quilt",
                   directional: bool = False, name: str | None = None, progress=None,
                   map_tiles=None, corner_patch: bool = False, corner_merge: bool | float = False,
-                  quilt_attempts: int = QUILT_ATTEMPTS, quilt_best_of: int = 1) -> TileSet:
+                  quilt_attempts: int = QUILT_ATTEMPTS, quilt_best_of: int = 1,
+                  quilted_source="auto") -> TileSet:
     """Build a planar, complete or isotropic geometric Wang tile set.
 
     Parameters
@@ -660,6 +682,23 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
         results were accepted, and keeps the one covering most of the tile
         (:func:`interior_quilt`); 1 (default) keeps the first. Recorded in
         ``metadata["recipe"]`` when not 1.
+    quilted_source : {"auto", True, False} or float
+        Cut the strips, the corner patch and the interiors from a larger
+        texture quilted from the exemplar first (the paper's ``M_out``,
+        :mod:`geotex.tiles.source`): True quilts a square of
+        :data:`~geotex.tiles.source.SOURCE_SIDE` tile units, a number is
+        the square's side (2 to 12 tile units), False never quilts, and
+        ``"auto"`` (default) quilts a :data:`~geotex.tiles.source.SOURCE_SIDE`
+        square only when the exemplar offers fewer than
+        :data:`~geotex.tiles.source.MIN_SEGMENTS` distinct candidate
+        segments per strip along an axis strips are cut along (or is
+        shorter than a tile), never for a ``lattice`` set.  The quilt is
+        seeded from ``seed``.  When used, ``metadata["recipe"]["quilted_source"]``
+        holds the side and ``metadata["quilted_source"]`` the quilting
+        figures; otherwise the set is the same, byte for byte, as without
+        the option.  Unlike the paper, the interiors are quilted from
+        windows of the quilted texture too (the paper quilts them from
+        ``M_in``), so that a small exemplar's windows are not its whole self.
     lattice : bool
         For exemplars laid out on a lattice of period ``params["pitch"]``
         (``1 / pitch`` a whole number): strips and quilting windows start
@@ -709,10 +748,13 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
         Unknown interior method, bad colours (or unequal colours for an
         isotropic set, or ``planar`` with ``isotropic``), ``corner_merge``
         with ``corner_patch`` or not a height in ``(0, 0.5)``, elements too large
-        for a tile, an exemplar with too few distinct strips, or ``quilt_attempts``
-        or ``quilt_best_of`` below 1.
+        for a tile, an exemplar with too few distinct strips, ``quilt_attempts``
+        or ``quilt_best_of`` below 1, or a ``quilted_source`` that is not
+        ``"auto"``, a bool or a side in range (or given with ``lattice`` or
+        interior ``"periodic"``).
     GeotexError
-        ``map_tiles`` left out a tile.
+        ``map_tiles`` left out a tile, or the quilted source has invalid
+        elements.
 
     Examples
     --------
@@ -728,6 +770,10 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
         raise InputError("isotropic and planar exclude each other: an isotropic set is "
                          "already the n^4 tiles of the plane, usable on a closed polycube")
     if interior == "periodic":
+        if quilted_source is True or (isinstance(quilted_source, (int, float, np.number))
+                                      and not isinstance(quilted_source, bool)):
+            raise InputError("quilted_source: interior 'periodic' cuts no strips from the "
+                             "exemplar; leave quilted_source at 'auto' or False")
         if not isotropic:
             raise InputError("interior 'periodic' (--interior periodic) builds isotropic "
                              "sets only; use isotropic=True (--isotropic)")
@@ -741,7 +787,8 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
                            lattice=lattice, seed=seed, interior=interior,
                            directional=directional, corner_patch=corner_patch,
                            corner_merge=corner_merge, quilt_attempts=quilt_attempts,
-                           quilt_best_of=quilt_best_of, progress=progress)
+                           quilt_best_of=quilt_best_of, quilted_source=quilted_source,
+                           progress=progress)
     plan, groups, cols = planned.plan, planned.groups, planned.cols
     n_colors, grid, recipe = planned.n_colors, plan.lattice, planned.recipe
     frames = plan.frames
@@ -795,6 +842,10 @@ def build_tileset(exemplar, *, colors=2, planar: bool = False, isotropic: bool =
         meta["recipe"]["quilt_attempts"] = int(quilt_attempts)
     if quilt_best_of != 1:
         meta["recipe"]["quilt_best_of"] = int(quilt_best_of)
+    if planned.source is not None:
+        # the side, so that the recipe rebuilds the set whether "auto" chose it or not
+        meta["recipe"]["quilted_source"] = planned.source["side"]
+        meta["quilted_source"] = dict(planned.source)
     return TileSet.from_tiles(tiles, groups, cols, n_colors=n_colors, height=planned.height,
                               depth=planned.depth, name=name or recipe["name"] or "tileset",
                               metadata=meta)

@@ -97,6 +97,7 @@ def rebuild(name: str, *, progress=None, table: dict | None = None, map_tiles=No
                          corner_merge=r.get("corner_merge", False),
                          quilt_attempts=r.get("quilt_attempts", QUILT_ATTEMPTS),
                          quilt_best_of=r.get("quilt_best_of", 1),
+                         quilted_source=r.get("quilted_source", False),
                          seed=r["seed"], interior=r.get("interior", "paste"), name=name,
                          progress=progress, map_tiles=map_tiles)
 

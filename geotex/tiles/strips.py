@@ -44,12 +44,13 @@ from geotex.tiles.fill import GAP, PIXEL, footprint_pixels, grown_heights, pixel
 
 __all__ = ["Strip", "CornerPatch", "corner_patch", "empty_strip", "element_boxes", "pick_strips", "largest_footprint", "lattice_phase",
            "lattice_corner", "corner_footprints", "corner_conflicts",
-           "corner_correspondences"]
+           "corner_correspondences", "distinct_segments"]
 
 CLEAR = 0.5 * GAP   # clearance of strip elements from the perpendicular tile sides
 CANDIDATES = 96     # random segment positions tried per colour
 SHORTLIST = 24      # best candidates (by covered length) pruned and compared
 END = 0.3           # length near a segment end whose coverage counts twice
+SEGMENT_GRID = 32   # segment starts per direction counted by distinct_segments
 EXACT = 12          # strips with at most this many elements in play are pruned exactly
 MATCH_BONUS = 0.25  # band strips: score per element pair lying on each other at a corner
 PATCH = 0.12        # corner patch: elements within this of the patch centre (both axes)
@@ -485,17 +486,7 @@ def pick_strips(V: np.ndarray, F: np.ndarray, size, *, count: int, along: int,
                            np.array([0.0, half] if along == 0 else [half, 0.0]),
                            np.array([span - 1.0, width - half] if along == 0
                                     else [width - half, span - 1.0]))
-    if along == 0:
-        t0 = lo[None, :, 0] - origin[:, 0:1]
-        t1 = hi[None, :, 0] - origin[:, 0:1]
-        s0 = lo[None, :, 1] - origin[:, 1:2]
-        s1 = hi[None, :, 1] - origin[:, 1:2]
-    else:
-        t0 = lo[None, :, 1] - origin[:, 1:2]
-        t1 = hi[None, :, 1] - origin[:, 1:2]
-        s0 = origin[:, 0:1] - hi[None, :, 0]
-        s1 = origin[:, 0:1] - lo[None, :, 0]
-    crossing = (s0 < -GAP / 4) & (s1 > GAP / 4) & (t0 >= CLEAR) & (t1 <= 1.0 - CLEAR)
+    t0, s0, t1, s1, crossing = _segment_boxes(lo, hi, origin, along)
     cover = np.where(crossing, t1 - t0, 0.0).sum(axis=1)
     rank = cover
     if band > 0 and chosen_before:
@@ -549,9 +540,84 @@ def pick_strips(V: np.ndarray, F: np.ndarray, size, *, count: int, along: int,
                                   boxes[sorted(key)], ends, boxes))
     if len(strips) < count:
         raise InputError(f"the exemplar has only {len(strips)} distinct edge strips along "
-                         f"{'xy'[along]} for {count} colours; use fewer colours or a larger "
-                         "exemplar")
+                         f"{'xy'[along]} for {count} colours; use fewer colours, a larger "
+                         "exemplar or a larger quilted source (quilted_source, "
+                         "--quilted-source)")
     return strips, used
+
+
+def _segment_boxes(lo, hi, origin, along):
+    """Element boxes in the strip coordinates of every candidate segment, and which cross it.
+
+    Parameters
+    ----------
+    lo, hi : numpy.ndarray, (E, 3) float64
+        Element bounding boxes.
+    origin : numpy.ndarray, (c, 2) float64
+        Segment starts in the exemplar.
+    along : int
+
+    Returns
+    -------
+    t0, s0, t1, s1 : numpy.ndarray, (c, E) float64
+    crossing : numpy.ndarray, (c, E) bool
+        The element crosses the segment's line and stays :data:`CLEAR`
+        inside its end lines.
+    """
+    if along == 0:
+        t0 = lo[None, :, 0] - origin[:, 0:1]
+        t1 = hi[None, :, 0] - origin[:, 0:1]
+        s0 = lo[None, :, 1] - origin[:, 1:2]
+        s1 = hi[None, :, 1] - origin[:, 1:2]
+    else:
+        t0 = lo[None, :, 1] - origin[:, 1:2]
+        t1 = hi[None, :, 1] - origin[:, 1:2]
+        s0 = origin[:, 0:1] - hi[None, :, 0]
+        s1 = origin[:, 0:1] - lo[None, :, 0]
+    crossing = (s0 < -GAP / 4) & (s1 > GAP / 4) & (t0 >= CLEAR) & (t1 <= 1.0 - CLEAR)
+    return t0, s0, t1, s1, crossing
+
+
+def distinct_segments(lo: np.ndarray, hi: np.ndarray, size, *, along: int,
+                      grid: int = SEGMENT_GRID) -> int:
+    """How many distinct edge strips the exemplar offers along an axis, before pruning.
+
+    The unit segments along ``along`` that :func:`pick_strips` draws its
+    candidates from (start anywhere along the axis, the line at least half
+    the widest element inside the exemplar across it) are laid on a regular
+    ``grid x grid`` lattice of starts, and the distinct non-empty sets of
+    elements crossing them (as :func:`pick_strips` counts crossing) are
+    counted.  Deterministic (no random draw).
+
+    Parameters
+    ----------
+    lo, hi : numpy.ndarray, (E, 3) float64
+        Element bounding boxes (:func:`element_boxes`).
+    size : tuple of 2 float
+        Exemplar extent.
+    along : int
+        Exemplar axis (0 = x, 1 = y).
+    grid : int
+        Segment starts per direction.
+
+    Returns
+    -------
+    int
+        0 when the exemplar is shorter than a tile along ``along`` or has no
+        room across it.
+    """
+    span, width = (size[0], size[1]) if along == 0 else (size[1], size[0])
+    half = 0.5 * float(np.max(hi[:, :2] - lo[:, :2])) if len(lo) else 0.0
+    if span < 1.0 or width < 2.0 * half or not len(lo):
+        return 0
+    a0 = np.linspace(0.0, span - 1.0, grid)
+    a1 = np.linspace(half, width - half, grid)
+    A0, A1 = np.meshgrid(a0, a1, indexing="ij")
+    origin = (np.stack([A0.ravel(), A1.ravel()], 1) if along == 0
+              else np.stack([A1.ravel(), A0.ravel()], 1))
+    crossing = _segment_boxes(lo, hi, origin, along)[4]
+    rows = np.unique(crossing[crossing.any(axis=1)], axis=0)
+    return int(len(rows))
 
 
 def _without_corner_conflicts(V, F, labels, members, origin, along, others, own=True,
