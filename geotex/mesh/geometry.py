@@ -26,7 +26,8 @@ def face_cross(V: np.ndarray, F: np.ndarray) -> np.ndarray:
     """Return ``(v1 - v0) x (v2 - v0)`` per face, ``(m, 3)`` float64.
 
     The same products and differences as :func:`numpy.cross` (the same bits),
-    written into one array without its temporaries: about a third of its time.
+    written into one array without its temporaries (0.6-0.9 of its time on fitted
+    surfaces, a third on scattered faces).
     """
     v0 = V[F[:, 0]]
     a = V[F[:, 1]] - v0
