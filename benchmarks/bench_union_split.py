@@ -254,14 +254,14 @@ def cut_tiles(tiles: TileSet, level: float) -> TileCut:
 def _shell(data: Path, base: str, tile_size, work: Path):
     """The bench's shell: ``base`` decimated to 15k faces, scaled to 80 mm."""
     sys.path.insert(0, str(HERE))
-    from bench_main_job import _decimated
+    from bench_main_job import decimated_base
 
     from geotex.io import read_mesh
     from geotex.shells import build_shell
 
     src = {"spot": data / "base" / "spot_odedstein.obj",
            "bob": data / "base" / "bob_uv" / "bob_tri.obj"}[base]
-    mesh = read_mesh(_decimated(src, 15000, work / f"{base}_15k.obj"))
+    mesh = read_mesh(decimated_base(src, 15000, work / f"{base}_15k.obj"))
     V = mesh.vertices * (80.0 / float(np.ptp(mesh.vertices, axis=0).max()))
     return build_shell(V, mesh.faces, tile_size=tile_size)
 
