@@ -368,9 +368,9 @@ def test_broad_phase_matches_brute_force(seed, monkeypatch):
     levels = []
     level_tasks = gi._level_tasks
 
-    def spy(faces, cell, cur, low):
+    def spy(faces, cell, cur, low, **kw):
         levels.append(cell)
-        return level_tasks(faces, cell, cur, low)
+        return level_tasks(faces, cell, cur, low, **kw)
 
     monkeypatch.setattr(gi, "_level_tasks", spy)
     # mostly small triangles and a few up to 500 times larger: several levels
@@ -954,8 +954,8 @@ def test_compiled_level_grid_matches_brute_force(monkeypatch, occ_cells):
     calls = []
     grid = gi._level_grid
 
-    def spy(*args):
-        out = grid(*args)
+    def spy(*args, **kw):
+        out = grid(*args, **kw)
         calls.append((bool(out[0]), args[3].size))
         return out
 
