@@ -1006,3 +1006,34 @@ def test_unpaired_vertices_given_or_computed_same_pairs(big, monkeypatch):
         self_intersecting_pairs(V, F, unpaired_vertices=un[1:])
     with pytest.raises(InputError):
         self_intersecting_pairs(V, F, unpaired_vertices=un.astype(np.int64))
+
+
+@pytest.mark.parametrize("occ_cells", [0, 1 << 28])
+def test_level_grid_in_pieces_is_the_grid_in_one_piece(monkeypatch, occ_cells):
+    # pieces of a few hundred items: the extent, entries, smaller faces, radix
+    # passes and rows each split on the pool give the one-piece arrays bit for bit
+    from concurrent.futures import ThreadPoolExecutor
+
+    monkeypatch.setattr(gi, "_GRID_PIECE", 200)
+    Vs, Fs = random_soup(5, m=1500, sizes=(0.002, 0.01))
+    Vb, Fb = random_soup(105, m=200, sizes=(0.01, 1.0))
+    V = np.concatenate([Vs, Vb])
+    F = np.concatenate([Fs, Fb + len(Vs)])
+    faces = gi._FaceData(gi._normalized(V, F), F)
+    cell0, level = gi._grid_levels(faces)
+    act = faces.active
+    row_bits = max(1, int(act.size - 1).bit_length())
+    assert np.unique(level).size >= 3
+    with ThreadPoolExecutor(max_workers=3) as pool:
+        for lev in np.unique(level):
+            cur = np.flatnonzero(level == lev)
+            low = gi._near(faces, cur, np.flatnonzero(level < lev))
+            args = (faces.box32, act, cur, low, cell0 * 2.0 ** lev, row_bits, gi._KEY_BITS,
+                    50, occ_cells)
+            one = gi._level_grid(*args)
+            assert one[0] and one[1].size > 0
+            for split in (2, 3, 5):
+                got = gi._level_grid(*args, mapper=pool.map, split=split)
+                assert got[0]
+                for a, b in zip(one[1:], got[1:]):
+                    assert a.dtype == b.dtype and np.array_equal(a, b)
