@@ -840,7 +840,10 @@ def test_parts_sweep_gives_the_grid_answer(case, monkeypatch):
     assert reference.size                                  # every case has contacts
 
 
-def test_parts_sweep_gives_the_grid_answer_on_random_soup(monkeypatch):
+@pytest.mark.parametrize("piece", [65_536, 7])
+def test_parts_sweep_gives_the_grid_answer_on_random_soup(monkeypatch, piece):
+    # piece=7: the parts' sort and boxes split in pieces on the pool
+    monkeypatch.setattr(gi, "_GRID_PIECE", piece)
     rng = np.random.default_rng(5)
     V = rng.uniform(0.0, 1.0, size=(120, 3))
     F = rng.integers(0, 120, size=(200, 3))
@@ -1037,3 +1040,26 @@ def test_level_grid_in_pieces_is_the_grid_in_one_piece(monkeypatch, occ_cells):
                 assert got[0]
                 for a, b in zip(one[1:], got[1:]):
                     assert a.dtype == b.dtype and np.array_equal(a, b)
+
+
+def test_compiled_normal_sums_are_the_bincount_sums():
+    # the vertex normal sums of the compiled fan stage, in any split of the
+    # vertices: np.bincount's per-column sums added to 0 in column order, bit
+    # for bit (signed zeros and degenerate faces' zero rows included)
+    rng = np.random.default_rng(7)
+    n, m = 300, 4000
+    F = rng.integers(0, n, size=(m, 3))
+    plane = rng.normal(size=(m, 4)) * 10.0 ** rng.integers(-8, 8, size=(m, 1))
+    plane[::7] = 0.0
+    plane[::11, :3] = -0.0
+    want = [sum(np.bincount(F[:, k], weights=np.ascontiguousarray(plane[:, a]), minlength=n)
+                for k in range(3)) for a in range(3)]
+    want_count = sum(np.bincount(F[:, k], minlength=n) for k in range(3))
+    for cuts in ([0, n], [0, 1, 150, 299, n]):
+        N = np.full((3, n), np.nan)
+        count = np.full(n, -1, np.int64)
+        for v0, v1 in zip(cuts[:-1], cuts[1:]):
+            gi._normal_sums(F, plane, v0, v1, N, count)
+        assert np.array_equal(count, want_count)
+        for a in range(3):
+            assert np.array_equal(N[a].view(np.int64), want[a].view(np.int64))

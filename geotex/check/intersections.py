@@ -848,12 +848,19 @@ def _separated_fans(faces: _FaceData, *, mapper=map, unpaired=None) -> np.ndarra
     cols = faces.corner_columns
     # the face normals one axis at a time (kept only for the numpy path's terms)
     unit, N = [], []
-    for i in range(3):
+    count = None
+    if F.size >= JIT_MIN_SIZE:
+        # compiled: the sums of np.bincount per corner column, in its order of
+        # additions, with the vertices split between the threads
+        Ns = np.empty((3, n))
+        count = np.empty(n, np.int64)
+        bounds = _pieces(n, _workers())
+        _each(mapper, bounds, lambda k, s, e: _normal_sums(F, faces.plane, s, e, Ns, count))
+        N = list(Ns)
+    for i in range(3 if F.size < JIT_MIN_SIZE else 0):
         x = np.ascontiguousarray(faces.plane[:, i])
         N.append(sum(np.bincount(c, weights=x, minlength=n) for c in cols))
-        if F.size < JIT_MIN_SIZE:
-            unit.append(x)
-    del x
+        unit.append(x)
     with np.errstate(divide="ignore", invalid="ignore"):
         norm = np.sqrt(N[0] * N[0] + N[1] * N[1] + N[2] * N[2])
         N = [x / norm for x in N]
@@ -901,7 +908,8 @@ def _separated_fans(faces: _FaceData, *, mapper=map, unpaired=None) -> np.ndarra
                 np.maximum.at(rho, c, r)
                 np.maximum.at(longest, c, big)
                 np.maximum.at(t, c, tol)
-        count = sum(np.bincount(c, minlength=n) for c in cols)
+        if count is None:
+            count = sum(np.bincount(c, minlength=n) for c in cols)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         margin = cos_min * shortest * np.sin(0.5 * spread)
         reach = np.maximum((1.0 + 1.0 / sin_min) / q_min,
@@ -1343,22 +1351,61 @@ def _part_sweep(faces: _FaceData, parts: np.ndarray, *, mapper=map, side=None, w
         pwithin = (np.zeros(count.size, dtype=bool) if within is None
                    else np.asarray(within, dtype=bool)[act[first]])
     box = faces.box32
-    order = act[np.lexsort((box[act, 0], part))]          # by part, then low x
     pstart = np.concatenate([[0], np.cumsum(count)]).astype(np.int64)
     n_parts = count.size
+    # the faces by part, then low x (ties in face order), and the parts'
+    # boxes: each part sorted on its own, the parts in pieces on the pool
+    grouped = _grouped_by_part(part, pstart)
+    order = np.empty(act.size, dtype=np.int64)
     pbox = np.empty((n_parts, 6), dtype=np.float32)
-    seg = pstart[:-1]
-    for k in range(3):
-        pbox[:, k] = np.minimum.reduceat(box[order, k], seg)
-        pbox[:, 3 + k] = np.maximum.reduceat(box[order, 3 + k], seg)
+    bounds = np.searchsorted(pstart, _pieces(act.size, _workers())).astype(np.int64)
+    bounds[-1] = n_parts
+    _each(mapper, bounds,
+          lambda k, s, e: _part_order(grouped, act, box, pstart, s, e, order, pbox))
+    del grouped
     porder = np.argsort(pbox[:, 0], kind="stable").astype(np.int64)
-    order = order.astype(np.int64)
     cuts = np.linspace(0, n_parts, min(n_parts, 16) + 1).astype(np.int64)
     keys = list(mapper(lambda k: _part_loops(order, pstart, pbox, porder, pside, pwithin,
                                              int(cuts[k]), int(cuts[k + 1]), box,
                                              faces.masked_rows, faces.F, faces.V, faces.plane,
                                              faces.tol, faces.E), range(cuts.size - 1)))
     return np.sort(np.concatenate(keys)) if keys else np.zeros(0, dtype=np.int64)
+
+
+@compiled
+def _grouped_by_part(part, pstart):
+    """The rows ``0 .. len(part) - 1`` grouped by ``part`` (a rank: part ``p``'s
+    rows at ``pstart[p]:pstart[p + 1]``), in row order within a part."""
+    at = pstart[:-1].copy()
+    out = np.empty(part.shape[0], np.int64)
+    for r in range(part.shape[0]):
+        p = part[r]
+        out[at[p]] = r
+        at[p] += 1
+    return out
+
+
+@compiled
+def _part_order(grouped, act, box, pstart, p0, p1, order, pbox):
+    """For parts ``p0 .. p1 - 1``: their faces by the low x of their boxes (a
+    stable sort: ties in face order, as ``np.lexsort``) into ``order``, and the
+    union of their boxes into ``pbox``."""
+    for p in range(p0, p1):
+        s, e = pstart[p], pstart[p + 1]
+        x = np.empty(e - s, np.float32)
+        for k in range(s, e):
+            x[k - s] = box[act[grouped[k]], 0]
+        o = np.argsort(x, kind="mergesort")
+        for k in range(e - s):
+            order[s + k] = act[grouped[s + o[k]]]
+        f = order[s]
+        for a in range(6):
+            pbox[p, a] = box[f, a]
+        for k in range(s + 1, e):
+            f = order[k]
+            for a in range(3):
+                pbox[p, a] = min(pbox[p, a], box[f, a])
+                pbox[p, 3 + a] = max(pbox[p, 3 + a], box[f, 3 + a])
 
 
 @helper
@@ -2254,6 +2301,30 @@ def _fan_term_loops(V, F, plane, tol, active, N, v0, v1, block, cos_min, total, 
                 rho[p] = -_nan_min(-rho[p], -r)
                 longest[p] = -_nan_min(-longest[p], -big)
                 t[p] = -_nan_min(-t[p], -tol[f])
+
+
+@compiled
+def _normal_sums(F, plane, v0, v1, N, count):
+    """For the vertices ``v0 .. v1 - 1``: ``N[a, v]``, the sum of axis ``a`` of
+    the unit normals of the faces at ``v`` and ``count[v]`` their number, as
+    ``sum(np.bincount(F[:, k], weights=plane[:, a]) for k in range(3))`` and
+    ``sum(np.bincount(F[:, k]) ...)`` give them (per corner column a sum in
+    face order, then the three columns added to ``0`` in order)."""
+    m = F.shape[0]
+    acc = np.zeros((3, v1 - v0, 3))
+    for v in range(v0, v1):
+        count[v] = 0
+    for k in range(3):
+        for f in range(m):
+            p = F[f, k]
+            if p < v0 or p >= v1:
+                continue
+            for a in range(3):
+                acc[k, p - v0, a] += plane[f, a]
+            count[p] += 1
+    for v in range(v0, v1):
+        for a in range(3):
+            N[a, v] = ((0.0 + acc[0, v - v0, a]) + acc[1, v - v0, a]) + acc[2, v - v0, a]
 
 
 @compiled
