@@ -50,9 +50,11 @@ order, so the output does not depend on the scheduling.
 
 From ``JIT_MIN_SIZE`` corner entries, steps 2-5 run as compiled loops
 (:mod:`geotex.jit`, no GIL): the per-face data in blocks on the pool, the fan
-terms with the vertices split between two threads, each level's grid
-(:func:`_level_grid`: entries, radix sort, pair counts, no stored cell
-ranges) and the pair tasks over its entries; the same pairs as the numpy path.
+terms and the vertex normal sums with the vertices split between the
+threads, each level's grid (:func:`_level_grid`: entries, radix sort, pair
+counts, no stored cell ranges; its loops over faces and entries in pieces
+on the pool, each piece filling its own range) and the pair tasks over its
+entries; the same pairs as the numpy path.
 
 :func:`self_intersecting_pairs_touching` (pairs with a face of a subset) and
 :func:`self_intersecting_pairs_between` (pairs between sides of parts, or
@@ -2311,20 +2313,24 @@ def _normal_sums(F, plane, v0, v1, N, count):
     ``sum(np.bincount(F[:, k]) ...)`` give them (per corner column a sum in
     face order, then the three columns added to ``0`` in order)."""
     m = F.shape[0]
-    acc = np.zeros((3, v1 - v0, 3))
+    acc = np.empty((v1 - v0, 3))                 # one column's sums at a time
     for v in range(v0, v1):
         count[v] = 0
     for k in range(3):
+        acc[:] = 0.0
         for f in range(m):
             p = F[f, k]
             if p < v0 or p >= v1:
                 continue
             for a in range(3):
-                acc[k, p - v0, a] += plane[f, a]
+                acc[p - v0, a] += plane[f, a]
             count[p] += 1
-    for v in range(v0, v1):
-        for a in range(3):
-            N[a, v] = ((0.0 + acc[0, v - v0, a]) + acc[1, v - v0, a]) + acc[2, v - v0, a]
+        for v in range(v0, v1):
+            for a in range(3):
+                if k == 0:
+                    N[a, v] = 0.0 + acc[v - v0, a]
+                else:
+                    N[a, v] = N[a, v] + acc[v - v0, a]
 
 
 @compiled
