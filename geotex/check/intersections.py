@@ -984,7 +984,8 @@ def _pair_tasks(faces: _FaceData, *, mapper=map):
         cell = cell0 * _LEVEL_RATIO ** lev
         cur = np.flatnonzero(level == lev)
         low = np.flatnonzero(level < lev)
-        yield from _level_tasks(faces, cell, cur, _near(faces, cur, low), mapper=mapper)
+        yield from _level_tasks(faces, cell, cur, _near(faces, cur, low, mapper=mapper),
+                                mapper=mapper)
 
 
 def _touching_tasks(faces: _FaceData, chosen: np.ndarray, *, mapper=map):
@@ -1002,19 +1003,29 @@ def _touching_tasks(faces: _FaceData, chosen: np.ndarray, *, mapper=map):
         cell = cell0 * _LEVEL_RATIO ** lev
         cur = np.flatnonzero(mine & (level == lev))
         low = np.flatnonzero(~mine | (level < lev))
-        yield from _level_tasks(faces, cell, cur, _near(faces, cur, low), mapper=mapper)
+        yield from _level_tasks(faces, cell, cur, _near(faces, cur, low, mapper=mapper),
+                                mapper=mapper)
 
 
-def _near(faces, cur, low):
+def _near(faces, cur, low, *, mapper=map):
     """The rows of ``low`` whose boxes meet the bounding box of the boxes ``cur``
-    (rows of ``faces.active``)."""
+    (rows of ``faces.active``); ``low`` in pieces on ``mapper``."""
     if low.size:
-        near = np.ones(low.size, dtype=bool)
+        near = np.empty(low.size, dtype=bool)
         act, box32 = faces.active, faces.box32
-        for axis in range(3):
-            lo = box32[act[cur], axis].min()
-            hi = box32[act[cur], 3 + axis].max()
-            near &= (box32[act[low], axis] <= hi) & (box32[act[low], 3 + axis] >= lo)
+        rows = act[cur]
+        lo = [box32[rows, axis].min() for axis in range(3)]
+        hi = [box32[rows, 3 + axis].max() for axis in range(3)]
+        del rows
+
+        def piece(k, s, e):
+            rows = act[low[s:e]]
+            keep = np.ones(e - s, dtype=bool)
+            for axis in range(3):
+                keep &= (box32[rows, axis] <= hi[axis]) & (box32[rows, 3 + axis] >= lo[axis])
+            near[s:e] = keep
+
+        _each(mapper, _pieces(low.size, _workers()), piece)
         low = low[near]
     return low
 
