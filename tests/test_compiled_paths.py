@@ -375,7 +375,8 @@ ci.JIT_MIN_SIZE = 0                        # the compiled path at this small siz
 if {first}:                                # fills the disk cache (compiles on a fresh clone)
     print(ci.self_intersecting_pairs(V2, F2).tolist())
 else:
-    funcs = [ci._entry_pair_loops, ci._fan_term_loops, ci._level_grid, ci._face_loops]
+    funcs = [ci._entry_pair_loops, ci._fan_term_loops, ci._grid_count, ci._grid_rows,
+             ci._face_loops]
     preload("geotex.check").join()
     loaded = [len(f.dispatcher().overloads) for f in funcs]
     assert all(k >= 1 for k in loaded), loaded

@@ -368,9 +368,9 @@ def test_broad_phase_matches_brute_force(seed, monkeypatch):
     levels = []
     level_tasks = gi._level_tasks
 
-    def spy(faces, cell, cur, low):
+    def spy(faces, cell, cur, low, **kw):
         levels.append(cell)
-        return level_tasks(faces, cell, cur, low)
+        return level_tasks(faces, cell, cur, low, **kw)
 
     monkeypatch.setattr(gi, "_level_tasks", spy)
     # mostly small triangles and a few up to 500 times larger: several levels
@@ -840,7 +840,10 @@ def test_parts_sweep_gives_the_grid_answer(case, monkeypatch):
     assert reference.size                                  # every case has contacts
 
 
-def test_parts_sweep_gives_the_grid_answer_on_random_soup(monkeypatch):
+@pytest.mark.parametrize("piece", [65_536, 7])
+def test_parts_sweep_gives_the_grid_answer_on_random_soup(monkeypatch, piece):
+    # piece=7: the parts' sort and boxes split in pieces on the pool
+    monkeypatch.setattr(gi, "_GRID_PIECE", piece)
     rng = np.random.default_rng(5)
     V = rng.uniform(0.0, 1.0, size=(120, 3))
     F = rng.integers(0, 120, size=(200, 3))
@@ -954,8 +957,8 @@ def test_compiled_level_grid_matches_brute_force(monkeypatch, occ_cells):
     calls = []
     grid = gi._level_grid
 
-    def spy(*args):
-        out = grid(*args)
+    def spy(*args, **kw):
+        out = grid(*args, **kw)
         calls.append((bool(out[0]), args[3].size))
         return out
 
@@ -1006,3 +1009,57 @@ def test_unpaired_vertices_given_or_computed_same_pairs(big, monkeypatch):
         self_intersecting_pairs(V, F, unpaired_vertices=un[1:])
     with pytest.raises(InputError):
         self_intersecting_pairs(V, F, unpaired_vertices=un.astype(np.int64))
+
+
+@pytest.mark.parametrize("occ_cells", [0, 1 << 28])
+def test_level_grid_in_pieces_is_the_grid_in_one_piece(monkeypatch, occ_cells):
+    # pieces of a few hundred items: the extent, entries, smaller faces, radix
+    # passes and rows each split on the pool give the one-piece arrays bit for bit
+    from concurrent.futures import ThreadPoolExecutor
+
+    monkeypatch.setattr(gi, "_GRID_PIECE", 200)
+    Vs, Fs = random_soup(5, m=1500, sizes=(0.002, 0.01))
+    Vb, Fb = random_soup(105, m=200, sizes=(0.01, 1.0))
+    V = np.concatenate([Vs, Vb])
+    F = np.concatenate([Fs, Fb + len(Vs)])
+    faces = gi._FaceData(gi._normalized(V, F), F)
+    cell0, level = gi._grid_levels(faces)
+    act = faces.active
+    row_bits = max(1, int(act.size - 1).bit_length())
+    assert np.unique(level).size >= 3
+    with ThreadPoolExecutor(max_workers=3) as pool:
+        for lev in np.unique(level):
+            cur = np.flatnonzero(level == lev)
+            low = gi._near(faces, cur, np.flatnonzero(level < lev))
+            args = (faces.box32, act, cur, low, cell0 * 2.0 ** lev, row_bits, gi._KEY_BITS,
+                    50, occ_cells)
+            one = gi._level_grid(*args)
+            assert one[0] and one[1].size > 0
+            for split in (2, 3, 5):
+                got = gi._level_grid(*args, mapper=pool.map, split=split)
+                assert got[0]
+                for a, b in zip(one[1:], got[1:]):
+                    assert a.dtype == b.dtype and np.array_equal(a, b)
+
+
+def test_compiled_normal_sums_are_the_bincount_sums():
+    # the vertex normal sums of the compiled fan stage, in any split of the
+    # vertices: np.bincount's per-column sums added to 0 in column order, bit
+    # for bit (signed zeros and degenerate faces' zero rows included)
+    rng = np.random.default_rng(7)
+    n, m = 300, 4000
+    F = rng.integers(0, n, size=(m, 3))
+    plane = rng.normal(size=(m, 4)) * 10.0 ** rng.integers(-8, 8, size=(m, 1))
+    plane[::7] = 0.0
+    plane[::11, :3] = -0.0
+    want = [sum(np.bincount(F[:, k], weights=np.ascontiguousarray(plane[:, a]), minlength=n)
+                for k in range(3)) for a in range(3)]
+    want_count = sum(np.bincount(F[:, k], minlength=n) for k in range(3))
+    for cuts in ([0, n], [0, 1, 150, 299, n]):
+        N = np.full((3, n), np.nan)
+        count = np.full(n, -1, np.int64)
+        for v0, v1 in zip(cuts[:-1], cuts[1:]):
+            gi._normal_sums(F, plane, v0, v1, N, count)
+        assert np.array_equal(count, want_count)
+        for a in range(3):
+            assert np.array_equal(N[a].view(np.int64), want[a].view(np.int64))

@@ -50,9 +50,11 @@ order, so the output does not depend on the scheduling.
 
 From ``JIT_MIN_SIZE`` corner entries, steps 2-5 run as compiled loops
 (:mod:`geotex.jit`, no GIL): the per-face data in blocks on the pool, the fan
-terms with the vertices split between two threads, each level's grid
-(:func:`_level_grid`: entries, radix sort, pair counts, no stored cell
-ranges) and the pair tasks over its entries; the same pairs as the numpy path.
+terms and the vertex normal sums with the vertices split between the
+threads, each level's grid (:func:`_level_grid`: entries, radix sort, pair
+counts, no stored cell ranges; its loops over faces and entries in pieces
+on the pool, each piece filling its own range) and the pair tasks over its
+entries; the same pairs as the numpy path.
 
 :func:`self_intersecting_pairs_touching` (pairs with a face of a subset) and
 :func:`self_intersecting_pairs_between` (pairs between sides of parts, or
@@ -111,6 +113,8 @@ _KEY_BITS = 62
 # Largest grid whose occupied cells the compiled grid marks in a bit array (32 MB);
 # larger grids look cells up by binary search.
 _OCC_CELLS = 1 << 28
+# Smallest piece of the compiled grid's loops run on a thread of the pool.
+_GRID_PIECE = 65_536
 
 
 def self_intersecting_pairs(V, F, *, max_pairs=None, topology=None, unpaired_vertices=None,
@@ -331,7 +335,8 @@ def self_intersecting_pairs_touching(V, F, faces) -> np.ndarray:
     try:
         fd = _FaceData(Vn[vids], sub, mapper=pool.map)
         if fd.active.size >= 2 and chosen[fd.active].any():
-            for hits in _in_order(pool, _touching_tasks(fd, chosen), window=2 * workers):
+            for hits in _in_order(pool, _touching_tasks(fd, chosen, mapper=pool.map),
+                                  window=2 * workers):
                 if hits.size:
                     found.append(hits)
     finally:
@@ -497,7 +502,8 @@ def _distinct_pairs(V, F, max_pairs, *, unpaired=None, parts=None):
             found.append(swept)
             count = swept.size
         for hits in (() if swept is not None else
-                     _in_order(pool, _pair_tasks(faces), window=2 * workers)):
+                     _in_order(pool, _pair_tasks(faces, mapper=pool.map),
+                               window=2 * workers)):
             if hits.size:
                 found.append(hits)
                 count += hits.size
@@ -844,12 +850,19 @@ def _separated_fans(faces: _FaceData, *, mapper=map, unpaired=None) -> np.ndarra
     cols = faces.corner_columns
     # the face normals one axis at a time (kept only for the numpy path's terms)
     unit, N = [], []
-    for i in range(3):
+    count = None
+    if F.size >= JIT_MIN_SIZE:
+        # compiled: the sums of np.bincount per corner column, in its order of
+        # additions, with the vertices split between the threads
+        Ns = np.empty((3, n))
+        count = np.empty(n, np.int64)
+        bounds = _pieces(n, _workers())
+        _each(mapper, bounds, lambda k, s, e: _normal_sums(F, faces.plane, s, e, Ns, count))
+        N = list(Ns)
+    for i in range(3 if F.size < JIT_MIN_SIZE else 0):
         x = np.ascontiguousarray(faces.plane[:, i])
         N.append(sum(np.bincount(c, weights=x, minlength=n) for c in cols))
-        if F.size < JIT_MIN_SIZE:
-            unit.append(x)
-    del x
+        unit.append(x)
     with np.errstate(divide="ignore", invalid="ignore"):
         norm = np.sqrt(N[0] * N[0] + N[1] * N[1] + N[2] * N[2])
         N = [x / norm for x in N]
@@ -897,7 +910,8 @@ def _separated_fans(faces: _FaceData, *, mapper=map, unpaired=None) -> np.ndarra
                 np.maximum.at(rho, c, r)
                 np.maximum.at(longest, c, big)
                 np.maximum.at(t, c, tol)
-        count = sum(np.bincount(c, minlength=n) for c in cols)
+        if count is None:
+            count = sum(np.bincount(c, minlength=n) for c in cols)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         margin = cos_min * shortest * np.sin(0.5 * spread)
         reach = np.maximum((1.0 + 1.0 / sin_min) / q_min,
@@ -958,21 +972,23 @@ def _corner_terms(faces: _FaceData, vcols, N, unit, s: int, e: int):
 # broad phase
 
 
-def _pair_tasks(faces: _FaceData):
+def _pair_tasks(faces: _FaceData, *, mapper=map):
     """Yield callables; each returns the intersecting pairs of one chunk as keys.
 
     Over all tasks, every pair of active faces whose boxes overlap is
     examined exactly once.  A key is ``i * m + j`` with ``i < j``.
+    ``mapper``: where the compiled grids run their pieces (the pool).
     """
     cell0, level = _grid_levels(faces)
     for lev in np.unique(level):
         cell = cell0 * _LEVEL_RATIO ** lev
         cur = np.flatnonzero(level == lev)
         low = np.flatnonzero(level < lev)
-        yield from _level_tasks(faces, cell, cur, _near(faces, cur, low))
+        yield from _level_tasks(faces, cell, cur, _near(faces, cur, low, mapper=mapper),
+                                mapper=mapper)
 
 
-def _touching_tasks(faces: _FaceData, chosen: np.ndarray):
+def _touching_tasks(faces: _FaceData, chosen: np.ndarray, *, mapper=map):
     """:func:`_pair_tasks` for the pairs with at least one face in ``chosen``.
 
     ``chosen`` is a boolean over the faces.  A chosen face of level ``L`` is
@@ -987,19 +1003,29 @@ def _touching_tasks(faces: _FaceData, chosen: np.ndarray):
         cell = cell0 * _LEVEL_RATIO ** lev
         cur = np.flatnonzero(mine & (level == lev))
         low = np.flatnonzero(~mine | (level < lev))
-        yield from _level_tasks(faces, cell, cur, _near(faces, cur, low))
+        yield from _level_tasks(faces, cell, cur, _near(faces, cur, low, mapper=mapper),
+                                mapper=mapper)
 
 
-def _near(faces, cur, low):
+def _near(faces, cur, low, *, mapper=map):
     """The rows of ``low`` whose boxes meet the bounding box of the boxes ``cur``
-    (rows of ``faces.active``)."""
+    (rows of ``faces.active``); ``low`` in pieces on ``mapper``."""
     if low.size:
-        near = np.ones(low.size, dtype=bool)
+        near = np.empty(low.size, dtype=bool)
         act, box32 = faces.active, faces.box32
-        for axis in range(3):
-            lo = box32[act[cur], axis].min()
-            hi = box32[act[cur], 3 + axis].max()
-            near &= (box32[act[low], axis] <= hi) & (box32[act[low], 3 + axis] >= lo)
+        rows = act[cur]
+        lo = [box32[rows, axis].min() for axis in range(3)]
+        hi = [box32[rows, 3 + axis].max() for axis in range(3)]
+        del rows
+
+        def piece(k, s, e):
+            rows = act[low[s:e]]
+            keep = np.ones(e - s, dtype=bool)
+            for axis in range(3):
+                keep &= (box32[rows, axis] <= hi[axis]) & (box32[rows, 3 + axis] >= lo[axis])
+            near[s:e] = keep
+
+        _each(mapper, _pieces(low.size, _workers()), piece)
         low = low[near]
     return low
 
@@ -1099,11 +1125,12 @@ def _fits(size, shift) -> bool:
     return float(size[0]) * size[1] * size[2] * 2 < 2.0 ** (_KEY_BITS - shift)
 
 
-def _level_tasks(faces, cell, cur, low):
+def _level_tasks(faces, cell, cur, low, *, mapper=map):
     """Sort one level's grid entries by cell and yield its pair tasks.
 
     ``cur`` and ``low`` are rows of ``faces.active``: the faces of this level
-    and the smaller faces that may meet them.
+    and the smaller faces that may meet them.  ``mapper`` runs the pieces of
+    the compiled grid (the pool; the same grid whatever runs them).
     """
     act = faces.active
     row_bits = max(1, int(act.size - 1).bit_length())
@@ -1112,7 +1139,8 @@ def _level_tasks(faces, cell, cur, low):
         # compiled: the entries, their sort and the pair counts in loops (the
         # numpy path below spends most of its time in temporaries)
         ok, first, face, counts, cuts = _level_grid(faces.box32, act, cur, low, cell, row_bits,
-                                                    _KEY_BITS, _PAIR_CHUNK, _OCC_CELLS)
+                                                    _KEY_BITS, _PAIR_CHUNK, _OCC_CELLS,
+                                                    mapper=mapper, split=_workers())
         if ok:
             level = (counts, first, face)
             for k in range(cuts.size - 1):
@@ -1336,22 +1364,61 @@ def _part_sweep(faces: _FaceData, parts: np.ndarray, *, mapper=map, side=None, w
         pwithin = (np.zeros(count.size, dtype=bool) if within is None
                    else np.asarray(within, dtype=bool)[act[first]])
     box = faces.box32
-    order = act[np.lexsort((box[act, 0], part))]          # by part, then low x
     pstart = np.concatenate([[0], np.cumsum(count)]).astype(np.int64)
     n_parts = count.size
+    # the faces by part, then low x (ties in face order), and the parts'
+    # boxes: each part sorted on its own, the parts in pieces on the pool
+    grouped = _grouped_by_part(part, pstart)
+    order = np.empty(act.size, dtype=np.int64)
     pbox = np.empty((n_parts, 6), dtype=np.float32)
-    seg = pstart[:-1]
-    for k in range(3):
-        pbox[:, k] = np.minimum.reduceat(box[order, k], seg)
-        pbox[:, 3 + k] = np.maximum.reduceat(box[order, 3 + k], seg)
+    bounds = np.searchsorted(pstart, _pieces(act.size, _workers())).astype(np.int64)
+    bounds[-1] = n_parts
+    _each(mapper, bounds,
+          lambda k, s, e: _part_order(grouped, act, box, pstart, s, e, order, pbox))
+    del grouped
     porder = np.argsort(pbox[:, 0], kind="stable").astype(np.int64)
-    order = order.astype(np.int64)
     cuts = np.linspace(0, n_parts, min(n_parts, 16) + 1).astype(np.int64)
     keys = list(mapper(lambda k: _part_loops(order, pstart, pbox, porder, pside, pwithin,
                                              int(cuts[k]), int(cuts[k + 1]), box,
                                              faces.masked_rows, faces.F, faces.V, faces.plane,
                                              faces.tol, faces.E), range(cuts.size - 1)))
     return np.sort(np.concatenate(keys)) if keys else np.zeros(0, dtype=np.int64)
+
+
+@compiled
+def _grouped_by_part(part, pstart):
+    """The rows ``0 .. len(part) - 1`` grouped by ``part`` (a rank: part ``p``'s
+    rows at ``pstart[p]:pstart[p + 1]``), in row order within a part."""
+    at = pstart[:-1].copy()
+    out = np.empty(part.shape[0], np.int64)
+    for r in range(part.shape[0]):
+        p = part[r]
+        out[at[p]] = r
+        at[p] += 1
+    return out
+
+
+@compiled
+def _part_order(grouped, act, box, pstart, p0, p1, order, pbox):
+    """For parts ``p0 .. p1 - 1``: their faces by the low x of their boxes (a
+    stable sort: ties in face order, as ``np.lexsort``) into ``order``, and the
+    union of their boxes into ``pbox``."""
+    for p in range(p0, p1):
+        s, e = pstart[p], pstart[p + 1]
+        x = np.empty(e - s, np.float32)
+        for k in range(s, e):
+            x[k - s] = box[act[grouped[k]], 0]
+        o = np.argsort(x, kind="mergesort")
+        for k in range(e - s):
+            order[s + k] = act[grouped[s + o[k]]]
+        f = order[s]
+        for a in range(6):
+            pbox[p, a] = box[f, a]
+        for k in range(s + 1, e):
+            f = order[k]
+            for a in range(3):
+                pbox[p, a] = min(pbox[p, a], box[f, a])
+                pbox[p, 3 + a] = max(pbox[p, 3 + a], box[f, 3 + a])
 
 
 @helper
@@ -1811,14 +1878,15 @@ def _cell_span(box32, f, a, cell, cmin, cmax, clip):
 
 
 @helper
-def _emit_entries(box32, act, rows, cell, cmin, cmax, size, clip, flag, shift, occ, keys):
+def _emit_entries(box32, act, rows, cell, cmin, cmax, size, clip, flag, shift, occ, keys, grow):
     """Packed keys ``(cell, flag, row, corner bits)`` of the entries of the
     boxes of ``rows`` (face by face, cells in x, y, z order), written to
-    ``keys`` when it has room (else only counted); with ``clip``, clipped to
-    the grid; kept only in cells the bit array ``occ`` marks when it has
-    words.  Returns the number of entries."""
+    ``keys`` when it has room or (``grow``) appended to it, grown as needed
+    (else only counted); with ``clip``, clipped to the grid; kept only in
+    cells the bit array ``occ`` marks when it has words.  Returns the number
+    of entries and ``keys`` (grown or not)."""
     w = 0
-    write = keys.shape[0] > 0
+    write = grow or keys.shape[0] > 0
     use_occ = occ.shape[0] > 0
     for r in range(rows.shape[0]):
         f = act[rows[r]]
@@ -1835,14 +1903,18 @@ def _emit_entries(box32, act, rows, cell, cmin, cmax, size, clip, flag, shift, o
                     if write:
                         corner = ((1 if x == lx else 0) | (2 if y == ly else 0)
                                   | (4 if z == lz else 0))
-                        keys[w] = (((c * 2 + flag) << shift) | (np.int64(rows[r]) << 3)
-                                   | (bits & corner))
+                        key = (((c * 2 + flag) << shift) | (np.int64(rows[r]) << 3)
+                               | (bits & corner))
+                        if grow:
+                            keys = _pushed(keys, w, key)
+                        else:
+                            keys[w] = key
                     w += 1
-    return w
+    return w, keys
 
 
-@compiled
-def _level_grid(box32, act, cur, low, cell, row_bits, key_bits, chunk, occ_cells):
+def _level_grid(box32, act, cur, low, cell, row_bits, key_bits, chunk, occ_cells, *,
+                mapper=map, split=1):
     """One level's grid of :func:`_level_tasks` in loops.
 
     The same entries as the numpy path (packed keys sorted by cell, the
@@ -1855,31 +1927,30 @@ def _level_grid(box32, act, cur, low, cell, row_bits, key_bits, chunk, occ_cells
     pairs.  ``ok`` is false (and the arrays empty) when the cell keys do not
     fit ``key_bits`` bits (the caller takes the numpy path).  The cell ranges
     are recomputed from the boxes where needed, never stored.
+
+    The loops over faces and entries (extent, entries, radix passes, rows)
+    run in up to ``split`` contiguous pieces of at least ``_GRID_PIECE``
+    items on ``mapper`` (the pool); each piece fills its own range of the
+    output (a radix pass: counts per piece, then each piece places its keys
+    after those of the pieces before it), so the arrays are the same bit for
+    bit whatever ``split`` is.  The occupied-cell bits, the merge with the
+    smaller faces and the task cuts stay in one loop each.
     """
     shift = row_bits + 3
-    n = cur.shape[0]
-    cmin = np.full(3, np.iinfo(np.int64).max, np.int64)
-    cmax = np.full(3, np.iinfo(np.int64).min, np.int64)
-    for r in range(n):
-        f = act[cur[r]]
-        for a in range(3):
-            lo, hi, _ = _cell_span(box32, f, a, cell, cmin, cmax, False)
-            cmin[a] = min(cmin[a], lo)
-            cmax[a] = max(cmax[a], hi)
+    ext = np.empty((split, 6), np.int64)
+    bounds = _pieces(cur.size, split)
+    _each(mapper, bounds, lambda k, s, e: _grid_extent(box32, act, cur[s:e], cell, ext[k]))
+    k = bounds.size - 1
+    cmin = ext[:k, :3].min(axis=0)
+    cmax = ext[:k, 3:].max(axis=0)
     size = cmax - cmin + 1
     if not (float(size[0]) * size[1] * size[2] * 2 < 2.0 ** (key_bits - shift)):
         return False, np.empty(0, np.uint8), np.empty(0, np.int32), np.empty(0, np.int32), \
             np.empty(0, np.int64)
-    none = np.empty(0, np.int64)
     no_occ = np.empty(0, np.uint64)
-    total = _emit_entries(box32, act, cur, cell, cmin, cmax, size, False, 0, shift, no_occ, none)
-    keys = np.empty(total, np.int64)
-    _emit_entries(box32, act, cur, cell, cmin, cmax, size, False, 0, shift, no_occ, keys)
-    cell_bits = 0
-    top = (size[0] * size[1] * size[2]) * 2
-    while (np.int64(1) << cell_bits) < top:
-        cell_bits += 1
-    keys = _radix_by_high_bits(keys, shift, cell_bits)
+    keys = _grid_entries(box32, act, cur, cell, cmin, cmax, size, shift, mapper, split)
+    cell_bits = (int(size[0]) * int(size[1]) * int(size[2]) * 2 - 1).bit_length()
+    keys = _radix_pieces(keys, shift, cell_bits, mapper, split)
     if low.shape[0]:
         # smaller faces: clipped to the level's cells, kept in cells holding a
         # current-level entry (a bit per cell for at most ``occ_cells`` cells)
@@ -1887,47 +1958,221 @@ def _level_grid(box32, act, cur, low, cell, row_bits, key_bits, chunk, occ_cells
         occ = no_occ
         if ncells <= occ_cells:
             occ = np.zeros((ncells + 63) >> 6, np.uint64)
-            for r in range(total):
-                c = keys[r] >> (shift + 1)
-                occ[c >> 6] |= np.uint64(1) << np.uint64(c & 63)
-        lt = _emit_entries(box32, act, low, cell, cmin, cmax, size, True, 1, shift, occ, none)
-        lkeys = np.empty(lt, np.int64)
-        if lt:
-            _emit_entries(box32, act, low, cell, cmin, cmax, size, True, 1, shift, occ, lkeys)
-        w = lt
-        if occ.shape[0] == 0:
-            w = 0
-            for r in range(lt):
-                c = lkeys[r] >> (shift + 1)
-                a, z = 0, total
-                while a < z:                     # first current key of cell >= c
-                    mid = (a + z) >> 1
-                    if (keys[mid] >> (shift + 1)) < c:
-                        a = mid + 1
-                    else:
-                        z = mid
-                if a < total and (keys[a] >> (shift + 1)) == c:
-                    lkeys[w] = lkeys[r]
-                    w += 1
-        lkeys = _radix_by_high_bits(lkeys[:w].copy(), shift, cell_bits)
-        merged = np.empty(total + w, np.int64)   # stable merge: current entries first
-        i, j, o = 0, 0, 0
-        while i < total or j < w:
-            if j >= w or (i < total and (keys[i] >> shift) <= (lkeys[j] >> shift)):
-                merged[o] = keys[i]
-                i += 1
-            else:
-                merged[o] = lkeys[j]
-                j += 1
-            o += 1
-        keys = merged
-        total += w
+            _grid_occupied(keys, shift, occ)
+        lkeys = _grid_low(box32, act, low, cell, cmin, cmax, size, shift, occ, mapper, split)
+        if occ.shape[0] == 0 and lkeys.size:
+            bounds = _pieces(lkeys.size, split)
+            kept = np.zeros(bounds.size - 1, np.int64)
+
+            def keep(k, s, e):
+                kept[k] = _grid_in_cells(lkeys[s:e], keys, shift)
+
+            _each(mapper, bounds, keep)
+            lkeys = np.concatenate([lkeys[s:s + w] for s, w in zip(bounds[:-1], kept)])
+        lkeys = _radix_pieces(lkeys, shift, cell_bits, mapper, split)
+        keys = _grid_merged(keys, lkeys, shift)
+        del lkeys
+    total = keys.shape[0]
     first = np.empty(total, np.uint8)
     face = np.empty(total, np.int32)
     counts = np.zeros(total, np.int32)
+    bounds = _pieces(total, split)
+    for k in range(1, bounds.size - 1):              # pieces of whole cells
+        bounds[k] = _grid_cell_start(keys, max(int(bounds[k]), int(bounds[k - 1])), shift)
+    _each(mapper, bounds,
+          lambda k, s, e: _grid_rows(keys, act, row_bits, shift, s, e, first, face, counts))
+    return True, first, face, counts, _grid_cuts(counts, chunk)
+
+
+def _pieces(n: int, split: int) -> np.ndarray:
+    """Bounds of up to ``split`` near-equal pieces of ``range(n)``, each of at least
+    ``_GRID_PIECE`` items (one piece below that)."""
+    k = max(1, min(split, n // _GRID_PIECE))
+    return (np.arange(k + 1, dtype=np.int64) * n) // k
+
+
+def _each(mapper, bounds, fn):
+    """``fn(k, s, e)`` for each piece ``k`` of ``bounds`` (on ``mapper``; one piece
+    in this thread)."""
+    if bounds.size == 2:
+        fn(0, int(bounds[0]), int(bounds[1]))
+        return
+    for _ in mapper(lambda k: fn(k, int(bounds[k]), int(bounds[k + 1])), range(bounds.size - 1)):
+        pass
+
+
+def _grid_entries(box32, act, rows, cell, cmin, cmax, size, shift, mapper, split):
+    """:func:`_grid_count` and :func:`_grid_write` of ``rows`` in pieces: counted,
+    then written each to its own range (the keys in row order, as in one loop)."""
+    bounds = _pieces(rows.size, split)
+    count = np.zeros(bounds.size - 1, np.int64)
+
+    def counted(k, s, e):
+        count[k] = _grid_count(box32, act, rows[s:e], cell, cmin, cmax, size, shift)
+
+    _each(mapper, bounds, counted)
+    at = np.concatenate([[0], np.cumsum(count)])
+    keys = np.empty(int(at[-1]), np.int64)
+
+    def written(k, s, e):
+        if count[k]:
+            _grid_write(box32, act, rows[s:e], cell, cmin, cmax, size, shift,
+                        keys[at[k]:at[k + 1]])
+
+    _each(mapper, bounds, written)
+    return keys
+
+
+def _grid_low(box32, act, rows, cell, cmin, cmax, size, shift, occ, mapper, split):
+    """:func:`_grid_low_entries` of ``rows`` in pieces, joined in row order."""
+    bounds = _pieces(rows.size, split)
+    got = [None] * (bounds.size - 1)
+
+    def emitted(k, s, e):
+        got[k] = _grid_low_entries(box32, act, rows[s:e], cell, cmin, cmax, size, shift, occ)
+
+    _each(mapper, bounds, emitted)
+    return got[0].copy() if len(got) == 1 else np.concatenate(got)
+
+
+def _radix_pieces(keys, shift, bits, mapper, split):
+    """:func:`_radix_by_high_bits` with each pass in pieces: digit counts per piece,
+    then each piece places its keys after the same digits of the pieces before
+    it (the same stable order).  ``keys`` is overwritten; returns the sorted keys."""
+    bounds = _pieces(keys.size, split)
+    if bounds.size == 2:
+        return _sorted_by_high_bits_inplace(keys, shift, bits)
+    dst = np.empty_like(keys)
+    done = 0
+    while done < bits:
+        sh = shift + done
+        count = np.zeros((bounds.size - 1, 2048), np.int64)
+        _each(mapper, bounds, lambda k, s, e: _radix_count(keys, s, e, sh, count[k]))
+        start = np.cumsum(count.sum(axis=0)) - count.sum(axis=0) + np.cumsum(count, axis=0) - count
+        _each(mapper, bounds, lambda k, s, e: _radix_place(keys, dst, s, e, sh, start[k]))
+        keys, dst = dst, keys
+        done += 11
+    return keys
+
+
+@compiled
+def _grid_extent(box32, act, rows, cell, out):
+    """Lowest and highest cell (``out[:3]``, ``out[3:]``) covered by the boxes of ``rows``."""
+    for a in range(3):
+        out[a] = np.iinfo(np.int64).max
+        out[3 + a] = np.iinfo(np.int64).min
+    for r in range(rows.shape[0]):
+        f = act[rows[r]]
+        for a in range(3):
+            out[a] = min(out[a], _cell_of(box32[f, a], cell))
+            out[3 + a] = max(out[3 + a], _cell_of(box32[f, 3 + a], cell))
+
+
+@compiled
+def _grid_count(box32, act, rows, cell, cmin, cmax, size, shift):
+    """The number of entries :func:`_emit_entries` gives the level's faces
+    ``rows`` (a piece).  The options are constants in each call of it: the
+    compiled loop is several times faster specialised for them."""
+    return _emit_entries(box32, act, rows, cell, cmin, cmax, size, False, 0, shift,
+                         np.empty(0, np.uint64), np.empty(0, np.int64), False)[0]
+
+
+@compiled
+def _grid_write(box32, act, rows, cell, cmin, cmax, size, shift, keys):
+    """:func:`_grid_count`, writing the entries to ``keys``."""
+    _emit_entries(box32, act, rows, cell, cmin, cmax, size, False, 0, shift,
+                  np.empty(0, np.uint64), keys, False)
+
+
+@compiled
+def _grid_low_entries(box32, act, rows, cell, cmin, cmax, size, shift, occ):
+    """The entries of the smaller faces ``rows`` (a piece), clipped to the
+    grid and kept in the cells of ``occ`` (all without words), in one pass
+    (most of these faces are scanned for no entry or one)."""
+    keys = np.empty(max(16, rows.shape[0]), np.int64)
+    w, keys = _emit_entries(box32, act, rows, cell, cmin, cmax, size, True, 1, shift, occ, keys,
+                            True)
+    return keys[:w]
+
+
+@compiled
+def _radix_count(src, s, e, sh, count):
+    """Counts of the 11-bit digit at bit ``sh`` of ``src[s:e]``."""
+    for k in range(s, e):
+        count[(src[k] >> sh) & 2047] += 1
+
+
+@compiled
+def _radix_place(src, dst, s, e, sh, start):
+    """Place ``src[s:e]`` in ``dst`` by digit from the positions ``start`` (advanced)."""
+    for k in range(s, e):
+        d = (src[k] >> sh) & 2047
+        dst[start[d]] = src[k]
+        start[d] += 1
+
+
+@compiled
+def _grid_occupied(keys, shift, occ):
+    """Set the bit of every cell holding one of ``keys``."""
+    for r in range(keys.shape[0]):
+        c = keys[r] >> (shift + 1)
+        occ[c >> 6] |= np.uint64(1) << np.uint64(c & 63)
+
+
+@compiled
+def _grid_in_cells(lkeys, keys, shift):
+    """Move the keys of ``lkeys`` whose cell holds one of the sorted ``keys`` to
+    its front, in order (binary search); returns their number."""
+    total = keys.shape[0]
+    w = 0
+    for r in range(lkeys.shape[0]):
+        c = lkeys[r] >> (shift + 1)
+        a, z = 0, total
+        while a < z:                             # first current key of cell >= c
+            mid = (a + z) >> 1
+            if (keys[mid] >> (shift + 1)) < c:
+                a = mid + 1
+            else:
+                z = mid
+        if a < total and (keys[a] >> (shift + 1)) == c:
+            lkeys[w] = lkeys[r]
+            w += 1
+    return w
+
+
+@compiled
+def _grid_merged(keys, lkeys, shift):
+    """Stable merge by ``key >> shift``: the current level's entries first."""
+    total, w = keys.shape[0], lkeys.shape[0]
+    merged = np.empty(total + w, np.int64)
+    i, j, o = 0, 0, 0
+    while i < total or j < w:
+        if j >= w or (i < total and (keys[i] >> shift) <= (lkeys[j] >> shift)):
+            merged[o] = keys[i]
+            i += 1
+        else:
+            merged[o] = lkeys[j]
+            j += 1
+        o += 1
+    return merged
+
+
+@compiled
+def _grid_cell_start(keys, p, shift):
+    """The first entry at or after ``p`` that starts a cell (``len(keys)`` if none)."""
+    n = keys.shape[0]
+    while 0 < p < n and (keys[p] >> (shift + 1)) == (keys[p - 1] >> (shift + 1)):
+        p += 1
+    return p
+
+
+@compiled
+def _grid_rows(keys, act, row_bits, shift, s, e, first, face, counts):
+    """Corner bits, face and pair count of the entries ``s .. e - 1`` (whole cells)."""
+    total = keys.shape[0]
     mask = (np.int64(1) << row_bits) - 1
-    start = 0
-    for p in range(total):
+    start = s
+    for p in range(s, e):
         key = keys[p]
         first[p] = key & 7
         face[p] = act[(key >> 3) & mask]
@@ -1936,6 +2181,12 @@ def _level_grid(box32, act, cur, low, cell, row_bits, key_bits, chunk, occ_cells
                 if ((keys[q] >> shift) & 1) == 0:
                     counts[q] = p - q
             start = p + 1
+
+
+@compiled
+def _grid_cuts(counts, chunk):
+    """Entry bounds of tasks of about ``chunk`` pairs."""
+    total = counts.shape[0]
     # two passes (count, then fill): no array of one slot per entry for the cuts
     nc = 1
     acc = 0
@@ -1960,7 +2211,7 @@ def _level_grid(box32, act, cur, low, cell, row_bits, key_bits, chunk, occ_cells
             acc = 0
     if cuts[k - 1] != total:
         cuts[k] = total
-    return True, first, face, counts, cuts
+    return cuts
 
 
 @compiled
@@ -2063,6 +2314,34 @@ def _fan_term_loops(V, F, plane, tol, active, N, v0, v1, block, cos_min, total, 
                 rho[p] = -_nan_min(-rho[p], -r)
                 longest[p] = -_nan_min(-longest[p], -big)
                 t[p] = -_nan_min(-t[p], -tol[f])
+
+
+@compiled
+def _normal_sums(F, plane, v0, v1, N, count):
+    """For the vertices ``v0 .. v1 - 1``: ``N[a, v]``, the sum of axis ``a`` of
+    the unit normals of the faces at ``v`` and ``count[v]`` their number, as
+    ``sum(np.bincount(F[:, k], weights=plane[:, a]) for k in range(3))`` and
+    ``sum(np.bincount(F[:, k]) ...)`` give them (per corner column a sum in
+    face order, then the three columns added to ``0`` in order)."""
+    m = F.shape[0]
+    acc = np.empty((v1 - v0, 3))                 # one column's sums at a time
+    for v in range(v0, v1):
+        count[v] = 0
+    for k in range(3):
+        acc[:] = 0.0
+        for f in range(m):
+            p = F[f, k]
+            if p < v0 or p >= v1:
+                continue
+            for a in range(3):
+                acc[p - v0, a] += plane[f, a]
+            count[p] += 1
+        for v in range(v0, v1):
+            for a in range(3):
+                if k == 0:
+                    N[a, v] = 0.0 + acc[v - v0, a]
+                else:
+                    N[a, v] = N[a, v] + acc[v - v0, a]
 
 
 @compiled
@@ -2214,3 +2493,4 @@ def _endpoint_inside(PX, dX, shX, E, fy, t):
                 and _edge_distance_at(E, fy, 2, x, y, z) >= -t):
             return True
     return False
+
