@@ -592,7 +592,8 @@ def _distortion(P, Y, F, labels, face_quad, fit) -> dict:
     return {"area_mean": s.area_normalized.mean, "area_p95": s.area_normalized.p95,
             "angle_mean": s.angle.mean, "angle_p95": s.angle.p95,
             "area_ratio": s.area_ratio, "folded_faces": int(fit.folded.sum()),
-            "folded_before_repair": int(fit.repaired), "collapsed": s.n_collapsed}
+            "folded_before_repair": int(fit.repaired), "collapsed": s.n_collapsed,
+            "reached": int(fit.reached)}
 
 
 def _coverage(V, F, Y, Fq) -> dict:

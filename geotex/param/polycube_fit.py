@@ -293,7 +293,7 @@ def _outside_far(S, Y, F, depth) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 def reached_surface(fit: SurfaceFit, P: np.ndarray, F: np.ndarray, projector: SurfaceProjector,
                     samples: np.ndarray, weights: np.ndarray, *, depth: float = 0.1,
                     rounds: int = 24, step: float = 0.5, spread: int = 8,
-                    reference_smoothing: int = 16) -> SurfaceFit:
+                    stall: float = 0.9, reference_smoothing: int = 16) -> SurfaceFit:
     """The fitted surface moved outward where the base sticks out of it by more than ``depth``.
 
     A protrusion of the base thinner than a voxel (Spot's horns at tile 0.12)
@@ -328,7 +328,9 @@ def reached_surface(fit: SurfaceFit, P: np.ndarray, F: np.ndarray, projector: Su
         Distance outside the fitted surface (in the units of the base) above
         which a sample pulls.
     rounds : int
-        Most rounds.
+        Most rounds; fewer once no sample is that far out, or once a round
+        leaves more than ``stall`` of the far samples' weighted distance to go
+        (the fold guard holds them back).
     step : float
         Fraction of the pull taken per round.
     spread : int
@@ -361,6 +363,7 @@ def reached_surface(fit: SurfaceFit, P: np.ndarray, F: np.ndarray, projector: Su
     # bring the surface nearer to the base, so no other sample gets far)
     near = S[far]
     wn = w[far]
+    gap = wn @ np.linalg.norm(near - C, axis=1)      # weighted distance still to go
     for _ in range(rounds):
         corners = F[fface]
         T = Y[corners]
@@ -393,7 +396,8 @@ def reached_surface(fit: SurfaceFit, P: np.ndarray, F: np.ndarray, projector: Su
             now = _refolded(now, Y, F, back, projector, face)
         bad = now
         sub, C, fface = _outside_far(near, Y, F, depth)
-        if sub.size == 0:
+        gap, gap0 = wn[sub] @ np.linalg.norm(near[sub] - C, axis=1), gap
+        if sub.size == 0 or gap > stall * gap0:
             break
         near, wn = near[sub], wn[sub]
     reached = int(np.count_nonzero((Y != fit.Y).any(axis=1)))
