@@ -293,7 +293,7 @@ def _outside_far(S, Y, F, depth) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 def reached_surface(fit: SurfaceFit, P: np.ndarray, F: np.ndarray, projector: SurfaceProjector,
                     samples: np.ndarray, weights: np.ndarray, *, depth: float = 0.1,
                     rounds: int = 24, step: float = 0.5, spread: int = 8,
-                    stall: float = 0.9, reference_smoothing: int = 16) -> SurfaceFit:
+                    stall: float = 0.97, reference_smoothing: int = 16) -> SurfaceFit:
     """The fitted surface moved outward where the base sticks out of it by more than ``depth``.
 
     A protrusion of the base thinner than a voxel (Spot's horns at tile 0.12)
