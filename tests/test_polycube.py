@@ -10,7 +10,7 @@ import pytest
 from geotex.check import check_mesh
 from geotex.errors import GeotexError, InputError
 from geotex.mesh.primitives import box, icosphere, torus
-from geotex.param.polycube import polycube
+from geotex.param.polycube import bare_fraction, polycube
 from geotex.param.polycube_fit import SurfaceProjector
 from geotex.param.polycube_quads import chart_axes
 from geotex.param.voxels import MANIFOLD_BLOCKS, manifold_solid, non_manifold_corners
@@ -294,9 +294,11 @@ def test_rod_out_of_the_fitted_surface_is_reported_bare():
     assert fine.diagnostics.tile_search["attempts"][0]["result"] == "ok"
 
 
-def test_spot_horns_within_a_tile_but_bare_are_not_covered():
-    """Spot's horns stay inside one tile of the fitted surface at tile 0.12 but
-    out of the texture's reach: the fit does not count as covering the base."""
+def test_spot_horns_within_a_tile_are_reached_by_the_fitted_surface(monkeypatch):
+    """Spot's horns stay inside one tile of the plain fit at tile 0.12 but out of
+    the texture's reach; the fit moved out to them covers them, bare no quad and
+    keeps the first grid shift."""
+    import geotex.param.polycube as module
     from geotex.data import sample_path
     from geotex.io import read_mesh
     from geotex.param.polycube_size import MAX_BARE
@@ -304,9 +306,61 @@ def test_spot_horns_within_a_tile_but_bare_are_not_covered():
     m = read_mesh(sample_path("spot"))
     pc = polycube(m.vertices, m.faces, tile_size=0.12)
     cov = pc.diagnostics.coverage
+    assert cov["within_tile"] >= 0.99 and cov["bare"] <= MAX_BARE
+    assert bare_fraction(m.vertices, m.faces, pc.Y, pc.F, depth=0.125 * 0.12) < 1e-4
+    assert pc.diagnostics.tile_search["attempts"][0]["result"] == "ok"
+    assert pc.diagnostics.voxels["fitted"] == 1
+    assert pc.diagnostics.distortion["reached"] > 0 and not pc.quad_folded.any()
+    assert pc.diagnostics.distortion["folded_faces"] == 0
+
+    monkeypatch.setattr(module, "reached_surface", lambda fit, *a, **k: fit)
+    plain = polycube(m.vertices, m.faces, tile_size=0.12)
+    cov = plain.diagnostics.coverage
     assert cov["within_tile"] >= 0.99 and cov["bare"] > MAX_BARE
-    assert pc.diagnostics.tile_search["attempts"][0]["result"] == "out of reach"
-    assert pc.diagnostics.voxels["fitted"] > 1           # the other grid shifts were tried
+    assert plain.diagnostics.tile_search["attempts"][0]["result"] == "out of reach"
+    assert plain.diagnostics.voxels["fitted"] > 1        # the other grid shifts were tried
+    assert plain.diagnostics.distortion["reached"] == 0
+
+
+def _bumped_sphere():
+    """An icosphere with a narrow bump (0.4 out) at +x, and a coarser sphere
+    projected onto it (on its own side): its vertices miss the bump's top."""
+    from geotex.mesh.geometry import vertex_normals
+    from geotex.param.polycube_fit import SurfaceFit
+
+    V, F = icosphere(4)
+    B = V * (1.0 + 0.4 * np.clip((V[:, 0] - 0.95) / 0.05, 0.0, 1.0))[:, None]
+    P, Fp = icosphere(3)
+    projector = SurfaceProjector(B, F)
+    Y, face = projector.project(P, vertex_normals(P, Fp))
+    fit = SurfaceFit(Y=Y, base_face=face, folded=np.zeros(Fp.shape[0], dtype=bool), repaired=0)
+    return B, F, P, Fp, projector, fit
+
+
+def test_reached_surface_moves_out_to_a_protrusion():
+    from geotex.param.polycube import _face_samples
+    from geotex.param.polycube_fit import folded_faces, reached_surface
+
+    B, F, P, Fp, projector, fit = _bumped_sphere()
+    before = bare_fraction(B, F, fit.Y, Fp, depth=0.05)
+    assert before > 0.02
+    out = reached_surface(fit, P, Fp, projector, *_face_samples(B, F), depth=0.02)
+    assert bare_fraction(B, F, out.Y, Fp, depth=0.05) < 0.01 * before
+    assert out.reached > 0 and out.reached == int((out.Y != fit.Y).any(axis=1).sum())
+    assert not folded_faces(out.Y, Fp, projector, out.base_face).any() and not out.folded.any()
+    far = P[:, 0] < -0.3                                         # the far side does not move
+    assert far.sum() > 100 and np.array_equal(out.Y[far], fit.Y[far])
+    C, _ = projector.closest(out.Y)                              # still on the base
+    assert np.abs(C - out.Y).max() < 1e-9
+    assert fit.Y.flags.writeable and np.array_equal(fit.Y, _bumped_sphere()[5].Y)  # not mutated
+
+
+def test_reached_surface_leaves_a_covering_fit_as_it_is():
+    from geotex.param.polycube import _face_samples
+    from geotex.param.polycube_fit import reached_surface
+
+    B, F, P, Fp, projector, fit = _bumped_sphere()
+    assert reached_surface(fit, P, Fp, projector, *_face_samples(B, F), depth=0.5) is fit
 
 
 def test_automatic_tile_size_too_thin_fails_naming_the_place(monkeypatch):

@@ -42,13 +42,15 @@ from geotex.check.intersections import self_intersecting_pairs
 from geotex.errors import GeotexError, InputError
 from geotex.mesh.arrays import as_mesh_arrays
 from geotex.mesh.geometry import face_areas, vertex_normals
-from geotex.mesh.topology import edge_topology, faces_within_rings, vertex_components
+from geotex.mesh.topology import (edge_topology, faces_within_rings, neighbour_mean,
+                                  vertex_components)
 from geotex.param.distortion import distortion_summary
-from geotex.param.polycube_fit import SurfaceProjector, fitted_surface
+from geotex.param.polycube_fit import (SurfaceFit, SurfaceProjector, fitted_surface,
+                                       folded_faces, reached_surface)
 from geotex.param.polycube_quads import QuadLayout, chart_axes
 from geotex.param.polycube_size import (AUTO_FLOOR, AUTO_START, AUTO_STEP, BARE_DEPTH,
                                         EXTRA_FITTED, MAX_FITTED, MAX_QUADS, MIN_COVERAGE,
-                                        MAX_BARE, SKIP_BELOW,
+                                        MAX_BARE, REACH_DEPTH, SKIP_BELOW,
                                         size_schedule, thin_spot)
 from geotex.param.polycube_surface import boundary_quads, subdivided_quads
 from geotex.param.voxels import (largest_component, manifold_solid, occupancy,
@@ -267,7 +269,7 @@ def _attempt(V, F, *, lo, ts, chi, k, r, iterations, max_quads=None, progress=No
     """
     Vt = (V - lo) / ts
     out = {"ts": ts, "Vt": Vt, "seen": [], "best": None, "fitted": 0, "too_large": False}
-    projector = None
+    projector = samples = None
     done = []                 # (candidate, fit, bad, cov) of the candidates fitted so far
     for c in _candidates(Vt, F, cell=float(k), k=k, res=r, chi=chi, max_quads=max_quads):
         out["seen"].append((c["chi"], c["parts"]))
@@ -287,8 +289,11 @@ def _attempt(V, F, *, lo, ts, chi, k, r, iterations, max_quads=None, progress=No
         if same is not None:
             _, fit, bad, cov = same
         else:
-            fit = fitted_surface(c["origin"] + c["P"], c["F"], projector, iterations=iterations)
-            bad = _bad_quads(fit, c["F"], c["labels"].size, r)
+            P = c["origin"] + c["P"]
+            fit = fitted_surface(P, c["F"], projector, iterations=iterations)
+            if samples is None:
+                samples = _face_samples(Vt, F)
+            fit, bad = _reached(fit, P, c["F"], projector, samples, c["labels"].size, r)
             cov = _coverage(Vt, F, fit.Y, c["F"])
             done.append((c, fit, bad, cov))
         key = _key(cov, int(bad.sum()))
@@ -515,6 +520,42 @@ def _search(V, F, *, extent, genus, opts):
     return best, search
 
 
+def _reached(fit, P, F, projector, samples, n_quads, res, *, tries: int = 3
+             ) -> tuple[SurfaceFit, np.ndarray]:
+    """The fit moved out to the base's protrusions (:func:`reached_surface`) and its
+    bare quads (:func:`_bad_quads`), never with a quad bare that the fit had textured.
+
+    Where moving out makes quads bare (the two sides of a thin fin pulled onto its
+    rim meet their own offset), their vertices and ``res`` rings around (wider at
+    each of ``tries``) go back to the fit's positions; if quads are still newly
+    bare then, the fit is kept as it was.
+    """
+    plain = _bad_quads(fit, F, n_quads, res)
+    out = reached_surface(fit, P, F, projector, *samples, depth=REACH_DEPTH)
+    if out is fit:
+        return fit, plain
+    n = fit.Y.shape[0]
+    ring = (neighbour_mean(F, n) != 0).astype(np.float64)
+    per_quad = 2 * res * res
+    for t in range(tries + 1):
+        bad = _bad_quads(out, F, n_quads, res)
+        new = np.flatnonzero(bad & ~plain)
+        if new.size == 0:
+            return out, bad
+        if t == tries:
+            break
+        back = np.zeros(n, dtype=bool)
+        back[F[(new[:, None] * per_quad + np.arange(per_quad)).ravel()].ravel()] = True
+        for _ in range(res * (t + 1)):
+            back = (ring @ back.astype(np.float64)) > 0
+        Y, face = out.Y.copy(), out.base_face.copy()
+        Y[back], face[back] = fit.Y[back], fit.base_face[back]
+        out = SurfaceFit(Y=Y, base_face=face, folded=folded_faces(Y, F, projector, face),
+                         repaired=fit.repaired,
+                         reached=int(np.count_nonzero((Y != fit.Y).any(axis=1))))
+    return fit, plain
+
+
 def _bad_quads(fit, F, n_quads, res, *, clearance: float = 0.05) -> np.ndarray:
     """Quads whose fitted image folds over or comes too close to another part of itself.
 
@@ -551,7 +592,8 @@ def _distortion(P, Y, F, labels, face_quad, fit) -> dict:
     return {"area_mean": s.area_normalized.mean, "area_p95": s.area_normalized.p95,
             "angle_mean": s.angle.mean, "angle_p95": s.angle.p95,
             "area_ratio": s.area_ratio, "folded_faces": int(fit.folded.sum()),
-            "folded_before_repair": int(fit.repaired), "collapsed": s.n_collapsed}
+            "folded_before_repair": int(fit.repaired), "collapsed": s.n_collapsed,
+            "reached": int(fit.reached)}
 
 
 def _coverage(V, F, Y, Fq) -> dict:

@@ -17,6 +17,11 @@ surface. It is moved onto the base by alternating
 Faces whose normal ends up opposite to the base normal below them are
 *folded*; a few local rounds of plain smoothing and projection around them
 untangle most folds. What remains is reported, never hidden.
+
+Last, :func:`reached_surface` moves the fitted surface outward where the
+base sticks out of it (a horn thinner than a voxel: the projection puts the
+sub-grid on the horn's root, the closest base to it, and the horn itself stays
+outside), so that the texture laid on the surface reaches the base there.
 """
 
 from __future__ import annotations
@@ -28,10 +33,11 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
-from geotex.mesh.geometry import face_cross, face_normals
+from geotex.mesh.geometry import clamped_barycentric, face_cross, face_normals
 from geotex.mesh.topology import neighbour_mean
 
-__all__ = ["closest_points_on_triangles", "SurfaceProjector", "SurfaceFit", "fitted_surface"]
+__all__ = ["closest_points_on_triangles", "SurfaceProjector", "SurfaceFit", "fitted_surface",
+           "reached_surface"]
 
 
 def closest_points_on_triangles(X: np.ndarray, A: np.ndarray, B: np.ndarray, C: np.ndarray
@@ -147,12 +153,15 @@ class SurfaceFit:
         Faces whose orientation disagrees with the base below them.
     repaired : int
         Folded faces before the local repair rounds.
+    reached : int
+        Vertices moved outward by :func:`reached_surface` (0 when it did not run).
     """
 
     Y: np.ndarray
     base_face: np.ndarray
     folded: np.ndarray
     repaired: int
+    reached: int = 0
 
 
 def _unit(X: np.ndarray) -> np.ndarray:
@@ -267,3 +276,129 @@ def fitted_surface(P: np.ndarray, F: np.ndarray, projector: SurfaceProjector, *,
             Y[idx], face[idx] = projector.project(M_idx @ Y, side_idx)
         bad = _refolded(bad, Y, F, sel, projector, face)
     return SurfaceFit(Y=Y, base_face=face, folded=bad, repaired=before)
+
+
+def _outside_far(S, Y, F, depth) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Points of ``S`` farther than ``depth`` outside the closed surface ``(Y, F)``:
+    their indices, closest points on it and the faces of those."""
+    C, face = SurfaceProjector(Y, F).closest(S)
+    far = np.flatnonzero(np.linalg.norm(S - C, axis=1) > depth)
+    if far.size:
+        wn = np.asarray(igl.fast_winding_number(np.ascontiguousarray(Y), F,
+                                                np.ascontiguousarray(S[far])))
+        far = far[wn < 0.5]
+    return far, C[far], face[far]
+
+
+def reached_surface(fit: SurfaceFit, P: np.ndarray, F: np.ndarray, projector: SurfaceProjector,
+                    samples: np.ndarray, weights: np.ndarray, *, depth: float = 0.1,
+                    rounds: int = 24, step: float = 0.5, spread: int = 8,
+                    stall: float = 0.97, reference_smoothing: int = 16) -> SurfaceFit:
+    """The fitted surface moved outward where the base sticks out of it by more than ``depth``.
+
+    A protrusion of the base thinner than a voxel (Spot's horns at tile 0.12)
+    is not in the voxel solid, so the fit lays the sub-grid on its root and
+    the protrusion stays outside the fitted surface, out of reach of the
+    texture laid on it. Each round, every base sample farther than ``depth``
+    outside the fitted surface (winding number below one half) pulls the
+    corners of the fitted face closest to it toward itself (barycentric
+    weights times the sample's weight, averaged per vertex); the pull is
+    spread harmonically ``spread`` rings around the pulled vertices (so the
+    sub-grid stretches over the protrusion instead of forming a spike),
+    ``step`` of it is taken, and the moved vertices are projected back onto
+    the base on their own side. Moved vertices of faces that would fold
+    (:func:`folded_faces`) go back to where they were in that round. A base
+    with no sample that far outside is returned unchanged (the same object).
+
+    Parameters
+    ----------
+    fit : SurfaceFit
+        The fit of :func:`fitted_surface`.
+    P : numpy.ndarray, (n, 3) float64
+        The start positions given to :func:`fitted_surface` (their normals give
+        every vertex its side).
+    F : numpy.ndarray, (m, 3) int64
+    projector : SurfaceProjector
+        The base mesh.
+    samples : numpy.ndarray, (k, 3) float64
+        Points on the base.
+    weights : numpy.ndarray, (k,) float64
+        Their area weights.
+    depth : float
+        Distance outside the fitted surface (in the units of the base) above
+        which a sample pulls.
+    rounds : int
+        Most rounds; fewer once no sample is that far out, or once a round
+        leaves more than ``stall`` of the far samples' weighted distance to go
+        (the fold guard holds them back).
+    step : float
+        Fraction of the pull taken per round.
+    spread : int
+        Smoothing steps that spread the pull to the neighbouring vertices.
+    reference_smoothing : int
+        As in :func:`fitted_surface`.
+
+    Returns
+    -------
+    SurfaceFit
+        With ``reached`` the number of vertices that moved.
+    """
+    S = np.asarray(samples, dtype=np.float64)
+    w = np.asarray(weights, dtype=np.float64)
+    Y, face = fit.Y, fit.base_face
+    far, C, fface = _outside_far(S, Y, F, depth)
+    if far.size == 0:
+        return fit
+    n = Y.shape[0]
+    M = neighbour_mean(F, n)
+    m = F.shape[0]
+    incidence = sp.csr_matrix((np.ones(3 * m), (F.ravel(), np.repeat(np.arange(m), 3))),
+                              shape=(n, m))
+    ref = _unit(incidence @ face_cross(P, F))
+    for _ in range(reference_smoothing):
+        ref = _unit(M @ ref)
+    Y, face = Y.copy(), face.copy()
+    bad = fit.folded
+    # samples that can pull: the ones far out at the start (later rounds only
+    # bring the surface nearer to the base, so no other sample gets far)
+    near = S[far]
+    wn = w[far]
+    gap = wn @ np.linalg.norm(near - C, axis=1)      # weighted distance still to go
+    for _ in range(rounds):
+        corners = F[fface]
+        T = Y[corners]
+        b = clamped_barycentric(C, T[:, 0], T[:, 1], T[:, 2]) * wn[:, None]
+        W = np.zeros(n)
+        pull = np.zeros((n, 3))
+        np.add.at(W, corners.ravel(), b.ravel())
+        np.add.at(pull, corners.ravel(), (b[:, :, None] * (near - C)[:, None, :]).reshape(-1, 3))
+        pulled = W > 0
+        pull[pulled] /= W[pulled, None]
+        for _ in range(spread):
+            pull = np.where(pulled[:, None], pull, M @ pull)
+        moved = np.flatnonzero(np.linalg.norm(pull, axis=1) > 0)
+        Y0, face0 = Y.copy(), face.copy()
+        Nn = _unit(ref[moved] + _unit((incidence @ face_cross(Y, F))[moved]))
+        Y[moved], face[moved] = projector.project(Y[moved] + step * pull[moved], Nn)
+        mask = np.zeros(n, dtype=bool)
+        mask[moved] = True
+        now = _refolded(bad, Y, F, mask, projector, face)
+        for _ in range(8):             # put back the moved corners of faces that fold
+            new = now & ~bad
+            if not new.any():
+                break
+            back = np.zeros(n, dtype=bool)
+            back[F[new].ravel()] = True
+            back &= mask & (Y != Y0).any(axis=1)
+            if not back.any():
+                break
+            Y[back], face[back] = Y0[back], face0[back]
+            now = _refolded(now, Y, F, back, projector, face)
+        bad = now
+        sub, C, fface = _outside_far(near, Y, F, depth)
+        gap, gap0 = wn[sub] @ np.linalg.norm(near[sub] - C, axis=1), gap
+        if sub.size == 0 or gap > stall * gap0:
+            break
+        near, wn = near[sub], wn[sub]
+    reached = int(np.count_nonzero((Y != fit.Y).any(axis=1)))
+    return SurfaceFit(Y=Y, base_face=face, folded=bad, repaired=fit.repaired, reached=reached)

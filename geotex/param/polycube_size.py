@@ -27,6 +27,7 @@ from geotex.mesh.geometry import face_normals
 
 __all__ = ["AUTO_START", "AUTO_FLOOR", "AUTO_STEP", "MAX_QUADS", "MAX_FITTED", "EXTRA_FITTED",
            "MIN_COVERAGE", "SKIP_BELOW", "BARE_DEPTH", "MAX_BARE",
+           "REACH_DEPTH",
            "size_schedule", "thin_spot", "face_thickness"]
 
 #: The automatic search starts at ``extent / AUTO_START`` ...
@@ -51,6 +52,10 @@ BARE_DEPTH = 0.25
 #: Largest share of the base area that may lie out of the texture's reach
 #: (farther than :data:`BARE_DEPTH` outside the fitted surface) for a fit to cover it.
 MAX_BARE = 0.002
+#: Depth (tiles) outside the fitted surface beyond which the base pulls the fitted
+#: surface outward after the fit (:func:`geotex.param.polycube_fit.reached_surface`):
+#: below an eighth of a tile, about half the lowest catalog set's height.
+REACH_DEPTH = 0.1
 
 
 def size_schedule(start: float, floor: float) -> list[float]:
