@@ -30,6 +30,7 @@ Run:  python examples/tiles_corner_merge.py [OUT_DIR]     (default docs/gallery)
 from __future__ import annotations
 
 import sys
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -37,7 +38,7 @@ import numpy as np
 from geotex.exemplars import exemplar
 from geotex.mesh.primitives import box
 from geotex.mesh.topology import face_components
-from geotex.render import Panel, render_panels
+from geotex.render import labelled_panel, labelled_parts, render_panels
 from geotex.tiles.build import built_tile, plan_tileset
 from geotex.tiles.catalog import recipes
 from geotex.tiles.colors import EAST, NORTH, SOUTH, WEST
@@ -49,21 +50,7 @@ PALETTE = {PLATE: "#bdb8ad", 1: "#d1495b", 2: "#f19ca6", 3: "#2e86ab", 4: "#9cc9
            MERGED: "#edae49", INTERIOR: "#66a182"}
 SIDES = (SOUTH, EAST, NORTH, WEST)
 
-
-def _join(parts):
-    Vs, Fs, Ss, off = [], [], [], 0
-    for V, F, s in parts:
-        Vs.append(V)
-        Fs.append(F + off)
-        Ss.append(np.broadcast_to(np.asarray(s, dtype=np.int64), (len(F),)))
-        off += len(V)
-    return np.concatenate(Vs), np.concatenate(Fs), np.concatenate(Ss)
-
-
-def _panel(V, F, labels, title):
-    used = np.unique(labels)
-    return Panel(V, F, scalars=np.searchsorted(used, labels).astype(np.float64),
-                 cmap=[PALETTE[int(u)] for u in used], title=title)
+_panel = partial(labelled_panel, palette=PALETTE)
 
 
 def _labelled(V, F, crossing: dict, band: dict, other: int):
@@ -107,10 +94,10 @@ def main(out: Path) -> None:
         parts1 += [(V, F, shade[side]), (Vb, Fb, shade[side] + 1)]
         crossing.update({tuple(p): shade[side] for p in V.astype(np.float32).tolist()})
         band.update({tuple(p): shade[side] + 1 for p in Vb.astype(np.float32).tolist()})
-    p1 = _join(parts1)
+    p1 = labelled_parts(parts1)
 
     (Vf, Ff), _ = planned.plan.frames[tile]
-    p2 = _join([plate, (Vf, Ff, _labelled(Vf, Ff, crossing, band, MERGED))])
+    p2 = labelled_parts([plate, (Vf, Ff, _labelled(Vf, Ff, crossing, band, MERGED))])
 
     (Vt, Ft), tstats = built_tile(planned.plan, tile)
     frame_keys = {tuple(p): MERGED for p in Vf.astype(np.float32).tolist()}
@@ -122,7 +109,7 @@ def main(out: Path) -> None:
         faces = np.flatnonzero(comp == c)
         if lab[faces[0]] == INTERIOR and all(key[v] in frame_keys for v in np.unique(Ft[faces])):
             lab[faces] = MERGED
-    p3 = _join([plate, (Vt, Ft, lab)])
+    p3 = labelled_parts([plate, (Vt, Ft, lab)])
 
     s = stats[tile]
     print(f"{SET} with corner_merge: tile {tile} sides {cols}: {s['added']} band elements "

@@ -34,6 +34,7 @@ Run:  python examples/tiles_pipeline.py [OUT_DIR]     (default docs/gallery)
 from __future__ import annotations
 
 import sys
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -41,11 +42,12 @@ import numpy as np
 from geotex.exemplars import exemplar
 from geotex.mesh.primitives import box
 from geotex.mesh.topology import face_components
-from geotex.render import Panel, render_panels
+from geotex.render import labelled_panel, labelled_parts, render_panels
 from geotex.tiles.build import built_tile, plan_tileset
 from geotex.tiles.catalog import recipes
 from geotex.tiles.colors import EAST, NORTH, SOUTH, WEST
 from geotex.tiles.frame import placed_half
+from geotex.tiles.strips import from_strip
 
 SET = "studs"
 TILE = 5                         # which tile of the set is shown
@@ -53,40 +55,13 @@ GREY, INTERIOR = 0, 9            # labels of the exemplar/plate and of interior 
 PALETTE = {GREY: "#bdb8ad", 1: "#d1495b", 2: "#2e86ab", 3: "#edae49", 4: "#8e6c8a",
            INTERIOR: "#66a182"}     # label 1 + k: strip colour k
 
-
-def _join(parts):
-    """Concatenate (V, F, per-face scalar) triples."""
-    Vs, Fs, Ss, off = [], [], [], 0
-    for V, F, s in parts:
-        Vs.append(V)
-        Fs.append(F + off)
-        Ss.append(np.full(len(F), int(s)))
-        off += len(V)
-    return np.concatenate(Vs), np.concatenate(Fs), np.concatenate(Ss)
+_panel = partial(labelled_panel, palette=PALETTE)
 
 
 def _plate(x0, y0, x1, y1, z):
     """A thin plate under a tile (the tile square), scalar GREY."""
     V, F = box((x0, y0, z - 0.01), (x1, y1, z))
     return V, F, GREY
-
-
-def _to_exemplar(V, origin, along):
-    """Strip coordinates (t, s, w) back to the exemplar (inverse of the strip's rotation)."""
-    out = np.array(V, dtype=np.float64)
-    t, s = V[:, 0], V[:, 1]
-    if along == 0:
-        out[:, 0], out[:, 1] = t + origin[0], s + origin[1]
-    else:
-        out[:, 0], out[:, 1] = origin[0] - s, origin[1] + t
-    return out
-
-
-def _panel(V, F, labels, title):
-    """A panel coloured by integer labels through :data:`PALETTE` (only the labels used)."""
-    used = np.unique(labels)
-    return Panel(V, F, scalars=np.searchsorted(used, labels).astype(np.float64),
-                 cmap=[PALETTE[int(u)] for u in used], title=title)
 
 
 def main(out: Path) -> None:
@@ -104,9 +79,9 @@ def main(out: Path) -> None:
     parts = [(ex.vertices, ex.faces, GREY)]
     for k, st in enumerate(strips):
         for half in (st.below, st.above):
-            parts.append((_to_exemplar(half[0], st.origin, st.along) + [0, 0, 0.002],
+            parts.append((from_strip(half[0], st.origin, st.along) + [0, 0, 0.002],
                           half[1], 1.0 + k))
-    p1 = _join(parts)
+    p1 = labelled_parts(parts)
 
     # 2. the strips in their own coordinates, the two halves pulled apart
     parts = []
@@ -115,7 +90,7 @@ def main(out: Path) -> None:
         for half, ds in ((st.below, -0.06), (st.above, 0.06)):
             parts.append((half[0] + [0.0, y + ds, 0.0], half[1], 1.0 + k))
         parts.append(_plate(0.0, y - 0.01, 1.0, y + 0.01, -depth))
-    p2 = _join(parts)
+    p2 = labelled_parts(parts)
 
     # 3. the frame of one tile, coloured by the strip (side colour) of each side
     cols = planned.cols[TILE].tolist()
@@ -123,7 +98,7 @@ def main(out: Path) -> None:
     for side, colour in zip((SOUTH, EAST, NORTH, WEST), cols):
         (V, F), _ = placed_half(strips[colour], side)
         parts.append((V, F, 1 + colour))
-    p3 = _join(parts)
+    p3 = labelled_parts(parts)
 
     # 4. the built tile: frame elements as in 3, interior green
     (Vt, Ft), stats = built_tile(planned.plan, TILE)
@@ -143,7 +118,7 @@ def main(out: Path) -> None:
         if all(h is not None for h in hits):
             scal[faces] = hits[0]
     plate = _plate(0.0, 0.0, 1.0, 1.0, -depth)
-    V4, F4, S4 = _join([plate, (Vt, Ft, 0.0)])
+    V4, F4, S4 = labelled_parts([plate, (Vt, Ft, 0.0)])
     S4[len(plate[1]):] = scal
     n_frame = len({tuple(p) for p in frame_V.astype(np.float32).tolist()})
     interior = int(sum(1 for c in range(n_comp) if (scal[comp == c] == INTERIOR).all()))

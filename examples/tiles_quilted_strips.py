@@ -35,6 +35,7 @@ Run:  python examples/tiles_quilted_strips.py [OUT_DIR]     (default docs/galler
 from __future__ import annotations
 
 import sys
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -43,9 +44,10 @@ from geotex.exemplars import exemplar
 from geotex.mesh.geometry import group_boxes
 from geotex.mesh.primitives import box
 from geotex.mesh.topology import face_components
-from geotex.render import Panel, render_panels
+from geotex.render import labelled_panel, labelled_parts, render_panels
 from geotex.tiles.build import build_tileset, plan_tileset
 from geotex.tiles.catalog import recipes
+from geotex.tiles.strips import from_strip
 from geotex.tiles.tiling import planar_tiling, random_arrangement
 from geotex.tiles.verify import check_seams, corner_density
 
@@ -56,23 +58,7 @@ GREY, LINE, CROSSING, INSIDE = 0, 1, 2, 3        # labels; strip k is 4 + k
 PALETTE = {GREY: "#bdb8ad", LINE: "#4a4a4a", CROSSING: "#e07a2f", INSIDE: "#66a182",
            4: "#d1495b", 5: "#2e86ab", 6: "#edae49", 7: "#8e6c8a"}
 
-
-def _join(parts):
-    """Concatenate (V, F, per-face label) triples."""
-    Vs, Fs, Ss, off = [], [], [], 0
-    for V, F, s in parts:
-        s = np.broadcast_to(np.asarray(s), (len(F),))
-        Vs.append(V)
-        Fs.append(F + off)
-        Ss.append(s.astype(np.int64))
-        off += len(V)
-    return np.concatenate(Vs), np.concatenate(Fs), np.concatenate(Ss)
-
-
-def _panel(V, F, labels, title):
-    used = np.unique(labels)
-    return Panel(V, F, scalars=np.searchsorted(used, labels).astype(np.float64),
-                 cmap=[PALETTE[int(u)] for u in used], title=title)
+_panel = partial(labelled_panel, palette=PALETTE)
 
 
 def _plate(w, h, z, lines=False):
@@ -86,25 +72,14 @@ def _plate(w, h, z, lines=False):
     return parts
 
 
-def _to_exemplar(V, origin, along):
-    """Strip coordinates (t, s, w) back to the source (inverse of the strip's rotation)."""
-    out = np.array(V, dtype=np.float64)
-    t, s = V[:, 0], V[:, 1]
-    if along == 0:
-        out[:, 0], out[:, 1] = t + origin[0], s + origin[1]
-    else:
-        out[:, 0], out[:, 1] = origin[0] - s, origin[1] + t
-    return out
-
-
 def _with_strips(V, F, strips, size, depth):
     """The source grey with its strips' elements coloured over it."""
     parts = _plate(size[0], size[1], -depth) + [(V, F, GREY)]
     for k, st in enumerate(strips):
         for half in (st.below, st.above):
-            parts.append((_to_exemplar(half[0], st.origin, st.along) + [0, 0, 0.002],
+            parts.append((from_strip(half[0], st.origin, st.along) + [0, 0, 0.002],
                           half[1], 4 + k))
-    return _join(parts)
+    return labelled_parts(parts)
 
 
 def _tiling(tiles, depth):
@@ -117,7 +92,7 @@ def _tiling(tiles, depth):
     crossing = (np.floor(lo[:, :2] + 1e-9) != np.floor(hi[:, :2] - 1e-9)).any(axis=1)
     d = corner_density(V, F, (GRID, GRID))
     label = np.where(crossing[comp], CROSSING, INSIDE)
-    return _join(_plate(GRID, GRID, -depth, lines=True) + [(V, F, label)]), \
+    return labelled_parts(_plate(GRID, GRID, -depth, lines=True) + [(V, F, label)]), \
         int(crossing.sum()), int(n), d.ratio
 
 
@@ -141,7 +116,7 @@ def main(out: Path) -> None:
         for half, ds in ((st.below, -0.06), (st.above, 0.06)):
             parts.append((half[0] + [0.0, y + ds, 0.0], half[1], 4 + k))
         parts.append(box((0.0, y - 0.01, -depth - 0.01), (1.0, y + 0.01, -depth)) + (GREY,))
-    p3 = _join(parts)
+    p3 = labelled_parts(parts)
     tilings = {}
     for name, ts in sets.items():
         tilings[name] = _tiling(ts, depth)

@@ -22,8 +22,9 @@ from geotex.errors import InputError
 from geotex.io.atomic import atomic_output
 from geotex.mesh.arrays import as_mesh_arrays
 from geotex.mesh.geometry import face_areas, face_normals
+from geotex.mesh.topology import concatenated
 
-__all__ = ["render_mesh", "render_panels", "Panel", "UP_AXES", "offscreen_pyvista",
+__all__ = ["render_mesh", "render_panels", "Panel", "labelled_parts", "labelled_panel", "UP_AXES", "offscreen_pyvista",
            "split_by_uv", "view_direction", "background_renderer"]
 
 UP_AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
@@ -199,6 +200,56 @@ class Panel:
                 if not np.isfinite(r) or r <= 0:
                     raise InputError(f"closeup radius must be a positive number, got {r}")
                 self.closeup_radius = r
+
+
+def labelled_parts(parts) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Stack ``(V, F, label)`` parts into one mesh with a label per face.
+
+    Parameters
+    ----------
+    parts : iterable of (V (n_i, 3) float64, F (m_i, 3) int64, label)
+        ``label``: an int for the whole part or an (m_i,) int array. Parts
+        without faces are skipped (:func:`geotex.mesh.topology.concatenated`).
+
+    Returns
+    -------
+    V : numpy.ndarray, (n, 3) float64
+    F : numpy.ndarray, (m, 3) int64
+    labels : numpy.ndarray, (m,) int64
+    """
+    parts = [(V, F, lab) for V, F, lab in parts if len(F)]
+    V, F = concatenated((V, F) for V, F, _ in parts)
+    labels = [np.broadcast_to(np.asarray(lab, dtype=np.int64), (len(F_),)) for _, F_, lab in parts]
+    return V, F, (np.concatenate(labels) if labels else np.zeros(0, dtype=np.int64))
+
+
+def labelled_panel(V, F, labels, title: str = "", *, palette: dict) -> "Panel":
+    """A panel whose faces are coloured by integer labels through ``palette``.
+
+    Parameters
+    ----------
+    V : numpy.ndarray, (n, 3) float64
+    F : numpy.ndarray, (m, 3) int64
+    labels : numpy.ndarray, (m,) int
+    title : str
+    palette : dict of int -> str
+        Colour of every label used.
+
+    Returns
+    -------
+    Panel
+
+    Raises
+    ------
+    InputError
+        A label used by a face has no colour in ``palette``.
+    """
+    used = np.unique(np.asarray(labels, dtype=np.int64))
+    missing = [int(u) for u in used if int(u) not in palette]
+    if missing:
+        raise InputError(f"labelled_panel: no colour for labels {missing}")
+    return Panel(V, F, scalars=np.searchsorted(used, labels).astype(np.float64),
+                 cmap=[palette[int(u)] for u in used], title=title)
 
 
 def split_by_uv(V, F, uv, uv_faces) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

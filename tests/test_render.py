@@ -293,3 +293,25 @@ def test_long_caption_is_broken_between_words_and_stays_in_its_panel(tmp_path, s
     lines = _wrapped_title(title, 320).split("\n")
     assert len(lines) >= 3 and " ".join(lines) == title
     assert _wrapped_title(title, 2000) == title
+
+
+def test_labelled_parts_offsets_faces_and_broadcasts_labels():
+    from geotex.render import labelled_parts
+
+    a = (np.eye(3), np.array([[0, 1, 2]]), 4)
+    empty = (np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64), 9)
+    b = (np.eye(3) + 1.0, np.array([[0, 1, 2], [2, 1, 0]]), np.array([5, 6]))
+    V, F, labels = labelled_parts([a, empty, b])
+    assert V.shape == (6, 3)
+    assert F.tolist() == [[0, 1, 2], [3, 4, 5], [5, 4, 3]]
+    assert labels.tolist() == [4, 5, 6]
+
+
+def test_labelled_panel_refuses_a_label_without_colour():
+    from geotex.render import labelled_panel
+
+    V, F = np.eye(3), np.array([[0, 1, 2]])
+    panel = labelled_panel(V, F, np.array([7]), palette={7: "#ff0000"}, title="t")
+    assert panel.title == "t"
+    with pytest.raises(InputError, match="no colour for labels \\[8\\]"):
+        labelled_panel(V, F, np.array([8]), palette={7: "#ff0000"})

@@ -357,3 +357,13 @@ def test_corner_correspondences_count_boxes_lying_on_each_other_at_a_corner():
     y = np.array([[0.05, -0.2, 0.15, -0.1]])
     assert corner_correspondences(x, y) == 1
     assert corner_correspondences(x, y + [0.0, -0.1, 0.0, -0.1]) == 0
+
+
+def test_from_strip_turns_strip_coordinates_back_into_the_exemplar():
+    from geotex.tiles.strips import from_strip
+
+    P = np.array([[0.5, 0.25, 0.1], [0.0, -0.5, 0.0]])
+    assert from_strip(P, (2.0, 3.0), 0).tolist() == [[2.5, 3.25, 0.1], [2.0, 2.5, 0.0]]
+    # along y: t runs up the y axis, s points to -x (a rotation, not a mirror)
+    assert from_strip(P, (2.0, 3.0), 1).tolist() == [[1.75, 3.5, 0.1], [2.5, 3.0, 0.0]]
+    assert P.tolist() == [[0.5, 0.25, 0.1], [0.0, -0.5, 0.0]]       # input untouched

@@ -44,7 +44,7 @@ from geotex.tiles.fill import GAP, PIXEL, footprint_pixels, grown_heights, pixel
 
 __all__ = ["Strip", "CornerPatch", "corner_patch", "empty_strip", "element_boxes", "pick_strips", "largest_footprint", "lattice_phase",
            "lattice_corner", "corner_footprints", "corner_conflicts",
-           "corner_correspondences", "distinct_segments"]
+           "corner_correspondences", "distinct_segments", "from_strip"]
 
 CLEAR = 0.5 * GAP   # clearance of strip elements from the perpendicular tile sides
 CANDIDATES = 96     # random segment positions tried per colour
@@ -288,6 +288,32 @@ def _to_strip(P: np.ndarray, origin, along: int) -> np.ndarray:
         out[..., 0], out[..., 1] = d[..., 0], d[..., 1]
     else:
         out[..., 0], out[..., 1] = d[..., 1], 0.0 - d[..., 0]
+    return out
+
+
+def from_strip(P: np.ndarray, origin, along: int) -> np.ndarray:
+    """Strip coordinates ``(t, s, w)`` -> exemplar points (inverse of the strip's rotation).
+
+    Parameters
+    ----------
+    P : numpy.ndarray, (..., 3) float64
+        Points in the coordinates of a strip (:class:`Strip`).
+    origin : tuple of 2 float
+        The strip's ``origin``.
+    along : int
+        The strip's ``along`` (0 = x, 1 = y).
+
+    Returns
+    -------
+    numpy.ndarray, (..., 3) float64
+        A new array; ``w`` is kept as the height.
+    """
+    out = np.array(P, dtype=np.float64)
+    t, s = out[..., 0].copy(), out[..., 1].copy()
+    if along == 0:
+        out[..., 0], out[..., 1] = t + origin[0], s + origin[1]
+    else:
+        out[..., 0], out[..., 1] = origin[0] - s, origin[1] + t
     return out
 
 
