@@ -135,6 +135,13 @@ def test_cli_quilted_source(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "--quilted-source maybe" in err
     assert not (tmp_path / "n.npz").exists() and not (tmp_path / "m.npz").exists()
+    for side in ("50", "nan", "1"):                   # the flag's range, named as the flag
+        assert main(["tiles", "build", str(ex), "-o", str(tmp_path / "r.npz"),
+                     "--quilted-source", side]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.endswith("a side between 2 and 12 tile units") and f"--quilted-source {side}" in err
+        assert "\n" not in err and "quilted_source" not in err
+    assert not (tmp_path / "r.npz").exists()
 
 
 def test_cropped_exemplar_keeps_whole_elements_only():

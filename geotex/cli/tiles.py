@@ -127,11 +127,17 @@ def _quilted_source(text: str):
         return True
     if word in ("no", "off", "false"):
         return False
+    from geotex.tiles.source import SIDE_RANGE
+
     try:
-        return float(word)
+        side = float(word)
     except ValueError:
         raise UsageError(f"--quilted-source {text}: give auto, yes, no or a side in tile "
                          "units") from None
+    if not SIDE_RANGE[0] <= side <= SIDE_RANGE[1]:      # NaN fails too
+        raise UsageError(f"--quilted-source {text}: a side between {SIDE_RANGE[0]:g} and "
+                         f"{SIDE_RANGE[1]:g} tile units")
+    return side
 
 
 def run_build(args) -> int:
