@@ -14,9 +14,10 @@ from __future__ import annotations
 import numpy as np
 
 from geotex.errors import InputError
-from geotex.exemplars.builders import (assemble, concatenate, noise_at, smooth_noise,
+from geotex.exemplars.builders import (assemble, noise_at, smooth_noise,
                                        stack_faces, stack_vertices)
 from geotex.exemplars.params import Param
+from geotex.mesh.topology import concatenated
 
 DESCRIPTION = "elongated irregular bark ridges along y, broken into plates"
 GAP = 0.02
@@ -109,5 +110,5 @@ def build(size, rng: np.random.Generator, p: dict):
             pole0 = np.array([[xs[c] + wander[0], y0, -p["depth"]]])
             pole1 = np.array([[xs[c] + wander[-1], y1, -p["depth"]]])
             parts.append(assemble(stack_vertices(ring, pole0, pole1), stack_faces(k, n)))
-    V, F = concatenate(parts)
+    V, F = concatenated(parts)
     return V, F

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["stack_faces", "loop_faces", "stack_vertices", "assemble", "concatenate",
+__all__ = ["stack_faces", "loop_faces", "stack_vertices", "assemble",
            "smooth_noise", "noise_at", "polygon_outline"]
 
 
@@ -101,18 +101,6 @@ def assemble(P: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     FF[vol < 0] = FF[vol < 0][:, :, ::-1]
     FF += (np.arange(E, dtype=np.int64) * nv)[:, None, None]
     return np.ascontiguousarray(P.reshape(-1, 3)), np.ascontiguousarray(FF.reshape(-1, 3))
-
-
-def concatenate(parts) -> tuple[np.ndarray, np.ndarray]:
-    """Concatenate ``(V, F)`` pairs into one mesh (face indices offset)."""
-    Vs, Fs, off = [], [], 0
-    for V, F in parts:
-        Vs.append(V)
-        Fs.append(F + off)
-        off += V.shape[0]
-    if not Vs:
-        return np.zeros((0, 3)), np.zeros((0, 3), np.int64)
-    return np.ascontiguousarray(np.vstack(Vs)), np.ascontiguousarray(np.vstack(Fs))
 
 
 def smooth_noise(rng: np.random.Generator, count: int, *, waves: int = 4,

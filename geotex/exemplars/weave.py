@@ -21,8 +21,9 @@ from __future__ import annotations
 import numpy as np
 
 from geotex.errors import InputError
-from geotex.exemplars.builders import assemble, concatenate, stack_faces, stack_vertices
+from geotex.exemplars.builders import assemble, stack_faces, stack_vertices
 from geotex.exemplars.params import Param
+from geotex.mesh.topology import concatenated
 
 __all__ = ["DESCRIPTION", "PARAMS", "GAP", "build", "strand_geometry", "tile_strands",
            "crossing_clearance"]
@@ -261,4 +262,4 @@ def build(size, rng: np.random.Generator, p: dict):
     sy = np.where(np.arange(ny) % 2 == 0, -1.0, 1.0)
     A = _strands(0, 1, ys, size[0], xs, sx, p, centre_z, amp)
     B = _strands(1, 0, xs, size[1], ys, sy, p, centre_z, amp)
-    return concatenate([A, B])
+    return concatenated([A, B])
