@@ -133,11 +133,22 @@ class SurfaceProjector:
         libigl's fast winding number is used instead. A point on the mesh
         has no defined winding number (either answer may come back).
 
+        Parameters
+        ----------
+        X : numpy.ndarray, (k, 3) float64
+
         Returns
         -------
         numpy.ndarray, (k,) float64
             Integers where the rays decide; libigl's (approximate) fast winding
             number elsewhere.
+
+        Examples
+        --------
+        >>> from geotex.mesh.primitives import icosphere
+        >>> V, F = icosphere(2)
+        >>> SurfaceProjector(V, F).winding_numbers(np.array([[0.0, 0.1, 0.0], [2.0, 0.0, 0.0]]))
+        array([1., 0.])
         """
         X = np.ascontiguousarray(X, dtype=np.float64)
         k = X.shape[0]
