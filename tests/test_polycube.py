@@ -355,6 +355,61 @@ def test_reached_surface_moves_out_to_a_protrusion():
     assert fit.Y.flags.writeable and np.array_equal(fit.Y, _bumped_sphere()[5].Y)  # not mutated
 
 
+def test_winding_numbers_are_the_signed_ray_crossings():
+    """Integers equal to libigl's fast winding number rounded, on a sphere and on
+    two overlapping spheres as one self-crossing surface (2 in the overlap)."""
+    import igl
+
+    V, F = icosphere(3)
+    rng = np.random.default_rng(5)
+    dirs = rng.normal(size=(300, 3))
+    dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
+    X = dirs * rng.choice([0.2, 0.7, 1.3, 4.0], size=(300, 1))
+    wn = SurfaceProjector(V, F).winding_numbers(X)
+    np.testing.assert_array_equal(wn, np.round(igl.fast_winding_number(V, F, X)))
+    np.testing.assert_array_equal(wn, (np.linalg.norm(X, axis=1) < 0.9).astype(float))
+    W = np.vstack([V, V + [0.8, 0.0, 0.0]])
+    FF = np.vstack([F, F + V.shape[0]])
+    pts = np.array([[0.4, 0.0, 0.0], [-0.5, 0.1, 0.0], [1.3, 0.0, 0.2], [3.0, 0.0, 0.0],
+                    [0.4, 0.0, 0.95]])
+    np.testing.assert_array_equal(SurfaceProjector(W, FF).winding_numbers(pts),
+                                  [2.0, 1.0, 1.0, 0.0, 0.0])
+    assert SurfaceProjector(V, F).winding_numbers(np.zeros((0, 3))).shape == (0,)
+
+
+def test_winding_numbers_ask_libigl_where_a_ray_meets_an_edge(monkeypatch):
+    """A ray through a vertex (a crossing on the faces' edges) is not counted:
+    the point gets libigl's fast winding number."""
+    import geotex.param.polycube_fit as module
+
+    V, F = icosphere(3)
+    d = module._RAYS[0]
+    k = int(np.argmax(V @ d))                        # the ray leaves through vertex k
+    X = np.array([V[k] - 0.5 * d, [0.0, 0.0, 0.1], [3.0, 0.0, 0.0]])
+    asked = []
+    real = module.igl.fast_winding_number
+    monkeypatch.setattr(module.igl, "fast_winding_number",
+                        lambda V_, F_, Q: asked.append(Q.copy()) or real(V_, F_, Q))
+    wn = SurfaceProjector(V, F).winding_numbers(X)
+    assert len(asked) == 1 and np.array_equal(asked[0], X[:1])
+    assert wn[0] > 0.5 and wn[1] == 1.0 and wn[2] == 0.0
+
+
+def test_reached_surface_with_the_callers_tree_is_the_same():
+    from geotex.param.polycube import _face_samples
+    from geotex.param.polycube_fit import reached_surface
+
+    B, F, P, Fp, projector, fit = _bumped_sphere()
+    S, w = _face_samples(B, F)
+    out = reached_surface(fit, P, Fp, projector, S, w, depth=0.02)
+    surface = SurfaceProjector(fit.Y, Fp)
+    again = reached_surface(fit, P, Fp, projector, S, w, depth=0.02, surface=surface,
+                            closest=surface.closest(S))
+    assert again.reached == out.reached > 0
+    for key in ("Y", "base_face", "folded"):
+        np.testing.assert_array_equal(getattr(again, key), getattr(out, key))
+
+
 def test_reached_surface_leaves_a_covering_fit_as_it_is():
     from geotex.param.polycube import _face_samples
     from geotex.param.polycube_fit import reached_surface

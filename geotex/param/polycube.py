@@ -34,7 +34,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-import igl
 import numpy as np
 
 from geotex.check import check_mesh
@@ -290,11 +289,17 @@ def _attempt(V, F, *, lo, ts, chi, k, r, iterations, max_quads=None, progress=No
             _, fit, bad, cov = same
         else:
             P = c["origin"] + c["P"]
-            fit = fitted_surface(P, c["F"], projector, iterations=iterations)
+            plain = fitted_surface(P, c["F"], projector, iterations=iterations)
             if samples is None:
                 samples = _face_samples(Vt, F)
-            fit, bad = _reached(fit, P, c["F"], projector, samples, c["labels"].size, r)
-            cov = _coverage(Vt, F, fit.Y, c["F"])
+            # the plain fit's tree and closest points serve the reach step's first
+            # test and, when the fit stays as it was, the coverage
+            surface = SurfaceProjector(plain.Y, c["F"])
+            closest = surface.closest(samples[0])
+            fit, bad = _reached(plain, P, c["F"], projector, samples, c["labels"].size, r,
+                                surface=surface, closest=closest)
+            cov = (_coverage(samples, surface, closest) if fit is plain
+                   else _coverage(samples, SurfaceProjector(fit.Y, c["F"])))
             done.append((c, fit, bad, cov))
         key = _key(cov, int(bad.sum()))
         if out["best"] is None or key < out["key"]:
@@ -520,18 +525,20 @@ def _search(V, F, *, extent, genus, opts):
     return best, search
 
 
-def _reached(fit, P, F, projector, samples, n_quads, res, *, tries: int = 3
-             ) -> tuple[SurfaceFit, np.ndarray]:
+def _reached(fit, P, F, projector, samples, n_quads, res, *, tries: int = 3, surface=None,
+             closest=None) -> tuple[SurfaceFit, np.ndarray]:
     """The fit moved out to the base's protrusions (:func:`reached_surface`) and its
     bare quads (:func:`_bad_quads`), never with a quad bare that the fit had textured.
 
     Where moving out makes quads bare (the two sides of a thin fin pulled onto its
     rim meet their own offset), their vertices and ``res`` rings around (wider at
     each of ``tries``) go back to the fit's positions; if quads are still newly
-    bare then, the fit is kept as it was.
+    bare then, the fit is kept as it was (the same object). ``surface`` and
+    ``closest`` are passed to :func:`reached_surface`.
     """
     plain = _bad_quads(fit, F, n_quads, res)
-    out = reached_surface(fit, P, F, projector, *samples, depth=REACH_DEPTH)
+    out = reached_surface(fit, P, F, projector, *samples, depth=REACH_DEPTH, surface=surface,
+                          closest=closest)
     if out is fit:
         return fit, plain
     n = fit.Y.shape[0]
@@ -596,22 +603,25 @@ def _distortion(P, Y, F, labels, face_quad, fit) -> dict:
             "reached": int(fit.reached)}
 
 
-def _coverage(V, F, Y, Fq) -> dict:
+def _coverage(samples, surface, closest=None) -> dict:
     """Distance from the base to the fitted surface, in tiles (area-weighted).
 
     Measured from every base face centroid to its closest point on the fitted
-    surface: mean and max distance, the fractions of the base area within
-    a quarter tile and within one tile, and ``bare`` (:func:`bare_fraction`,
-    from the same closest-point queries).
+    surface (a :class:`SurfaceProjector`; ``samples``: :func:`_face_samples` of
+    the base; ``closest``: the surface's closest points of them, when known):
+    mean and max distance, the fractions of the base area within a quarter
+    tile and within one tile, and ``bare`` (:func:`bare_fraction`, from the
+    same closest-point queries).
     """
-    S, a4 = _face_samples(V, F)
-    d4 = np.linalg.norm(SurfaceProjector(Y, Fq).closest(S)[0] - S, axis=1)
+    S, a4 = samples
+    C = (surface.closest(S) if closest is None else closest)[0]
+    d4 = np.linalg.norm(C - S, axis=1)
     d = d4[::4]                                   # the centroids
     a = a4[::4] * 4.0
     return {"mean": float(np.average(d, weights=a)), "max": float(d.max()),
             "within_quarter_tile": float(a[d <= 0.25].sum() / a.sum()),
             "within_tile": float(a[d <= 1.0].sum() / a.sum()),
-            "bare": _outside_share(S, a4, d4, Y, Fq, BARE_DEPTH)}
+            "bare": _outside_share(S, a4, d4, surface, BARE_DEPTH)}
 
 
 def _face_samples(V, F) -> tuple[np.ndarray, np.ndarray]:
@@ -624,14 +634,12 @@ def _face_samples(V, F) -> tuple[np.ndarray, np.ndarray]:
     return S, np.repeat(face_areas(V, F) / 4.0, 4)
 
 
-def _outside_share(S, a, d, Y, Fq, depth) -> float:
+def _outside_share(S, a, d, surface, depth) -> float:
     """Share of the weights ``a`` of points ``S`` farther than ``depth`` (``d``:
-    their distances) outside the closed surface ``(Y, Fq)`` (winding number < 1/2)."""
+    their distances) outside the closed ``surface`` (a :class:`SurfaceProjector`;
+    winding number < 1/2)."""
     far = d > depth
-    wn = np.asarray(igl.fast_winding_number(np.ascontiguousarray(Y, dtype=np.float64),
-                                            np.ascontiguousarray(Fq, dtype=np.int64),
-                                            np.ascontiguousarray(S[far])))
-    far[far] = wn < 0.5
+    far[far] = surface.winding_numbers(S[far]) < 0.5
     return float(a[far].sum() / a.sum())
 
 
@@ -664,5 +672,6 @@ def bare_fraction(V, F, Y, Fq, *, depth: float = BARE_DEPTH) -> float:
         In ``[0, 1]``.
     """
     S, a = _face_samples(V, F)
-    d = np.linalg.norm(SurfaceProjector(Y, Fq).closest(S)[0] - S, axis=1)
-    return _outside_share(S, a, d, Y, Fq, depth)
+    surface = SurfaceProjector(Y, Fq)
+    d = np.linalg.norm(surface.closest(S)[0] - S, axis=1)
+    return _outside_share(S, a, d, surface, depth)

@@ -76,6 +76,16 @@ def closest_points_on_triangles(X: np.ndarray, A: np.ndarray, B: np.ndarray, C: 
     return out
 
 
+#: Two fixed ray directions, along no axis or grid diagonal, for the winding numbers
+#: of :meth:`SurfaceProjector.winding_numbers` (unit vectors).
+_RAYS = np.array([[1.0, 2.0 ** 0.5, 3.0 ** 0.5], [-(5.0 ** 0.5), 1.0, 7.0 ** 0.5]])
+_RAYS /= np.linalg.norm(_RAYS, axis=1, keepdims=True)
+
+#: A ray crossing is trusted when its barycentric coordinates (single precision in
+#: libigl's hits) and the cosine between the ray and the face's normal are above this.
+_CLEAN = 1e-5
+
+
 class SurfaceProjector:
     """Closest points on a fixed triangle mesh.
 
@@ -88,10 +98,17 @@ class SurfaceProjector:
     def __init__(self, V: np.ndarray, F: np.ndarray):
         self.V = np.ascontiguousarray(V, dtype=np.float64)
         self.F = np.ascontiguousarray(F, dtype=np.int64)
-        self.normals = face_normals(self.V, self.F)
+        self._normals = None
         self._tree = igl.AABB()
         self._tree.init(self.V, self.F)
         self._kd = None
+
+    @property
+    def normals(self) -> np.ndarray:
+        """Unit face normals ``(m, 3)`` (computed on first use)."""
+        if self._normals is None:
+            self._normals = face_normals(self.V, self.F)
+        return self._normals
 
     @property
     def _centroids(self) -> cKDTree:
@@ -103,6 +120,55 @@ class SurfaceProjector:
         """Closest points ``(k, 3)`` and their faces ``(k,)``."""
         _, face, C = self._tree.squared_distance(self.V, self.F, np.ascontiguousarray(X))
         return np.asarray(C, dtype=np.float64), np.asarray(face, dtype=np.int64)
+
+    def winding_numbers(self, X: np.ndarray) -> np.ndarray:
+        """Winding numbers of the closed mesh at points ``X`` ``(k, 3)`` off it, ``(k,)``.
+
+        Counted as the signed crossings of a ray from every point through the
+        AABB tree of the closest-point queries (+1 where the ray leaves
+        through a face, -1 where it enters): on a closed mesh, self-crossing
+        or not, that is the winding number. A point is counted along two
+        fixed directions; where the two counts differ, or a crossing lies
+        within ``1e-5`` of a face's edge (barycentric) or grazes the face,
+        libigl's fast winding number is used instead. A point on the mesh
+        has no defined winding number (either answer may come back).
+
+        Parameters
+        ----------
+        X : numpy.ndarray, (k, 3) float64
+
+        Returns
+        -------
+        numpy.ndarray, (k,) float64
+            Integers where the rays decide; libigl's (approximate) fast winding
+            number elsewhere.
+
+        Examples
+        --------
+        >>> from geotex.mesh.primitives import icosphere
+        >>> V, F = icosphere(2)
+        >>> SurfaceProjector(V, F).winding_numbers(np.array([[0.0, 0.1, 0.0], [2.0, 0.0, 0.0]]))
+        array([1., 0.])
+        """
+        X = np.ascontiguousarray(X, dtype=np.float64)
+        k = X.shape[0]
+        counts, trusted = [], np.ones(k, dtype=bool)
+        for d in _RAYS:
+            hits = self._tree.intersect_ray(self.V, self.F, X,
+                                            np.ascontiguousarray(np.broadcast_to(d, X.shape)))
+            rows = np.repeat(np.arange(k), [len(h) for h in hits])
+            flat = np.array([hit for h in hits for hit in h], dtype=np.float64).reshape(-1, 4)
+            cos = self.normals[flat[:, 0].astype(np.int64)] @ d
+            u, v, t = flat[:, 2], flat[:, 3], flat[:, 1]
+            clean = ((u > _CLEAN) & (v > _CLEAN) & (1.0 - u - v > _CLEAN)
+                     & (np.abs(cos) > _CLEAN) & (t > 0))
+            trusted[rows[~clean]] = False
+            counts.append(np.bincount(rows, weights=np.sign(cos), minlength=k))
+        out = counts[0]
+        redo = np.flatnonzero(~trusted | (counts[0] != counts[1]))
+        if redo.size:
+            out[redo] = igl.fast_winding_number(self.V, self.F, np.ascontiguousarray(X[redo]))
+        return out
 
     def project(self, X: np.ndarray, N: np.ndarray, *, min_cos: float = 0.0,
                 candidates: int = 32) -> tuple[np.ndarray, np.ndarray]:
@@ -278,22 +344,23 @@ def fitted_surface(P: np.ndarray, F: np.ndarray, projector: SurfaceProjector, *,
     return SurfaceFit(Y=Y, base_face=face, folded=bad, repaired=before)
 
 
-def _outside_far(S, Y, F, depth) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Points of ``S`` farther than ``depth`` outside the closed surface ``(Y, F)``:
-    their indices, closest points on it and the faces of those."""
-    C, face = SurfaceProjector(Y, F).closest(S)
+def _outside_far(S, surface, depth, closest=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Points of ``S`` farther than ``depth`` outside the closed ``surface``
+    (a :class:`SurfaceProjector`; ``closest``: its :meth:`~SurfaceProjector.closest`
+    of ``S`` when known): their indices, closest points on it and the faces of those."""
+    C, face = surface.closest(S) if closest is None else closest
     far = np.flatnonzero(np.linalg.norm(S - C, axis=1) > depth)
     if far.size:
-        wn = np.asarray(igl.fast_winding_number(np.ascontiguousarray(Y), F,
-                                                np.ascontiguousarray(S[far])))
-        far = far[wn < 0.5]
+        far = far[surface.winding_numbers(S[far]) < 0.5]
     return far, C[far], face[far]
 
 
 def reached_surface(fit: SurfaceFit, P: np.ndarray, F: np.ndarray, projector: SurfaceProjector,
                     samples: np.ndarray, weights: np.ndarray, *, depth: float = 0.1,
                     rounds: int = 24, step: float = 0.5, spread: int = 8,
-                    stall: float = 0.97, reference_smoothing: int = 16) -> SurfaceFit:
+                    stall: float = 0.97, reference_smoothing: int = 16,
+                    surface: SurfaceProjector | None = None,
+                    closest: tuple[np.ndarray, np.ndarray] | None = None) -> SurfaceFit:
     """The fitted surface moved outward where the base sticks out of it by more than ``depth``.
 
     A protrusion of the base thinner than a voxel (Spot's horns at tile 0.12)
@@ -337,6 +404,11 @@ def reached_surface(fit: SurfaceFit, P: np.ndarray, F: np.ndarray, projector: Su
         Smoothing steps that spread the pull to the neighbouring vertices.
     reference_smoothing : int
         As in :func:`fitted_surface`.
+    surface : SurfaceProjector, optional
+        The fitted surface ``(fit.Y, F)``, when the caller has built it (its
+        tree is used for the first test, not built again).
+    closest : tuple of numpy.ndarray, optional
+        ``surface.closest(samples)`` when the caller has it.
 
     Returns
     -------
@@ -346,7 +418,8 @@ def reached_surface(fit: SurfaceFit, P: np.ndarray, F: np.ndarray, projector: Su
     S = np.asarray(samples, dtype=np.float64)
     w = np.asarray(weights, dtype=np.float64)
     Y, face = fit.Y, fit.base_face
-    far, C, fface = _outside_far(S, Y, F, depth)
+    far, C, fface = _outside_far(S, SurfaceProjector(Y, F) if surface is None else surface,
+                                 depth, closest)
     if far.size == 0:
         return fit
     n = Y.shape[0]
@@ -395,7 +468,7 @@ def reached_surface(fit: SurfaceFit, P: np.ndarray, F: np.ndarray, projector: Su
             Y[back], face[back] = Y0[back], face0[back]
             now = _refolded(now, Y, F, back, projector, face)
         bad = now
-        sub, C, fface = _outside_far(near, Y, F, depth)
+        sub, C, fface = _outside_far(near, SurfaceProjector(Y, F), depth)
         gap, gap0 = wn[sub] @ np.linalg.norm(near[sub] - C, axis=1), gap
         if sub.size == 0 or gap > stall * gap0:
             break
