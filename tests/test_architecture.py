@@ -56,6 +56,8 @@ ALLOWED_IN_FILE: dict[tuple[str, str], str] = {
         "the assertion helpers for users' tests fail the way pytest's own asserts do",
     ("geotex/tiles/__init__.py", "AttributeError"):
         "module-level __getattr__ protocol (lazy catalog names)",
+    ("geotex/displace/__init__.py", "AttributeError"):
+        "module-level __getattr__ protocol (names imported on first use)",
     ("geotex/check/slicers.py", "ValueError"):
         "pending: geotex/check is being reworked; the parsers' ValueError on unreadable "
         "slicer output is caught in the same module and becomes an ExternalToolError",
@@ -77,6 +79,16 @@ ALLOWED_LAZY_IMPORTS: dict[tuple[str, str], str] = {
         "mappings pull in the field, patch and image machinery (networkx) only when used",
     ("geotex/displace/api.py", "geotex.displace.step"):
         "STEP input only: gmsh and the repair steps (pymeshlab, ~0.2 s)",
+    ("geotex/displace/__init__.py", "geotex.displace.api"):
+        "module __getattr__: the parser reads geotex.displace.choices for every command "
+        "(`geotex --help`, `geotex map`); the displacement machinery (check, relief, image "
+        "reading, ~0.15 s CPU) is imported on first use",
+    ("geotex/displace/__init__.py", "geotex.displace.heightmap"):
+        "module __getattr__: imported on first use (as geotex.displace.api)",
+    ("geotex/displace/__init__.py", "geotex.displace.mappings"):
+        "module __getattr__: imported on first use (as geotex.displace.api)",
+    ("geotex/displace/__init__.py", "geotex.displace.masks"):
+        "module __getattr__: imported on first use (as geotex.displace.api)",
     ("geotex/heighttilt/refine.py", "geotex.mesh.meshlab"):
         "imports pymeshlab (~0.2 s), needed only when a base is remeshed",
     ("geotex/tiles/__init__.py", "geotex.tiles.catalog"):
@@ -434,6 +446,29 @@ def test_startup_imports_no_heavy_module():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True, cwd=PACKAGE_DIR.parent)
     assert out.stdout.strip() == "[]", f"heavy modules imported at startup: {out.stdout}"
+
+
+#: Modules the ``geotex`` parser may not load: it reads displace's option names from
+#: geotex.displace.choices, not through the displacement machinery.
+NOT_IN_PARSER = ("geotex.displace.api", "geotex.displace.masks", "geotex.displace.mappings",
+                 "geotex.relief", "geotex.check", "PIL")
+
+
+def test_parser_leaves_the_displacement_machinery_out():
+    """Building the parser (every command, ``geotex --help``) imports no displacement code,
+    and ``geotex.displace`` still gives every public name on first use."""
+    code = ("import sys, geotex.cli; geotex.cli.build_parser(); "
+            f"print(sorted(m for m in {NOT_IN_PARSER!r} if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, cwd=PACKAGE_DIR.parent)
+    assert out.stdout.strip() == "[]", f"imported by the parser: {out.stdout}"
+    import geotex.displace as gd
+    from geotex.displace import choices, mappings, masks
+
+    assert all(getattr(gd, name) is not None for name in gd.__all__)
+    assert mappings.MAPPINGS is choices.MAPPINGS and masks.CURVES is choices.CURVES
+    with pytest.raises(AttributeError):
+        gd.no_such_name
 
 
 #: Modules that using a catalog tile set over a shell (the main job's imports) may not load:

@@ -404,6 +404,31 @@ def test_preload_loads_the_cached_code_before_the_first_call():
     assert run(False) == expected
 
 
+@pytest.mark.parametrize("three_mf", [True, False])
+def test_main_job_preload_leaves_the_3mf_text_loops_to_3mf_files(monkeypatch, three_mf):
+    """``geotex map`` to an STL does not load the 3MF number-text loops; the rest of
+    geotex.io (the weld, the STL writer) and the job's packages are loaded."""
+    import threading
+
+    import geotex.jit as jit
+    from geotex.cli import _common
+
+    asked = []
+
+    def spy(*packages):
+        asked.append(packages)
+        return threading.Thread(target=lambda: None)
+
+    monkeypatch.setattr(jit, "preload", spy)
+    monkeypatch.setattr(_common, "PRELOADS", [])
+    _common.preload_compiled(three_mf=three_mf)
+    loaded = {mod for mod in jit._REGISTRY for p in asked[0]
+              if mod == p or mod.startswith(p + ".")}
+    assert {"geotex.io._common", "geotex.io.stl", "geotex.check.intersections",
+            "geotex.mapping.shape", "geotex.mesh.topology"} <= loaded
+    assert ("geotex.io.numtext" in loaded) == three_mf
+
+
 def _refined_both(monkeypatch, V, F, L, **kw):
     import geotex.relief.subdivide as subdivide
 

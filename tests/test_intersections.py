@@ -855,16 +855,31 @@ def test_parts_sweep_gives_the_grid_answer_on_random_soup(monkeypatch, piece):
         assert np.array_equal(self_intersecting_pairs(V, F, parts=parts), reference)
 
 
-def test_parts_too_large_fall_back_to_the_grid(monkeypatch):
+def _spied(monkeypatch, name):
+    """Calls of ``gi.<name>`` counted in the returned list."""
+    calls = []
+    real = getattr(gi, name)
+
+    def spy(*args, **kw):
+        calls.append(1)
+        return real(*args, **kw)
+
+    monkeypatch.setattr(gi, name, spy)
+    return calls
+
+
+@pytest.mark.parametrize("run", [1, 7, 64])
+def test_parts_too_large_are_swept_in_runs(monkeypatch, run):
     V, F = icosphere(2)
     W = V + 0.3
     V2, F2 = np.vstack([V, W]), np.vstack([F, F + len(V)])
     reference = self_intersecting_pairs(V2, F2)
     monkeypatch.setattr(gi, "JIT_MIN_SIZE", 0)
     monkeypatch.setattr(gi, "_PART_MAX_FACES", 100)
-    monkeypatch.setattr(gi, "_part_loops", None)         # must not be reached
+    monkeypatch.setattr(gi, "_PART_RUN", run)
+    runs, sweeps = _spied(monkeypatch, "_runs_of_large_parts"), _spied(monkeypatch, "_part_loops")
     got = self_intersecting_pairs(V2, F2, parts=np.repeat([0, 1], len(F)))
-    assert np.array_equal(got, reference) and reference.size
+    assert runs and sweeps and np.array_equal(got, reference) and reference.size
 
 
 @pytest.mark.parametrize("jit", [True, False])
@@ -910,16 +925,115 @@ def test_per_face_data_compiled_equal_numpy_bit_for_bit():
             assert getattr(a, name).tobytes() == getattr(b, name).tobytes(), name
 
 
-def test_pairs_between_parts_too_large_fall_back_to_the_full_search(monkeypatch):
+def test_pairs_between_parts_too_large_are_swept_in_runs(monkeypatch):
     V, F = icosphere(2)
     V2, F2 = np.vstack([V, V + 0.3]), np.vstack([F, F + len(V)])
     parts = np.repeat([0, 1], len(F))
     reference = self_intersecting_pairs(V2, F2)
     monkeypatch.setattr(gi, "_PART_MAX_FACES", 100)
-    monkeypatch.setattr(gi, "_part_loops", None)         # must not be reached
-    got = gi.self_intersecting_pairs_between(V2, F2, parts, side=parts)
+    monkeypatch.setattr(gi, "_PART_RUN", 16)
+    monkeypatch.setattr(gi, "self_intersecting_pairs", None)     # no full search
+    runs = _spied(monkeypatch, "_runs_of_large_parts")
     cross = parts[reference[:, 0]] != parts[reference[:, 1]]
-    assert np.array_equal(got, reference[cross]) and got.size
+    got = gi.self_intersecting_pairs_between(V2, F2, parts, side=parts)
+    assert runs and np.array_equal(got, reference[cross]) and got.size
+    # one part marked within: the whole answer, pairs of its runs included
+    one = np.zeros(len(F2), dtype=np.int64)
+    got = gi.self_intersecting_pairs_between(V2, F2, one, within=np.ones(len(F2), bool))
+    assert np.array_equal(got, reference)
+
+
+def _run_cases():
+    """Meshes with every kind of contact, for the runs of large parts: random
+    soups (general position, and on few shared vertices), coplanar overlapping
+    grids, spheres crossing and touching, and degenerate faces."""
+    rng = np.random.default_rng(21)
+    cases = [random_soup(31, m=600), random_soup(32, m=500, pool=60),
+             random_soup(33, m=400, sizes=(0.001, 0.9))]
+    # coplanar: two grids in one plane, one shifted and turned a little; a third
+    # sharing the first grid's vertices along its edge (an unwelded seam)
+    Vg, Fg = primitives.grid_plane(12, 9)
+    c, s_ = np.cos(0.3), np.sin(0.3)
+    Vr = Vg @ np.array([[c, s_, 0.0], [-s_, c, 0.0], [0.0, 0.0, 1.0]]) + (0.31, 0.17, 0.0)
+    V = np.vstack([Vg, Vr, Vg + (1.0, 0.0, 0.0)])
+    n = len(Vg)
+    F = np.vstack([Fg, Fg + n, Fg + 2 * n])
+    cases.append((V, F))
+    # spheres crossing, touching at a vertex, and faces sharing vertices of both
+    V1, F1 = icosphere(2)
+    top = V1[int(np.argmax(V1[:, 2]))]
+    V2 = V1 - V1[int(np.argmin(V1[:, 2]))] + top            # lowest on the other's highest
+    V, F = np.vstack([V1, V2 + (0.0, 0.0, 0.0), V1 + (0.7, 0.2, 0.1)]), np.vstack(
+        [F1, F1 + len(V1), F1 + 2 * len(V1)])
+    mixed = rng.integers(0, len(V), size=(60, 3))             # across the spheres
+    mixed = mixed[(mixed[:, 0] != mixed[:, 1]) & (mixed[:, 1] != mixed[:, 2])
+                  & (mixed[:, 0] != mixed[:, 2])]
+    cases.append((V, np.vstack([F, mixed])))
+    # degenerate faces (a repeated index, three collinear points) among a soup
+    V, F = random_soup(34, m=300)
+    V = np.vstack([V, [[0.2, 0.2, 0.2], [0.4, 0.4, 0.4], [0.6, 0.6, 0.6]]])
+    k = len(V) - 3
+    F = np.vstack([F, [[k, k + 1, k + 2], [0, 0, 5], [k, 7, 7]]])
+    cases.append((V, F))
+    return cases
+
+
+@pytest.mark.parametrize("case", range(6))
+def test_runs_of_large_parts_give_the_filtered_full_search(case, monkeypatch):
+    # parts cut into runs find the pairs of the plain path (the full search,
+    # filtered) on every kind of contact, for any run length and any parts
+    V, F = _run_cases()[case]
+    reference = self_intersecting_pairs(V, F)
+    assert reference.size
+    m = len(F)
+    rng = np.random.default_rng(100 + case)
+    monkeypatch.setattr(gi, "_PART_MAX_FACES", 40)
+    numpy_size = gi.JIT_MIN_SIZE
+    runs = _spied(monkeypatch, "_runs_of_large_parts")
+    i, j = reference[:, 0], reference[:, 1]
+    layouts = [np.zeros(m, dtype=np.int64),                        # one part
+               rng.integers(0, 3, size=m),                        # three large, interleaved
+               np.where(rng.random(m) < 0.5, 0, rng.integers(1, 200, size=m))]  # large + small
+    for run in (1, 5, 32):
+        monkeypatch.setattr(gi, "_PART_RUN", run)
+        for parts in layouts:
+            n = int(parts.max()) + 1
+            side, within = (rng.integers(0, 2, size=n)[parts], (rng.random(n) < 0.5)[parts])
+            got = gi.self_intersecting_pairs_between(V, F, parts, side=side, within=within)
+            keep = (side[i] != side[j]) | ((parts[i] == parts[j]) & within[i])
+            assert np.array_equal(got, reference[keep])
+            got = gi.self_intersecting_pairs_between(V, F, parts, within=np.ones(m, bool))
+            assert np.array_equal(got, reference[parts[i] == parts[j]])
+            monkeypatch.setattr(gi, "JIT_MIN_SIZE", 0)           # the full search's sweep
+            got = self_intersecting_pairs(V, F, parts=parts)
+            monkeypatch.setattr(gi, "JIT_MIN_SIZE", numpy_size)
+            assert np.array_equal(got, reference)
+    assert runs
+
+
+def test_runs_of_large_parts_are_compact_patches(monkeypatch):
+    # a large part is cut in Morton order, not in face order: each run's box is
+    # far smaller than the part's (faces shuffled), and the runs partition its faces
+    V, F = torus(60, 30)
+    F = F[np.random.default_rng(3).permutation(len(F))]
+    m = len(F)
+    monkeypatch.setattr(gi, "_PART_RUN", 64)
+    monkeypatch.setattr(gi, "_PART_MAX_FACES", 100)
+    faces = gi._FaceData(gi._normalized(V, F), F, compiled=True)
+    act = faces.active
+    part = np.r_[np.zeros(m - 10, np.int64), np.arange(1, 11)]   # one large part, ten small
+    count = np.bincount(part)
+    sub, first, cnt, origin = gi._runs_of_large_parts(faces.box32, act, part, count)
+    assert cnt.sum() == act.size and np.array_equal(np.bincount(sub), cnt)
+    assert np.all(cnt[origin == 0] <= 64) and np.array_equal(cnt[origin > 0], np.ones(10))
+    assert np.array_equal(origin, np.r_[np.zeros(origin.size - 10, np.int64), np.arange(1, 11)])
+    assert np.array_equal(origin[sub], part)
+    box = faces.box32[act]
+    whole = box[part == 0]
+    span = (whole[:, 3:].max(axis=0) - whole[:, :3].min(axis=0)).max()
+    spans = [(box[sub == r][:, 3:].max(axis=0) - box[sub == r][:, :3].min(axis=0)).max()
+             for r in np.flatnonzero(origin == 0)]
+    assert np.median(spans) < 0.5 * span
 
 
 @pytest.mark.parametrize("bad", [dict(parts=np.zeros(3, int)), dict(side=np.zeros(3)),

@@ -103,8 +103,11 @@ _NARROW_CHUNK = 32_768
 _MAX_WORKERS = 4
 # Safety factor of the fan separation bound (see _separated_fans).
 _FAN_SAFETY = 8.0
-# Largest part swept by parts= (a sweep is quadratic in the worst case).
+# Largest part swept whole by parts= (a sweep is quadratic in the worst case);
+# larger parts are swept in runs of _PART_RUN faces, consecutive in Morton
+# order of their boxes' centres.
 _PART_MAX_FACES = 4096
+_PART_RUN = 256
 # Meshes up to this many faces are searched by self_intersecting_pairs_between
 # in the calling thread.
 _SERIAL_FACES = 4096
@@ -154,8 +157,9 @@ def self_intersecting_pairs(V, F, *, max_pairs=None, topology=None, unpaired_ver
         whose boxes overlap instead of on the global grid: the same pairs are
         examined with the same predicates, so the answer is the same, at less
         cost.  Used only on the compiled path (from ``JIT_MIN_SIZE`` entries of
-        ``F``) and when no part has more than 4096 faces;
-        otherwise ignored.  With ``max_pairs``, the sweep finds every pair
+        ``F``), otherwise ignored; a part of more than 4096 faces is swept
+        as runs of 256 faces in Morton order (the same pairs).  With
+        ``max_pairs``, the sweep finds every pair
         first and keeps the lowest ``max_pairs``: a subset of the answer as
         without ``parts``, not necessarily the same subset.
 
@@ -391,9 +395,12 @@ def self_intersecting_pairs_between(V, F, parts, *, side=None, within=None) -> n
     to the wanted pairs of parts.  Pairs around a vertex with a separated fan
     (module docstring, step 3), which the full search never tests because
     the narrow phase provably rejects them, are tested here, so no fan is
-    examined; the answer is the same.  With faces of the same vertex set, or
-    a part too large to sweep, the full search is run and its answer
-    filtered.
+    examined; the answer is the same.  A part of more than 4096 faces (a
+    base beside the elements) is swept as runs of 256 faces, consecutive in
+    Morton order of their boxes' centres, and the pairs of its runs are
+    swept like pairs of parts (each pair of faces is still examined once):
+    the grid's set-up over the whole mesh is not paid.  With faces of the
+    same vertex set, the full search is run and its answer filtered.
     """
     V, F = as_mesh_arrays(V, F)
     m = F.shape[0]
@@ -434,8 +441,6 @@ def self_intersecting_pairs_between(V, F, parts, *, side=None, within=None) -> n
     finally:
         if pool is not None:
             pool.shutdown(wait=True, cancel_futures=True)
-    if keys is None:                                  # a part too large to sweep
-        return wanted(self_intersecting_pairs(V, F))
     return np.stack([keys // m, keys % m], axis=1)
 
 
@@ -1339,9 +1344,11 @@ def _part_sweep(faces: _FaceData, parts: np.ndarray, *, mapper=map, side=None, w
     grid (:func:`_pair_tasks`), with the same filters and narrow phase: pairs
     within a part by a sweep over the low x of their boxes, pairs of two
     parts whose boxes (the union of their faces' boxes) overlap by a sweep
-    over the faces of each that overlap the other's box.  ``None`` when a part
-    is too large for sweeping (the caller takes the grid).  The parts are
-    swept in chunks (``mapper``: the thread pool); the keys come back sorted.
+    over the faces of each that overlap the other's box.  A part of more than
+    ``_PART_MAX_FACES`` faces is cut into runs (:func:`_runs_of_large_parts`)
+    swept as parts of their own, with the pairs of two runs of one part swept
+    where that part's own pairs are wanted.  The parts are swept in chunks
+    (``mapper``: the thread pool); the keys come back sorted.
 
     With ``side`` (per face, one value per part) only pairs of parts on
     different sides are swept, and within-part pairs only in the parts whose
@@ -1354,10 +1361,11 @@ def _part_sweep(faces: _FaceData, parts: np.ndarray, *, mapper=map, side=None, w
     _, first, part, count = np.unique(part, return_index=True, return_inverse=True,
                                       return_counts=True)
     part = part.ravel()
-    if count.max() > _PART_MAX_FACES:
-        return None
+    porigin = np.arange(count.size, dtype=np.int64)
+    if count.max() > _PART_MAX_FACES:           # large parts: swept as runs
+        part, first, count, porigin = _runs_of_large_parts(faces.box32, act, part, count)
     if side is None:                            # every pair of parts, and within each
-        pside = np.arange(count.size, dtype=np.int64)
+        pside = porigin
         pwithin = np.ones(count.size, dtype=bool)
     else:
         pside = np.asarray(side, dtype=np.int64)[act[first]]
@@ -1379,10 +1387,49 @@ def _part_sweep(faces: _FaceData, parts: np.ndarray, *, mapper=map, side=None, w
     porder = np.argsort(pbox[:, 0], kind="stable").astype(np.int64)
     cuts = np.linspace(0, n_parts, min(n_parts, 16) + 1).astype(np.int64)
     keys = list(mapper(lambda k: _part_loops(order, pstart, pbox, porder, pside, pwithin,
-                                             int(cuts[k]), int(cuts[k + 1]), box,
+                                             porigin, int(cuts[k]), int(cuts[k + 1]), box,
                                              faces.masked_rows, faces.F, faces.V, faces.plane,
                                              faces.tol, faces.E), range(cuts.size - 1)))
     return np.sort(np.concatenate(keys)) if keys else np.zeros(0, dtype=np.int64)
+
+
+def _runs_of_large_parts(box, act, part, count):
+    """Parts above ``_PART_MAX_FACES`` faces cut into runs of ``_PART_RUN`` faces.
+
+    ``part`` (a rank per active face) and ``count`` are those of
+    :func:`_part_sweep`; a large part's faces are ordered by the Morton code
+    of their box centres (ties in face order), so that a run is a compact
+    patch whose box overlaps few others.  Returns the new ``part`` (a rank
+    per active face: the runs of a part follow each other, in its place
+    among the parts), ``first`` (an active face of each), ``count`` and
+    ``porigin`` (the part each came from).
+    """
+    rows = np.flatnonzero(count[part] > _PART_MAX_FACES)
+    f = act[rows]
+    centre = 0.5 * (box[f, :3].astype(np.float64) + box[f, 3:])
+    # normalised coordinates lie within (-1, 1): 21 bits per axis
+    q = np.clip(np.floor((centre + 1.0) * 2.0 ** 20), 0, 2 ** 21 - 1).astype(np.uint64)
+    code = _spread_bits(q[:, 0]) | (_spread_bits(q[:, 1]) << np.uint64(1)) \
+        | (_spread_bits(q[:, 2]) << np.uint64(2))
+    rows = rows[np.lexsort((code, part[rows]))]  # by part, then code (stable: face order)
+    of = part[rows]
+    rank = np.arange(rows.size) - np.searchsorted(of, of)
+    runs = -(-int(count.max()) // _PART_RUN)
+    key = part * runs
+    key[rows] += rank // _PART_RUN
+    _, first, sub, count = np.unique(key, return_index=True, return_inverse=True,
+                                     return_counts=True)
+    return sub.ravel(), first, count, part[first]
+
+
+def _spread_bits(x: np.ndarray) -> np.ndarray:
+    """The 21 low bits of ``x`` (uint64) moved to bits 0, 3, 6, ... (Morton code)."""
+    x = x & np.uint64(0x1FFFFF)
+    for shift, mask in ((32, 0x1F00000000FFFF), (16, 0x1F0000FF0000FF),
+                        (8, 0x100F00F00F00F00F), (4, 0x10C30C30C30C30C3),
+                        (2, 0x1249249249249249)):
+        x = (x | (x << np.uint64(shift))) & np.uint64(mask)
+    return x
 
 
 @compiled
@@ -1432,14 +1479,15 @@ def _pushed(out, found, key):
 
 
 @compiled
-def _part_loops(order, pstart, pbox, porder, pside, pwithin, c0, c1, box, mrows, F, V, plane,
-                tol, E):
+def _part_loops(order, pstart, pbox, porder, pside, pwithin, porigin, c0, c1, box, mrows, F, V,
+                plane, tol, E):
     """Sweeps of :func:`_part_sweep`: ``order`` holds the active faces by part,
     then low x; part ``p`` is ``order[pstart[p]:pstart[p + 1]]``; ``porder``
     lists the parts by the low x of their boxes ``pbox``.  Sweeps parts
     ``c0 .. c1 - 1`` (those with ``pwithin``) and the pairs of parts whose
     first (in ``porder``) is ``porder[c0 .. c1 - 1]`` (those of different
-    ``pside``).  Returns the keys."""
+    ``pside``, and runs of one ``porigin`` part with ``pwithin``).  Returns
+    the keys."""
     # the box and fan tests are written out in the loops: a call passing
     # arrays costs reference counting, which would cost more than the tests
     m = F.shape[0]
@@ -1481,7 +1529,7 @@ def _part_loops(order, pstart, pbox, porder, pside, pwithin, c0, c1, box, mrows,
             q = porder[ib]
             if pbox[q, 0] > pbox[p, 3]:
                 break
-            if pside[p] == pside[q]:
+            if pside[p] == pside[q] and not (pwithin[p] and porigin[p] == porigin[q]):
                 continue
             if (pbox[p, 1] > pbox[q, 4] or pbox[q, 1] > pbox[p, 4]
                     or pbox[p, 2] > pbox[q, 5] or pbox[q, 2] > pbox[p, 5]):

@@ -103,7 +103,7 @@ def guard_output(output, *inputs) -> Path:
 PRELOADS: list = []
 
 
-def preload_compiled(*, relief: bool = False) -> None:
+def preload_compiled(*, relief: bool = False, three_mf: bool = True) -> None:
     """Start loading the compiled loops of the main job (:func:`geotex.jit.preload`).
 
     The self-intersection test (input check, shell, union, final check), edge
@@ -111,7 +111,9 @@ def preload_compiled(*, relief: bool = False) -> None:
     process otherwise pays for numba (~0.4 s) at the input check, in the main
     thread. ``relief``: also the relief refinement's loops (``geotex displace``);
     otherwise also the tile mapping's (the shaped map's walk to the fitted
-    surface, interpolation over the shell's faces).
+    surface, interpolation over the shell's faces). ``three_mf``: also the 3MF
+    number-text loops (:mod:`geotex.io.numtext`, six of them, ~0.06 s CPU),
+    which only a 3MF file read or written runs.
     """
     import importlib
 
@@ -121,6 +123,7 @@ def preload_compiled(*, relief: bool = False) -> None:
     modules += ["geotex.relief.subdivide"] if relief else ["geotex.mapping.shape"]
     for name in modules:
         importlib.import_module(name)
-    packages = ["geotex.check", "geotex.mesh", "geotex.io"] + (
+    io = ["geotex.io"] if three_mf else ["geotex.io._common", "geotex.io.stl"]
+    packages = ["geotex.check", "geotex.mesh"] + io + (
         ["geotex.relief"] if relief else ["geotex.mapping", "geotex.shells"])
     PRELOADS.append(preload(*packages))

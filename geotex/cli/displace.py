@@ -37,8 +37,7 @@ def _numbers(text: str, k: int, flag: str) -> list[float]:
 
 
 def register(sub):
-    from geotex.displace.mappings import MAPPINGS
-    from geotex.displace.masks import CURVES, PAINT_TOLERANCE
+    from geotex.displace.choices import CURVES, MAPPINGS, PAINT_TOLERANCE
 
     p = sub.add_parser("displace", help=HELP, description=HELP + ". The part is refined "
                        "(exact edge splits, creases kept), each vertex reads its height "

@@ -190,7 +190,7 @@ def run_map(args) -> int:
 
     tiles_file, shell_file = tileset_path(args.tiles), shell_path(args.shell)
     out, extra = _check_outputs(args, tiles_file, shell_file)
-    preload_compiled()
+    preload_compiled(three_mf=out.suffix.lower() == ".3mf")      # (the inputs are .npz)
     tiles, shell = load_tiles(args.tiles), load_shell(args.shell)
     if args.size_mm is not None:
         from geotex.shells import scaled_shell
@@ -213,7 +213,7 @@ def run_texture(args) -> int:
 
     tiles_file = tileset_path(args.tiles)
     out, extra = _check_outputs(args, args.base, tiles_file)
-    preload_compiled()
+    preload_compiled(three_mf=".3mf" in (out.suffix.lower(), Path(args.base).suffix.lower()))
     tiles = load_tiles(args.tiles)
     name = Path(args.base).stem
     t = time.perf_counter()

@@ -33,6 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from geotex.displace.choices import MAPPINGS
 from geotex.displace.heightmap import sample_periodic
 from geotex.errors import InputError
 from geotex.jit import JIT_MIN_SIZE, compiled, helper
@@ -40,8 +41,6 @@ from geotex.options import finite_number, positive_number
 
 __all__ = ["MAPPINGS", "MappingOptions", "mapping_options", "projected_heights"]
 
-MAPPINGS = ("triplanar", "cubic", "cylindrical", "spherical", "planar-xy", "planar-xz",
-            "planar-yz", "uv", "pgp", "lapped")
 #: Default millimetres per tile for the projections.
 DEFAULT_SCALE_MM = 20.0
 #: Cap blending band of the cylindrical mapping, degrees.

@@ -58,6 +58,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
+from geotex.displace.choices import CURVES, PAINT_TOLERANCE
 from geotex.errors import GeotexError, InputError
 from geotex.io import read_mesh_colors
 from geotex.mesh.geometry import face_normals
@@ -68,9 +69,6 @@ __all__ = ["MaskOptions", "mask_options", "selected_faces", "face_selection_file
            "face_selection", "painted_faces", "bucket_fill_faces", "mask_weights", "CURVES",
            "PAINT_TOLERANCE", "MAX_TRANSFER_DISTANCE"]
 
-CURVES = ("linear", "smoothstep", "ease-in")
-#: Two colours match when no channel (0..255) differs by more than this.
-PAINT_TOLERANCE = 30.0
 #: A painted mesh whose nearest face centroids lie farther than this fraction
 #: of the base's diagonal on average is not a copy of the base.
 MAX_TRANSFER_DISTANCE = 0.01
