@@ -204,6 +204,39 @@ def test_a_ring_folded_at_a_crumpled_quad_is_laid_back_with_the_rings_linked_thr
     assert d.max() < shell.tile_size and (d > 0).sum() < 0.05 * len(X)
 
 
+def _own_pairs(X, G, label, e):
+    """Crossing pairs of element ``e``'s own faces (exact test)."""
+    return self_intersecting_pairs(X, G[label == e])
+
+
+@pytest.mark.slow
+def test_a_strand_unfolded_by_the_move_of_another_in_its_quad_counts_as_laid_back():
+    # Spot's weave on the catalog shell (rebuilt with the reach step): two strands
+    # fold in one quad at the right horn. Laying the first back on the smoothed
+    # map moves every point of that quad, the second strand's too, which unfolds
+    # it; its turn then finds nothing of its own crossing. It used to be left out
+    # as still folded (one strand loop of 92)
+    shell, m, c, scale, below, X, still = _mapped_on("spot", "weave")
+    lab = c.label
+    quads = m.quads[m.faces[:, 0]]
+    crossing = {}
+    for e in still.tolist():
+        pairs = _own_pairs(X, m.faces, lab, e)
+        assert pairs.size                           # each crosses itself as given
+        crossing[e] = set(quads[lab == e][np.unique(pairs)].tolist())
+    shared = [(a, b) for a in crossing for b in crossing if a < b and crossing[a] & crossing[b]]
+    assert shared
+    a, b = shared[0]
+    X1, left = remapped_folds(shell, m, X, lab, [a], scale=scale, depth_scale=below)
+    assert left.size == 0 and _own_pairs(X1, m.faces, lab, b).size == 0
+    X2, left = remapped_folds(shell, m, X, lab, still, scale=scale, depth_scale=below)
+    assert left.size == 0
+    assert element_contacts(X2, m.faces).folded.size == 0
+    # handed over alone, unmoved, it is laid back by its own move all the same
+    _, left = remapped_folds(shell, m, X, lab, [b], scale=scale, depth_scale=below)
+    assert left.size == 0
+
+
 @pytest.mark.slow
 def test_shaped_scales_no_size_seats_are_smoothed_instead_of_left_out():
     shell, m, c, scale, below, X, still = _mapped_on("spot", "scales")
