@@ -183,16 +183,18 @@ def _mapped_on(shell_name, set_name, factors=None):
 
 @pytest.mark.slow
 def test_a_ring_folded_at_a_crumpled_quad_is_laid_back_with_the_rings_linked_through_it():
-    # Spot's chain mail: three rings still fold after shrinking; one of them (at a
-    # quad whose fitted sub-grid normals turn 72 degrees) cuts the rings linked
-    # through it when it is laid back alone or with the points of its own quad
+    # Spot's chain mail (catalog shell rebuilt with the reach step): four rings
+    # still fold after shrinking; two of them, at the foot of each horn (quads
+    # whose fitted sub-grid is crumpled), cut the rings linked through them when
+    # laid back alone or with the points of their own quad (on the shell before
+    # the reach step: three rings, one of them)
     shell, m, c, scale, below, X, still = _mapped_on("spot", "chainmail")
-    assert still.size == 3
+    assert still.size == 4
     # (the shrunk rings may meet others: the union judges those by their boxes)
     c1 = element_contacts(X, m.faces)
     _, left = remapped_folds(shell, m, X, c.label, still, scale=scale, depth_scale=below,
                              reach=())
-    assert left.size == 1
+    assert left.size == 2
     X2, left = remapped_folds(shell, m, X, c.label, still, scale=scale, depth_scale=below)
     assert left.size == 0
     c2 = element_contacts(X2, m.faces)
@@ -202,6 +204,39 @@ def test_a_ring_folded_at_a_crumpled_quad_is_laid_back_with_the_rings_linked_thr
     assert {tuple(p) for p in c2.touching.tolist()} <= before
     d = np.linalg.norm(X2 - X, axis=1)
     assert d.max() < shell.tile_size and (d > 0).sum() < 0.05 * len(X)
+
+
+def _own_pairs(X, G, label, e):
+    """Crossing pairs of element ``e``'s own faces (exact test)."""
+    return self_intersecting_pairs(X, G[label == e])
+
+
+@pytest.mark.slow
+def test_a_strand_unfolded_by_the_move_of_another_in_its_quad_counts_as_laid_back():
+    # Spot's weave on the catalog shell (rebuilt with the reach step): two strands
+    # fold in one quad at the right horn. Laying the first back on the smoothed
+    # map moves every point of that quad, the second strand's too, which unfolds
+    # it; its turn then finds nothing of its own crossing. It used to be left out
+    # as still folded (one strand loop of 92)
+    shell, m, c, scale, below, X, still = _mapped_on("spot", "weave")
+    lab = c.label
+    quads = m.quads[m.faces[:, 0]]
+    crossing = {}
+    for e in still.tolist():
+        pairs = _own_pairs(X, m.faces, lab, e)
+        assert pairs.size                           # each crosses itself as given
+        crossing[e] = set(quads[lab == e][np.unique(pairs)].tolist())
+    shared = [(a, b) for a in crossing for b in crossing if a < b and crossing[a] & crossing[b]]
+    assert shared
+    a, b = shared[0]
+    X1, left = remapped_folds(shell, m, X, lab, [a], scale=scale, depth_scale=below)
+    assert left.size == 0 and _own_pairs(X1, m.faces, lab, b).size == 0
+    X2, left = remapped_folds(shell, m, X, lab, still, scale=scale, depth_scale=below)
+    assert left.size == 0
+    assert element_contacts(X2, m.faces).folded.size == 0
+    # handed over alone, unmoved, it is laid back by its own move all the same
+    _, left = remapped_folds(shell, m, X, lab, [b], scale=scale, depth_scale=below)
+    assert left.size == 0
 
 
 @pytest.mark.slow

@@ -279,15 +279,20 @@ def test_offset_pairs_searched_again_only_where_directions_moved(torus_shell, mo
     np.testing.assert_array_equal(grown[1], full(far, h))
 
 
-def test_bare_warning_on_the_catalog_spot_names_the_flag():
-    """The catalog Spot (tile 0.12) leaves its horns out of the texture's reach;
-    its file predates the record, so the share is computed from the shell."""
+def test_bare_warning_on_the_catalog_blub_names_the_flag():
+    """The catalog Blub (tile 0.095) leaves the tips of its fins out of the
+    texture's reach; its file predates the record, so the share is computed
+    from the shell. The catalog Spot, rebuilt with the reach step, records
+    none out of reach (its horns) and does not warn."""
     from geotex.param.polycube_size import MAX_BARE
     from geotex.shells import bare_area, bare_warning, load_named
 
-    spot = load_named("spot")
-    assert "bare" not in spot.polycube.diagnostics.coverage
-    assert bare_area(spot) > MAX_BARE
-    line = bare_warning(spot, "use a smaller --tile-size")
+    blub = load_named("blub")
+    assert "bare" not in blub.polycube.diagnostics.coverage
+    assert bare_area(blub) > MAX_BARE
+    line = bare_warning(blub, "use a smaller --tile-size")
     assert line.startswith("warning: ") and line.endswith("--tile-size") and "\n" not in line
+    spot = load_named("spot")
+    assert spot.polycube.diagnostics.coverage["bare"] == 0.0
+    assert bare_warning(spot, "use a smaller --tile-size") is None
     assert bare_warning(load_named("torus"), "use a smaller --tile-size") is None

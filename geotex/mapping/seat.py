@@ -705,7 +705,9 @@ def remapped_folds(shell, mapped, X: np.ndarray, label: np.ndarray, folded, *, s
     within ``a``): a folded chain-mail ring at a crumpled quad of Spot
     (sub-grid normals 72 degrees apart) cut the rings linked through it that
     reach into the next quads, which the moves within its quad left where
-    they were.
+    they were. A folded element that crosses nothing of its own when its
+    turn comes, because a kept move of an earlier one moved its points
+    (elements folded in the same quad), counts as laid back.
 
     Parameters
     ----------
@@ -731,7 +733,8 @@ def remapped_folds(shell, mapped, X: np.ndarray, label: np.ndarray, folded, *, s
     X : numpy.ndarray, (N, 3) float64
     still_folded : numpy.ndarray, (k,) int64
     """
-    X = np.array(X, dtype=np.float64, copy=True)
+    X_given = np.asarray(X, dtype=np.float64)
+    X = np.array(X_given, copy=True)
     G = mapped.faces
     todo = np.unique(np.asarray(folded, dtype=np.int64))
     if todo.size == 0:
@@ -740,6 +743,9 @@ def remapped_folds(shell, mapped, X: np.ndarray, label: np.ndarray, folded, *, s
     order = np.argsort(label, kind="stable")
     starts = np.searchsorted(label[order], np.arange(n_el + 1))
     vel = mapped.element
+    # points moved by a kept move (an element laid back moves its neighbours
+    # in the quad too, so a later folded element may already be unfolded)
+    shifted = np.zeros(X.shape[0], dtype=bool)
     uvw_all, quad_all = mapped.tile_points, mapped.quads
     w_all = np.where(uvw_all[:, 2] < 0, uvw_all[:, 2] * float(depth_scale),
                      uvw_all[:, 2] * float(scale))
@@ -753,10 +759,15 @@ def remapped_folds(shell, mapped, X: np.ndarray, label: np.ndarray, folded, *, s
         pairs = _own_crossings(X[verts], local)
         seed = verts[np.unique(local[pairs.ravel()].ravel())]
         if seed.size == 0:
-            # it crosses nothing of its own (the contact test counted it folded on
-            # the whole layout, e.g. by a face it shares with no other element's
-            # numbering): nothing to lay back here, it stays as it was judged
-            left.append(e)
+            # it crosses nothing of its own. Laid back already if a kept move of an
+            # earlier element moved its points and it crossed itself as given (two
+            # strands folded in one quad at Spot's horn: the first one's move
+            # unfolds the second, every moved face tested); otherwise the contact
+            # test counted it folded on the whole layout (e.g. by a face it shares
+            # with no other element's numbering): nothing to lay back here, it
+            # stays as it was judged
+            if not (shifted[verts].any() and _own_crossings(X_given[verts], local).size):
+                left.append(e)
             continue
         seed_quads = np.unique(quad_all[seed])
         region = np.flatnonzero(np.isin(quad_all, seed_quads))
@@ -802,6 +813,7 @@ def remapped_folds(shell, mapped, X: np.ndarray, label: np.ndarray, folded, *, s
                 if not _clean_move(X, G, mv, fbox, pl):
                     X[mv] = before
                     continue
+                shifted[mv] = True
                 at = np.zeros(X.shape[0], dtype=bool)
                 at[mv] = True
                 changed = np.flatnonzero(at[G].any(axis=1))
