@@ -106,14 +106,9 @@ def measure(shell, tileset, repeats, work):
 
     (V, F, X, G, c), (Vb, Fb), (XA, GA, element), n_meets = _operands(shell, tileset)
     base = manifold_of(Vb, Fb)
-    flat = crossing._FLAT
 
     def own(guard):
-        crossing._FLAT = flat if guard else -1.0
-        try:
-            r = crossing.crossing_union(Vb, Fb, XA, GA, element=element)
-        finally:
-            crossing._FLAT = flat
+        r = crossing.crossing_union(Vb, Fb, XA, GA, element=element, flat_test=guard)
         if r.left_out.size == 0:
             return r.vertices, r.faces, r.left_out
         # the elements left out, added by a boolean (as a caller would)

@@ -6,9 +6,12 @@ the segment where the two meet, and so is the base face; the pieces of
 element faces inside the base and of base faces inside an element are
 dropped, and the rest, stitched along the cuts, is the union. manifold3d's
 boolean spends most of its time on exactly these crossings
-(``benchmarks/results/union_split.md``). This module is a measured
-prototype, not used by :func:`geotex.mapping.united_with_base`: see
-``benchmarks/results/union_own.md`` for its cost against the boolean.
+(``benchmarks/results/union_split.md``). :func:`geotex.mapping.united_with_base`
+uses it where the elements that meet nothing are most of the work
+(``union="auto"``), without its own test of the flat pieces and with every
+element or none: the main job's exact check of the written coordinates is its
+guard, and a result that fails it is redone by manifold3d's boolean
+(``benchmarks/results/union_own.md``).
 
 Steps:
 
@@ -29,8 +32,9 @@ Steps:
    (a planar graph of its edges and cuts in the face's plane, its faces
    walked, each triangulated by ear clipping); a piece is kept by the side of
    the cut it lies on;
-4. the flat pieces (slivers between nearly collinear cut points) are
-   tested against the faces near them by the exact intersection test
+4. with ``flat_test``, the flat pieces (slivers between nearly collinear
+   cut points) are tested against the faces near them by the exact
+   intersection test
    (:func:`~geotex.check.intersections.self_intersecting_pairs_touching`):
    a piece that meets another leaves its elements out, and the faces are
    split again without them;
@@ -53,8 +57,8 @@ from geotex.check.intersections import (self_intersecting_pairs_between,
                                         self_intersecting_pairs_touching)
 from geotex.errors import GeotexError, InputError
 from geotex.jit import compiled, helper
-from geotex.mesh.topology import compacted, concatenated, edge_topology
 from geotex.mesh.arrays import as_mesh_arrays
+from geotex.mesh.topology import compacted, concatenated, edge_topology
 
 __all__ = ["crossing_union", "CrossingUnion"]
 
@@ -608,7 +612,8 @@ def _pieces(W, H, nbf, pairs, half, crossed, t, topo, edge_faces):
 
 
 def crossing_union(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray, *,
-                   element: np.ndarray) -> CrossingUnion:
+                   element: np.ndarray, flat_test: bool = True,
+                   all_or_none: bool = False) -> CrossingUnion:
     """Union of a solid with closed elements that cross the solid but not each other.
 
     Parameters
@@ -623,11 +628,22 @@ def crossing_union(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray, *
         finds those that do; they are not checked here).
     element : numpy.ndarray, (l,) int64
         Element of every face of ``G``, ``0 .. n_elements - 1``.
+    flat_test : bool, optional
+        Test the flat pieces of the cut faces against the faces near them
+        (exact test) and leave out the elements of those that cross another
+        (default). False skips it (0.4 s at ~370k faces): the caller must
+        then check the result.
+    all_or_none : bool, optional
+        Stop as soon as one element would be left out, before the faces are
+        kept or dropped and stitched: the result then has no vertices and no
+        faces, and ``left_out`` lists the elements found so far (the caller
+        unites the whole by a boolean instead).
 
     Returns
     -------
     CrossingUnion
-        The united solid and the elements left out.
+        The united solid and the elements left out (with ``all_or_none``
+        and elements left out: empty arrays and those elements).
 
     Raises
     ------
@@ -664,6 +680,8 @@ def crossing_union(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray, *
     status, half, crossed, t = _pair_event_loops(W, H, pairs)
     out = np.zeros(n_el, dtype=bool)
     out[lab[pairs[status < 0, 1]]] = True
+    if all_or_none and out.any():
+        return _none_united(out)
     cross = status == 2
     pairs, half, crossed, t = pairs[cross], half[cross], crossed[cross], t[cross]
     topo = edge_topology(H, len(W))
@@ -676,11 +694,15 @@ def crossing_union(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray, *
             # a face not split: leave out its element, or every element
             # crossing that base face, and split again without them
             _leave_out(out, split[st < 0], nbf, lab, pairs)
+            if all_or_none:
+                return _none_united(out)
             continue
         kept = _kept_faces(V, F, X, G, H, nbf, lab, element, pairs[use], split, edge_keep, out,
                            topo, edge_faces)
         piece = keep == 1
         F2 = np.concatenate([H[kept], tri[piece]])
+        if not flat_test:
+            break
         # the exact test of the flat pieces against the faces near them: a
         # piece that crosses anything leaves out the elements it came from
         source = np.concatenate([np.flatnonzero(kept), np.repeat(split, counts)[piece]])
@@ -690,8 +712,15 @@ def crossing_union(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray, *
         if bad.size == 0:
             break
         _leave_out(out, np.unique(source[bad.ravel()]), nbf, lab, pairs)
+        if all_or_none:
+            return _none_united(out)
     V2, F2 = compacted(P, F2)
     return CrossingUnion(V2, F2, np.flatnonzero(out))
+
+
+def _none_united(out: np.ndarray) -> CrossingUnion:
+    """The result of ``all_or_none`` when elements would be left out: no solid."""
+    return CrossingUnion(np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64), np.flatnonzero(out))
 
 
 def _shape_quality(P: np.ndarray, T: np.ndarray) -> np.ndarray:
