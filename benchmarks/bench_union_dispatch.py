@@ -5,7 +5,9 @@ catalog shell), one shell is built, then ``textured_solid(..., union=U)`` runs
 with ``U = "boolean"`` (main's path) and ``U = "auto"`` (the dispatch),
 interleaved in one process for ``--repeats`` rounds (order alternating): CPU
 seconds of the process (``time.process_time``, manifold3d's threads included)
-and the union stage's wall seconds. Each round's STL is written and its
+of the whole job and of `united_with_base` (progress callback: from its
+first step to the check), and the
+wall seconds of the union and validate stages. Each round's STL is written and its
 sha256 compared with the first round's; the last one is read back and judged
 by ``geotex check``.
 
@@ -67,15 +69,24 @@ def measure(shell, tileset, repeats, work, name):
     out = {}
     for r in range(repeats):
         for u in (("boolean", "auto") if r % 2 == 0 else ("auto", "boolean")):
+            marks = {}
+
+            def progress(stage, marks=marks):
+                marks.setdefault(stage, time.process_time())
+
             t = time.process_time()
-            res = textured_solid(shell, tiles, seed=0, union=u)
+            res = textured_solid(shell, tiles, seed=0, union=u, progress=progress)
             cpu = time.process_time() - t
+            # united_with_base: from its first step to the check (a fallback
+            # union runs in the validate stage)
+            union_cpu = marks["validate"] - marks["union: folded elements"]
             path = work / f"{name}_{u}_{r}.stl"
             write_mesh(path, Mesh(res.vertices, res.faces))
             sha = hashlib.sha256(path.read_bytes()).hexdigest()
-            o = out.setdefault(u, {"cpu": [], "union": [], "sha": set(), "path": path,
+            o = out.setdefault(u, {"cpu": [], "union": [], "union_cpu": [], "sha": set(), "path": path,
                                    "stats": res.stats, "printable": res.report.printable})
             o["cpu"].append(cpu)
+            o["union_cpu"].append(union_cpu)
             o["union"].append(res.stats.seconds["union"] + res.stats.seconds.get("validate", 0))
             o["sha"].add(sha)
     rows = []
@@ -86,6 +97,7 @@ def measure(shell, tileset, repeats, work, name):
         rows.append(f"| {name} | {shell.tile_size:.3g} | {u} | {s.union_method} | "
                     f"{s.union_fallbacks} | {s.union_retries} | "
                     f"{' '.join(f'{c:.2f}' for c in o['cpu'])} | "
+                    f"{' '.join(f'{c:.2f}' for c in o['union_cpu'])} | "
                     f"{' '.join(f'{c:.2f}' for c in o['union'])} | {s.faces:,} | "
                     f"{len(o['sha'])} | {'printable' if rep.printable else 'NOT printable'} | "
                     f"{sorted(o['sha'])[0][:12]} |")
@@ -107,6 +119,7 @@ def main(argv=None) -> int:
         textured_solid(load_shell("torus"), load_tiles("studs"), seed=0, union=u)
     print(f"load {os.getloadavg()[0]:.1f}", flush=True)
     print("| row | tile mm | union= | used | fallbacks | retries | job CPU s per round | "
+          "united_with_base CPU s | "
           "union+validate wall s | faces | distinct sha256 | STL check | sha256 |", flush=True)
     for name in args.rows:
         src, ts, tileset = ROWS[name]
