@@ -12,7 +12,8 @@ from geotex.errors import InputError
 from geotex.exemplars import exemplar
 from geotex.mapping import textured_solid
 from geotex.mapping.crossing import CrossingUnion
-from geotex.mapping.union import OWN_SHARE, element_contacts, united_with_base
+from geotex.mapping.union import (OWN_ELEMENTS_PER_BASE_FACE, OWN_SHARE, element_contacts,
+                                  united_with_base)
 from geotex.mesh.primitives import box, icosphere, torus
 from geotex.mesh.solid import manifold_of
 from geotex.mesh.topology import concatenated
@@ -78,9 +79,14 @@ def test_auto_sends_the_union_where_the_lone_elements_are_most_of_the_faces():
     # only lone elements, more faces than the base: the own union
     lone = [(0.5 + 0.6 * i, 0.5 + 0.6 * j) for i in range(5) for j in range(5)]
     parts, (X, G) = _spheres(lone, 1.0123)
-    assert len(G) >= OWN_SHARE * len(F)
+    assert len(G) >= OWN_SHARE * len(F) and len(lone) <= OWN_ELEMENTS_PER_BASE_FACE * len(F)
     _, _, stats = united_with_base(V, F, X, G, union="auto")
     assert stats.method == "own"
+    # the same elements on a coarse base (12 faces, each crossed by many): the boolean
+    Vc, Fc = box((0, 0, 0), (4, 4, 1))
+    assert len(lone) > OWN_ELEMENTS_PER_BASE_FACE * len(Fc)
+    _, _, stats = united_with_base(Vc, Fc, X, G, union="auto")
+    assert stats.method == "boolean" and stats.fallbacks == 0
     # a long chain of meeting elements and two lone ones: the boolean
     chain = [(0.5 + 0.15 * i, 2.0) for i in range(20)] + [(0.5, 3.5), (3.5, 3.5)]
     parts, (X, G) = _spheres(chain, 1.0123)

@@ -47,7 +47,8 @@ from geotex.progress import report
 
 __all__ = ["united_with_base", "element_contacts", "ElementContacts", "element_groups",
            "element_pairs",
-           "UnionStats", "SLIVER_TOLERANCE", "UNION_STAGES", "UNION_METHODS", "OWN_SHARE"]
+           "UnionStats", "SLIVER_TOLERANCE", "UNION_STAGES", "UNION_METHODS", "OWN_SHARE",
+           "OWN_ELEMENTS_PER_BASE_FACE"]
 
 #: Stage names passed to the ``progress`` callback of :func:`united_with_base`.
 UNION_STAGES = ("union: folded elements", "union: boolean", "union: slivers")
@@ -60,6 +61,13 @@ UNION_METHODS = ("auto", "own", "boolean")
 #: the elements that meet another): its cost grows with every face of both
 #: operands, the boolean's with the crossings (``benchmarks/results/union_own.md``).
 OWN_SHARE = 1.0
+
+#: ... and at most this many lone elements per base face: a base face that
+#: many elements cross is split into one polygon with many holes, whose ear
+#: clipping leaves long slivers that the float32 rounding can fold (the Spot
+#: catalog shell, 1,654 base faces, with 2,961 lone studs failed the job's
+#: check and cost the boolean on top; 0.1-0.7 per face passed on every row).
+OWN_ELEMENTS_PER_BASE_FACE = 1.0
 
 
 
@@ -283,7 +291,8 @@ def united_with_base(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray,
         other elements (:func:`~geotex.mapping.crossing.crossing_union`; the
         boolean instead when it cannot unite every one of them), or the own
         union where they have at least :data:`OWN_SHARE` faces per face of
-        the rest. The own union does not test its result for crossing
+        the rest and are at most :data:`OWN_ELEMENTS_PER_BASE_FACE` per base
+        face. The own union does not test its result for crossing
         faces: check it (:func:`~geotex.mapping.texture.textured_solid`
         does, and redoes it by the boolean when it fails).
     progress : callable, optional
@@ -337,7 +346,8 @@ def united_with_base(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray,
     n_lone = int(np.count_nonzero(lone[label]))
     if union == "auto":
         rest = len(F) + int(np.count_nonzero(meets[label]))
-        union = "own" if n_lone > 0 and n_lone >= OWN_SHARE * rest else "boolean"
+        fine = int(lone.sum()) <= OWN_ELEMENTS_PER_BASE_FACE * len(F)
+        union = "own" if n_lone > 0 and n_lone >= OWN_SHARE * rest and fine else "boolean"
     solids = []
     if meets.any():
         solids = [manifold_of(*compacted(X, G[((group == g) & meets)[label]]))
