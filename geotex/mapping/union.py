@@ -17,7 +17,8 @@ Where the elements that meet nothing are most of the work, the last boolean
 is replaced by the own local union (:func:`~geotex.mapping.crossing.crossing_union`:
 faces cut along their crossings with the base, no boolean): the base united
 with the meeting elements' groups is its base, the lone elements its
-elements (``union="auto"``, rule :data:`OWN_SHARE`). It has no guard of its
+elements (``union="auto"``, rules :data:`OWN_SHARE` and
+:data:`OWN_ELEMENTS_PER_BASE_FACE`). It has no guard of its
 own: the main job's exact check of the written coordinates is its guard, and
 :func:`~geotex.mapping.texture.textured_solid` redoes a union that fails it by
 the boolean (``benchmarks/results/union_own.md``).
