@@ -83,8 +83,9 @@ def measure(shell, tileset, repeats, work, name):
             path = work / f"{name}_{u}_{r}.stl"
             write_mesh(path, Mesh(res.vertices, res.faces))
             sha = hashlib.sha256(path.read_bytes()).hexdigest()
-            o = out.setdefault(u, {"cpu": [], "union": [], "union_cpu": [], "sha": set(), "path": path,
-                                   "stats": res.stats, "printable": res.report.printable})
+            o = out.setdefault(u, {"cpu": [], "union": [], "union_cpu": [], "sha": set(),
+                                   "path": path, "stats": res.stats,
+                                   "printable": res.report.printable})
             o["cpu"].append(cpu)
             o["union_cpu"].append(union_cpu)
             o["union"].append(res.stats.seconds["union"] + res.stats.seconds.get("validate", 0))
