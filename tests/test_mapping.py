@@ -108,7 +108,8 @@ def test_stats_are_a_frozen_record_whose_dict_is_the_json_report(torus_shell, st
                        "mapped_faces", "welded", "open_faces_dropped", "elements",
                        "union_operands", "elements_floating", "elements_folded",
                        "elements_reseated", "union_retries", "elements_lowered",
-                       "elements_propped", "cavities_filled", "vertices", "faces", "seconds"]
+                       "elements_propped", "cavities_filled", "union_method", "union_fallbacks",
+                       "vertices", "faces", "seconds"]
     assert d["faces"] == res.faces.shape[0] and d["quads"] == torus_shell.n_quads
     assert set(d["seconds"]) == {"assign", "map", "union"}
     json.dumps(d)

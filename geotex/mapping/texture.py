@@ -4,7 +4,9 @@
 within each axis class, picks the matching tile for every quad, maps and welds
 the tile geometry into the shell (:mod:`~geotex.mapping.place`), unites the
 closed elements with the base solid (:mod:`~geotex.mapping.union`) and runs
-the printability check on the result.
+the printability check on the result. Where the own local union is used
+(:mod:`~geotex.mapping.crossing`), that check is its guard: a result it
+rejects is redone by manifold3d's boolean of the same operands.
 """
 
 from __future__ import annotations
@@ -22,8 +24,8 @@ from geotex.mapping.place import MappedTiles, depth_scale, mapped_tiles, reseate
 from geotex.mapping.seat import (floating_elements, lowered_elements, propped_elements,
                                  remapped_folds, rooted_elements, smoothed_folds)
 from geotex.mapping.shape import map_jacobian
-from geotex.mapping.union import (UNION_STAGES, ElementContacts, element_contacts,
-                                  united_with_base)
+from geotex.mapping.union import (UNION_METHODS, UNION_STAGES, ElementContacts,
+                                  element_contacts, united_with_base)
 from geotex.mesh.topology import face_components
 from geotex.param.polycube_fit import SurfaceProjector
 from geotex.printing.stored import printable_stored_solid
@@ -85,6 +87,12 @@ class TextureStats:
         enclosed, filled (not counted as floating elements).
     union_retries : int
         Unions redone without the elements next to defects.
+    union_method : str
+        The union that made the result: ``"own"`` (the local union of
+        :mod:`~geotex.mapping.crossing`) or ``"boolean"`` (manifold3d).
+    union_fallbacks : int
+        Own unions replaced by the boolean: one that could not unite every
+        element, one whose result the check rejected.
     float32_collapsed_faces, elements_left_out_at_defects : int or None
         Faces collapsed by the float32 rounding, and elements left out at
         defects (None when the result was not checked).
@@ -111,6 +119,8 @@ class TextureStats:
     elements_lowered: int = 0
     elements_propped: int = 0
     cavities_filled: int = 0
+    union_method: str = "boolean"
+    union_fallbacks: int = 0
     float32_collapsed_faces: int | None = None
     elements_left_out_at_defects: int | None = None
     vertices: int
@@ -230,8 +240,8 @@ def _elements_near(points, X, G, exclude=None) -> np.ndarray:
 
 
 def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = True,
-                   shaped: bool | None = None, progress=None, on_stored=None,
-                   keep_elements: bool = False) -> TexturedSolid:
+                   shaped: bool | None = None, union: str = "auto", progress=None,
+                   on_stored=None, keep_elements: bool = False) -> TexturedSolid:
     """Lay ``tiles`` over ``shell`` and unite them with its base.
 
     Parameters
@@ -260,6 +270,14 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
         rings of one size, moved one by one, cut into their neighbours where
         the quads are squashed: on Spot the union then fused them and took
         about three times as long), shaped for the others.
+    union : {"auto", "own", "boolean"}, optional
+        How the elements are united with the base
+        (:func:`~geotex.mapping.union.united_with_base`). The own local union
+        is used only with ``check``, whose exact test of the stored
+        coordinates is its guard: a result the check rejects is united again
+        by manifold3d's boolean of the same operands (nothing left out)
+        before elements next to defects are left out. Without ``check``,
+        ``"auto"`` is the boolean.
     progress : callable, optional
         Called with each stage and step of :data:`MAP_PROGRESS` (the times in
         ``stats.seconds`` are per stage of :data:`MAP_STAGES`).
@@ -281,12 +299,16 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
     Raises
     ------
     InputError
-        Planar tile set, bad height or seed.
+        Planar tile set, bad height, seed or union.
     GeotexError
         manifold3d rejects the base or the elements.
     """
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise InputError(f"seed must be a non-negative integer, got {seed!r}")
+    if union not in UNION_METHODS:
+        raise InputError(f"union must be one of {', '.join(UNION_METHODS)}, got {union!r}")
+    if not check and union == "auto":
+        union = "boolean"       # the own union's guard is the check
     h = texture_height(shell, tiles, height)
     if tiles.directional:
         tiles = oriented_tileset(tiles)     # a directional base set, turned to its flow
@@ -381,8 +403,10 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
         order = np.lexsort((touching[:, 1], touching[:, 0]))
         contacts = ElementContacts(np.concatenate([contacts.label, post_label]),
                                    contacts.folded, touching[order])
-    V, F, union = united_with_base(shell.base_vertices, shell.base_faces, X, G,
-                                   contacts=contacts, moved=moved, progress=progress)
+    V, F, united = united_with_base(shell.base_vertices, shell.base_faces, X, G,
+                                    contacts=contacts, moved=moved, union=union,
+                                    progress=progress)
+    fallbacks = united.fallbacks
     times["union"] = time.perf_counter() - t
     rep = None
     exclude = None
@@ -399,6 +423,16 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
         solid = printable_stored_solid(V, F, precision=np.float32, manifold3d=False,
                                        max_examples=ALL_DEFECTS, progress=progress,
                                        on_stored=on_stored)
+        if not solid.report.printable and united.method == "own":
+            # the check is the own union's guard: the boolean of the same
+            # operands (nothing left out) replaces a result it rejects
+            fallbacks += 1
+            V, F, united = united_with_base(shell.base_vertices, shell.base_faces, X, G,
+                                            contacts=contacts, moved=moved, union="boolean",
+                                            progress=progress)
+            solid = printable_stored_solid(V, F, precision=np.float32, manifold3d=False,
+                                           max_examples=ALL_DEFECTS, progress=progress,
+                                           on_stored=on_stored)
         # the boolean can leave needle faces where an element grazes the base
         # or a neighbour; leave the elements there out and unite again
         while not solid.report.printable and retried < RETRIES:
@@ -406,9 +440,9 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
             if len(points) == 0:
                 break
             exclude = _elements_near(points, X, G, exclude)
-            V, F, union = united_with_base(shell.base_vertices, shell.base_faces,
-                                           X, G, exclude=exclude,
-                                           contacts=contacts, moved=moved, progress=progress)
+            V, F, united = united_with_base(shell.base_vertices, shell.base_faces,
+                                            X, G, exclude=exclude, contacts=contacts,
+                                            moved=moved, union="boolean", progress=progress)
             solid = printable_stored_solid(V, F, precision=np.float32, manifold3d=False,
                                            max_examples=ALL_DEFECTS, progress=progress,
                                            on_stored=on_stored)
@@ -424,11 +458,12 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
         quads=pc.layout.n_quads, bare_quads=int((tile_of_quad < 0).sum()), height=h, seed=int(seed),
         mapped_vertices=int(X.shape[0]), mapped_faces=int(G.shape[0]),
         welded=mapped.welded, open_faces_dropped=mapped.dropped_faces,
-        elements=union.elements, union_operands=union.groups,
-        elements_floating=union.floating, elements_folded=union.folded,
+        elements=united.elements, union_operands=united.groups,
+        elements_floating=united.floating, elements_folded=united.folded,
         elements_reseated=int(folded.size - still.size), union_retries=retried,
         elements_lowered=int(lowered.size), elements_propped=int(propped.size),
-        cavities_filled=union.cavities, **cleanup,
+        cavities_filled=united.cavities, union_method=united.method,
+        union_fallbacks=fallbacks, **cleanup,
         vertices=int(V.shape[0]), faces=int(F.shape[0]),
         seconds={k: round(v, 3) for k, v in times.items()})
     if not keep_elements:

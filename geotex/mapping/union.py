@@ -13,6 +13,16 @@ whole result).
 Pieces of the result that are not part of the body (elements that float above
 a concave base) are left out, so the print is one solid.
 
+Where the elements that meet nothing are most of the work, the last boolean
+is replaced by the own local union (:func:`~geotex.mapping.crossing.crossing_union`:
+faces cut along their crossings with the base, no boolean): the base united
+with the meeting elements' groups is its base, the lone elements its
+elements (``union="auto"``, rules :data:`OWN_SHARE` and
+:data:`OWN_ELEMENTS_PER_BASE_FACE`). It has no guard of its
+own: the main job's exact check of the written coordinates is its guard, and
+:func:`~geotex.mapping.texture.textured_solid` redoes a union that fails it by
+the boolean (``benchmarks/results/union_own.md``).
+
 The boolean's time is the element-base intersections, not the triangle count:
 cutting elements in tile space and sending only their bottoms with a lid
 through it was measured and does not pay (``benchmarks/bench_union_split.py``,
@@ -29,6 +39,7 @@ import numpy as np
 
 from geotex.check.intersections import self_intersecting_pairs
 from geotex.errors import GeotexError, InputError
+from geotex.mapping.crossing import crossing_union
 from geotex.mesh.geometry import component_volumes, group_boxes
 from geotex.mesh.needles import SLIVER_TOLERANCE, needle_free
 from geotex.mesh.solid import arrays_of_manifold, manifold_of
@@ -37,10 +48,27 @@ from geotex.progress import report
 
 __all__ = ["united_with_base", "element_contacts", "ElementContacts", "element_groups",
            "element_pairs",
-           "UnionStats", "SLIVER_TOLERANCE", "UNION_STAGES"]
+           "UnionStats", "SLIVER_TOLERANCE", "UNION_STAGES", "UNION_METHODS", "OWN_SHARE",
+           "OWN_ELEMENTS_PER_BASE_FACE"]
 
 #: Stage names passed to the ``progress`` callback of :func:`united_with_base`.
 UNION_STAGES = ("union: folded elements", "union: boolean", "union: slivers")
+
+#: Values of ``union`` in :func:`united_with_base`.
+UNION_METHODS = ("auto", "own", "boolean")
+
+#: ``union="auto"`` uses the own local union when the elements that meet
+#: nothing have at least this many faces per face of the rest (the base and
+#: the elements that meet another): its cost grows with every face of both
+#: operands, the boolean's with the crossings (``benchmarks/results/union_own.md``).
+OWN_SHARE = 1.0
+
+#: ... and at most this many lone elements per base face: a base face that
+#: many elements cross is split into one polygon with many holes, whose ear
+#: clipping leaves long slivers that the float32 rounding can fold (the Spot
+#: catalog shell, 1,654 base faces, with 2,961 lone studs failed the job's
+#: check and cost the boolean on top; 0.1-0.7 per face passed on every row).
+OWN_ELEMENTS_PER_BASE_FACE = 1.0
 
 
 
@@ -63,6 +91,13 @@ class UnionStats:
         filled.
     folded : int
         Elements left out because the map folds them onto themselves.
+    method : str
+        The union that made the result: ``"own"`` (the local union of
+        :mod:`~geotex.mapping.crossing`) or ``"boolean"`` (manifold3d).
+    fallbacks : int
+        1 when the own union was tried and could not unite every element
+        (no proved sign, a face it could not split): the boolean made the
+        result instead; else 0.
     """
 
     elements: int
@@ -70,6 +105,8 @@ class UnionStats:
     floating: int = 0
     folded: int = 0
     cavities: int = 0
+    method: str = "boolean"
+    fallbacks: int = 0
 
 
 class ElementContacts(NamedTuple):
@@ -228,7 +265,8 @@ def _check_elements(solids) -> None:
 
 def united_with_base(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray, *,
                      exclude=None, contacts: ElementContacts | None = None, moved=None,
-                     progress=None) -> tuple[np.ndarray, np.ndarray, UnionStats]:
+                     union: str = "boolean", progress=None
+                     ) -> tuple[np.ndarray, np.ndarray, UnionStats]:
     """One solid: the base plus every usable closed element.
 
     Parameters
@@ -248,6 +286,16 @@ def united_with_base(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray,
     moved : array_like of int, optional
         Elements moved since ``contacts`` was found (re-seated); an element
         folded in ``contacts`` that is not moved is left out.
+    union : {"boolean", "own", "auto"}, optional
+        How the elements that meet nothing are added: by manifold3d's boolean
+        (default), or by the own local union with the base united with the
+        other elements (:func:`~geotex.mapping.crossing.crossing_union`; the
+        boolean instead when it cannot unite every one of them), or the own
+        union where they have at least :data:`OWN_SHARE` faces per face of
+        the rest and are at most :data:`OWN_ELEMENTS_PER_BASE_FACE` per base
+        face. The own union does not test its result for crossing
+        faces: check it (:func:`~geotex.mapping.texture.textured_solid`
+        does, and redoes it by the boolean when it fails).
     progress : callable, optional
         Called with each stage of :data:`UNION_STAGES`.
 
@@ -259,9 +307,13 @@ def united_with_base(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray,
 
     Raises
     ------
+    InputError
+        ``union`` is not one of :data:`UNION_METHODS`.
     GeotexError
         manifold3d rejects the base or the elements (open elements, a bug).
     """
+    if union not in UNION_METHODS:
+        raise InputError(f"union must be one of {', '.join(UNION_METHODS)}, got {union!r}")
     base = manifold_of(V, F)
     if base.status() != manifold3d.Error.NoError:
         raise GeotexError(f"the base is not a valid solid for manifold3d ({base.status().name});"
@@ -291,20 +343,36 @@ def united_with_base(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray,
     # over the whole result: on Spot with studs this saves 17-20% of the boolean
     meets = np.zeros(n_el, dtype=bool)
     meets[pairs.ravel()] = True
-    pieces = [compacted(X, G[(usable & ~meets)[label]])]
+    lone = usable & ~meets
+    n_lone = int(np.count_nonzero(lone[label]))
+    if union == "auto":
+        rest = len(F) + int(np.count_nonzero(meets[label]))
+        fine = int(lone.sum()) <= OWN_ELEMENTS_PER_BASE_FACE * len(F)
+        union = "own" if n_lone > 0 and n_lone >= OWN_SHARE * rest and fine else "boolean"
+    solids = []
     if meets.any():
         solids = [manifold_of(*compacted(X, G[((group == g) & meets)[label]]))
                   for g in range(int(group.max()) + 1)]
         _check_elements(solids)
-        pieces.append(arrays_of_manifold(manifold3d.Manifold.batch_boolean(
-            solids, manifold3d.OpType.Add)))
     report(progress, UNION_STAGES[1])
-    solid = base
-    if usable.any():
-        elements = manifold_of(*concatenated(pieces))
-        _check_elements([elements])
-        solid = manifold3d.Manifold.batch_boolean([base, elements], manifold3d.OpType.Add)
-    solid.num_tri()                      # evaluate here (manifold3d is lazy)
+    method, fallbacks = "boolean", 0
+    if union == "own" and n_lone:
+        VF = _own_union(base, solids, X, G, label, lone)
+        if VF is None:
+            fallbacks = 1
+        else:
+            method = "own"
+    if method == "boolean":
+        pieces = [compacted(X, G[lone[label]])]
+        if solids:
+            pieces.append(arrays_of_manifold(manifold3d.Manifold.batch_boolean(
+                solids, manifold3d.OpType.Add)))
+        solid = base
+        if usable.any():
+            elements = manifold_of(*concatenated(pieces))
+            _check_elements([elements])
+            solid = manifold3d.Manifold.batch_boolean([base, elements], manifold3d.OpType.Add)
+        VF = arrays_of_manifold(solid)       # evaluated here (manifold3d is lazy)
     report(progress, UNION_STAGES[2])
     # the boolean leaves needle triangles (area ~1e-13 of the solid) where element
     # and base surfaces cross nearly tangentially; float32 rounding (STL) folds some
@@ -313,7 +381,7 @@ def united_with_base(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray,
     # changing the shape by less than that (manifold3d's simplify at the same
     # tolerance kept most of them, where a collapse would move a crease)
     diag = float(np.linalg.norm(np.ptp(np.vstack([V, X]), axis=0)))
-    V2, F2, _ = needle_free(*arrays_of_manifold(solid), tolerance=SLIVER_TOLERANCE * diag)
+    V2, F2, _ = needle_free(*VF, tolerance=SLIVER_TOLERANCE * diag)
     # elements that do not reach the base (where the fitted surface lies above a
     # concave base) would print as loose pieces: keep the body they are part of
     # (a closed void between an element and the base is a part too, facing
@@ -326,4 +394,27 @@ def united_with_base(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray,
         floating = parts - 1 - cavities
         V2, F2 = compacted(V2, F2[label == body])
     return V2, F2, UnionStats(int((group >= 0).sum()) - floating, int(group.max()) + 1,
-                              floating, int(folded.size), cavities)
+                              floating, int(folded.size), cavities, method, fallbacks)
+
+
+def _own_union(base, solids, X, G, label, lone):
+    """The own local union of ``base`` and ``solids`` (one boolean) with the ``lone`` elements.
+
+    Returns the arrays ``(V, F)``, or None when it cannot unite every lone
+    element (it stops before stitching; the caller uses the boolean).
+    """
+    if solids:
+        base = manifold3d.Manifold.batch_boolean([base] + solids, manifold3d.OpType.Add)
+    Vb, Fb = arrays_of_manifold(base)
+    faces = lone[label]
+    XA, GA = compacted(X, G[faces])
+    _, element = np.unique(label[faces], return_inverse=True)
+    try:
+        r = crossing_union(Vb, Fb, XA, GA, element=element.astype(np.int64),
+                           flat_test=False, all_or_none=True)
+    except InputError:
+        raise
+    except GeotexError:
+        # inputs that break its assumptions (it says so): the boolean decides
+        return None
+    return None if r.left_out.size else (r.vertices, r.faces)
