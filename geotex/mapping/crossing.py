@@ -17,8 +17,8 @@ Steps:
 
 1. crossing face pairs (base face, element face) by the exact intersection
    test (:func:`~geotex.check.intersections.self_intersecting_pairs_between`,
-   the base and large elements split into compact parts so its sweep stays
-   local);
+   every element a part and the base one: the test sweeps the base and large
+   elements in compact runs, so it stays local);
 2. for every pair, which edges of one face cross the other face, decided by
    filtered orientation predicates (a sign is used only where the
    floating-point error bound proves it); a crossing point is keyed by
@@ -69,9 +69,6 @@ _FILTER = 1e-13
 #: faces near them. Measured on Spot with studs (170k pieces): every piece that
 #: met another had a quality below 1e-6; 2.2k pieces lie below 1e-3.
 _FLAT = 1e-3
-#: Faces per part of the crossing test's sweep (runs of the base and of large
-#: elements; a part of more than 4096 faces makes the test search the whole mesh).
-_PART_FACES = 256
 
 
 class CrossingUnion(NamedTuple):
@@ -535,27 +532,6 @@ def _split_loops(P, F, faces, seg_start, seg_list, seg_pq, bp_start, bp_list,
     return counts, status, no
 
 
-def _sweep_parts(V: np.ndarray, F: np.ndarray, group: np.ndarray) -> np.ndarray:
-    """Part of every face for the crossing test's sweep: each group in runs of at
-    most ``_PART_FACES`` faces, in Morton order of their centroids (the sweep's
-    parts must stay small and compact; the base is one group)."""
-    c = V[F].mean(axis=1)
-    span = float(np.ptp(c, axis=0).max()) or 1.0
-    q = ((c - c.min(axis=0)) / span * 1023).astype(np.int64)
-    key = np.zeros(len(F), dtype=np.int64)
-    for b in range(10):
-        for k in range(3):
-            key |= ((q[:, k] >> b) & 1) << (3 * b + k)
-    order = np.lexsort((key, group))
-    g = group[order]
-    start = np.flatnonzero(np.r_[True, g[1:] != g[:-1]])
-    rank = np.arange(len(F)) - np.repeat(start, np.diff(np.r_[start, len(F)]))
-    run = np.r_[True, (g[1:] != g[:-1]) | (rank[1:] % _PART_FACES == 0)]
-    part = np.empty(len(F), dtype=np.int64)
-    part[order] = np.cumsum(run) - 1
-    return part
-
-
 def _cut_points(W, H, h2e, pairs, half, crossed, t):
     """Crossing points keyed by (edge, crossed face): coordinates and the id of each pair's two."""
     key = h2e[half.ravel()] * len(H) + crossed.ravel()
@@ -675,7 +651,7 @@ def crossing_union(V: np.ndarray, F: np.ndarray, X: np.ndarray, G: np.ndarray, *
     nbf = len(F)
     lab = np.concatenate([np.full(nbf, -1, dtype=np.int64), element])
     pairs = self_intersecting_pairs_between(
-        W, H, _sweep_parts(W, H, lab),
+        W, H, lab + 1,
         side=np.concatenate([np.zeros(nbf, dtype=np.int64), np.ones(len(G), dtype=np.int64)]))
     status, half, crossed, t = _pair_event_loops(W, H, pairs)
     out = np.zeros(n_el, dtype=bool)
