@@ -12,7 +12,8 @@ from geotex.mapping import element_contacts, mapped_tiles, texture_height, tiles
 from geotex.mapping.assign import edge_colors
 from geotex.mapping.place import depth_scale
 from geotex.mapping.seat import (floating_elements, lowered_elements, propped_elements,
-                                 remapped_folds, rooted_elements, smoothed_folds)
+                                 remapped_folds, rooted_elements, smoothed_folds,
+                                 stood_elements)
 from geotex.mesh.geometry import signed_volume
 from geotex.mesh.primitives import box, icosphere
 from geotex.mesh.topology import concatenated, edge_topology, face_components
@@ -359,6 +360,53 @@ def test_a_lifted_shaped_element_gets_a_root_into_the_base_and_keeps_its_top(stu
     X3, left, met = rooted_elements(shell, dataclasses.replace(m, tile_points=flat), X, c.label,
                                     fl, depth=tiles.depth * below)
     assert left.tolist() == fl.tolist() and np.array_equal(X3, X) and met.size == 0
+
+
+def test_a_lifted_shaped_element_no_root_seats_is_stood_on_a_post(studs_on_torus):
+    shell, tiles, m, below = studs_on_torus
+    V0, F0 = shell.base_vertices, shell.base_faces
+    label = m.element[m.faces[:, 0]]
+    lifted = np.array([3, int(label.max()) // 2])
+    centre = np.stack([np.bincount(m.element, weights=m.vertices[:, i]) for i in range(3)], 1)
+    centre /= np.bincount(m.element)[:, None]
+    near = np.linalg.norm(centre[:, None] - centre[lifted][None], axis=2).min(axis=1)
+    m = _only_elements(m, near < 1.5 * shell.tile_size)
+    lifted = np.searchsorted(np.flatnonzero(near < 1.5 * shell.tile_size), lifted)
+    c = element_contacts(m.vertices, m.faces, label=m.element[m.faces[:, 0]])
+    none = np.zeros((0, 2), dtype=np.int64)
+    X = m.vertices.copy()
+    for e in lifted:
+        v = m.element == e
+        n = np.mean(X[v], axis=0) - np.mean(X[v & (m.tile_points[:, 2] < 0)], axis=0)
+        X[v] += 1.5 * tiles.depth * below * n / np.linalg.norm(n)
+    fl = floating_elements(V0, F0, X, m.faces, label=c.label, touching=none)
+    assert fl.tolist() == sorted(lifted.tolist())
+    # with nothing below the surface there is no root to extend: stood instead
+    flat = m.tile_points.copy()
+    flat[:, 2] = np.abs(flat[:, 2])
+    mf = dataclasses.replace(m, tile_points=flat)
+    _, left, _ = rooted_elements(shell, mf, X, c.label, fl, depth=tiles.depth * below)
+    assert left.tolist() == fl.tolist()
+    X0 = X.copy()
+    PV, PF, stood, left = stood_elements(shell, mf, X, c.label, fl, depth=tiles.depth * below)
+    assert left.size == 0 and stood.tolist() == fl.tolist()
+    assert np.array_equal(X, X0)                      # the elements keep their place
+    n_el = int(c.label.max()) + 1
+    _, post = face_components(PF, len(PV))
+    assert int(post.max()) + 1 == stood.size
+    for p in range(stood.size):                       # every post a closed, outward solid
+        Fp = PF[post == p]
+        assert np.all(edge_topology(Fp, len(PV)).face_count == 2)
+        assert signed_volume(PV, Fp) > 0
+    # each post crosses its own element and no other; the pair no longer floats
+    XX, GG = concatenated([(X, m.faces), (PV, PF)])
+    part = np.concatenate([c.label, n_el + post])
+    pairs = self_intersecting_pairs(XX, GG, parts=part)
+    a, b = part[pairs[:, 0]], part[pairs[:, 1]]
+    met = {(int(min(x, y)), int(max(x, y))) for x, y in zip(a, b) if x != y and max(x, y) >= n_el}
+    assert met == {(int(e), n_el + i) for i, e in enumerate(stood)}
+    touching = np.array(sorted(met), dtype=np.int64)
+    assert floating_elements(V0, F0, XX, GG, label=part, touching=touching).size == 0
 
 
 @pytest.mark.slow

@@ -41,7 +41,7 @@ from geotex.mesh.topology import compacted, concatenated, edge_topology
 from geotex.shells.locate import interpolated
 
 __all__ = ["floating_elements", "lowered_elements", "rooted_elements", "propped_elements",
-           "smoothed_folds", "ROOT_STEPS",
+           "stood_elements", "smoothed_folds", "ROOT_STEPS", "STAND_RADIUS", "STAND_FLAT",
            "remapped_folds", "LOWER_STEPS", "POST_SIDES", "REMAP_RADII",
            "REMAP_HEIGHTS", "REMAP_REACH"]
 
@@ -65,6 +65,15 @@ ROOT_STEPS = (1.0, 1.5, 2.5)
 
 #: Sides of the prism :func:`propped_elements` stands an element on.
 POST_SIDES = 8
+
+#: Radius of the post :func:`stood_elements` stands a shaped element on, over
+#: the spread of the element's points across its offset direction.
+STAND_RADIUS = 0.15
+
+#: Flattest element :func:`stood_elements` stands: least over largest singular
+#: value of its centred points (Blub's squashed scales 0.003-0.02, whole
+#: scales 0.1-0.3; posts under the squashed ones left needles in the union).
+STAND_FLAT = 0.05
 
 
 def _element_boxes(X, G, label, n_el):
@@ -344,6 +353,40 @@ def lowered_elements(shell, mapped, label: np.ndarray, elements, *, scale: float
     return X, np.asarray(left, dtype=np.int64)
 
 
+def _root_reach(shell, mapped, X: np.ndarray, verts, depth: float
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Mean offset direction of each element and how far its lowest point is from ``depth``.
+
+    ``verts`` lists the vertices of every element. Returns ``d`` (``(k, 3)``,
+    unit: the shell's offset directions at its tile points, averaged), the
+    stretch along ``d`` that brings its lowest tile point ``depth`` below the
+    base, ``(dist + depth) / max(d . n, 0.25)`` (``dist`` and ``n`` the
+    distance to the base and its normal there), and that point's tile ``w``.
+    """
+    pc = shell.polycube
+    V0, F0 = shell.base_vertices, shell.base_faces
+    k = len(verts)
+    allv = np.concatenate(verts)
+    el = np.repeat(np.arange(k), [v.size for v in verts])
+    w = mapped.tile_points[allv, 2]
+    # every element's mean offset direction, at its tile points
+    face, bary = pc.locate(mapped.quads[allv], mapped.tile_points[allv, :2])
+    D = interpolated(shell.D, pc.F, face, bary)
+    D /= np.maximum(np.linalg.norm(D, axis=1, keepdims=True), 1e-300)
+    d = np.stack([np.bincount(el, weights=D[:, i], minlength=k) for i in range(3)], 1)
+    d /= np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-300)
+    # each element's lowest tile point: its distance to the base and the normal there
+    low = np.lexsort((w, el))
+    first = np.r_[0, np.cumsum([v.size for v in verts])[:-1]]
+    bottom = allv[low[first]]
+    wmin = mapped.tile_points[bottom, 2]
+    sq, fi, _ = igl.point_mesh_squared_distance(X[bottom], V0, F0)
+    n = np.cross(V0[F0[fi, 1]] - V0[F0[fi, 0]], V0[F0[fi, 2]] - V0[F0[fi, 0]])
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+    reach = (np.sqrt(sq) + float(depth)) / np.maximum((d * n).sum(axis=1), 0.25)
+    return d, reach, wmin
+
+
 def rooted_elements(shell, mapped, X: np.ndarray, label: np.ndarray, elements, *,
                     depth: float, steps=ROOT_STEPS
                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -397,30 +440,12 @@ def rooted_elements(shell, mapped, X: np.ndarray, label: np.ndarray, elements, *
     todo = np.unique(np.asarray(elements, dtype=np.int64))
     if todo.size == 0:
         return X, todo, np.zeros((0, 2), dtype=np.int64)
-    pc = shell.polycube
     V0, F0 = shell.base_vertices, shell.base_faces
     boxes = _seating_boxes(shell, X, G, label)
     lo, hi, _, _, order, starts = boxes
     rows = [order[starts[e]:starts[e + 1]] for e in todo]
     verts = [np.unique(G[r]) for r in rows]
-    allv = np.concatenate(verts)
-    el = np.repeat(np.arange(todo.size), [v.size for v in verts])
-    w = mapped.tile_points[allv, 2]
-    # every element's mean offset direction, at its tile points
-    face, bary = pc.locate(mapped.quads[allv], mapped.tile_points[allv, :2])
-    D = interpolated(shell.D, pc.F, face, bary)
-    D /= np.maximum(np.linalg.norm(D, axis=1, keepdims=True), 1e-300)
-    d = np.stack([np.bincount(el, weights=D[:, i], minlength=todo.size) for i in range(3)], 1)
-    d /= np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-300)
-    # each element's lowest tile point: its distance to the base and the normal there
-    low = np.lexsort((w, el))
-    first = np.r_[0, np.cumsum([v.size for v in verts])[:-1]]
-    bottom = allv[low[first]]
-    wmin = mapped.tile_points[bottom, 2]
-    sq, fi, _ = igl.point_mesh_squared_distance(X[bottom], V0, F0)
-    n = np.cross(V0[F0[fi, 1]] - V0[F0[fi, 0]], V0[F0[fi, 2]] - V0[F0[fi, 0]])
-    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
-    reach = (np.sqrt(sq) + float(depth)) / np.maximum((d * n).sum(axis=1), 0.25)
+    d, reach, wmin = _root_reach(shell, mapped, X, verts, depth)
     left, pairs = [], []
     for j, e in enumerate(todo):
         v = verts[j]
@@ -653,6 +678,125 @@ def propped_elements(shell, mapped, X: np.ndarray, label: np.ndarray, elements, 
     if not PV:
         return (np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64),
                 np.zeros(0, dtype=np.int64), np.asarray(left, dtype=np.int64))
+    return (np.vstack(PV), np.vstack(PF), np.asarray(propped, dtype=np.int64),
+            np.asarray(left, dtype=np.int64))
+
+
+def stood_elements(shell, mapped, X: np.ndarray, label: np.ndarray, elements, *,
+                   depth: float, steps=ROOT_STEPS, radius: float = STAND_RADIUS,
+                   flat: float = STAND_FLAT, sides: int = POST_SIDES, candidates: int = 6
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Stand floating shaped elements on the base with a post along their offset direction.
+
+    For a shaped element (a scale, a stud) that no longer root seats
+    (:func:`rooted_elements`: its stretched root crosses its own faces, as
+    a thin or shrunk scale's does where it sits well above the base), a
+    prism of ``sides`` sides is stood under it in space, its axis along the
+    element's mean offset direction ``d``: from the mean height along ``d``
+    of the element's points about the axis (inside the element) down past
+    its lowest point by the stretch that brings that ``depth`` below the base
+    (as :func:`rooted_elements` estimates it) times each of ``steps``. Its
+    radius is ``radius`` times the spread of the element's points across
+    ``d``. The axis is tried through the element's centre across ``d``, then
+    half way from there to each of its lowest points (up to ``candidates``
+    in all); a post is kept if it crosses the base and its own element and
+    no other element (exact tests). The element keeps its shape and place.
+    An element flatter than ``flat`` (its smallest principal spread over its
+    largest: a scale the map squashed to a sheet) gets no post.
+
+    Parameters
+    ----------
+    shell : Shell
+    mapped : MappedTiles
+        Tile points and quads of every vertex (``mapped.vertices`` is not used).
+    X : numpy.ndarray, (N, 3) float64
+        Current positions of the mapped vertices.
+    label : numpy.ndarray, (M,) int64
+        Element of every face of ``mapped.faces``.
+    elements : array_like of int
+        Floating elements.
+    depth : float
+        World depth below the base the post reaches (as in
+        :func:`rooted_elements`).
+    steps : sequence of float
+        Multiples of the estimated stretch tried for the post's length.
+    radius : float
+        Post radius over the spread of the element's points across ``d``.
+    flat : float
+        Smallest ratio of the element's least to its largest singular value
+        (of its centred points) that gets a post.
+    sides : int
+        Sides of every post.
+    candidates : int
+        Axes tried per element.
+
+    Returns
+    -------
+    posts_vertices : numpy.ndarray, (a, 3) float64
+    posts_faces : numpy.ndarray, (b, 3) int64
+        The posts, each a closed solid (vertex numbers from 0).
+    propped : numpy.ndarray, (p,) int64
+        The element every post stands, in post order.
+    still_floating : numpy.ndarray, (k,) int64
+    """
+    G = mapped.faces
+    todo = np.unique(np.asarray(elements, dtype=np.int64))
+    none = (np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64), np.zeros(0, dtype=np.int64))
+    if todo.size == 0:
+        return none + (todo,)
+    V0, F0 = shell.base_vertices, shell.base_faces
+    boxes = _seating_boxes(shell, X, G, label)
+    _, _, _, _, order, starts = boxes
+    rows = [order[starts[e]:starts[e + 1]] for e in todo]
+    verts = [np.unique(G[r]) for r in rows]
+    d, reach, _ = _root_reach(shell, mapped, X, verts, depth)
+    PV, PF, propped, left = [], [], [], []
+    n_post = 0
+    for j, e in enumerate(todo):
+        P = X[verts[j]]
+        # a frame (e1, e2, d) about the element's centre
+        e1 = np.cross(d[j], np.eye(3)[int(np.argmin(np.abs(d[j])))])
+        e1 /= np.linalg.norm(e1)
+        frame = np.stack([e1, np.cross(d[j], e1), d[j]])
+        o = P.mean(axis=0)
+        sv = np.linalg.svd(P - o, compute_uv=False)
+        if not sv[2] >= float(flat) * sv[0]:
+            # a sheet (a scale the map squashed flat): a post's top inside it
+            # lies in near-coincident faces, which the union turns into needles
+            left.append(e)
+            continue
+        L = (P - o) @ frame.T
+        r = float(radius) * float(np.sqrt((L[:, :2] ** 2).sum(axis=1).mean()))
+        lowest = np.argsort(L[:, 2], kind="stable")[:max(int(candidates) - 1, 0)]
+        axes = np.vstack([np.zeros((1, 2)), 0.5 * L[lowest, :2]])
+        done = False
+        for c in axes:
+            about = ((L[:, :2] - c) ** 2).sum(axis=1) <= (2.0 * r) ** 2
+            if not r > 0 or not about.any():
+                continue
+            top = float(L[about, 2].mean())
+            for s in steps:
+                bottom = float(L[:, 2].min()) - float(s) * float(reach[j])
+                Pp, Fp = _post(c, r, top, bottom, sides, 4)
+                Xp = o + Pp @ frame
+                met, folded = _crossings_near(Xp, Fp, e, X, G, boxes, V0, F0)
+                if folded or not (met.size == 1 and met[0] == 1):
+                    continue
+                own, _ = _crossing_parts([(Xp, Fp), (X, G[rows[j]])], 0)
+                if own.size == 0:
+                    continue
+                PV.append(Xp)
+                PF.append(Fp + n_post)
+                n_post += len(Xp)
+                propped.append(e)
+                done = True
+                break
+            if done:
+                break
+        if not done:
+            left.append(e)
+    if not PV:
+        return none + (np.asarray(left, dtype=np.int64),)
     return (np.vstack(PV), np.vstack(PF), np.asarray(propped, dtype=np.int64),
             np.asarray(left, dtype=np.int64))
 

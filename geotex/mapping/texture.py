@@ -22,7 +22,8 @@ from geotex.errors import GeotexError, InputError
 from geotex.mapping.assign import edge_colors, tiles_for_quads
 from geotex.mapping.place import MappedTiles, depth_scale, mapped_tiles, reseated_elements
 from geotex.mapping.seat import (floating_elements, lowered_elements, propped_elements,
-                                 remapped_folds, rooted_elements, smoothed_folds)
+                                 remapped_folds, rooted_elements, smoothed_folds,
+                                 stood_elements)
 from geotex.mapping.shape import map_jacobian
 from geotex.mapping.union import (UNION_METHODS, UNION_STAGES, ElementContacts,
                                   element_contacts, united_with_base)
@@ -81,7 +82,8 @@ class TextureStats:
     elements_lowered, elements_propped : int
         Floating elements lowered onto the base (strands, rings) or whose
         roots were extended into it (shaped elements), or stood on it with a post
-        (:mod:`~geotex.mapping.seat`).
+        (strands and rings on a post in the tile frame, shaped elements on one
+        along their offset direction; :mod:`~geotex.mapping.seat`).
     cavities_filled : int
         Closed voids between elements and the base that the union's result
         enclosed, filled (not counted as floating elements).
@@ -365,9 +367,10 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
     # the union into many operands
     contacts = contacts._replace(folded=np.union1d(moved, still))
     # elements that would float are lowered onto the base, or stood on it
-    # (strands, rings), or their roots are extended into it (shaped elements
-    # keep their shape above the surface). A moved element's contacts found
-    # before the move no longer hold: it is not held up by them
+    # (strands, rings), or their roots are extended into it or they are stood
+    # on a post along their offset direction (shaped elements keep their
+    # shape above the surface). A moved element's contacts found before the
+    # move no longer hold: it is not held up by them
     n_el = int(contacts.label.max()) + 1 if contacts.label.size else 0
     usable = np.ones(n_el, dtype=bool)
     usable[still] = False
@@ -385,10 +388,16 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
             touching = np.unique(np.vstack([contacts.touching, met]), axis=0)
             contacts = contacts._replace(touching=touching)
     lowered = np.setdiff1d(floating, unseated)
-    # (shaped elements are not stood on posts: one no root seats is left out)
-    PV, PF, propped, _ = propped_elements(shell, mapped, X, contacts.label,
-                                          unseated if reseat else unseated[:0],
-                                          scale=scale, depth_scale=below, depth=tiles.depth)
+    if reseat:
+        PV, PF, propped, _ = propped_elements(shell, mapped, X, contacts.label, unseated,
+                                              scale=scale, depth_scale=below, depth=tiles.depth)
+    else:
+        # a shaped element no root seats (its stretched root crosses itself:
+        # 9 of Blub's 22 floating scales, thin or shrunk ones in its concave
+        # creases) is stood on a post along its offset direction, keeping its
+        # shape and place
+        PV, PF, propped, _ = stood_elements(shell, mapped, X, contacts.label, unseated,
+                                            depth=tiles.depth * below)
     # (lowered elements and posts were kept only where they cross nothing else)
     mapped = dataclasses.replace(mapped, vertices=X)
     G = mapped.faces
