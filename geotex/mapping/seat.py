@@ -851,7 +851,9 @@ def remapped_folds(shell, mapped, X: np.ndarray, label: np.ndarray, folded, *, s
     reach into the next quads, which the moves within its quad left where
     they were. A folded element that crosses nothing of its own when its
     turn comes, because a kept move of an earlier one moved its points
-    (elements folded in the same quad), counts as laid back.
+    (elements folded in the same quad), counts as laid back; so does one
+    whose tries failed but which a later one's kept move carried along
+    until its own faces cross nothing.
 
     Parameters
     ----------
@@ -895,7 +897,7 @@ def remapped_folds(shell, mapped, X: np.ndarray, label: np.ndarray, folded, *, s
                      uvw_all[:, 2] * float(scale))
     fbox = list(_face_boxes(X, G))
     trials = [(float(r), 1.0) for r in radii] + [(float(radii[-1]), float(f)) for f in heights]
-    left = []
+    left, crossed = [], []
     for e in todo:
         faces = G[order[starts[e]:starts[e + 1]]]
         verts, local = np.unique(faces, return_inverse=True)
@@ -969,4 +971,12 @@ def remapped_folds(shell, mapped, X: np.ndarray, label: np.ndarray, folded, *, s
                 break
         if not done:
             left.append(e)
+            crossed.append(e)
+    # a folded element no try laid back may have been laid back with a later
+    # one's neighbours (every point of the quads moves, each move clean by the
+    # exact test): a weave loop on Blub
+    if crossed:
+        again = {e for e in crossed
+                 if _own_crossings(*compacted(X, G[order[starts[e]:starts[e + 1]]])).size == 0}
+        left = [e for e in left if e not in again]
     return X, np.asarray(left, dtype=np.int64)
