@@ -45,6 +45,26 @@ def shared_tileset(tmp_path_factory):
     return get
 
 
+@pytest.fixture(scope="module")
+def studs(shared_tileset):
+    """A complete one-colour studs set (6 tiles), built once per test run."""
+    from geotex.exemplars import exemplar
+    from geotex.tiles import build_tileset
+
+    return shared_tileset("studs-res6-1-seed0-paste", lambda: build_tileset(
+        exemplar("studs", seed=1, resolution=6), colors=1, seed=0, interior="paste"))
+
+
+@pytest.fixture(scope="module")
+def torus_shell():
+    """Shell of a thin-ish torus on a coarse grid (tile 0.4): its voxel staircases
+    make the quads rectangles and rhombi (mean conformal ratio well above 1)."""
+    from geotex.shells import build_shell
+
+    V, F = torus(1.0, 0.4, n_major=48, n_minor=24)
+    return build_shell(V, F, tile_size=0.4, name="torus")
+
+
 @pytest.fixture
 def tet():
     V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=np.float64)

@@ -23,23 +23,10 @@ from geotex.tiles import build_tileset, save_tileset
 
 
 @pytest.fixture(scope="module")
-def studs(shared_tileset):
-    """A complete one-colour set (6 tiles)."""
-    return shared_tileset("studs-res6-1-seed0-paste", lambda: build_tileset(
-        exemplar("studs", seed=1, resolution=6), colors=1, seed=0, interior="paste"))
-
-
-@pytest.fixture(scope="module")
 def iso_studs():
     """An isotropic two-colour set (16 tiles)."""
     return build_tileset(exemplar("studs", seed=1, resolution=6), colors=2, isotropic=True, seed=0,
                          interior="paste")
-
-
-@pytest.fixture(scope="module")
-def torus_shell():
-    V, F = torus(1.0, 0.4, n_major=48, n_minor=24)
-    return build_shell(V, F, tile_size=0.4, name="torus")
 
 
 def test_flat_tile_on_flat_quad_is_the_identity_up_to_scale(studs):

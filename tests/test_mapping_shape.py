@@ -8,31 +8,14 @@ import numpy as np
 import pytest
 
 from geotex.errors import InputError
-from geotex.exemplars import exemplar
 from geotex.mapping import edge_colors, mapped_tiles, textured_solid, tiles_for_quads
 from geotex.mapping.shape import (SPREAD, element_directions, element_footprints,
                                   shaped_positions, spread_centres)
 from geotex.mapping.union import element_contacts
-from geotex.mesh.primitives import box, torus
+from geotex.mesh.primitives import box
 from geotex.mesh.topology import face_components
-from geotex.shells import build_shell
 from geotex.shells.locate import interpolated
-from geotex.tiles import build_tileset
 from geotex.tiles.tiling import planar_tiling, random_arrangement
-
-
-@pytest.fixture(scope="module")
-def studs(shared_tileset):
-    return shared_tileset("studs-res6-1-seed0-paste", lambda: build_tileset(
-        exemplar("studs", seed=1, resolution=6), colors=1, seed=0, interior="paste"))
-
-
-@pytest.fixture(scope="module")
-def torus_shell():
-    # a thin-ish torus on a coarse grid: its voxel staircases make the quads
-    # rectangles and rhombi (mean conformal ratio well above 1)
-    V, F = torus(1.0, 0.4, n_major=48, n_minor=24)
-    return build_shell(V, F, tile_size=0.4, name="torus")
 
 
 def test_footprints_of_known_shapes():

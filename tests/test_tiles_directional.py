@@ -10,7 +10,6 @@ import pytest
 from geotex.errors import InputError
 from geotex.exemplars import exemplar
 from geotex.mapping import edge_colors, tiles_for_quads
-from geotex.mesh.primitives import torus
 from geotex.shells import build_shell, quad_points_to_shell
 from geotex.tiles import build_tileset, check_seams, load_tileset, save_tileset
 from geotex.tiles.colors import COMPLETE_GROUPS, SOUTH, EAST, NORTH, WEST
@@ -32,12 +31,6 @@ def _small_scales():
 def base():
     return build_tileset(_small_scales(), colors=1, directional=True, seed=0,
                          interior="paste", name="scales-test")
-
-
-@pytest.fixture(scope="module")
-def torus_shell():
-    V, F = torus(1.0, 0.4, n_major=48, n_minor=24)
-    return build_shell(V, F, tile_size=0.4, name="torus")
 
 
 @pytest.mark.parametrize("up", [0, 1, 2])

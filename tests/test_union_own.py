@@ -9,16 +9,13 @@ import pytest
 import geotex.mapping.union as union_module
 from geotex.check import check_mesh
 from geotex.errors import InputError
-from geotex.exemplars import exemplar
 from geotex.mapping import textured_solid
 from geotex.mapping.crossing import CrossingUnion
 from geotex.mapping.union import (OWN_ELEMENTS_PER_BASE_FACE, OWN_SHARE, element_contacts,
                                   united_with_base)
-from geotex.mesh.primitives import box, icosphere, torus
+from geotex.mesh.primitives import box, icosphere
 from geotex.mesh.solid import manifold_of
 from geotex.mesh.topology import concatenated
-from geotex.shells import build_shell
-from geotex.tiles import build_tileset
 
 
 def _spheres(centres, z):
@@ -99,18 +96,6 @@ def test_bad_union_is_refused():
     _, (X, G) = _spheres(CENTRES[:1], 1.0123)
     with pytest.raises(InputError, match="union"):
         united_with_base(V, F, X, G, union="fast")
-
-
-@pytest.fixture(scope="module")
-def studs(shared_tileset):
-    return shared_tileset("studs-res6-1-seed0-paste", lambda: build_tileset(
-        exemplar("studs", seed=1, resolution=6), colors=1, seed=0, interior="paste"))
-
-
-@pytest.fixture(scope="module")
-def torus_shell():
-    V, F = torus(1.0, 0.4, n_major=48, n_minor=24)
-    return build_shell(V, F, tile_size=0.4, name="torus")
 
 
 def test_main_job_reports_its_union_and_the_check_guards_the_own_one(torus_shell, studs,
