@@ -58,6 +58,8 @@ ALLOWED_IN_FILE: dict[tuple[str, str], str] = {
         "module-level __getattr__ protocol (lazy catalog names)",
     ("geotex/displace/__init__.py", "AttributeError"):
         "module-level __getattr__ protocol (names imported on first use)",
+    ("geotex/shells/__init__.py", "AttributeError"):
+        "module-level __getattr__ protocol (names imported on first use)",
     ("geotex/check/slicers.py", "ValueError"):
         "pending: geotex/check is being reworked; the parsers' ValueError on unreadable "
         "slicer output is caught in the same module and becomes an ExternalToolError",
@@ -89,6 +91,22 @@ ALLOWED_LAZY_IMPORTS: dict[tuple[str, str], str] = {
         "module __getattr__: imported on first use (as geotex.displace.api)",
     ("geotex/displace/__init__.py", "geotex.displace.masks"):
         "module __getattr__: imported on first use (as geotex.displace.api)",
+    ("geotex/shells/__init__.py", "geotex.shells.build"):
+        "module __getattr__: `geotex map` names a missing shell file (geotex.shells.catalog) "
+        "before the polycube machinery (~0.3 s CPU) is imported on first use",
+    ("geotex/shells/__init__.py", "geotex.shells.catalog"):
+        "module __getattr__: imported on first use (as geotex.shells.build)",
+    ("geotex/shells/__init__.py", "geotex.shells.store"):
+        "module __getattr__: imported on first use (as geotex.shells.build)",
+    ("geotex/shells/__init__.py", "geotex.shells.locate"):
+        "module __getattr__: imported on first use (as geotex.shells.build)",
+    ("geotex/shells/__init__.py", "geotex.shells.scale"):
+        "module __getattr__: imported on first use (as geotex.shells.build)",
+    ("geotex/shells/catalog.py", "geotex.shells.build"):
+        "only rebuilding a catalog shell builds one; naming a shell file does not",
+    ("geotex/shells/catalog.py", "geotex.shells.store"):
+        "reading a shell file loads the polycube records; naming one (`geotex map`'s "
+        "argument check) does not",
     ("geotex/heighttilt/refine.py", "geotex.mesh.meshlab"):
         "imports pymeshlab (~0.2 s), needed only when a base is remeshed",
     ("geotex/tiles/__init__.py", "geotex.tiles.catalog"):
@@ -469,6 +487,28 @@ def test_parser_leaves_the_displacement_machinery_out():
     assert mappings.MAPPINGS is choices.MAPPINGS and masks.CURVES is choices.CURVES
     with pytest.raises(AttributeError):
         gd.no_such_name
+
+
+def test_map_names_a_missing_shell_before_the_polycube_machinery_loads(tmp_path):
+    """``geotex map --shell NAME`` with no such shell fails (exit 2, one line) without
+    importing the polycube stack; ``geotex.shells`` still gives every public name."""
+    code = ("import sys, geotex.cli\n"
+            "print('exit', geotex.cli.main(['map', '--tiles', 'studs', '--shell', "
+            f"'no-such-shell', '-o', {str(tmp_path / 'out.stl')!r}]))\n"
+            "print(sorted(m for m in ('geotex.param.polycube', 'geotex.shells.build') "
+            "if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, cwd=PACKAGE_DIR.parent)
+    assert "no-such-shell: no such shell file" in out.stderr
+    assert len(out.stderr.strip().splitlines()) == 1
+    assert out.stdout.split()[-1] == "[]", f"loaded before the error: {out.stdout}"
+    assert out.stdout.startswith("exit 2\n")
+    assert not (tmp_path / "out.stl").exists()
+    import geotex.shells as gs
+
+    assert all(getattr(gs, name) is not None for name in gs.__all__)
+    with pytest.raises(AttributeError):
+        gs.no_such_name
 
 
 #: Modules that using a catalog tile set over a shell (the main job's imports) may not load:

@@ -185,16 +185,17 @@ def _finish(args, shell, tiles, out, extra, *, label: str, seconds=None) -> int:
 def run_map(args) -> int:
     import numpy as np
 
-    from geotex.shells import bare_warning, load_named as load_shell, shell_path
+    from geotex.shells import shell_path
     from geotex.tiles.catalog import load_named as load_tiles, tileset_path
 
+    # the files are named before the polycube machinery loads (geotex.shells' other names)
     tiles_file, shell_file = tileset_path(args.tiles), shell_path(args.shell)
     out, extra = _check_outputs(args, tiles_file, shell_file)
     preload_compiled(three_mf=out.suffix.lower() == ".3mf")      # (the inputs are .npz)
+    from geotex.shells import bare_warning, load_named as load_shell, scaled_shell
+
     tiles, shell = load_tiles(args.tiles), load_shell(args.shell)
     if args.size_mm is not None:
-        from geotex.shells import scaled_shell
-
         shell = scaled_shell(shell, args.size_mm / float(np.ptp(shell.base_vertices,
                                                                  axis=0).max()))
     warning = bare_warning(shell, "rebuild the shell with smaller tiles ('geotex shell build "

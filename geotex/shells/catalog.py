@@ -17,8 +17,6 @@ from geotex.data import sample_path
 from geotex.errors import InputError, MissingFileError
 from geotex.io import read_mesh
 from geotex.mesh.primitives import torus
-from geotex.shells.build import build_shell
-from geotex.shells.store import load_shell, save_shell, shell_file_metadata
 
 __all__ = ["CATALOG_DIR", "recipes", "shell_path", "list_shells", "load_named", "rebuild",
            "source_mesh"]
@@ -31,11 +29,15 @@ shell_path = CATALOG.path
 
 def load_named(name_or_path):
     """Load a shell by catalog name or path."""
+    from geotex.shells.store import load_shell
+
     return load_shell(shell_path(name_or_path))
 
 
 def list_shells() -> list[dict]:
     """Catalog entries with the metadata stored in each shell file."""
+    from geotex.shells.store import shell_file_metadata
+
     out = CATALOG.entries()
     for entry in out:
         if entry["bytes"]:
@@ -77,6 +79,9 @@ def rebuild(name: str, path=None, *, progress=None):
     -------
     Shell
     """
+    from geotex.shells.build import build_shell
+    from geotex.shells.store import save_shell
+
     r = CATALOG.recipe(name)
     V, F = source_mesh(r)
     shell = build_shell(V, F, tile_size=r["tile_size"], name=name, source=r["source"],
