@@ -241,28 +241,35 @@ def test_cli_automatic_tile_size_and_too_large_error(tmp_path, capsys):
 
 
 def test_offset_pairs_searched_again_only_where_directions_moved(torus_shell, monkeypatch):
-    """The incremental search of the pinch test gives the full search's answer."""
+    """The incremental search of the pinch test gives the full search's answer,
+    normalised by one box (the surface's grown by the height) whatever the
+    directions, so that turned directions at the box's extremes keep it."""
     import geotex.shells.build as build
 
     s = torus_shell
     Y, F = s.polycube.Y, s.polycube.F
     n = Y.shape[0]
     h = 3.0 * s.max_height                        # tall enough to cross somewhere
+    box = np.stack([Y[F].reshape(-1, 3).min(axis=0) - h, Y[F].reshape(-1, 3).max(axis=0) + h])
 
-    def full(D, h):
+    def full(D, h, box=box):
         return self_intersecting_pairs(np.vstack([Y, Y + h * D]),
-                                       np.vstack([F, F[:, ::-1] + n]))
+                                       np.vstack([F, F[:, ::-1] + n]), box=box)
 
     calls = []
     touching = build.self_intersecting_pairs_touching
     monkeypatch.setattr(build, "self_intersecting_pairs_touching",
-                        lambda *a: calls.append(a[2].size) or touching(*a))
+                        lambda *a, **k: calls.append(a[2].size) or touching(*a, **k))
     first = build._offset_pairs(Y, F, s.D, h)
-    assert first[1].shape[0] > 0
-    # some interior directions turned: the kept pairs plus a local search
+    assert first[1].shape[0] > 0 and np.array_equal(first[2], box)
+    np.testing.assert_array_equal(first[1], full(s.D, h))
+    # some directions turned, one of them at the surface's largest x (a box
+    # of the stacked mesh alone could move): the kept pairs plus a local search
     D = s.D.copy()
     rows = np.random.default_rng(3).choice(n, 40, replace=False)
+    rows[0] = int(np.argmax(Y[:, 0]))
     D[rows] = np.roll(D[rows], 1, axis=1)
+    D[rows[0]] = [1.0, 0.0, 0.0]
     again = build._offset_pairs(Y, F, D, h, first)
     assert len(calls) == 1 and 0 < calls[0] < F.shape[0]
     expected = full(D, h)
@@ -270,13 +277,13 @@ def test_offset_pairs_searched_again_only_where_directions_moved(torus_shell, mo
     np.testing.assert_array_equal(again[1], expected)
     # nothing moved: the previous answer as it is
     np.testing.assert_array_equal(build._offset_pairs(Y, F, D, h, again)[1], expected)
-    # a direction that grows the box of the mesh: the full search again
+    # a longer direction takes the offset out of the box: the full search, by the
+    # larger box
     far = D.copy()
-    far[int(np.argmax(Y[:, 0]))] = [1.0, 0.0, 0.0]
-    assert not np.array_equal(far, D)
+    far[rows[0]] = [2.0, 0.0, 0.0]
     grown = build._offset_pairs(Y, F, far, h, again)
-    assert len(calls) == 1
-    np.testing.assert_array_equal(grown[1], full(far, h))
+    assert len(calls) == 1 and grown[2][1, 0] > box[1, 0]
+    np.testing.assert_array_equal(grown[1], full(far, h, grown[2]))
 
 
 def test_bare_warning_on_the_catalog_blub_names_the_flag():
@@ -296,3 +303,4 @@ def test_bare_warning_on_the_catalog_blub_names_the_flag():
     assert spot.polycube.diagnostics.coverage["bare"] == 0.0
     assert bare_warning(spot, "use a smaller --tile-size") is None
     assert bare_warning(load_named("torus"), "use a smaller --tile-size") is None
+
