@@ -304,3 +304,43 @@ def test_bare_warning_on_the_catalog_blub_names_the_flag():
     assert bare_warning(spot, "use a smaller --tile-size") is None
     assert bare_warning(load_named("torus"), "use a smaller --tile-size") is None
 
+
+def _crossing_above(L):
+    """A square at z = 0 and a small tilted triangle above it spanning z = L +- 0.005,
+    both offset straight up, and a triangle whose offset flips from height 0.9."""
+    a = 0.9 / np.sqrt(2)
+    V = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0],
+                  [0.4, 0.4, L - 0.005], [0.6, 0.4, L - 0.005], [0.5, 0.6, L + 0.005],
+                  [5 - a, 0, 0], [5 + a, 0, 0], [5, 1, 0]], dtype=np.float64)
+    F = np.array([[0, 1, 2], [0, 2, 3], [4, 5, 6], [7, 8, 9]], dtype=np.int64)
+    D = np.tile([0.0, 0.0, 1.0], (10, 1))
+    D[7], D[8] = [np.sqrt(0.5), 0, np.sqrt(0.5)], [-np.sqrt(0.5), 0, np.sqrt(0.5)]
+    return V, F, D
+
+
+def test_safe_height_is_the_whole_surface_bisection_when_the_shrinking_one_misses(monkeypatch):
+    """The shrinking bisection follows the flipping triangle alone and ends at a
+    height where the square's offset crosses the small triangle: the bisection
+    is redone on the whole surface, to the same height as a whole-surface
+    bisection from the start, without testing that height twice."""
+    import geotex.shells.build as build
+    from geotex.mesh.geometry import face_cross
+
+    tested = []
+    defects = build._offset_defects
+
+    def recorded(V, F, D, h, normals, *, first=False):
+        tested.append((F.shape[0], h))
+        return defects(V, F, D, h, normals, first=first)
+
+    monkeypatch.setattr(build, "_offset_defects", recorded)
+    V, F, D = _crossing_above(0.5)                # no crossing near the end
+    lo = build.max_offset_height(V, F, D, steps=6, upper=1.0)
+    assert lo == 0.890625 and [t[0] for t in tested] == [4, 1, 1, 1, 1, 1, 1, 4]
+    V, F, D = _crossing_above(lo)                 # now the square's offset crosses there
+    tested.clear()
+    got = build.max_offset_height(V, F, D, steps=6, upper=1.0)
+    whole = [h for m, h in tested if m == 4]
+    assert len(whole) == len(set(whole)) == 7 and lo in whole
+    tested.clear()
+    assert got == build._bisected_height(V, F, D, face_cross(V, F), 1.0, 6) == 0.875

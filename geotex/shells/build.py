@@ -148,14 +148,16 @@ def _offset_defects(V, F, D, h, base_normals, *, first: bool = False) -> np.ndar
     return np.union1d(np.flatnonzero(flipped), pairs.ravel() % m)
 
 
-def _bisected_height(V, F, D, base_normals, hi: float, steps: int, *, shrink: bool = False
-                     ) -> float:
+def _bisected_height(V, F, D, base_normals, hi: float, steps: int, *, shrink: bool = False,
+                     fails: tuple = ()) -> float:
     """Bisection on ``[0, hi]`` (``hi`` fails); with ``shrink``, each failed step keeps
-    testing only the faces that failed there."""
+    testing only the faces that failed there. ``fails``: heights known to fail on
+    ``F`` (not tested again)."""
     lo = 0.0
     for _ in range(steps):
         mid = 0.5 * (lo + hi)
-        bad = _offset_defects(V, F, D, mid, base_normals, first=not shrink)
+        bad = (np.zeros(1, dtype=np.int64) if mid in fails else
+               _offset_defects(V, F, D, mid, base_normals, first=not shrink))
         if bad.size == 0:
             lo = mid
         else:
@@ -201,7 +203,7 @@ def max_offset_height(V: np.ndarray, F: np.ndarray, D: np.ndarray, *, steps: int
     lo = _bisected_height(V, F[bad], D, base_normals[bad], hi, steps, shrink=True)
     if lo == 0.0 or _offset_ok(V, F, D, lo, base_normals):
         return lo
-    return _bisected_height(V, F, D, base_normals, hi, steps)
+    return _bisected_height(V, F, D, base_normals, hi, steps, fails=(lo,))
 
 
 PINCH_PROBE = 0.125
