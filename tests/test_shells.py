@@ -240,11 +240,11 @@ def test_cli_automatic_tile_size_and_too_large_error(tmp_path, capsys):
     assert "--tile-size" in err and "genus 3" in err and "resolves it" in err
 
 
-def test_offset_pairs_searched_again_only_where_directions_moved(torus_shell, monkeypatch):
+def test_offset_surface_pairs_searched_again_only_where_directions_moved(torus_shell, monkeypatch):
     """The incremental search of the pinch test gives the full search's answer,
     normalised by one box (the surface's grown by the height) whatever the
     directions, so that turned directions at the box's extremes keep it."""
-    import geotex.shells.build as build
+    import geotex.check.intersections as gi
 
     s = torus_shell
     Y, F = s.polycube.Y, s.polycube.F
@@ -257,10 +257,10 @@ def test_offset_pairs_searched_again_only_where_directions_moved(torus_shell, mo
                                        np.vstack([F, F[:, ::-1] + n]), box=box)
 
     calls = []
-    touching = build.self_intersecting_pairs_touching
-    monkeypatch.setattr(build, "self_intersecting_pairs_touching",
+    touching = gi.self_intersecting_pairs_touching
+    monkeypatch.setattr(gi, "self_intersecting_pairs_touching",
                         lambda *a, **k: calls.append(a[2].size) or touching(*a, **k))
-    first = build._offset_pairs(Y, F, s.D, h)
+    first = gi.offset_surface_pairs(Y, F, s.D, h)
     assert first[1].shape[0] > 0 and np.array_equal(first[2], box)
     np.testing.assert_array_equal(first[1], full(s.D, h))
     # some directions turned, one of them at the surface's largest x (a box
@@ -270,18 +270,20 @@ def test_offset_pairs_searched_again_only_where_directions_moved(torus_shell, mo
     rows[0] = int(np.argmax(Y[:, 0]))
     D[rows] = np.roll(D[rows], 1, axis=1)
     D[rows[0]] = [1.0, 0.0, 0.0]
-    again = build._offset_pairs(Y, F, D, h, first)
+    again = gi.offset_surface_pairs(Y, F, D, h, previous=first)
     assert len(calls) == 1 and 0 < calls[0] < F.shape[0]
     expected = full(D, h)
     assert not np.array_equal(expected, first[1])          # the turn changed the answer
     np.testing.assert_array_equal(again[1], expected)
     # nothing moved: the previous answer as it is
-    np.testing.assert_array_equal(build._offset_pairs(Y, F, D, h, again)[1], expected)
+    same = gi.offset_surface_pairs(Y, F, D, h, previous=again)
+    assert len(calls) == 1
+    np.testing.assert_array_equal(same[1], expected)
     # a longer direction takes the offset out of the box: the full search, by the
     # larger box
     far = D.copy()
     far[rows[0]] = [2.0, 0.0, 0.0]
-    grown = build._offset_pairs(Y, F, far, h, again)
+    grown = gi.offset_surface_pairs(Y, F, far, h, previous=again)
     assert len(calls) == 1 and grown[2][1, 0] > box[1, 0]
     np.testing.assert_array_equal(grown[1], full(far, h, grown[2]))
 

@@ -78,7 +78,7 @@ from geotex.mesh.arrays import as_mesh_arrays
 from geotex.mesh.topology import edge_topology, has_twin_faces, unpaired_edge_vertices
 
 __all__ = ["self_intersecting_pairs", "self_intersecting_pairs_touching",
-           "self_intersecting_pairs_between", "REL_TOL", "ABS_TOL"]
+           "self_intersecting_pairs_between", "offset_surface_pairs", "REL_TOL", "ABS_TOL"]
 
 #: Tolerance of the geometric predicates relative to the local triangle size
 #: (the longest edge of the two triangles of a pair).
@@ -457,6 +457,78 @@ def self_intersecting_pairs_between(V, F, parts, *, side=None, within=None) -> n
         if pool is not None:
             pool.shutdown(wait=True, cancel_futures=True)
     return np.stack([keys // m, keys % m], axis=1)
+
+
+def offset_surface_pairs(Y, F, D, h, *, previous=None, box=None
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Intersecting face pairs of a surface ``(Y, F)`` together with its offset ``Y + h D``.
+
+    The stacked mesh is ``Y`` and ``Y + h D`` with the faces ``F`` and
+    ``F[:, ::-1] + len(Y)`` (the offset reversed); its pairs are those of
+    :func:`self_intersecting_pairs`, with coordinates normalised by one box
+    (``box``) that holds the offsets along all the directions a caller
+    tries, so that after some directions change only the pairs touching
+    the moved offset faces need a search.
+
+    Parameters
+    ----------
+    Y : numpy.ndarray, (n, 3) float64
+    F : numpy.ndarray, (m, 3) int64
+    D : numpy.ndarray, (n, 3) float64
+        Offset directions (unit, for the default ``box``).
+    h : float
+        Offset height.
+    previous : tuple, optional
+        The return value of an earlier call with the same ``Y`` and ``F`` and
+        other directions (or a surface with some vertices moved): when the box
+        is the same, only the pairs touching a face with a moved corner are
+        searched again (:func:`self_intersecting_pairs_touching`) and the
+        other pairs are kept, which is the same answer (a pair's predicates
+        see only its two faces, in coordinates normalised by that box).
+    box : array_like, (2, 3) float64, optional
+        Box to normalise by (default: the box of ``Y``'s vertices in ``F``
+        grown by ``h`` on every side, which holds their offsets along unit
+        directions); grown to the stacked mesh's box where that is larger.
+
+    Returns
+    -------
+    V : numpy.ndarray, (2 n, 3) float64
+        The stacked vertices.
+    pairs : numpy.ndarray, (k, 2) int64
+        ``self_intersecting_pairs(V, stacked faces, box=box)``: rows below
+        ``m`` are faces of ``(Y, F)``, the others offset faces (``m + f``).
+    box : numpy.ndarray, (2, 3) float64
+        The box the coordinates were normalised by.
+
+    Raises
+    ------
+    InputError
+        Malformed ``box``.
+    """
+    n = Y.shape[0]
+    V = np.vstack([Y, Y + h * D])
+    FF = np.vstack([F, F[:, ::-1] + n])
+    used = np.zeros(V.shape[0], dtype=bool)
+    used[FF.ravel()] = True
+    U = V[used]
+    if box is None:
+        Yu = Y[used[:n]]
+        box = np.stack([Yu.min(axis=0) - h, Yu.max(axis=0) + h])
+    box = _box_argument(box)
+    box = np.stack([np.minimum(box[0], U.min(axis=0)), np.maximum(box[1], U.max(axis=0))])
+    if previous is not None:
+        V0, pairs0, box0 = previous
+        moved = (V != V0).any(axis=1) & used
+        if not moved.any() and np.array_equal(box, box0):
+            return V, pairs0, box0
+        if np.array_equal(box, box0):
+            changed = moved[FF].any(axis=1)
+            keep = pairs0[~(changed[pairs0[:, 0]] | changed[pairs0[:, 1]])]
+            new = self_intersecting_pairs_touching(V, FF, np.flatnonzero(changed), box=box)
+            pairs = np.concatenate([keep, new])
+            pairs = pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
+            return V, pairs, box
+    return V, self_intersecting_pairs(V, FF, box=box), box
 
 
 def _faces_near(Vn, F, sel):

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from geotex.check.intersections import self_intersecting_pairs, self_intersecting_pairs_touching
+from geotex.check.intersections import offset_surface_pairs, self_intersecting_pairs
 from geotex.errors import InputError
 from geotex.mesh.arrays import as_mesh_arrays
 from geotex.mesh.geometry import face_cross, vertex_normals
@@ -210,55 +210,17 @@ PINCH_PROBE = 0.125
 """Height, in tiles, that every textured quad's offset must reach (see :func:`build_shell`)."""
 
 
-def _offset_pairs(Y, F, D, h, previous=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Intersecting face pairs of ``(Y, F)`` together with its offset ``Y + h D``.
-
-    The offset faces are ``F[:, ::-1] + len(Y)`` (reversed). Returns the stacked
-    vertices, :func:`~geotex.check.intersections.self_intersecting_pairs` of
-    the stacked mesh and the box its coordinates were normalised by: the box
-    of ``Y``'s vertices in ``F`` grown by ``h`` on every side (which holds
-    their offsets by ``h`` along any unit directions), or the stacked mesh's
-    box where that is larger. ``previous`` is such a return value for the same
-    ``Y``, ``F`` and ``h`` and other directions: when the box is the same,
-    only the pairs touching an offset face with a moved corner are searched
-    again (:func:`~geotex.check.intersections.self_intersecting_pairs_touching`,
-    same box) and the other pairs are kept, which is the same answer (the
-    predicates of a pair see only its two faces, in coordinates normalised by
-    that box).
-    """
-    n = Y.shape[0]
-    V = np.vstack([Y, Y + h * D])
-    FF = np.vstack([F, F[:, ::-1] + n])
-    used = np.zeros(V.shape[0], dtype=bool)
-    used[FF.ravel()] = True
-    U, Yu = V[used], Y[used[:n]]
-    box = np.stack([np.minimum(Yu.min(axis=0) - h, U.min(axis=0)),
-                    np.maximum(Yu.max(axis=0) + h, U.max(axis=0))])
-    if previous is not None:
-        V0, pairs0, box0 = previous
-        moved = (V != V0).any(axis=1) & used
-        if not moved.any():
-            return V, pairs0, box0
-        if np.array_equal(box, box0):
-            changed = moved[FF].any(axis=1)
-            keep = pairs0[~(changed[pairs0[:, 0]] | changed[pairs0[:, 1]])]
-            new = self_intersecting_pairs_touching(V, FF, np.flatnonzero(changed), box=box)
-            pairs = np.concatenate([keep, new])
-            pairs = pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
-            return V, pairs, box
-    return V, self_intersecting_pairs(V, FF, box=box), box
-
-
 def _pinched_faces(Y, F, D, h, previous=None) -> tuple[np.ndarray, tuple]:
     """Faces of ``(Y, F)`` whose offset by ``h`` along ``D`` flips or crosses the surface.
 
-    Also returns the state to pass back as ``previous`` (see :func:`_offset_pairs`)
-    when only some directions change.
+    Also returns the state to pass back as ``previous`` (see
+    :func:`~geotex.check.intersections.offset_surface_pairs`) when only some
+    directions change.
     """
     Vo = Y + h * D
     flipped = np.einsum("ij,ij->i", face_cross(Vo, F), face_cross(Y, F)) <= 0
     m = F.shape[0]
-    state = _offset_pairs(Y, F, D, h, previous)
+    state = offset_surface_pairs(Y, F, D, h, previous=previous)
     pairs = state[1]
     pairs = pairs[(pairs < m).any(axis=1)]     # the offset crossing only itself: a crease
     return np.unique(np.concatenate([np.flatnonzero(flipped), pairs.ravel() % m])), state
