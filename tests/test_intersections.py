@@ -805,6 +805,23 @@ def test_a_given_box_normalises_like_a_mesh_of_that_box(jit, monkeypatch):
             gi.self_intersecting_pairs_touching(V, F, faces, box=bad)
 
 
+def test_offset_surface_pairs_are_the_stacked_search_by_the_grown_box():
+    V, F = _bumpy_torus(2, 0.005)
+    D = np.zeros_like(V)
+    D[:, 2] = 1.0
+    h = 0.2
+    Vs, pairs, box = gi.offset_surface_pairs(V, F, D, h)
+    np.testing.assert_array_equal(box, [V.min(axis=0) - h, V.max(axis=0) + h])
+    FF = np.concatenate([F, F[:, ::-1] + len(V)])
+    assert len(pairs) > 0 and np.array_equal(Vs, np.concatenate([V, V + h * D]))
+    np.testing.assert_array_equal(pairs, self_intersecting_pairs(Vs, FF, box=box))
+    for args in ((D[1:], h), (D, np.nan), (np.where(D > 0, np.inf, D), h)):
+        with pytest.raises(InputError):
+            gi.offset_surface_pairs(V, F, *args)
+    with pytest.raises(InputError, match="box"):
+        gi.offset_surface_pairs(V, F, D, h, box=[[0, 0, 0]])
+
+
 def test_distinct_faces_hint_skips_only_the_grouping():
     for V, F in (_bumpy_torus(0, 0.06), two_spheres(level=3)[:2], random_soup(2, m=300, pool=80)):
         from geotex.mesh.topology import duplicate_face_groups

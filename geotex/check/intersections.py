@@ -503,8 +503,15 @@ def offset_surface_pairs(Y, F, D, h, *, previous=None, box=None
     Raises
     ------
     InputError
-        Malformed ``box``.
+        Malformed ``Y``, ``F``, ``D``, ``h`` or ``box``.
     """
+    Y, F = as_mesh_arrays(Y, F)
+    D = np.asarray(D, dtype=np.float64)
+    if D.shape != Y.shape or not np.isfinite(D).all():
+        raise InputError(f"D must be one finite direction per vertex, shape {Y.shape}, "
+                         f"got {D.shape}")
+    if not np.isfinite(h):
+        raise InputError(f"h must be a finite height, got {h!r}")
     n = Y.shape[0]
     V = np.vstack([Y, Y + h * D])
     FF = np.vstack([F, F[:, ::-1] + n])

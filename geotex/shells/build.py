@@ -193,7 +193,8 @@ def max_offset_height(V: np.ndarray, F: np.ndarray, D: np.ndarray, *, steps: int
     grows. Each of its steps therefore tests only the faces that failed at the
     last failing height (fewer and fewer), and the height found is tested once
     more on the whole surface; should that fail, the bisection is redone on
-    the whole surface, so the answer never rests on the assumption.
+    the whole surface (without testing again the height that check failed
+    at), so the answer never rests on the assumption.
     """
     base_normals = face_cross(V, F)
     hi = float(upper) if upper is not None else 0.25 * float(np.ptp(V, axis=0).max())
