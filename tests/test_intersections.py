@@ -776,6 +776,52 @@ def test_touching_pairs_with_large_faces_and_duplicates():
         gi.self_intersecting_pairs_touching(V2, F2, [len(F2)])
 
 
+@pytest.mark.parametrize("jit", [True, False])
+def test_a_given_box_normalises_like_a_mesh_of_that_box(jit, monkeypatch):
+    # box=: the coordinates normalised by that box, as if the mesh reached its
+    # corners; the touching search with the same box gives rows of that answer
+    monkeypatch.setattr(gi, "JIT_MIN_SIZE", 0 if jit else 10 ** 12)
+    V, F = _bumpy_torus(1, 0.06)
+    lo, hi = V.min(axis=0), V.max(axis=0)
+    assert np.array_equal(self_intersecting_pairs(V, F, box=[lo, hi]),
+                          self_intersecting_pairs(V, F))
+    box = np.stack([lo - [0.3, 0.1, 0.5], hi + [0.2, 0.7, 0.1]])
+    # the same box made by two far corners on a degenerate face of their own
+    n = len(V)
+    V2 = np.concatenate([V, box])
+    F2 = np.concatenate([F, [[n, n, n + 1]]])
+    want = self_intersecting_pairs(V2, F2)
+    got = self_intersecting_pairs(V, F, box=box)
+    assert len(got) > 0 and np.array_equal(got, want)
+    faces = np.random.default_rng(4).choice(len(F), 40, replace=False)
+    keep = np.zeros(len(F), dtype=bool)
+    keep[faces] = True
+    assert np.array_equal(gi.self_intersecting_pairs_touching(V, F, faces, box=box),
+                          got[keep[got[:, 0]] | keep[got[:, 1]]])
+    for bad in ([lo + 0.01, hi], [hi, lo], [[0, 0, 0]], [lo, hi + np.inf]):
+        with pytest.raises(InputError, match="box"):
+            self_intersecting_pairs(V, F, box=bad)
+        with pytest.raises(InputError, match="box"):
+            gi.self_intersecting_pairs_touching(V, F, faces, box=bad)
+
+
+def test_offset_surface_pairs_are_the_stacked_search_by_the_grown_box():
+    V, F = _bumpy_torus(2, 0.005)
+    D = np.zeros_like(V)
+    D[:, 2] = 1.0
+    h = 0.2
+    Vs, pairs, box = gi.offset_surface_pairs(V, F, D, h)
+    np.testing.assert_array_equal(box, [V.min(axis=0) - h, V.max(axis=0) + h])
+    FF = np.concatenate([F, F[:, ::-1] + len(V)])
+    assert len(pairs) > 0 and np.array_equal(Vs, np.concatenate([V, V + h * D]))
+    np.testing.assert_array_equal(pairs, self_intersecting_pairs(Vs, FF, box=box))
+    for args in ((D[1:], h), (D, np.nan), (np.where(D > 0, np.inf, D), h)):
+        with pytest.raises(InputError):
+            gi.offset_surface_pairs(V, F, *args)
+    with pytest.raises(InputError, match="box"):
+        gi.offset_surface_pairs(V, F, D, h, box=[[0, 0, 0]])
+
+
 def test_distinct_faces_hint_skips_only_the_grouping():
     for V, F in (_bumpy_torus(0, 0.06), two_spheres(level=3)[:2], random_soup(2, m=300, pool=80)):
         from geotex.mesh.topology import duplicate_face_groups

@@ -454,7 +454,12 @@ def test_same_voxel_polycube_is_fitted_once(monkeypatch):
     # every fit reports bare quads, so the search goes on to the copy (the torus
     # has no other candidate at this size)
     real_bad = module._bad_quads
-    monkeypatch.setattr(module, "_bad_quads", lambda *a, **k: real_bad(*a, **k) | True)
+
+    def all_bad(*args, **kwargs):
+        bad, state = real_bad(*args, **kwargs)
+        return bad | True, state
+
+    monkeypatch.setattr(module, "_bad_quads", all_bad)
     polycube(V, F, tile_size=0.25)
     assert len(fits) == 1                     # the copy reused, not fitted again
     monkeypatch.setattr(module, "_bad_quads", real_bad)

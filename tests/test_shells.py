@@ -240,43 +240,52 @@ def test_cli_automatic_tile_size_and_too_large_error(tmp_path, capsys):
     assert "--tile-size" in err and "genus 3" in err and "resolves it" in err
 
 
-def test_offset_pairs_searched_again_only_where_directions_moved(torus_shell, monkeypatch):
-    """The incremental search of the pinch test gives the full search's answer."""
-    import geotex.shells.build as build
+def test_offset_surface_pairs_searched_again_only_where_directions_moved(torus_shell, monkeypatch):
+    """The incremental search of the pinch test gives the full search's answer,
+    normalised by one box (the surface's grown by the height) whatever the
+    directions, so that turned directions at the box's extremes keep it."""
+    import geotex.check.intersections as gi
 
     s = torus_shell
     Y, F = s.polycube.Y, s.polycube.F
     n = Y.shape[0]
     h = 3.0 * s.max_height                        # tall enough to cross somewhere
+    box = np.stack([Y[F].reshape(-1, 3).min(axis=0) - h, Y[F].reshape(-1, 3).max(axis=0) + h])
 
-    def full(D, h):
+    def full(D, h, box=box):
         return self_intersecting_pairs(np.vstack([Y, Y + h * D]),
-                                       np.vstack([F, F[:, ::-1] + n]))
+                                       np.vstack([F, F[:, ::-1] + n]), box=box)
 
     calls = []
-    touching = build.self_intersecting_pairs_touching
-    monkeypatch.setattr(build, "self_intersecting_pairs_touching",
-                        lambda *a: calls.append(a[2].size) or touching(*a))
-    first = build._offset_pairs(Y, F, s.D, h)
-    assert first[1].shape[0] > 0
-    # some interior directions turned: the kept pairs plus a local search
+    touching = gi.self_intersecting_pairs_touching
+    monkeypatch.setattr(gi, "self_intersecting_pairs_touching",
+                        lambda *a, **k: calls.append(a[2].size) or touching(*a, **k))
+    first = gi.offset_surface_pairs(Y, F, s.D, h)
+    assert first[1].shape[0] > 0 and np.array_equal(first[2], box)
+    np.testing.assert_array_equal(first[1], full(s.D, h))
+    # some directions turned, one of them at the surface's largest x (a box
+    # of the stacked mesh alone could move): the kept pairs plus a local search
     D = s.D.copy()
     rows = np.random.default_rng(3).choice(n, 40, replace=False)
+    rows[0] = int(np.argmax(Y[:, 0]))
     D[rows] = np.roll(D[rows], 1, axis=1)
-    again = build._offset_pairs(Y, F, D, h, first)
+    D[rows[0]] = [1.0, 0.0, 0.0]
+    again = gi.offset_surface_pairs(Y, F, D, h, previous=first)
     assert len(calls) == 1 and 0 < calls[0] < F.shape[0]
     expected = full(D, h)
     assert not np.array_equal(expected, first[1])          # the turn changed the answer
     np.testing.assert_array_equal(again[1], expected)
     # nothing moved: the previous answer as it is
-    np.testing.assert_array_equal(build._offset_pairs(Y, F, D, h, again)[1], expected)
-    # a direction that grows the box of the mesh: the full search again
-    far = D.copy()
-    far[int(np.argmax(Y[:, 0]))] = [1.0, 0.0, 0.0]
-    assert not np.array_equal(far, D)
-    grown = build._offset_pairs(Y, F, far, h, again)
+    same = gi.offset_surface_pairs(Y, F, D, h, previous=again)
     assert len(calls) == 1
-    np.testing.assert_array_equal(grown[1], full(far, h))
+    np.testing.assert_array_equal(same[1], expected)
+    # a longer direction takes the offset out of the box: the full search, by the
+    # larger box
+    far = D.copy()
+    far[rows[0]] = [2.0, 0.0, 0.0]
+    grown = gi.offset_surface_pairs(Y, F, far, h, previous=again)
+    assert len(calls) == 1 and grown[2][1, 0] > box[1, 0]
+    np.testing.assert_array_equal(grown[1], full(far, h, grown[2]))
 
 
 def test_bare_warning_on_the_catalog_blub_names_the_flag():
@@ -296,3 +305,44 @@ def test_bare_warning_on_the_catalog_blub_names_the_flag():
     assert spot.polycube.diagnostics.coverage["bare"] == 0.0
     assert bare_warning(spot, "use a smaller --tile-size") is None
     assert bare_warning(load_named("torus"), "use a smaller --tile-size") is None
+
+
+def _crossing_above(L):
+    """A square at z = 0 and a small tilted triangle above it spanning z = L +- 0.005,
+    both offset straight up, and a triangle whose offset flips from height 0.9."""
+    a = 0.9 / np.sqrt(2)
+    V = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0],
+                  [0.4, 0.4, L - 0.005], [0.6, 0.4, L - 0.005], [0.5, 0.6, L + 0.005],
+                  [5 - a, 0, 0], [5 + a, 0, 0], [5, 1, 0]], dtype=np.float64)
+    F = np.array([[0, 1, 2], [0, 2, 3], [4, 5, 6], [7, 8, 9]], dtype=np.int64)
+    D = np.tile([0.0, 0.0, 1.0], (10, 1))
+    D[7], D[8] = [np.sqrt(0.5), 0, np.sqrt(0.5)], [-np.sqrt(0.5), 0, np.sqrt(0.5)]
+    return V, F, D
+
+
+def test_safe_height_is_the_whole_surface_bisection_when_the_shrinking_one_misses(monkeypatch):
+    """The shrinking bisection follows the flipping triangle alone and ends at a
+    height where the square's offset crosses the small triangle: the bisection
+    is redone on the whole surface, to the same height as a whole-surface
+    bisection from the start, without testing that height twice."""
+    import geotex.shells.build as build
+    from geotex.mesh.geometry import face_cross
+
+    tested = []
+    defects = build._offset_defects
+
+    def recorded(V, F, D, h, normals, *, first=False):
+        tested.append((F.shape[0], h))
+        return defects(V, F, D, h, normals, first=first)
+
+    monkeypatch.setattr(build, "_offset_defects", recorded)
+    V, F, D = _crossing_above(0.5)                # no crossing near the end
+    lo = build.max_offset_height(V, F, D, steps=6, upper=1.0)
+    assert lo == 0.890625 and [t[0] for t in tested] == [4, 1, 1, 1, 1, 1, 1, 4]
+    V, F, D = _crossing_above(lo)                 # now the square's offset crosses there
+    tested.clear()
+    got = build.max_offset_height(V, F, D, steps=6, upper=1.0)
+    whole = [h for m, h in tested if m == 4]
+    assert len(whole) == len(set(whole)) == 7 and lo in whole
+    tested.clear()
+    assert got == build._bisected_height(V, F, D, face_cross(V, F), 1.0, 6) == 0.875

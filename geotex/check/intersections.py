@@ -78,7 +78,7 @@ from geotex.mesh.arrays import as_mesh_arrays
 from geotex.mesh.topology import edge_topology, has_twin_faces, unpaired_edge_vertices
 
 __all__ = ["self_intersecting_pairs", "self_intersecting_pairs_touching",
-           "self_intersecting_pairs_between", "REL_TOL", "ABS_TOL"]
+           "self_intersecting_pairs_between", "offset_surface_pairs", "REL_TOL", "ABS_TOL"]
 
 #: Tolerance of the geometric predicates relative to the local triangle size
 #: (the longest edge of the two triangles of a pair).
@@ -121,7 +121,7 @@ _GRID_PIECE = 65_536
 
 
 def self_intersecting_pairs(V, F, *, max_pairs=None, topology=None, unpaired_vertices=None,
-                            distinct_faces: bool = False, parts=None) -> np.ndarray:
+                            distinct_faces: bool = False, parts=None, box=None) -> np.ndarray:
     """Return every pair of faces of a triangle mesh whose triangles intersect.
 
     Parameters
@@ -162,6 +162,15 @@ def self_intersecting_pairs(V, F, *, max_pairs=None, topology=None, unpaired_ver
         ``max_pairs``, the sweep finds every pair
         first and keeps the lowest ``max_pairs``: a subset of the answer as
         without ``parts``, not necessarily the same subset.
+    box : array_like, (2, 3) float64, optional
+        Low and high corner of the box the coordinates are normalised by
+        (module docstring, step 1) instead of the box of the referenced
+        vertices; it must contain them.  Searches of meshes that share a box
+        (a surface and its offsets at several heights) then see the same
+        normalised coordinates for the same vertices, so the pairs of faces
+        that did not move are the same pairs
+        (:func:`self_intersecting_pairs_touching` with the same ``box``
+        finds the others).
 
     Returns
     -------
@@ -173,8 +182,9 @@ def self_intersecting_pairs(V, F, *, max_pairs=None, topology=None, unpaired_ver
     ------
     InputError
         If ``V`` or ``F`` is malformed (shape, non-finite values, indices out
-        of range), ``max_pairs`` is not a non-negative integer or ``parts`` is
-        not one integer per face.
+        of range), ``max_pairs`` is not a non-negative integer, ``parts`` is
+        not one integer per face or ``box`` is not a finite box containing
+        the referenced vertices.
 
     Notes
     -----
@@ -243,6 +253,7 @@ def self_intersecting_pairs(V, F, *, max_pairs=None, topology=None, unpaired_ver
             raise InputError(f"parts must be one integer per face, shape ({m},), "
                              f"got {parts.dtype} {parts.shape}")
     empty = np.zeros((0, 2), dtype=np.int64)
+    box = _box_argument(box)
     if m < 2 or max_pairs == 0:
         return empty
     unpaired = None
@@ -265,14 +276,14 @@ def self_intersecting_pairs(V, F, *, max_pairs=None, topology=None, unpaired_ver
     if classes is not None:                  # duplicate faces: solve on one per class
         first, cls = classes
         pairs = _distinct_pairs(V, F[first], max_pairs,
-                                parts=None if parts is None else parts[first])
+                                parts=None if parts is None else parts[first], box=box)
         pairs = _expanded(first[pairs], cls, max_pairs)
     else:
-        pairs = _distinct_pairs(V, F, max_pairs, unpaired=unpaired, parts=parts)
+        pairs = _distinct_pairs(V, F, max_pairs, unpaired=unpaired, parts=parts, box=box)
     return pairs
 
 
-def self_intersecting_pairs_touching(V, F, faces) -> np.ndarray:
+def self_intersecting_pairs_touching(V, F, faces, *, box=None) -> np.ndarray:
     """Return the intersecting pairs of :func:`self_intersecting_pairs` with a face in ``faces``.
 
     Exactly the rows of ``self_intersecting_pairs(V, F)`` whose first or
@@ -286,6 +297,9 @@ def self_intersecting_pairs_touching(V, F, faces) -> np.ndarray:
     F : array_like, (m, 3) int64
     faces : array_like, (k,) int64
         Face indices (any order, repeats allowed).
+    box : array_like, (2, 3) float64, optional
+        The normalising box, as for :func:`self_intersecting_pairs`: the
+        rows are those of ``self_intersecting_pairs(V, F, box=box)``.
 
     Returns
     -------
@@ -295,7 +309,7 @@ def self_intersecting_pairs_touching(V, F, faces) -> np.ndarray:
     Raises
     ------
     InputError
-        If ``V``, ``F`` or ``faces`` is malformed.
+        If ``V``, ``F``, ``faces`` or ``box`` is malformed.
 
     Notes
     -----
@@ -319,13 +333,14 @@ def self_intersecting_pairs_touching(V, F, faces) -> np.ndarray:
     empty = np.zeros((0, 2), dtype=np.int64)
     if sel.size and (sel[0] < 0 or sel[-1] >= m):
         raise InputError(f"faces must be indices in [0, {m}), got {sel[0]} .. {sel[-1]}")
+    box = _box_argument(box)
     if m < 2 or sel.size == 0:
         return empty
-    Vn = _normalized(V, F)
+    Vn = _normalized(V, F, box)
     near = _faces_near(Vn, F, sel)
     sub = F[near]
     if _duplicate_classes(sub) is not None:          # rare: let the full search group them
-        pairs = self_intersecting_pairs(V, F)
+        pairs = self_intersecting_pairs(V, F, box=box)
         keep = np.zeros(m, dtype=bool)
         keep[sel] = True
         return pairs[keep[pairs[:, 0]] | keep[pairs[:, 1]]]
@@ -444,6 +459,85 @@ def self_intersecting_pairs_between(V, F, parts, *, side=None, within=None) -> n
     return np.stack([keys // m, keys % m], axis=1)
 
 
+def offset_surface_pairs(Y, F, D, h, *, previous=None, box=None
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Intersecting face pairs of a surface ``(Y, F)`` together with its offset ``Y + h D``.
+
+    The stacked mesh is ``Y`` and ``Y + h D`` with the faces ``F`` and
+    ``F[:, ::-1] + len(Y)`` (the offset reversed); its pairs are those of
+    :func:`self_intersecting_pairs`, with coordinates normalised by one box
+    (``box``) that holds the offsets along all the directions a caller
+    tries, so that after some directions change only the pairs touching
+    the moved offset faces need a search.
+
+    Parameters
+    ----------
+    Y : numpy.ndarray, (n, 3) float64
+    F : numpy.ndarray, (m, 3) int64
+    D : numpy.ndarray, (n, 3) float64
+        Offset directions (unit, for the default ``box``).
+    h : float
+        Offset height.
+    previous : tuple, optional
+        The return value of an earlier call with the same ``Y`` and ``F`` and
+        other directions (or a surface with some vertices moved): when the box
+        is the same, only the pairs touching a face with a moved corner are
+        searched again (:func:`self_intersecting_pairs_touching`) and the
+        other pairs are kept, which is the same answer (a pair's predicates
+        see only its two faces, in coordinates normalised by that box).
+    box : array_like, (2, 3) float64, optional
+        Box to normalise by (default: the box of ``Y``'s vertices in ``F``
+        grown by ``h`` on every side, which holds their offsets along unit
+        directions); grown to the stacked mesh's box where that is larger.
+
+    Returns
+    -------
+    V : numpy.ndarray, (2 n, 3) float64
+        The stacked vertices.
+    pairs : numpy.ndarray, (k, 2) int64
+        ``self_intersecting_pairs(V, stacked faces, box=box)``: rows below
+        ``m`` are faces of ``(Y, F)``, the others offset faces (``m + f``).
+    box : numpy.ndarray, (2, 3) float64
+        The box the coordinates were normalised by.
+
+    Raises
+    ------
+    InputError
+        Malformed ``Y``, ``F``, ``D``, ``h`` or ``box``.
+    """
+    Y, F = as_mesh_arrays(Y, F)
+    D = np.asarray(D, dtype=np.float64)
+    if D.shape != Y.shape or not np.isfinite(D).all():
+        raise InputError(f"D must be one finite direction per vertex, shape {Y.shape}, "
+                         f"got {D.shape}")
+    if not np.isfinite(h):
+        raise InputError(f"h must be a finite height, got {h!r}")
+    n = Y.shape[0]
+    V = np.vstack([Y, Y + h * D])
+    FF = np.vstack([F, F[:, ::-1] + n])
+    used = np.zeros(V.shape[0], dtype=bool)
+    used[FF.ravel()] = True
+    U = V[used]
+    if box is None:
+        Yu = Y[used[:n]]
+        box = np.stack([Yu.min(axis=0) - h, Yu.max(axis=0) + h])
+    box = _box_argument(box)
+    box = np.stack([np.minimum(box[0], U.min(axis=0)), np.maximum(box[1], U.max(axis=0))])
+    if previous is not None:
+        V0, pairs0, box0 = previous
+        moved = (V != V0).any(axis=1) & used
+        if not moved.any() and np.array_equal(box, box0):
+            return V, pairs0, box0
+        if np.array_equal(box, box0):
+            changed = moved[FF].any(axis=1)
+            keep = pairs0[~(changed[pairs0[:, 0]] | changed[pairs0[:, 1]])]
+            new = self_intersecting_pairs_touching(V, FF, np.flatnonzero(changed), box=box)
+            pairs = np.concatenate([keep, new])
+            pairs = pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
+            return V, pairs, box
+    return V, self_intersecting_pairs(V, FF, box=box), box
+
+
 def _faces_near(Vn, F, sel):
     """Sorted faces whose box (as the search inflates it) may meet a face of ``sel``'s.
 
@@ -485,15 +579,15 @@ def _faces_near(Vn, F, sel):
     return np.flatnonzero(hot[cols[0]] | hot[cols[1]] | hot[cols[2]])
 
 
-def _distinct_pairs(V, F, max_pairs, *, unpaired=None, parts=None):
+def _distinct_pairs(V, F, max_pairs, *, unpaired=None, parts=None, box=None):
     """:func:`self_intersecting_pairs` for faces with distinct vertex sets
-    (``unpaired``: their unpaired-edge vertices, when known; ``parts``: see there)."""
+    (``unpaired``: their unpaired-edge vertices, when known; ``parts``, ``box``: see there)."""
     m = F.shape[0]
     empty = np.zeros((0, 2), dtype=np.int64)
     workers = _workers()
     pool = ThreadPoolExecutor(max_workers=workers)
     try:
-        faces = _FaceData(_normalized(V, F), F, mapper=pool.map)
+        faces = _FaceData(_normalized(V, F, box), F, mapper=pool.map)
         if faces.active.size < 2:
             return empty
         faces.separated = _separated_fans(faces, mapper=pool.map, unpaired=unpaired)
@@ -649,13 +743,30 @@ def _expanded(pairs: np.ndarray, cls: np.ndarray, max_pairs) -> np.ndarray:
 # preparation
 
 
-def _normalized(V: np.ndarray, F: np.ndarray) -> np.ndarray:
-    """Return ``V`` centred on the box of the referenced vertices, extent in [1, 2)."""
+def _box_argument(box):
+    """``box`` of :func:`self_intersecting_pairs` as a ``(2, 3)`` float64 array, or None."""
+    if box is None:
+        return None
+    b = np.asarray(box, dtype=np.float64)
+    if b.shape != (2, 3) or not np.isfinite(b).all() or (b[0] > b[1]).any():
+        raise InputError(f"box must be a finite (2, 3) array of a low and a high corner, "
+                         f"got {np.shape(box)}")
+    return b
+
+
+def _normalized(V: np.ndarray, F: np.ndarray, box=None) -> np.ndarray:
+    """Return ``V`` centred on the box of the referenced vertices (or on ``box``,
+    which must contain them), the box's largest extent in [1, 2)."""
     used = np.zeros(V.shape[0], dtype=bool)
     used[F.ravel()] = True
     U = V[used]
     lo, hi = U.min(axis=0), U.max(axis=0)
     del U
+    if box is not None:
+        if (lo < box[0]).any() or (hi > box[1]).any():
+            raise InputError(f"box must contain the referenced vertices, got {box.tolist()} "
+                             f"around vertices spanning {[lo.tolist(), hi.tolist()]}")
+        lo, hi = box[0], box[1]
     half = float(np.max(0.5 * hi - 0.5 * lo))
     exponent = int(np.frexp(half)[1]) if half > 0 else 0
     # exact scaling (half-extent in [0.5, 1)): the box of the scaled rows is the

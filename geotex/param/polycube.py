@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from geotex.check import check_mesh
-from geotex.check.intersections import self_intersecting_pairs
+from geotex.check.intersections import offset_surface_pairs, self_intersecting_pairs
 from geotex.errors import GeotexError, InputError
 from geotex.mesh.arrays import as_mesh_arrays
 from geotex.mesh.geometry import face_areas, vertex_normals
@@ -536,16 +536,22 @@ def _reached(fit, P, F, projector, samples, n_quads, res, *, tries: int = 3, sur
     bare then, the fit is kept as it was (the same object). ``surface`` and
     ``closest`` are passed to :func:`reached_surface`.
     """
-    plain = _bad_quads(fit, F, n_quads, res)
     out = reached_surface(fit, P, F, projector, *samples, depth=REACH_DEPTH, surface=surface,
                           closest=closest)
     if out is fit:
-        return fit, plain
+        return fit, _bad_quads(fit, F, n_quads, res)[0]
+    # one box for the tests of the fit and of every moved-out surface (which
+    # moves vertices between the two): each test after the first searches
+    # only around the vertices that moved since the last
+    used = np.unique(F)
+    both = np.concatenate([fit.Y[used], out.Y[used]])
+    box = np.stack([both.min(axis=0) - BAD_CLEARANCE, both.max(axis=0) + BAD_CLEARANCE])
+    plain, state = _bad_quads(fit, F, n_quads, res, box=box)
     n = fit.Y.shape[0]
     ring = (neighbour_mean(F, n) != 0).astype(np.float64)
     per_quad = 2 * res * res
     for t in range(tries + 1):
-        bad = _bad_quads(out, F, n_quads, res)
+        bad, state = _bad_quads(out, F, n_quads, res, box=box, previous=state)
         new = np.flatnonzero(bad & ~plain)
         if new.size == 0:
             return out, bad
@@ -563,18 +569,34 @@ def _reached(fit, P, F, projector, samples, n_quads, res, *, tries: int = 3, sur
     return fit, plain
 
 
-def _bad_quads(fit, F, n_quads, res, *, clearance: float = 0.05) -> np.ndarray:
+BAD_CLEARANCE = 0.05
+"""Offset, in tiles, that :func:`_bad_quads` tests the fitted surface against."""
+
+
+def _bad_quads(fit, F, n_quads, res, *, box=None, previous=None) -> tuple[np.ndarray, tuple]:
     """Quads whose fitted image folds over or comes too close to another part of itself.
 
     The second happens where the voxels bridge a gap narrower than a tile: the
     two sides of the bridge land on (nearly) the same surface. It is found as
     the faces where the fitted surface crosses itself or its own offset by
-    ``clearance`` tiles along the vertex normals. Such quads are left bare.
+    :data:`BAD_CLEARANCE` tiles along the vertex normals. Such quads are left bare.
+
+    Also returns the state of the search
+    (:func:`~geotex.check.intersections.offset_surface_pairs`, normalised by
+    ``box``, searched again only around moved vertices after ``previous``),
+    None when neither is given (the search normalised by the stacked
+    surface's own box).
     """
     Y = fit.Y
     n, m = Y.shape[0], F.shape[0]
-    lifted = Y + clearance * vertex_normals(Y, F)
-    pairs = self_intersecting_pairs(np.vstack([Y, lifted]), np.vstack([F, F[:, ::-1] + n]))
+    normals = vertex_normals(Y, F)
+    state = None
+    if box is None and previous is None:
+        lifted = Y + BAD_CLEARANCE * normals
+        pairs = self_intersecting_pairs(np.vstack([Y, lifted]), np.vstack([F, F[:, ::-1] + n]))
+    else:
+        state = offset_surface_pairs(Y, F, normals, BAD_CLEARANCE, previous=previous, box=box)
+        pairs = state[1]
     # the offset crossing only itself is a concave crease tighter than the
     # clearance (it limits the shell's height, not the map): not a bridge
     pairs = pairs[(pairs < m).any(axis=1)] % m
@@ -585,7 +607,7 @@ def _bad_quads(fit, F, n_quads, res, *, clearance: float = 0.05) -> np.ndarray:
     faces = np.concatenate([np.flatnonzero(fit.folded), pairs.ravel()])
     bad = np.zeros(n_quads, dtype=bool)
     bad[faces // (2 * res * res)] = True
-    return bad
+    return bad, state
 
 
 def _distortion(P, Y, F, labels, face_quad, fit) -> dict:

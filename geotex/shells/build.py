@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from geotex.check.intersections import self_intersecting_pairs, self_intersecting_pairs_touching
+from geotex.check.intersections import offset_surface_pairs, self_intersecting_pairs
 from geotex.errors import InputError
 from geotex.mesh.arrays import as_mesh_arrays
 from geotex.mesh.geometry import face_cross, vertex_normals
@@ -148,14 +148,16 @@ def _offset_defects(V, F, D, h, base_normals, *, first: bool = False) -> np.ndar
     return np.union1d(np.flatnonzero(flipped), pairs.ravel() % m)
 
 
-def _bisected_height(V, F, D, base_normals, hi: float, steps: int, *, shrink: bool = False
-                     ) -> float:
+def _bisected_height(V, F, D, base_normals, hi: float, steps: int, *, shrink: bool = False,
+                     fails: tuple = ()) -> float:
     """Bisection on ``[0, hi]`` (``hi`` fails); with ``shrink``, each failed step keeps
-    testing only the faces that failed there."""
+    testing only the faces that failed there. ``fails``: heights known to fail on
+    ``F`` (not tested again)."""
     lo = 0.0
     for _ in range(steps):
         mid = 0.5 * (lo + hi)
-        bad = _offset_defects(V, F, D, mid, base_normals, first=not shrink)
+        bad = (np.zeros(1, dtype=np.int64) if mid in fails else
+               _offset_defects(V, F, D, mid, base_normals, first=not shrink))
         if bad.size == 0:
             lo = mid
         else:
@@ -191,7 +193,8 @@ def max_offset_height(V: np.ndarray, F: np.ndarray, D: np.ndarray, *, steps: int
     grows. Each of its steps therefore tests only the faces that failed at the
     last failing height (fewer and fewer), and the height found is tested once
     more on the whole surface; should that fail, the bisection is redone on
-    the whole surface, so the answer never rests on the assumption.
+    the whole surface (without testing again the height that check failed
+    at), so the answer never rests on the assumption.
     """
     base_normals = face_cross(V, F)
     hi = float(upper) if upper is not None else 0.25 * float(np.ptp(V, axis=0).max())
@@ -201,58 +204,24 @@ def max_offset_height(V: np.ndarray, F: np.ndarray, D: np.ndarray, *, steps: int
     lo = _bisected_height(V, F[bad], D, base_normals[bad], hi, steps, shrink=True)
     if lo == 0.0 or _offset_ok(V, F, D, lo, base_normals):
         return lo
-    return _bisected_height(V, F, D, base_normals, hi, steps)
+    return _bisected_height(V, F, D, base_normals, hi, steps, fails=(lo,))
 
 
 PINCH_PROBE = 0.125
 """Height, in tiles, that every textured quad's offset must reach (see :func:`build_shell`)."""
 
 
-def _offset_pairs(Y, F, D, h, previous=None) -> tuple[np.ndarray, np.ndarray]:
-    """Intersecting face pairs of ``(Y, F)`` together with its offset ``Y + h D``.
-
-    The offset faces are ``F[:, ::-1] + len(Y)`` (reversed). Returns the stacked
-    vertices and :func:`~geotex.check.intersections.self_intersecting_pairs` of
-    the stacked mesh. ``previous`` is such a return value for the same ``Y``,
-    ``F`` and ``h`` and other directions: then only the pairs touching an offset
-    face with a moved corner are searched again
-    (:func:`~geotex.check.intersections.self_intersecting_pairs_touching`) and
-    the other pairs are kept, which is the same answer (the predicates of a
-    pair see only its two faces, in coordinates normalised by the box of the
-    mesh, so this is done only when that box did not change).
-    """
-    n = Y.shape[0]
-    V = np.vstack([Y, Y + h * D])
-    FF = np.vstack([F, F[:, ::-1] + n])
-    if previous is not None:
-        V0, pairs0 = previous
-        used = np.zeros(V.shape[0], dtype=bool)
-        used[FF.ravel()] = True
-        moved = (V != V0).any(axis=1) & used
-        U, U0 = V[used], V0[used]
-        if not moved.any():
-            return V, pairs0
-        if (np.array_equal(U.min(axis=0), U0.min(axis=0))
-                and np.array_equal(U.max(axis=0), U0.max(axis=0))):
-            changed = moved[FF].any(axis=1)
-            keep = pairs0[~(changed[pairs0[:, 0]] | changed[pairs0[:, 1]])]
-            new = self_intersecting_pairs_touching(V, FF, np.flatnonzero(changed))
-            pairs = np.concatenate([keep, new])
-            pairs = pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
-            return V, pairs
-    return V, self_intersecting_pairs(V, FF)
-
-
 def _pinched_faces(Y, F, D, h, previous=None) -> tuple[np.ndarray, tuple]:
     """Faces of ``(Y, F)`` whose offset by ``h`` along ``D`` flips or crosses the surface.
 
-    Also returns the state to pass back as ``previous`` (see :func:`_offset_pairs`)
-    when only some directions change.
+    Also returns the state to pass back as ``previous`` (see
+    :func:`~geotex.check.intersections.offset_surface_pairs`) when only some
+    directions change.
     """
     Vo = Y + h * D
     flipped = np.einsum("ij,ij->i", face_cross(Vo, F), face_cross(Y, F)) <= 0
     m = F.shape[0]
-    state = _offset_pairs(Y, F, D, h, previous)
+    state = offset_surface_pairs(Y, F, D, h, previous=previous)
     pairs = state[1]
     pairs = pairs[(pairs < m).any(axis=1)]     # the offset crossing only itself: a crease
     return np.unique(np.concatenate([np.flatnonzero(flipped), pairs.ravel() % m])), state
