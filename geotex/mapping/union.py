@@ -74,14 +74,15 @@ OWN_ELEMENTS_PER_BASE_FACE = 1.0
 #: times the sliver tolerance by collapsing that edge (the boolean's: below the
 #: tolerance itself). Its cut points come as close together as the crossings
 #: of the surfaces do (an element edge through a base face next to where a
-#: base edge crosses the element face), where manifold3d merges them: at 1x
-#: Spot 15k at 3.7 mm kept 110 needles (the boolean 27), at 8x 9; Kitten 15k
-#: at 3.11 mm 146 -> 15 (the boolean 15). The shape moves by less than 8e-6 of
-#: the diagonal (1 micrometre at 120 mm).
-OWN_DART_LENGTH = 8.0
+#: base edge crosses the element face), where manifold3d merges them. Needles
+#: left (the boolean's in brackets): Spot 15k at 3.704 mm 110 at 1x, 9 at 8x
+#: (27); Kitten 15k at 3.114 mm 146, 15 (15); Kitten 15k at 5.61 mm 6 at 8x,
+#: 1 at 16x (5); torus catalog shell with studs 4, 1 (2). The shape moves by
+#: less than 1.6e-5 of the diagonal (2 micrometres at 120 mm).
+OWN_DART_LENGTH = 16.0
 
 #: ... in up to this many rounds (a cluster of needles takes several: Kitten
-#: 15k at 3.11 mm kept 47 after 8 rounds, 15 after 16).
+#: 15k at 3.114 mm kept 47 after 8 rounds, 15 after 16).
 OWN_NEEDLE_ROUNDS = 32
 
 
