@@ -9,6 +9,7 @@ import pytest
 from geotex.check import check_mesh
 from geotex.errors import InputError
 from geotex.mapping.crossing import crossing_union
+from geotex.mesh.needles import needle_faces
 from geotex.mesh.primitives import box, closed_cylinder, icosphere
 from geotex.mesh.solid import manifold_of
 from geotex.mesh.topology import concatenated, edge_topology
@@ -126,3 +127,20 @@ def test_bad_element_labels():
         crossing_union(V, F, X, G, element=np.zeros(len(G) - 1, dtype=np.int64))
     with pytest.raises(InputError):
         crossing_union(V, F, X, G, element=np.full(len(G), -1))
+
+
+def test_a_chain_of_nearly_collinear_cut_points_leaves_no_flat_piece():
+    # the tilted stud's walls cross the finely divided top along lines, each
+    # through many base edges: ear clipping alone fanned two pieces over such
+    # a chain (heights 8e-7 and 1e-6 of the diagonal, which the float32
+    # rounding can fold); flipped within their face they are gone
+    V, F = box((0, 0, 0), (4, 4, 1), divisions=32)
+    parts = [_stud((3.4653977281237016, 2.6052852063343552, 0.0),
+                   (0.018860747641344634, 0.010390772698803199, 1.0),
+                   bottom=0.811301114448697, radius=0.11946453843763682, n_height=3)]
+    X, G, element = _elements(parts)
+    V2, F2, left = crossing_union(V, F, X, G, element=element, flat_test=False)
+    assert left.size == 0
+    _assert_solid_equal(V2, F2, _reference(V, F, parts))
+    diag = np.linalg.norm(np.ptp(np.vstack([V, X]), axis=0))
+    assert needle_faces(V2, F2, tolerance=1e-5 * diag).size == 0

@@ -85,3 +85,22 @@ def test_collapse_refused_when_the_link_condition_fails():
     assert F2.shape == F.shape
     assert np.array_equal(np.sort(F2, axis=None), np.sort(F, axis=None))
 
+
+
+def test_dart_length_collapses_a_needle_on_an_edge_longer_than_the_tolerance():
+    # the dart sphere's short edge, with a tolerance just under it: its two
+    # faces are needles (heights ~0.9 of the edge) but no darts by default
+    V, F = _dart_sphere()
+    short = float(np.sort(np.linalg.norm(V - V[-1], axis=1))[1])
+    tol = 0.99 * short
+    assert len(needle_faces(V, F, tolerance=tol)) == 2
+    V1, F1, _ = needle_free(V, F, tolerance=tol)
+    assert len(needle_faces(V1, F1, tolerance=tol)) == 2
+    V2, F2, ops = needle_free(V, F, tolerance=tol, dart_length=2 * short)
+    assert ops == 1
+    assert len(needle_faces(V2, F2, tolerance=tol)) == 0
+    assert F2.shape[0] == F.shape[0] - 2
+    assert check_mesh(V2, F2).printable
+    # no rounds, nothing done
+    V3, F3, ops = needle_free(V, F, tolerance=tol, dart_length=2 * short, rounds=0)
+    assert ops == 0 and np.array_equal(F3, F)

@@ -109,7 +109,7 @@ def test_main_job_reports_its_union_and_the_check_guards_the_own_one(torus_shell
     # unchecked, "auto" is the boolean (the check is the own union's guard)
     unchecked = textured_solid(torus_shell, studs, seed=3, check=False, union="auto")
     assert unchecked.stats.union_method == "boolean"
-    # the job's default is the boolean (the own union failed the check at ~1.2M faces)
+    # so is the job's default ("auto") unchecked
     assert textured_solid(torus_shell, studs, seed=3, check=False).stats.union_method == "boolean"
     with pytest.raises(InputError, match="union"):
         textured_solid(torus_shell, studs, seed=3, union="fast")

@@ -30,7 +30,12 @@ Steps:
    lies the part of the base face outside the element and the part of the
    element face inside the base. Every cut face is split along its segments
    (a planar graph of its edges and cuts in the face's plane, its faces
-   walked, each triangulated by ear clipping); a piece is kept by the side of
+   walked, each triangulated by ear clipping, then its diagonals flipped
+   toward better shapes: the triangles of one piece are coplanar, so this
+   changes no geometry, and it joins a chain of nearly collinear cut points
+   to the far corner instead of fanning flat triangles over it, which the
+   float32 rounding folded: Spot 15k with studs at 3.7 mm had 4 crossing
+   face pairs in its float32 result before); a piece is kept by the side of
    the cut it lies on;
 4. with ``flat_test``, the flat pieces (slivers between nearly collinear
    cut points) are tested against the faces near them by the exact
@@ -247,6 +252,71 @@ def _cross(xy, a, b, c):
     """Twice the signed area of the 2-D triangle of points ``a, b, c`` of ``xy``."""
     return ((xy[b, 0] - xy[a, 0]) * (xy[c, 1] - xy[a, 1])
             - (xy[b, 1] - xy[a, 1]) * (xy[c, 0] - xy[a, 0]))
+
+
+@helper
+def _quality(xy, a, b, c):
+    """Twice the area over the summed squared edges of 2-D triangle ``a, b, c`` (< 0 turned)."""
+    l2 = ((xy[b, 0] - xy[a, 0]) ** 2 + (xy[b, 1] - xy[a, 1]) ** 2
+          + (xy[c, 0] - xy[b, 0]) ** 2 + (xy[c, 1] - xy[b, 1]) ** 2
+          + (xy[a, 0] - xy[c, 0]) ** 2 + (xy[a, 1] - xy[c, 1]) ** 2)
+    if l2 <= 0:
+        return 0.0
+    return _cross(xy, a, b, c) / l2
+
+
+@helper
+def _flipped(xy, tris, nt):
+    """Flip diagonals of the triangles ``tris[:nt]`` of one polygon toward better shapes.
+
+    All triangles lie in one plane (the pieces of one cut face), so flipping
+    the edge two of them share changes no geometry. An edge shared as
+    ``a -> b`` by one and ``b -> a`` by another is flipped when both new
+    triangles turn the right way and the worse of them has a better shape
+    (:func:`_quality`) than the worse of the old two: ear clipping fans flat
+    triangles over a chain of nearly collinear cut points, which the float32
+    rounding folds; flipped, each chain point is joined to the far corner.
+    Returns the number of flips.
+    """
+    flips = 0
+    for _ in range(4 * nt + 4):
+        changed = False
+        for c in range(nt):
+            for e in range(3):
+                a, b, x = tris[c, e], tris[c, (e + 1) % 3], tris[c, (e + 2) % 3]
+                d = -1
+                y = -1
+                for c2 in range(nt):
+                    if c2 == c:
+                        continue
+                    for e2 in range(3):
+                        if tris[c2, e2] == b and tris[c2, (e2 + 1) % 3] == a:
+                            d = c2
+                            y = tris[c2, (e2 + 2) % 3]
+                if d < 0 or x == y:
+                    continue
+                old = min(_quality(xy, a, b, x), _quality(xy, b, a, y))
+                new = min(_quality(xy, a, y, x), _quality(xy, y, b, x))
+                if new <= old * (1.0 + 1e-9) or new <= 0.0:
+                    continue
+                # the new diagonal must not exist already (a polygon with
+                # bridged holes passes some corners twice)
+                dup = False
+                for c3 in range(nt):
+                    for e3 in range(3):
+                        p, q = tris[c3, e3], tris[c3, (e3 + 1) % 3]
+                        if (p == x and q == y) or (p == y and q == x):
+                            dup = True
+                if dup:
+                    continue
+                tris[c, 0], tris[c, 1], tris[c, 2] = a, y, x
+                tris[d, 0], tris[d, 1], tris[d, 2] = y, b, x
+                flips += 1
+                changed = True
+                break
+        if not changed:
+            break
+    return flips
 
 
 @helper
@@ -518,6 +588,7 @@ def _split_loops(P, F, faces, seg_start, seg_list, seg_pq, bp_start, bp_list,
             if nt < 0:
                 fail = True
                 break
+            _flipped(xy, tris, nt)
             for c in range(nt):
                 out_tri[no, 0] = gid[tris[c, 0]]
                 out_tri[no, 1] = gid[tris[c, 1]]

@@ -4,10 +4,11 @@
 within each axis class, picks the matching tile for every quad, maps and welds
 the tile geometry into the shell (:mod:`~geotex.mapping.place`), unites the
 closed elements with the base solid (:mod:`~geotex.mapping.union`) and runs
-the printability check on the result. Where the own local union is asked for
-(``union="own"`` or ``"auto"``, :mod:`~geotex.mapping.crossing`; the default is
-manifold3d's boolean), that check is its guard: a result it
-rejects is redone by manifold3d's boolean of the same operands.
+the printability check on the result. Where the own local union is used
+(``union="own"``, or ``"auto"``, the default, where the elements that meet
+nothing are most of the work; :mod:`~geotex.mapping.crossing`), that check is
+its guard: a result it rejects is redone by manifold3d's boolean of the same
+operands.
 """
 
 from __future__ import annotations
@@ -243,7 +244,7 @@ def _elements_near(points, X, G, exclude=None) -> np.ndarray:
 
 
 def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = True,
-                   shaped: bool | None = None, union: str = "boolean", progress=None,
+                   shaped: bool | None = None, union: str = "auto", progress=None,
                    on_stored=None, keep_elements: bool = False) -> TexturedSolid:
     """Lay ``tiles`` over ``shell`` and unite them with its base.
 
@@ -280,11 +281,12 @@ def textured_solid(shell, tiles, *, height=None, seed: int = 0, check: bool = Tr
         coordinates is its guard: a result the check rejects is united again
         by manifold3d's boolean of the same operands (nothing left out)
         before elements next to defects are left out. Without ``check``,
-        ``"auto"`` is the boolean. The default is the boolean: on the main
-        job's benchmark (``benchmarks/results/main_job.md``, 2026-12-08) the
-        check rejected the own union of Spot and Kitten at ~1.2-1.6M faces
-        (4 crossing face pairs after the float32 rounding), and the boolean
-        redone on top made those jobs 3-9 s slower than the boolean alone.
+        ``"auto"`` is the boolean. The default is ``"auto"``: with the
+        diagonals of its pieces flipped within their faces and its needles
+        collapsed up to :data:`~geotex.mapping.union.OWN_DART_LENGTH` times
+        the sliver tolerance, the check accepted the own union on every row
+        of the main job's benchmark and the catalog shells (18 rows, no
+        fallback; ``benchmarks/results/union_own.md``).
     progress : callable, optional
         Called with each stage and step of :data:`MAP_PROGRESS` (the times in
         ``stats.seconds`` are per stage of :data:`MAP_STAGES`).

@@ -6,8 +6,9 @@ corners to a file's float32 can fold them onto a neighbour (manifold3d's
 ``simplify`` keeps most of them, where a collapse would move a crease).
 :func:`needle_free` removes them:
 
-* a *dart* (one edge shorter than the tolerance) loses that edge: one end
-  moves onto the other (the mesh changes by less than the tolerance), when
+* a *dart* (one edge shorter than the tolerance, or than a given
+  ``dart_length``) loses that edge: one end moves onto the other (the mesh
+  changes by less than that length), when
   the link condition holds (the two ends share exactly the two opposite
   vertices, so the mesh stays a manifold), no two faces would double up and
   no surrounding face turns over;
@@ -96,8 +97,8 @@ def _height_loops(V, F, out):
         out[f] = area2 / longest if longest > 0.0 else 0.0
 
 
-def needle_free(V: np.ndarray, F: np.ndarray, *, tolerance: float
-                ) -> tuple[np.ndarray, np.ndarray, int]:
+def needle_free(V: np.ndarray, F: np.ndarray, *, tolerance: float, dart_length=None,
+                rounds: int = _MAX_ROUNDS) -> tuple[np.ndarray, np.ndarray, int]:
     """Remove needle triangles from a closed manifold mesh by collapses and flips.
 
     Parameters
@@ -108,6 +109,14 @@ def needle_free(V: np.ndarray, F: np.ndarray, *, tolerance: float
     tolerance : float
         Faces lower than this (see :func:`needle_faces`) are needles; dart
         edges shorter than this are collapsed.
+    dart_length : float, optional
+        A needle whose shortest edge is shorter than this is a dart (its
+        edge collapsed, moving the mesh by up to this much); default
+        ``tolerance``. A local union whose cut points fall close together
+        leaves needles on edges a little longer than ``tolerance``.
+    rounds : int, optional
+        At most this many rounds of operations (each round's operations
+        have disjoint footprints, so a cluster of needles takes several).
 
     Returns
     -------
@@ -125,6 +134,7 @@ def needle_free(V: np.ndarray, F: np.ndarray, *, tolerance: float
     """
     V = np.array(V, dtype=np.float64)
     F = np.array(F, dtype=np.int64)
+    dart_length = tolerance if dart_length is None else float(dart_length)
     height = _heights(V, F)
     needles = np.flatnonzero(height < tolerance)
     if needles.size == 0:
@@ -138,7 +148,7 @@ def needle_free(V: np.ndarray, F: np.ndarray, *, tolerance: float
     sub = F[region]
     height = height[region]
     done = 0
-    for _ in range(_MAX_ROUNDS):
+    for _ in range(rounds):
         local = np.flatnonzero(height < tolerance)
         local = local[np.argsort(height[local], kind="stable")]
         if local.size == 0:
@@ -150,7 +160,7 @@ def needle_free(V: np.ndarray, F: np.ndarray, *, tolerance: float
         at = np.full(sub.shape[0], -1, dtype=np.int64)
         at[work] = np.arange(work.size)
         W = sub[work]
-        applied, changed = _one_round(V, W, at[local], tolerance, complete)
+        applied, changed = _one_round(V, W, at[local], dart_length, complete)
         sub[work] = W
         changed = work[changed]
         if applied == 0:
@@ -253,8 +263,10 @@ def _spliced_loops(F, region, sub, out, kept):
     return p
 
 
-def _one_round(V, F, needles, tolerance, complete) -> tuple[int, np.ndarray]:
+def _one_round(V, F, needles, dart_length, complete) -> tuple[int, np.ndarray]:
     """Apply, in place, a set of valid operations with disjoint footprints.
+
+    A needle whose shortest edge is below ``dart_length`` is a dart.
 
     Deleted faces get -1. Every needle proposes one operation; invalid ones
     are dropped, then an operation is applied when it has the lowest needle
@@ -268,7 +280,7 @@ def _one_round(V, F, needles, tolerance, complete) -> tuple[int, np.ndarray]:
     length = np.linalg.norm(V[nxt] - V[T], axis=2)
     rows = np.arange(q)
     kmin, kmax = np.argmin(length, axis=1), np.argmax(length, axis=1)
-    dart = length[rows, kmin] < tolerance
+    dart = length[rows, kmin] < dart_length
     k = np.where(dart, kmin, kmax)
     # the operation's edge (a, b) in the needle's direction, and its apex c
     a, b, c = T[rows, k], T[rows, (k + 1) % 3], T[rows, (k + 2) % 3]
