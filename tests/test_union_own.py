@@ -79,11 +79,16 @@ def test_auto_sends_the_union_where_the_lone_elements_are_most_of_the_faces():
     assert len(G) >= OWN_SHARE * len(F) and len(lone) <= OWN_ELEMENTS_PER_BASE_FACE * len(F)
     _, _, stats = united_with_base(V, F, X, G, union="auto")
     assert stats.method == "own"
-    # the same elements on a coarse base (12 faces, each crossed by many): the boolean
+    # a coarse base (12 faces) under 49 lone elements (4.1 per face): still the own
+    # union, and its float32 result passes the check; under 81 (6.75 per face): the boolean
     Vc, Fc = box((0, 0, 0), (4, 4, 1))
-    assert len(lone) > OWN_ELEMENTS_PER_BASE_FACE * len(Fc)
-    _, _, stats = united_with_base(Vc, Fc, X, G, union="auto")
-    assert stats.method == "boolean" and stats.fallbacks == 0
+    for n, step, method in ((7, 0.5, "own"), (9, 0.42, "boolean")):
+        many = [(0.3 + step * i, 0.3 + step * j) for i in range(n) for j in range(n)]
+        _, (Xm, Gm) = _spheres(many, 1.0123)
+        assert (len(many) > OWN_ELEMENTS_PER_BASE_FACE * len(Fc)) == (method == "boolean")
+        V2, F2, stats = united_with_base(Vc, Fc, Xm, Gm, union="auto")
+        assert stats.method == method and stats.fallbacks == 0
+        assert check_mesh(V2.astype(np.float32).astype(np.float64), F2).printable
     # a long chain of meeting elements and two lone ones: the boolean
     chain = [(0.5 + 0.15 * i, 2.0) for i in range(20)] + [(0.5, 3.5), (3.5, 3.5)]
     parts, (X, G) = _spheres(chain, 1.0123)
