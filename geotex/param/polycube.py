@@ -44,8 +44,8 @@ from geotex.mesh.geometry import face_areas, vertex_normals
 from geotex.mesh.topology import (edge_topology, faces_within_rings, neighbour_mean,
                                   vertex_components)
 from geotex.param.distortion import distortion_summary
-from geotex.param.polycube_fit import (SurfaceFit, SurfaceProjector, fitted_surface,
-                                       folded_faces, reached_surface)
+from geotex.param.polycube_fit import (SurfaceFit, SurfaceProjector, balanced_surface,
+                                       fitted_surface, folded_faces, reached_surface)
 from geotex.param.polycube_quads import QuadLayout, chart_axes
 from geotex.param.polycube_size import (AUTO_FLOOR, AUTO_START, AUTO_STEP, BARE_DEPTH,
                                         EXTRA_FITTED, MAX_FITTED, MAX_QUADS, MIN_COVERAGE,
@@ -290,6 +290,9 @@ def _attempt(V, F, *, lo, ts, chi, k, r, iterations, max_quads=None, progress=No
         else:
             P = c["origin"] + c["P"]
             plain = fitted_surface(P, c["F"], projector, iterations=iterations)
+            # no tile covering much more base than its share (sparse patches where
+            # charts meet at a slant)
+            plain = balanced_surface(plain, P, c["F"], projector, smoothing=2 * r, calm=r)
             if samples is None:
                 samples = _face_samples(Vt, F)
             # the plain fit's tree and closest points serve the reach step's first
