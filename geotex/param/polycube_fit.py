@@ -514,7 +514,7 @@ def _concave_crease_faces(projector: SurfaceProjector, *, min_angle: float = 30.
 def balanced_surface(fit: SurfaceFit, P: np.ndarray, F: np.ndarray, projector: SurfaceProjector,
                      *, rounds: int = 6, strength: float = 0.5, max_move: float = 0.25,
                      smoothing: int = 8, calm: int = 4, crease_angle: float = 30.0,
-                     reference_smoothing: int = 16) -> SurfaceFit:
+                     still: np.ndarray | None = None, reference_smoothing: int = 16) -> SurfaceFit:
     """The fitted surface slid within the base so that no tile covers much more than its share.
 
     The fit's tangential relaxation evens out the spacing of the sub-grid
@@ -534,7 +534,8 @@ def balanced_surface(fit: SurfaceFit, P: np.ndarray, F: np.ndarray, projector: S
     base on their own side. The moves fade out over ``calm`` rings toward
     the base faces beside a sharp concave crease (more than ``crease_angle``
     degrees), where the shell's offset is tightest and a sub-grid moved
-    across the crease lowers its safe height. Moved vertices of faces that
+    across the crease lowers its safe height, and toward the ``still``
+    vertices. Moved vertices of faces that
     would fold (:func:`folded_faces`) or collapse go back to where they
     were in that round. A fit whose tiles already cover their shares (a
     grid-aligned box) does not move.
@@ -562,6 +563,9 @@ def balanced_surface(fit: SurfaceFit, P: np.ndarray, F: np.ndarray, projector: S
         Rings over which the moves fade out toward a sharp concave crease.
     crease_angle : float
         Degrees by which the base must fold inward at an edge to count as a crease.
+    still : numpy.ndarray, (n,) bool, optional
+        Vertices that do not move either (the moves fade out toward them as
+        toward a crease): where the reach step will pull the fit out.
     reference_smoothing : int
         As in :func:`fitted_surface`.
 
@@ -586,6 +590,8 @@ def balanced_surface(fit: SurfaceFit, P: np.ndarray, F: np.ndarray, projector: S
     # safe height): none on them, full ``calm`` rings away
     ring = (M != 0).astype(np.float64)
     near = _concave_crease_faces(projector, min_angle=crease_angle)[face]
+    if still is not None:
+        near = near | np.asarray(still, dtype=bool)
     keep = np.ones(n)
     for k in range(calm):
         keep[near] = np.minimum(keep[near], k / calm)
