@@ -514,7 +514,8 @@ def _concave_crease_faces(projector: SurfaceProjector, *, min_angle: float = 30.
 def balanced_surface(fit: SurfaceFit, P: np.ndarray, F: np.ndarray, projector: SurfaceProjector,
                      *, rounds: int = 6, strength: float = 0.5, max_move: float = 0.25,
                      smoothing: int = 8, calm: int = 4, crease_angle: float = 30.0,
-                     still: np.ndarray | None = None, reference_smoothing: int = 16) -> SurfaceFit:
+                     still: np.ndarray | None = None, squash: float = 0.35,
+                     reference_smoothing: int = 16) -> SurfaceFit:
     """The fitted surface slid within the base so that no tile covers much more than its share.
 
     The fit's tangential relaxation evens out the spacing of the sub-grid
@@ -563,6 +564,10 @@ def balanced_surface(fit: SurfaceFit, P: np.ndarray, F: np.ndarray, projector: S
         Rings over which the moves fade out toward a sharp concave crease.
     crease_angle : float
         Degrees by which the base must fold inward at an edge to count as a crease.
+    squash : float
+        A face left with this fraction of its area or less (a sub-grid whose
+        offset would cross itself early) takes its vertices, and ``calm`` rings
+        around fading out, back toward where the fit put them.
     still : numpy.ndarray, (n,) bool, optional
         Vertices that do not move either (the moves fade out toward them as
         toward a crease): where the reach step will pull the fit out.
@@ -633,8 +638,12 @@ def balanced_surface(fit: SurfaceFit, P: np.ndarray, F: np.ndarray, projector: S
         u = (incidence @ (g * (fa * ok)[:, None])) / np.maximum(w, 1e-300)[:, None]
         Nb = projector.normals[face]
         u -= np.einsum("ij,ij->i", u, Nb)[:, None] * Nb
+        # one step length for all (a clipped vertex would squash its faces), so that
+        # all but a hundredth move at most ``max_move``; those are clipped at twice it
         length = np.linalg.norm(u, axis=1)
-        u *= np.minimum(1.0, max_move * spacing / np.maximum(length, 1e-300))[:, None]
+        cap = max_move * spacing
+        u *= min(1.0, cap / max(float(np.percentile(length, 99)), 1e-300))
+        u *= np.minimum(1.0, 2.0 * cap / np.maximum(length, 1e-300))[:, None]
         Y0, face0 = Y.copy(), face.copy()
         Nn = _unit(ref + _unit(incidence @ face_cross(Y, F)))
         Y, face = projector.project(Y + keep[:, None] * u, Nn)
@@ -657,4 +666,22 @@ def balanced_surface(fit: SurfaceFit, P: np.ndarray, F: np.ndarray, projector: S
             Y[back], face[back] = Y0[back], face0[back]
             now = _refolded(now, Y, F, back, projector, face)
         bad = now
+    # where a face ended up squashed (a fraction ``squash`` of its area or less),
+    # the moves fade out toward it as toward a crease, and the fit is projected again
+    start = face_areas(fit.Y, F)
+    squashed = face_areas(Y, F) <= squash * start
+    if squashed.any():
+        near = np.zeros(n, dtype=bool)
+        near[F[squashed].ravel()] = True
+        fade = np.ones(n)
+        for k in range(calm + 1):
+            fade[near] = np.minimum(fade[near], k / (calm + 1))
+            near = (ring @ near.astype(np.float64)) > 0
+        sel = np.flatnonzero(fade < 1.0)
+        Nn = _unit(ref + _unit(incidence @ face_cross(Y, F)))[sel]
+        Y[sel], face[sel] = projector.project(fit.Y[sel] + fade[sel, None] * (Y[sel] - fit.Y[sel]),
+                                              Nn)
+        back = np.zeros(n, dtype=bool)
+        back[sel] = True
+        bad = _refolded(bad, Y, F, back, projector, face)
     return SurfaceFit(Y=Y, base_face=face, folded=bad, repaired=fit.repaired, reached=fit.reached)
