@@ -475,3 +475,76 @@ def test_same_voxel_polycube_is_fitted_once(monkeypatch):
                                       "labels": np.arange(2)},
                                      {"origin": np.ones(3), "corners": np.ones((2, 4)),
                                       "labels": np.arange(2)})
+
+
+def _stretched_sphere():
+    """A sphere stretched 2.2x along x as the base, and a finer sphere projected onto
+    it: its triangles cover about twice the base area near the poles of x."""
+    from geotex.mesh.geometry import vertex_normals
+    from geotex.param.polycube_fit import SurfaceFit
+
+    V, F = icosphere(4)
+    B = V * [2.2, 1.0, 1.0]
+    P, Fp = icosphere(3)
+    projector = SurfaceProjector(B, F)
+    Y, face = projector.project(P * [2.2, 1.0, 1.0], vertex_normals(P, Fp))
+    fit = SurfaceFit(Y=Y, base_face=face, folded=np.zeros(Fp.shape[0], dtype=bool), repaired=0)
+    return B, F, P, Fp, projector, fit
+
+
+def _vertex_excess(Y, P, F):
+    """log of every vertex's area over its share of the total (shares: areas on P)."""
+    from geotex.mesh.geometry import face_areas
+
+    def per_vertex(X):
+        return np.bincount(F.ravel(), weights=np.repeat(face_areas(X, F), 3))
+
+    a, s = per_vertex(Y), per_vertex(P)
+    return np.log((a / a.sum()) / (s / s.sum()))
+
+
+def test_balanced_surface_brings_the_largest_areas_down():
+    from geotex.param.polycube_fit import balanced_surface, folded_faces
+
+    B, F, P, Fp, projector, fit = _stretched_sphere()
+    before = _vertex_excess(fit.Y, P, Fp)
+    assert np.percentile(before, 95) > 0.15
+    out = balanced_surface(fit, P, Fp, projector, smoothing=4, calm=2)
+    after = _vertex_excess(out.Y, P, Fp)
+    assert np.percentile(after, 95) < 0.8 * np.percentile(before, 95)
+    assert after.max() < before.max()
+    C, _ = projector.closest(out.Y)                              # still on the base
+    assert np.abs(C - out.Y).max() < 1e-9
+    assert not folded_faces(out.Y, Fp, projector, out.base_face).any() and not out.folded.any()
+    assert np.array_equal(fit.Y, _stretched_sphere()[5].Y)       # not mutated
+    again = balanced_surface(fit, P, Fp, projector, smoothing=4, calm=2)
+    assert again.Y.tobytes() == out.Y.tobytes()                  # deterministic
+
+
+def test_balanced_surface_leaves_an_even_fit_in_place():
+    from geotex.param.polycube_fit import SurfaceFit, balanced_surface
+
+    V, F = icosphere(3)
+    projector = SurfaceProjector(V, F)
+    _, face = projector.closest(V)
+    fit = SurfaceFit(Y=V.copy(), base_face=face, folded=np.zeros(F.shape[0], dtype=bool),
+                     repaired=0)
+    out = balanced_surface(fit, V, F, projector)       # every vertex covers its share
+    assert np.abs(out.Y - V).max() < 1e-9
+
+
+def test_concave_crease_faces_of_a_box_and_of_its_inside_out():
+    from geotex.param.polycube_fit import _concave_crease_faces
+
+    V, F = box((0, 0, 0), (2, 1, 1), divisions=2)
+    assert not _concave_crease_faces(SurfaceProjector(V, F)).any()
+    inside_out = _concave_crease_faces(SurfaceProjector(V, F[:, ::-1]))
+    # every face beside a 90-degree edge, and none in the middle of a side
+    from geotex.mesh.geometry import face_normals
+    N = face_normals(V, F)
+    edge_faces = np.zeros(F.shape[0], dtype=bool)
+    for i, f in enumerate(F):
+        others = np.flatnonzero(np.isin(F, f).sum(axis=1) == 2)
+        edge_faces[i] = (np.abs(N[others] @ N[i]) < 0.5).any()
+    assert edge_faces.any() and not edge_faces.all()
+    np.testing.assert_array_equal(inside_out, edge_faces)

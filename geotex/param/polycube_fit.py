@@ -31,13 +31,16 @@ from dataclasses import dataclass
 import igl
 import numpy as np
 import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from geotex.mesh.geometry import clamped_barycentric, face_cross, face_normals
+from geotex.errors import SolverError
+from geotex.linalg import factor
+from geotex.mesh.geometry import clamped_barycentric, face_areas, face_cross, face_normals
 from geotex.mesh.topology import neighbour_mean
 
 __all__ = ["closest_points_on_triangles", "SurfaceProjector", "SurfaceFit", "fitted_surface",
-           "reached_surface"]
+           "reached_surface", "balanced_surface"]
 
 
 def closest_points_on_triangles(X: np.ndarray, A: np.ndarray, B: np.ndarray, C: np.ndarray
@@ -475,3 +478,210 @@ def reached_surface(fit: SurfaceFit, P: np.ndarray, F: np.ndarray, projector: Su
         near, wn = near[sub], wn[sub]
     reached = int(np.count_nonzero((Y != fit.Y).any(axis=1)))
     return SurfaceFit(Y=Y, base_face=face, folded=bad, repaired=fit.repaired, reached=reached)
+
+
+def _reference_normals(P: np.ndarray, F: np.ndarray, M: sp.csr_matrix,
+                       incidence: sp.csr_matrix, smoothing: int) -> np.ndarray:
+    """The smoothed start normals that give every vertex its side (as in
+    :func:`fitted_surface`), ``(n, 3)`` unit."""
+    ref = _unit(incidence @ face_cross(P, F))
+    for _ in range(smoothing):
+        ref = _unit(M @ ref)
+    return ref
+
+
+def _concave_crease_faces(projector: SurfaceProjector, *, min_angle: float = 30.0
+                          ) -> np.ndarray:
+    """Faces of the base beside an edge where it folds inward by more than ``min_angle``
+    degrees, ``(m,)`` bool (a closed manifold base: every edge has two faces)."""
+    V, F, N = projector.V, projector.F, projector.normals
+    m = F.shape[0]
+    a, b, c = F.ravel(), np.roll(F, -1, axis=1).ravel(), np.roll(F, -2, axis=1).ravel()
+    key = np.minimum(a, b) * V.shape[0] + np.maximum(a, b)
+    order = np.argsort(key, kind="stable")
+    k = key[order]
+    first = np.flatnonzero(k[:-1] == k[1:])
+    h1, h2 = order[first], order[first + 1]
+    f1, f2 = h1 // 3, h2 // 3
+    sharp = np.einsum("ij,ij->i", N[f1], N[f2]) < np.cos(np.radians(min_angle))
+    concave = np.einsum("ij,ij->i", V[c[h2]] - V[a[h1]], N[f1]) > 0
+    out = np.zeros(m, dtype=bool)
+    out[f1[sharp & concave]] = True
+    out[f2[sharp & concave]] = True
+    return out
+
+
+def balanced_surface(fit: SurfaceFit, P: np.ndarray, F: np.ndarray, projector: SurfaceProjector,
+                     *, rounds: int = 6, strength: float = 0.5, max_move: float = 0.25,
+                     smoothing: int = 8, calm: int = 4, crease_angle: float = 30.0,
+                     still: np.ndarray | None = None, squash: float = 0.35,
+                     reference_smoothing: int = 16) -> SurfaceFit:
+    """The fitted surface slid within the base so that no tile covers much more than its share.
+
+    The fit's tangential relaxation evens out the spacing of the sub-grid
+    but not its area: where polycube charts meet at a slant (Spot's chest),
+    whole tiles end up covering 1.5-3 times the base area of a typical one,
+    and the texture laid on them is visibly sparser. Every vertex's share is
+    its part of the polycube's area (a corner where three quads meet has
+    three quarters of the share of a flat one); its *excess* is the log of
+    the area it covers over its share of the fitted total, averaged over
+    ``smoothing`` rings (the scale of a tile, not of a cell). Where the
+    excess is positive it is brought down by ``strength`` of itself; the rest
+    grows by one common factor. Each round moves the vertices along the
+    gradient of the potential ``phi`` with ``L phi = area * (excess - goal)``
+    (``L`` the cotangent Laplacian of the fit; to first order a move changes
+    the area by its divergence), in the base's tangent plane, at most
+    ``max_move`` of the sub-grid spacing, and projects them back onto the
+    base on their own side. The moves fade out over ``calm`` rings toward
+    the base faces beside a sharp concave crease (more than ``crease_angle``
+    degrees), where the shell's offset is tightest and a sub-grid moved
+    across the crease lowers its safe height, and toward the ``still``
+    vertices. Moved vertices of faces that
+    would fold (:func:`folded_faces`) or collapse go back to where they
+    were in that round. A fit whose tiles already cover their shares (a
+    grid-aligned box) does not move.
+
+    Parameters
+    ----------
+    fit : SurfaceFit
+        The fit of :func:`fitted_surface`.
+    P : numpy.ndarray, (n, 3) float64
+        The start positions given to :func:`fitted_surface` (the polycube: its
+        areas are the shares, its normals give every vertex its side).
+    F : numpy.ndarray, (m, 3) int64
+    projector : SurfaceProjector
+        The base mesh.
+    rounds : int
+        Solve + move + project rounds.
+    strength : float
+        In ``[0, 1]``: the part of a positive excess taken away.
+    max_move : float
+        Longest move of a vertex in one round, in sub-grid spacings.
+    smoothing : int
+        Rings over which the excess is averaged (``polycube`` passes two
+        tiles' worth, ``2 res``).
+    calm : int
+        Rings over which the moves fade out toward a sharp concave crease.
+    crease_angle : float
+        Degrees by which the base must fold inward at an edge to count as a crease.
+    squash : float
+        A face left with this fraction of its area or less (a sub-grid whose
+        offset would cross itself early) takes its vertices, and ``calm`` rings
+        around fading out, back toward where the fit put them.
+    still : numpy.ndarray, (n,) bool, optional
+        Vertices that do not move either (the moves fade out toward them as
+        toward a crease): where the reach step will pull the fit out.
+    reference_smoothing : int
+        As in :func:`fitted_surface`.
+
+    Returns
+    -------
+    SurfaceFit
+        A new fit (``repaired`` and ``reached`` as in ``fit``); ``fit`` itself
+        when the Laplacian of the fit cannot be factored (a degenerate fit).
+    """
+    n, m = P.shape[0], F.shape[0]
+    M = neighbour_mean(F, n)
+    incidence = sp.csr_matrix((np.ones(3 * m), (F.ravel(), np.repeat(np.arange(m), 3))),
+                              shape=(n, m))
+    ref = _reference_normals(P, F, M, incidence, reference_smoothing)
+    share = incidence @ face_areas(P, F)
+    share /= share.sum()
+    spacing = np.median(np.linalg.norm(P[F[:, 0]] - P[F[:, 1]], axis=1))
+    Y, face, bad = fit.Y.copy(), fit.base_face.copy(), fit.folded
+    thin = 0.05 * np.median(face_areas(Y, F))     # a face this small counts as collapsed
+    # the moves fade out toward sharp concave creases of the base (there the
+    # shell's offset is tightest, and a sub-grid moved across it lowers its
+    # safe height): none on them, full ``calm`` rings away
+    ring = (M != 0).astype(np.float64)
+    near = _concave_crease_faces(projector, min_angle=crease_angle)[face]
+    if still is not None:
+        near = near | np.asarray(still, dtype=bool)
+    keep = np.ones(n)
+    for k in range(calm):
+        keep[near] = np.minimum(keep[near], k / calm)
+        near = (ring @ near.astype(np.float64)) > 0
+
+    def excess(area):      # log area over share, at the scale of ``smoothing`` rings
+        e = np.log(area / (share * area.sum()))
+        for _ in range(smoothing):
+            e = M @ e
+        return e
+
+    e0 = excess(incidence @ face_areas(Y, F))
+    # only where a tile covers more than its share is the area brought down
+    # (``strength`` of the way, in the log); the rest grows by one common factor
+    target = e0 - strength * np.maximum(e0, 0.0)
+    fa = face_areas(Y, F)
+    # one Laplacian and gradient (of the fit, over its faces that are not nearly
+    # degenerate) serve every round: the moves are small against a tile
+    ok = fa > 1e-6 * np.median(fa)
+    L = sp.csr_matrix(igl.cotmatrix(Y, F[ok]), shape=(n, n))
+    K = -L + sp.identity(n, format="csr") * (1e-6 * abs(L.diagonal()).mean())
+    try:
+        solver = factor(K, what="the area balance of the polycube fit")
+    except SolverError:
+        return fit
+    G = igl.grad(Y, F)
+    inside = np.asarray(incidence[:, ok].sum(axis=1)).ravel() > 0
+    parts = connected_components(abs(L) > 0, directed=False)[1][inside]
+    size = np.bincount(parts)
+    for _ in range(rounds):
+        fa = face_areas(Y, F)
+        area = incidence @ fa
+        d = excess(area) - target
+        rhs = np.where(inside, area * d / 3.0, 0.0)     # the area of every part stays
+        rhs[inside] -= (np.bincount(parts, weights=rhs[inside]) / size)[parts]
+        phi = solver.solve(rhs)
+        g = np.nan_to_num((G @ phi).reshape(3, m).T) * ok[:, None]
+        w = incidence @ (fa * ok)
+        u = (incidence @ (g * (fa * ok)[:, None])) / np.maximum(w, 1e-300)[:, None]
+        Nb = projector.normals[face]
+        u -= np.einsum("ij,ij->i", u, Nb)[:, None] * Nb
+        # one step length for all (a clipped vertex would squash its faces), so that
+        # all but a hundredth move at most ``max_move``; those are clipped at twice it
+        length = np.linalg.norm(u, axis=1)
+        cap = max_move * spacing
+        u *= min(1.0, cap / max(float(np.percentile(length, 99)), 1e-300))
+        u *= np.minimum(1.0, 2.0 * cap / np.maximum(length, 1e-300))[:, None]
+        Y0, face0 = Y.copy(), face.copy()
+        Nn = _unit(ref + _unit(incidence @ face_cross(Y, F)))
+        Y, face = projector.project(Y + keep[:, None] * u, Nn)
+        # a face is folded only if it also faces away from its corners' base faces
+        # (the cheap half of the test): the other half only for those
+        cross = face_cross(Y, F)
+        maybe = np.flatnonzero(
+            np.einsum("ij,ij->i", cross, projector.normals[face[F]].sum(axis=1)) <= 0)
+        now = np.zeros(m, dtype=bool)
+        now[maybe] = folded_faces(Y, F[maybe], projector, face)
+        for _ in range(8):      # put back the moved corners of faces that fold or collapse
+            new = (now | (face_areas(Y, F) < thin)) & ~bad
+            if not new.any():
+                break
+            back = np.zeros(n, dtype=bool)
+            back[F[new].ravel()] = True
+            back &= (Y != Y0).any(axis=1)
+            if not back.any():
+                break
+            Y[back], face[back] = Y0[back], face0[back]
+            now = _refolded(now, Y, F, back, projector, face)
+        bad = now
+    # where a face ended up squashed (a fraction ``squash`` of its area or less),
+    # the moves fade out toward it as toward a crease, and the fit is projected again
+    start = face_areas(fit.Y, F)
+    squashed = face_areas(Y, F) <= squash * start
+    if squashed.any():
+        near = np.zeros(n, dtype=bool)
+        near[F[squashed].ravel()] = True
+        fade = np.ones(n)
+        for k in range(calm + 1):
+            fade[near] = np.minimum(fade[near], k / (calm + 1))
+            near = (ring @ near.astype(np.float64)) > 0
+        sel = np.flatnonzero(fade < 1.0)
+        Nn = _unit(ref + _unit(incidence @ face_cross(Y, F)))[sel]
+        Y[sel], face[sel] = projector.project(fit.Y[sel] + fade[sel, None] * (Y[sel] - fit.Y[sel]),
+                                              Nn)
+        back = np.zeros(n, dtype=bool)
+        back[sel] = True
+        bad = _refolded(bad, Y, F, back, projector, face)
+    return SurfaceFit(Y=Y, base_face=face, folded=bad, repaired=fit.repaired, reached=fit.reached)
