@@ -44,9 +44,8 @@ from geotex.mesh.geometry import face_areas, vertex_normals
 from geotex.mesh.topology import (edge_topology, faces_within_rings, neighbour_mean,
                                   vertex_components)
 from geotex.param.distortion import distortion_summary
-from geotex.param.polycube_fit import (SurfaceFit, SurfaceProjector, _outside_far,
-                                       balanced_surface, fitted_surface, folded_faces,
-                                       reached_surface)
+from geotex.param.polycube_fit import (SurfaceFit, SurfaceProjector, fitted_surface,
+                                       folded_faces, reached_surface)
 from geotex.param.polycube_quads import QuadLayout, chart_axes
 from geotex.param.polycube_size import (AUTO_FLOOR, AUTO_START, AUTO_STEP, BARE_DEPTH,
                                         EXTRA_FITTED, MAX_FITTED, MAX_QUADS, MIN_COVERAGE,
@@ -293,7 +292,6 @@ def _attempt(V, F, *, lo, ts, chi, k, r, iterations, max_quads=None, progress=No
             plain = fitted_surface(P, c["F"], projector, iterations=iterations)
             if samples is None:
                 samples = _face_samples(Vt, F)
-            plain = _balanced(plain, P, c["F"], projector, samples, r)
             # the plain fit's tree and closest points serve the reach step's first
             # test and, when the fit stays as it was, the coverage
             surface = SurfaceProjector(plain.Y, c["F"])
@@ -525,26 +523,6 @@ def _search(V, F, *, extent, genus, opts):
             f"({thin_spot(V, F)}); thicken the shape there or widen the gap")
     search["chosen"] = float(best["ts"])
     return best, search
-
-
-def _balanced(fit, P, F, projector, samples, res, *, reach_rings: int = 8) -> SurfaceFit:
-    """The fit with no tile covering much more base than its share
-    (:func:`balanced_surface`: no sparse patches where charts meet at a slant).
-
-    The vertices the reach step will pull out (those of the faces nearest to
-    a base sample more than ``REACH_DEPTH`` outside the fit, and
-    ``reach_rings`` rings around, the reach step's spread) stay as the fit
-    put them, so that step works on them as before.
-    """
-    n = fit.Y.shape[0]
-    far, _, faces = _outside_far(samples[0], SurfaceProjector(fit.Y, F), REACH_DEPTH)
-    still = np.zeros(n, dtype=bool)
-    still[F[faces].ravel()] = True
-    if still.any():
-        ring = (neighbour_mean(F, n) != 0).astype(np.float64)
-        for _ in range(reach_rings):
-            still = (ring @ still.astype(np.float64)) > 0
-    return balanced_surface(fit, P, F, projector, smoothing=2 * res, calm=res, still=still)
 
 
 def _reached(fit, P, F, projector, samples, n_quads, res, *, tries: int = 3, surface=None,
